@@ -43,9 +43,11 @@ import logging
 import numpy as np
 import scipy.fft
 
+from .grid import pixel_size
 from .halfspace import pixel_integral_gradient
 
-__all__ = ["SlopeEnergy", "SlopeIntegrals", "edge_jumps", "monopole_tail"]
+__all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeIntegrals", "edge_jumps", "estimate_rms_slope",
+           "monopole_tail"]
 
 logger = logging.getLogger(__name__)
 
@@ -278,3 +280,100 @@ class SlopeEnergy:
         rim_share = rim_jumps / jumps if jumps > 0 else 1.0
         return SlopeIntegrals(face_area=float(face.sum()) * area, total=total, face=face_sum,
                               exterior=exterior, rim_share=rim_share)
+
+
+@dataclasses.dataclass(frozen=True)
+class SlopeEstimate:
+    """Rms slope of a limiting face with its estimated discretisation error.
+
+    Attributes
+    ----------
+    rms_slope : float, dimensionless
+        Energy-corrected rms slope on the finest grid in ``grids``.
+    error : float, dimensionless
+        Estimated absolute discretisation error of ``rms_slope``.
+    rms_slope_plain : float, dimensionless
+        Plain pixel rms slope on that grid, for comparison.
+    grids : tuple of int
+        Grid sizes solved, coarse to fine.
+    values : tuple of float
+        Corrected rms slope on each grid.
+    """
+
+    rms_slope: float
+    error: float
+    rms_slope_plain: float
+    grids: tuple
+    values: tuple
+
+    @property
+    def relative_error(self):
+        """``error / rms_slope``."""
+        return self.error / self.rms_slope
+
+
+def _ladder(geometry, n):
+    """Grids for the estimate: ``n/4, n/2, n`` where the geometry allows, else ``n, 2n``."""
+    coarse = []
+    for d in (4, 2):
+        if n % d == 0:
+            try:
+                geometry.check_grid(n // d)
+            except ValueError:
+                continue
+            coarse.append(n // d)
+    if coarse:
+        return coarse + [n]
+    return [n, 2 * n]
+
+
+def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star, n, *,
+                       exponent=1.0):
+    """Energy-corrected rms slope of the limiting face, with an error estimate.
+
+    Parameters
+    ----------
+    geometry : phase geometry
+        An object of :mod:`steady.phases` (``labels(n)``, ``check_grid(n)``).
+    wear_coefficients : array_like, shape (P,), 1/Pa
+    normal_force : float, N
+    radius : float, m
+    E_star : float, Pa
+    n : int
+        Grid of the estimate.
+    exponent : float, optional
+        Pressure exponent ``m`` of the wear law (default 1).
+
+    Returns
+    -------
+    SlopeEstimate
+        The value on grid ``n`` with the error
+        ``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)`` from the same geometry
+        rasterised at ``n/2`` and ``n/4``.  Where the geometry admits no
+        coarser grid (a pixel map at its own size, or ``n`` near the
+        coarsest grid the geometry accepts) the value comes from ``2n``
+        and the error is ``|S_2n - S_n|``.
+    """
+    from .solution import phase_pressures  # solution imports this module's users
+
+    grids = _ladder(geometry, int(n))
+    values = []
+    plain = None
+    for m in grids:
+        labels = geometry.labels(m)
+        face = labels >= 0
+        n_phases = int(labels.max()) + 1
+        counts = np.bincount(labels[face], minlength=n_phases)
+        h = pixel_size(m, radius)
+        p = phase_pressures(counts, wear_coefficients, normal_force, h * h, exponent=exponent)
+        pressure = np.where(face, np.append(p, 0.0)[labels], 0.0)
+        integrals = SlopeEnergy(m, h, E_star)(pressure, face)
+        values.append(integrals.rms_slope)
+        plain = integrals.rms_slope_plain
+        logger.debug("n=%d rms slope corrected %.8g plain %.8g", m, values[-1], plain)
+    if len(values) >= 3:
+        error = max(abs(values[-1] - values[-2]), abs(values[-2] - values[-3]) / 2)
+    else:
+        error = abs(values[-1] - values[0])
+    return SlopeEstimate(rms_slope=values[-1], error=float(error), rms_slope_plain=plain,
+                         grids=tuple(grids), values=tuple(values))
