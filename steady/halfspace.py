@@ -14,9 +14,10 @@ in both axes, so its spectrum is real; the derivative kernels are odd in
 one axis, so their spectra are purely imaginary.  Only the real (resp.
 imaginary) parts are stored.
 
-The forward transform skips the ``n`` rows of zero padding and the inverse
-transform keeps only the ``n`` rows of the face, so that one product costs
-about three quarters of a plain padded FFT pair.
+The inverse transform keeps only the ``n`` rows of the face after its
+column pass, and the padded input and the product's spectrum live in work
+buffers allocated once, so that one product costs less than a plain padded
+FFT pair.  The buffers make an instance unsafe to share between threads.
 """
 
 from __future__ import annotations
@@ -123,15 +124,22 @@ def _pixel_corner_sum(ox, oy, h, antiderivative):
             - F(Xp[:, None], Ym[None, :]) + F(Xm[:, None], Ym[None, :]))
 
 
-def _uniform_corner_kernel(n, h, antiderivative):
-    """``antiderivative`` corner-summed at offsets ``0..n`` pixels (quadrant).
+def _corner_asinh(n, h):
+    """``asinh(Y/|X|)`` on the ``(n + 2)^2`` lattice of pixel corners.
 
-    The corners of neighbouring pixels coincide, so the antiderivative is
-    evaluated once on the ``(n + 2)^2`` corner lattice.
+    Corners sit at ``(i - 1/2) h`` for ``i = 0..n+1``; none is zero, so no
+    case needs special treatment.  The same array yields the influence
+    kernel and the x-derivative kernel.
     """
     corners = (np.arange(n + 2) - 0.5) * h
-    values = antiderivative(corners[:, None], corners[None, :])
-    return _corner_sum(values)
+    return corners, np.arcsinh(corners[None, :] / np.abs(corners[:, None]))
+
+
+def _influence_quadrant(corners, asinh):
+    """Pixel integral of ``1/r`` at offsets ``0..n`` pixels, from the corner lattice."""
+    g = corners[:, None] * asinh  # X asinh(Y/|X|); the other half is its transpose
+    g += g.T
+    return _corner_sum(g)
 
 
 class HalfSpace:
@@ -173,9 +181,14 @@ class HalfSpace:
         self.E_star = float(E_star)
         self.workers = workers
         self._m = 2 * n  # padded size
+        self._corners = _corner_asinh(n, self.h)
         self._influence_q = self._even_spectrum(
-            _uniform_corner_kernel(n, self.h, _antiderivative) / (np.pi * self.E_star))
+            _influence_quadrant(*self._corners) / (np.pi * self.E_star))
         self._gradient_q = None
+        # Work buffers, reused by every product: the zero padding is written
+        # once, and the products need no fresh allocation.
+        self._padded = np.zeros((self._m, self._m))
+        self._work = np.empty((self._m, n + 1), dtype=complex)
 
     # -- spectra -------------------------------------------------------
     def _wrap(self, quadrant, parity_x):
@@ -201,21 +214,18 @@ class HalfSpace:
         k = self._wrap(quadrant, +1)
         return scipy.fft.rfft2(k, workers=self.workers).real.copy()
 
-    def _odd_x_spectrum(self, quadrant):
-        k = self._wrap(quadrant, -1)
-        return scipy.fft.rfft2(k, workers=self.workers).imag.copy()
-
     def _ensure_gradient(self):
         if self._gradient_q is None:
-            n, h = self.n, self.h
-            dx = _uniform_corner_kernel_dx(n, h) / (np.pi * self.E_star)
-            gx_q = self._odd_x_spectrum(dx)
-            # d/dy kernel is the transpose of d/dx; build it explicitly since
-            # the half spectrum is not symmetric under transposition.
-            k = self._wrap(dx, -1).T
-            gy_q = scipy.fft.rfft2(k, workers=self.workers).imag.copy()
+            _, asinh = self._corners
+            dx = _corner_sum(asinh) / (np.pi * self.E_star)
+            k = self._wrap(dx, -1)
+            # Purely imaginary spectra, stored complex so that a product is
+            # a single pass.  The d/dy kernel is the transpose of d/dx; the
+            # half spectrum is not symmetric under transposition.
+            gx_q = 1j * scipy.fft.rfft2(k, workers=self.workers).imag
+            gy_q = 1j * scipy.fft.rfft2(k.T, workers=self.workers).imag
             self._gradient_q = (gx_q, gy_q)
-            logger.debug("gradient spectra built for n=%d", n)
+            logger.debug("gradient spectra built for n=%d", self.n)
         return self._gradient_q
 
     # -- transforms ----------------------------------------------------
@@ -230,13 +240,13 @@ class HalfSpace:
         -------
         ndarray, shape (2n, n + 1), complex
         """
-        field_r = np.asarray(field_r, dtype=float)
+        field_r = np.asarray(field_r)
         if field_r.shape != (self.n, self.n):
             raise ValueError(
                 f"field must have shape {(self.n, self.n)}, got {field_r.shape}")
-        # Only the n non-zero rows need their row transform.
-        rows_q = scipy.fft.rfft(field_r, n=self._m, axis=1, workers=self.workers)
-        return scipy.fft.fft(rows_q, n=self._m, axis=0, workers=self.workers)
+        n = self.n
+        self._padded[:n, :n] = field_r
+        return scipy.fft.rfft2(self._padded, workers=self.workers)
 
     def inverse(self, spectrum_q):
         """Real field on the face from a padded half spectrum.
@@ -250,7 +260,15 @@ class HalfSpace:
         ndarray, shape (n, n)
         """
         n, m = self.n, self._m
+        # Only the face's n rows are kept after the column transform.
         cols = scipy.fft.ifft(spectrum_q, axis=0, workers=self.workers)[:n]
+        return scipy.fft.irfft(cols, n=m, axis=1, workers=self.workers)[:, :n]
+
+    def _product(self, pressure_q, kernel_q):
+        """Field on the face of ``kernel_q * pressure_q``, through the work buffer."""
+        np.multiply(pressure_q, kernel_q, out=self._work)
+        n, m = self.n, self._m
+        cols = scipy.fft.ifft(self._work, axis=0, workers=self.workers, overwrite_x=True)[:n]
         return scipy.fft.irfft(cols, n=m, axis=1, workers=self.workers)[:, :n]
 
     # -- operators -----------------------------------------------------
@@ -265,11 +283,11 @@ class HalfSpace:
         -------
         ndarray, shape (n, n), m
         """
-        return self.inverse(self.forward(pressure_r) * self._influence_q)
+        return self._product(self.forward(pressure_r), self._influence_q)
 
     def displacement_q(self, pressure_q):
         """Displacement from an already transformed pressure (see :meth:`forward`)."""
-        return self.inverse(pressure_q * self._influence_q)
+        return self._product(pressure_q, self._influence_q)
 
     def gradient(self, pressure_r, *, pressure_q=None):
         """Surface gradient ``(du/dx, du/dy)`` at the pixel centres.
@@ -290,10 +308,7 @@ class HalfSpace:
         gx_q, gy_q = self._ensure_gradient()
         if pressure_q is None:
             pressure_q = self.forward(pressure_r)
-        # Purely imaginary spectra: multiply by i * (imaginary part).
-        gx = self.inverse(1j * gx_q * pressure_q)
-        gy = self.inverse(1j * gy_q * pressure_q)
-        return gx, gy
+        return self._product(pressure_q, gx_q), self._product(pressure_q, gy_q)
 
     @property
     def self_influence(self):
@@ -301,8 +316,3 @@ class HalfSpace:
         return 4 * self.h * np.arcsinh(1.0) / (np.pi * self.E_star)
 
 
-def _uniform_corner_kernel_dx(n, h):
-    """x-derivative kernel at offsets ``0..n`` pixels (quadrant)."""
-    corners = (np.arange(n + 2) - 0.5) * h
-    values = _antiderivative_dx(corners[:, None], corners[None, :])
-    return _corner_sum(values)
