@@ -46,8 +46,8 @@ import scipy.fft
 from .grid import pixel_size
 from .halfspace import pixel_integral_gradient
 
-__all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeIntegrals", "edge_jumps", "estimate_rms_slope",
-           "monopole_tail"]
+__all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
+           "estimate_rms_slope", "monopole_tail"]
 
 logger = logging.getLogger(__name__)
 
@@ -89,12 +89,12 @@ class SlopeIntegrals:
     @property
     def rms_slope(self):
         """Corrected rms slope over the face, dimensionless."""
-        return float(np.sqrt(max(self.corrected, 0.0) / self.face_area))
+        return np.sqrt(np.maximum(self.corrected, 0.0) / self.face_area)
 
     @property
     def rms_slope_plain(self):
         """Plain pixel rms slope over the face, dimensionless."""
-        return float(np.sqrt(self.face / self.face_area))
+        return np.sqrt(self.face / self.face_area)
 
 
 def edge_jumps(pressure_r, face):
@@ -113,17 +113,8 @@ def edge_jumps(pressure_r, face):
         Over edges between a face pixel and a pixel off the face
         (including the grid's border).
     """
-    p = np.where(face, pressure_r, 0.0)
-    f = np.pad(face, 1)
-    p = np.pad(p, 1)
-    interior = rim = 0.0
-    for axis in (0, 1):
-        a = np.moveaxis(p, axis, 0)
-        m = np.moveaxis(f, axis, 0)
-        jump = (a[1:] - a[:-1]) ** 2
-        interior += float(jump[m[1:] & m[:-1]].sum())
-        rim += float(jump[m[1:] ^ m[:-1]].sum())
-    return interior, rim
+    interior, rim = _edge_differences(np.where(face, pressure_r, 0.0)[None], face)
+    return float(np.sum(interior**2)), float(np.sum(rim**2))
 
 
 def monopole_tail(force, centroid, box, E_star):
@@ -162,7 +153,7 @@ def monopole_tail(force, centroid, box, E_star):
 
 
 class _BoxGradient:
-    """``|grad u|^2`` on an output box from sources on a (coarser) pixel grid.
+    """Gradient on an output box from sources on a (coarser) pixel grid.
 
     Sources occupy pixel indices ``[0, ns)`` on both axes with spacing
     ``H``; outputs are the pixel centres ``[lo, lo + m)`` of the same
@@ -184,14 +175,11 @@ class _BoxGradient:
         self.rows = np.mod(np.arange(lo, lo + m), size)
 
     def __call__(self, sources):
+        """Gradient ``(gx, gy)`` on the output box, each shape (m, m)."""
         s = (self.size, self.size)
         sq = scipy.fft.rfft2(sources, s=s, workers=self.workers)
-        out = np.zeros((self.m, self.m))
-        for kq in (self.gx_q, self.gy_q):
-            g = scipy.fft.irfft2(sq * kq, s=s, workers=self.workers)
-            g = g[np.ix_(self.rows, self.rows)]
-            out += g * g
-        return out
+        return tuple(scipy.fft.irfft2(sq * kq, s=s, workers=self.workers)
+                     [np.ix_(self.rows, self.rows)] for kq in (self.gx_q, self.gy_q))
 
 
 class SlopeEnergy:
@@ -250,36 +238,119 @@ class SlopeEnergy:
         -------
         SlopeIntegrals
         """
-        n, h, m = self.n, self.h, self.margin
-        p = np.where(face, pressure_r, 0.0)
+        return self.gram([pressure_r], face).integrals([1.0])
+
+    def gram(self, fields, face):
+        """Quadratic forms of the slope integrals over a set of pressure fields.
+
+        Every integral in :class:`SlopeIntegrals` is a quadratic form of the
+        pressure; for ``p = sum_i w_i fields[i]`` it is ``w^T M w``.  With
+        the phase indicators as fields, a sweep over wear coefficients costs
+        no transform at all.
+
+        Parameters
+        ----------
+        fields : sequence of ndarray, shape (n, n), Pa
+            Pressure fields (zero off the face).
+        face : ndarray of bool, shape (n, n)
+
+        Returns
+        -------
+        SlopeGram
+        """
+        n, h, m, c = self.n, self.h, self.margin, self.c
+        fields = np.asarray([np.where(face, f, 0.0) for f in fields])
         area = h * h
-        g2 = self._fine(p)
-        on_face = np.zeros(g2.shape, dtype=bool)
+        on_face = np.zeros((self.fine, self.fine), dtype=bool)
         on_face[m:m + n, m:m + n] = face
-        face_sum = float(g2[on_face].sum()) * area
-        exterior = float(g2[~on_face].sum()) * area
+        inner = np.zeros(self._coarse.m, dtype=bool)
+        inner[self._coarse_inner] = True
+        coarse_outside = ~(inner[:, None] & inner[None, :])
 
+        face_rows, ext_rows, coarse_rows = [], [], []
         boxed = np.zeros((self.fine, self.fine))
-        boxed[m:m + n, m:m + n] = p
-        c = self.c
-        coarse_p = boxed.reshape(self.fine // c, c, self.fine // c, c).mean(axis=(1, 3))
-        g2c = self._coarse(coarse_p)
-        g2c[self._coarse_inner, self._coarse_inner] = 0.0
-        exterior += float(g2c.sum()) * (c * h) ** 2
+        for f in fields:
+            gx, gy = self._fine(f)
+            face_rows.append(np.concatenate([gx[on_face], gy[on_face]]))
+            ext_rows.append(np.concatenate([gx[~on_face], gy[~on_face]]))
+            boxed[m:m + n, m:m + n] = f
+            coarse = boxed.reshape(self.fine // c, c, self.fine // c, c).mean(axis=(1, 3))
+            gx, gy = self._coarse(coarse)
+            coarse_rows.append(np.concatenate([gx[coarse_outside], gy[coarse_outside]]))
 
-        force = float(p.sum()) * area
-        x = (np.arange(n) - (n - 1) / 2) * h
-        centroid = (float(x @ p.sum(axis=1)) * area / force, float(x @ p.sum(axis=0)) * area / force)
+        def gram(rows):
+            a = np.asarray(rows)
+            return a @ a.T
+
+        forces = fields.reshape(len(fields), -1).sum(axis=1) * area
         lo = (-n / 2 - m - self._coarse_extra * c) * h
         hi = lo + (self.fine + 2 * self._coarse_extra * c) * h
-        exterior += monopole_tail(force, centroid, (lo, hi, lo, hi), self.E_star)
+        mid = (lo + hi) / 2
+        # About the box centre the monopole-dipole cross term integrates to
+        # zero; what is left, dipole^2 / L^2, is below 1e-6 of the total.
+        tail = monopole_tail(1.0, (mid, mid), (lo, hi, lo, hi), self.E_star)
+        exterior = (gram(ext_rows) * area + gram(coarse_rows) * (c * h) ** 2
+                    + tail * np.outer(forces, forces))
+        flat = fields.reshape(len(fields), -1)
+        total = 4.0 / self.E_star**2 * (flat @ flat.T) * area
+        interior, rim = _edge_differences(fields, face)
+        return SlopeGram(face_area=float(face.sum()) * area, total=total,
+                         face=gram(face_rows) * area, exterior=exterior,
+                         interior_jumps=interior @ interior.T, rim_jumps=rim @ rim.T)
 
-        total = 4.0 / self.E_star**2 * float(np.sum(p * p)) * area
-        interior_jumps, rim_jumps = edge_jumps(p, face)
-        jumps = interior_jumps + rim_jumps
-        rim_share = rim_jumps / jumps if jumps > 0 else 1.0
-        return SlopeIntegrals(face_area=float(face.sum()) * area, total=total, face=face_sum,
-                              exterior=exterior, rim_share=rim_share)
+
+def _edge_differences(fields, face):
+    """Field differences across pixel edges, split into interior and rim edges.
+
+    Returns two arrays of shape (len(fields), edges).
+    """
+    f = np.pad(face, 1)
+    p = np.pad(fields, ((0, 0), (1, 1), (1, 1)))
+    interior, rim = [], []
+    for axis in (1, 2):
+        a = np.moveaxis(p, axis, 1)
+        mask = np.moveaxis(f, axis - 1, 0)
+        diff = a[:, 1:] - a[:, :-1]
+        interior.append(diff[:, mask[1:] & mask[:-1]])
+        rim.append(diff[:, mask[1:] ^ mask[:-1]])
+    return np.concatenate(interior, axis=1), np.concatenate(rim, axis=1)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SlopeGram:
+    """Quadratic forms (``P x P`` matrices, m^2 per Pa^2) of the slope integrals.
+
+    See :meth:`SlopeEnergy.gram`; ``interior_jumps`` and ``rim_jumps`` are
+    in Pa^2 per Pa^2 (dimensionless weights).
+    """
+
+    face_area: float
+    total: np.ndarray
+    face: np.ndarray
+    exterior: np.ndarray
+    interior_jumps: np.ndarray
+    rim_jumps: np.ndarray
+
+    def integrals(self, weights):
+        """:class:`SlopeIntegrals` of ``p = sum_i weights[i] fields[i]``.
+
+        Parameters
+        ----------
+        weights : array_like, shape (P,) or (K, P)
+            Several rows give arrays of shape (K,) in every field.
+        """
+        w = np.asarray(weights, dtype=float)
+
+        def form(matrix):
+            return np.einsum("...i,ij,...j->...", w, matrix, w)
+
+        rim = form(self.rim_jumps)
+        jumps = form(self.interior_jumps) + rim
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = np.where(jumps > 0, rim / np.where(jumps > 0, jumps, 1.0), 1.0)
+        return SlopeIntegrals(face_area=self.face_area, total=form(self.total),
+                              face=form(self.face), exterior=form(self.exterior),
+                              rim_share=share)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -368,8 +439,8 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
         p = phase_pressures(counts, wear_coefficients, normal_force, h * h, exponent=exponent)
         pressure = np.where(face, np.append(p, 0.0)[labels], 0.0)
         integrals = SlopeEnergy(m, h, E_star)(pressure, face)
-        values.append(integrals.rms_slope)
-        plain = integrals.rms_slope_plain
+        values.append(float(integrals.rms_slope))
+        plain = float(integrals.rms_slope_plain)
         logger.debug("n=%d rms slope corrected %.8g plain %.8g", m, values[-1], plain)
     if len(values) >= 3:
         error = max(abs(values[-1] - values[-2]), abs(values[-2] - values[-3]) / 2)
