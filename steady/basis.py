@@ -1,0 +1,150 @@
+"""Per-phase fields of one phase map, for sweeps over wear coefficients.
+
+The steady pressure is constant on each phase (eq. 7), so the limiting face
+is a linear combination of the faces of the phase indicators,
+``f_inf = sum_i p_i K chi_i`` (eq. 9), and the mean-square slope is a
+quadratic form in the phase pressures.  A :class:`PhaseBasis` transforms
+each phase once; afterwards the face, the rms slope (plain and
+energy-corrected, :mod:`steady.accuracy`) and the phase pressures for any
+number of wear-coefficient sets cost no transform at all.  This is what
+makes maps over the wear ratio (paper Fig. 4b, 5b) cheap.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from . import reference
+from .accuracy import SlopeEnergy
+from .grid import pixel_size
+from .halfspace import HalfSpace
+from .phases import validate_labels
+from .pressures import phase_pressures
+
+__all__ = ["PhaseBasis", "SweepSlopes"]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SweepSlopes:
+    """Rms slopes for a set of wear-coefficient rows.
+
+    Attributes
+    ----------
+    rms_slope : ndarray, shape (K,), dimensionless
+        Energy-corrected rms slope.
+    rms_slope_plain : ndarray, shape (K,), dimensionless
+        Plain pixel rms slope.
+    reference_slope : float, dimensionless
+        ``grad_f0 = 4 pbar / (pi E*)``.
+    phase_pressures : ndarray, shape (K, P), Pa
+    """
+
+    rms_slope: np.ndarray
+    rms_slope_plain: np.ndarray
+    reference_slope: float
+    phase_pressures: np.ndarray
+
+    @property
+    def normalised(self):
+        """``rms_slope / grad_f0`` (eq. 15), shape (K,)."""
+        return self.rms_slope / self.reference_slope
+
+
+class PhaseBasis:
+    """Faces and slope quadratic forms of the phase indicators of one map.
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n, n), int
+        Phase index on the face, -1 off it (:mod:`steady.phases`).
+    radius : float, m
+        Punch radius ``a``.
+    E_star : float, Pa
+    faces : bool, optional
+        Also keep the per-phase faces ``K chi_i`` (``P`` arrays of
+        ``n x n``) for :meth:`face`; default True.
+
+    Notes
+    -----
+    Cost: for ``P`` phases, ``P`` transforms of the face and the
+    energy-corrected slope integrals (:meth:`steady.accuracy.SlopeEnergy.gram`).
+    """
+
+    def __init__(self, labels, radius, E_star, *, faces=True):
+        labels = np.asarray(labels)
+        n = labels.shape[0]
+        if labels.ndim != 2 or labels.shape[1] != n:
+            raise ValueError(f"labels must be a square array, got shape {labels.shape}")
+        self.n_phases = int(labels.max()) + 1
+        self.counts = validate_labels(labels, self.n_phases)
+        self.labels = labels
+        self.radius = float(radius)
+        self.E_star = float(E_star)
+        self.h = pixel_size(n, self.radius)
+        face = labels >= 0
+        indicators = [(labels == i).astype(float) for i in range(self.n_phases)]
+        self._gram = SlopeEnergy(n, self.h, self.E_star).gram(indicators, face)
+        self._faces = None
+        if faces:
+            hs = HalfSpace(n, self.h, self.E_star)
+            self._faces = np.array([hs.displacement(chi) for chi in indicators])
+
+    @property
+    def fill_factors(self):
+        """Realised area fractions of the phases, shape (P,)."""
+        return self.counts / self.counts.sum()
+
+    def phase_pressures(self, wear_coefficients, normal_force, *, exponent=1.0):
+        """Steady phase pressures (eq. 7) for one or many coefficient rows.
+
+        Parameters
+        ----------
+        wear_coefficients : array_like, shape (P,) or (K, P), 1/Pa
+        normal_force : float, N
+        exponent : float, optional
+
+        Returns
+        -------
+        ndarray, shape (P,) or (K, P), Pa
+        """
+        k = np.asarray(wear_coefficients, dtype=float)
+        rows = np.atleast_2d(k)
+        if rows.shape[-1] != self.n_phases:
+            raise ValueError(f"need {self.n_phases} wear coefficients per row, got "
+                             f"shape {k.shape}")
+        out = np.array([phase_pressures(self.counts, row, normal_force, self.h**2,
+                                        exponent=exponent) for row in rows])
+        return out[0] if k.ndim == 1 else out
+
+    def rms_slopes(self, wear_coefficients, normal_force, *, exponent=1.0):
+        """Rms slopes for many wear-coefficient rows.
+
+        Parameters
+        ----------
+        wear_coefficients : array_like, shape (K, P), 1/Pa
+        normal_force : float, N
+        exponent : float, optional
+
+        Returns
+        -------
+        SweepSlopes
+        """
+        p = np.atleast_2d(self.phase_pressures(wear_coefficients, normal_force,
+                                               exponent=exponent))
+        integrals = self._gram.integrals(p)
+        g0 = reference.reference_slope(reference.mean_pressure(normal_force, self.radius),
+                                       self.E_star)
+        return SweepSlopes(rms_slope=np.atleast_1d(integrals.rms_slope),
+                           rms_slope_plain=np.atleast_1d(integrals.rms_slope_plain),
+                           reference_slope=g0, phase_pressures=p)
+
+    def face(self, wear_coefficients, normal_force, *, exponent=1.0):
+        """Limiting face ``f_inf`` (eq. 9), shape (n, n), m; NaN off the face."""
+        if self._faces is None:
+            raise ValueError("this basis was built with faces=False")
+        p = self.phase_pressures(wear_coefficients, normal_force, exponent=exponent)
+        f = np.tensordot(p, self._faces, axes=1)
+        f[self.labels < 0] = np.nan
+        return f

@@ -1,0 +1,235 @@
+"""HDF5 files of steady results (layout ``runin.steady``, version 1).
+
+Layout (root group)::
+
+    attributes
+        format            "runin.steady"
+        format_version    1
+        rms_slope         rms of |grad f_inf| over the face, best  (units: rms_slope_units)
+                          estimate (energy-corrected where rms_slope_error is finite)
+        rms_slope_error   its estimated discretisation error, NaN if not estimated
+        rms_slope_plain   plain pixel rms of the slope dataset
+        rms_slope_ref     grad_f0 = 4 pbar / (pi E*), eq. 12       (rms_slope_ref_units)
+        fill_factors      realised area fraction of each phase     (fill_factors_units)
+        phase_pressures   steady pressure on each phase, Pa        (phase_pressures_units)
+        wear_coefficients k_i, 1/Pa                                (wear_coefficients_units)
+        exponent          m of the wear law k p^m                  (exponent_units)
+        normal_force N, radius m, E_star Pa, pixel_size m          (<name>_units)
+        n                 pixels across the diameter
+    datasets, each with a ``units`` attribute
+        phase     (n, n) int8/int16   phase index, -1 off the face   units "1"
+        pressure  (n, n) float64      steady pressure                units "Pa"
+        face      (n, n) float64      limiting face f_inf, NaN off   units "m"
+        slope     (n, n) float64      |grad f_inf|, NaN off the face units "1"
+        scene     scalar string       the scene TOML (attribute ``source_path``)
+
+An attribute cannot carry attributes, so the unit of attribute ``x`` is the
+string attribute ``x_units``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import pathlib
+import tempfile
+
+import h5py
+import numpy as np
+
+from .solution import SteadyResult
+
+__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "read_result", "write_result"]
+
+FORMAT = "runin.steady"
+FORMAT_VERSION = 1
+
+_DATASETS = {"phase": "1", "pressure": "Pa", "face": "m", "slope": "1"}
+_ATTRIBUTES = {
+    "rms_slope": "1",
+    "rms_slope_error": "1",
+    "rms_slope_plain": "1",
+    "rms_slope_ref": "1",
+    "fill_factors": "1",
+    "phase_pressures": "Pa",
+    "wear_coefficients": "1/Pa",
+    "exponent": "1",
+    "normal_force": "N",
+    "radius": "m",
+    "E_star": "Pa",
+    "pixel_size": "m",
+    "n": "1",
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class StoredResult:
+    """A steady result read back from HDF5.
+
+    Attributes
+    ----------
+    result : SteadyResult
+    scene_text : str
+        The scene TOML stored with the result ("" if none was stored).
+    path : pathlib.Path
+    """
+
+    result: SteadyResult
+    scene_text: str
+    path: pathlib.Path
+
+
+def write_result(path, result, scene=None, *, force=False):
+    """Write a steady result (and its scene) to an HDF5 file.
+
+    The file is written to a temporary file in the same directory and moved
+    into place (:func:`os.replace`), so a reader never sees half a file.
+    Missing parent directories are created.
+
+    Parameters
+    ----------
+    path : str or path-like
+    result : SteadyResult
+    scene : Scene, optional
+        Its TOML text and source path are stored.
+    force : bool, optional
+        Overwrite an existing file (default False).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        If ``path`` exists and ``force`` is False, or is a directory.
+    """
+    path = pathlib.Path(path)
+    if path.is_dir():
+        raise ValueError(f"output {str(path)!r} is a directory")
+    if path.exists() and not force:
+        raise ValueError(f"output {str(path)!r} exists (use force to overwrite)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        with h5py.File(tmp, "w") as f:
+            _write(f, result, scene)
+        os.replace(tmp, path)
+    except BaseException:
+        pathlib.Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _write(f, result, scene):
+    f.attrs["format"] = FORMAT
+    f.attrs["format_version"] = FORMAT_VERSION
+    values = {
+        "rms_slope": result.rms_slope,
+        "rms_slope_error": result.rms_slope_error,
+        "rms_slope_plain": result.rms_slope_plain,
+        "rms_slope_ref": result.reference_slope,
+        "fill_factors": np.asarray(result.fill_factors),
+        "phase_pressures": np.asarray(result.phase_pressures),
+        "wear_coefficients": np.asarray(result.wear_coefficients),
+        "exponent": result.exponent,
+        "normal_force": result.normal_force,
+        "radius": result.radius,
+        "E_star": result.E_star,
+        "pixel_size": result.pixel_size,
+        "n": result.n,
+    }
+    for name, unit in _ATTRIBUTES.items():
+        f.attrs[name] = values[name]
+        f.attrs[f"{name}_units"] = unit
+    dtype = np.int8 if result.n_phases < 127 else np.int16
+    arrays = {"phase": result.labels.astype(dtype), "pressure": result.pressure,
+              "face": result.face, "slope": result.slope}
+    for name, unit in _DATASETS.items():
+        ds = f.create_dataset(name, data=arrays[name])
+        ds.attrs["units"] = unit
+    ds = f.create_dataset("scene", data="" if scene is None else scene.text,
+                          dtype=h5py.string_dtype())
+    ds.attrs["source_path"] = "" if scene is None or scene.source_path is None else str(
+        scene.source_path)
+
+
+def read_result(path):
+    """Read and check a file written by :func:`write_result`.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    StoredResult
+
+    Raises
+    ------
+    ValueError
+        Missing file, not HDF5, corrupt, another layout or another version
+        (the message names the path and the problem).
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise ValueError(f"result file {str(path)!r} does not exist")
+    try:
+        is_hdf5 = h5py.is_hdf5(path)
+    except OSError as err:
+        raise ValueError(f"cannot read result file {str(path)!r}: {err}") from None
+    if not is_hdf5:
+        raise ValueError(f"result file {str(path)!r} is not an HDF5 file")
+    try:
+        with h5py.File(path, "r") as f:
+            return StoredResult(*_read(f, path), path=path)
+    except (OSError, KeyError, TypeError) as err:
+        raise ValueError(f"result file {str(path)!r} is corrupt or incomplete: {err}") from None
+
+
+def _read(f, path):
+    fmt = f.attrs.get("format")
+    if isinstance(fmt, bytes):
+        fmt = fmt.decode()
+    if fmt != FORMAT:
+        raise ValueError(f"result file {str(path)!r} is not a {FORMAT} file "
+                         f"(format attribute {fmt!r})")
+    version = f.attrs.get("format_version")
+    if isinstance(version, np.generic):
+        version = version.item()
+    if version != FORMAT_VERSION:
+        raise ValueError(f"result file {str(path)!r} has format_version {version!r}; this "
+                         f"reader supports {FORMAT_VERSION}")
+    missing = [name for name in (*_DATASETS, "scene") if name not in f]
+    missing += [name for name in _ATTRIBUTES if name not in f.attrs]
+    if missing:
+        raise ValueError(f"result file {str(path)!r} lacks {missing[0]!r}")
+    a = {name: f.attrs[name] for name in _ATTRIBUTES}
+    arrays = {name: f[name][()] for name in _DATASETS}
+    n = int(a["n"])
+    bad = [name for name, v in arrays.items() if v.shape != (n, n)]
+    if bad:
+        raise ValueError(f"result file {str(path)!r}: dataset {bad[0]!r} has shape "
+                         f"{arrays[bad[0]].shape}, expected {(n, n)}")
+    scene_text = f["scene"][()]
+    if isinstance(scene_text, bytes):
+        scene_text = scene_text.decode("utf-8")
+    result = SteadyResult(
+        labels=arrays["phase"].astype(np.int64),
+        pressure=arrays["pressure"],
+        phase_pressures=np.atleast_1d(a["phase_pressures"]).astype(float),
+        face=arrays["face"],
+        slope=arrays["slope"],
+        rms_slope=float(a["rms_slope"]),
+        reference_slope=float(a["rms_slope_ref"]),
+        fill_factors=np.atleast_1d(a["fill_factors"]).astype(float),
+        wear_coefficients=np.atleast_1d(a["wear_coefficients"]).astype(float),
+        exponent=float(a["exponent"]),
+        normal_force=float(a["normal_force"]),
+        radius=float(a["radius"]),
+        E_star=float(a["E_star"]),
+        rms_slope_plain=float(a["rms_slope_plain"]),
+        rms_slope_error=float(a["rms_slope_error"]),
+    )
+    return result, scene_text

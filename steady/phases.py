@@ -1,0 +1,581 @@
+"""Phase maps of the punch face that can be rasterised at any grid size.
+
+A phase geometry is a continuous description of which phase sits where on
+the face, in units of the punch radius ``a`` (the face is the unit disk).
+Every geometry has
+
+- ``n_phases`` : the number of phases ``P``;
+- ``labels(n)`` : an ``(n, n)`` integer array with the phase index
+  ``0..P-1`` at every face pixel (see :func:`steady.grid.face_mask`) and
+  ``-1`` off the face;
+- ``min_grid()`` : the smallest ``n`` at which the geometry is resolved;
+- ``check_grid(n)`` : raises :class:`ValueError` (naming ``n`` and the
+  minimum) if ``labels(n)`` would refuse ``n``.
+
+Because the geometry is continuous, the same object can be rasterised at
+several ``n`` (for instance to estimate the discretisation error of the
+rms slope).  :class:`ArrayMap` is the exception: it is given as pixels and
+can only be refined by integer factors.
+
+Resolution rules (``labels`` refuses coarser grids):
+
+- every geometry: ``n >= 8``;
+- :class:`Voronoi`: at least 2 pixels per mean seed spacing.  ``N`` seeds
+  in the square ``[-1, 1]^2`` are ``2 / sqrt(N)`` apart on average and a
+  pixel is ``2 / n`` wide, so ``n >= ceil(2 sqrt(N))``;
+- :class:`Rods`: at least 3 pixels per radius of the smallest rod,
+  ``n >= ceil(6 / r_min)`` (``r_min`` in units of ``a``);
+- :class:`ArrayMap`: ``n`` must be a multiple of the map's size.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import logging
+import math
+import pathlib
+
+import numpy as np
+from scipy import ndimage, spatial
+
+from .grid import face_mask, pixel_centres
+
+__all__ = [
+    "ArrayMap",
+    "Homogeneous",
+    "MIN_GRID",
+    "Rods",
+    "Voronoi",
+    "extend_off_face",
+    "load_phase_map",
+    "realised_fill_factors",
+    "validate_labels",
+]
+
+logger = logging.getLogger(__name__)
+
+#: Smallest grid accepted by any geometry, pixels across the diameter.
+MIN_GRID = 8
+
+#: Tolerance on the sum of the fill factors.
+_FILL_SUM_TOL = 1e-9
+
+
+def _check_grid(n, minimum, what):
+    """Raise ``ValueError`` unless ``n`` is an integer ``>= minimum``."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise ValueError(f"grid size n must be an integer, got {n!r}")
+    if n < minimum:
+        raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = {minimum}")
+    return int(n)
+
+
+def validate_labels(labels, n_phases, *, face=None):
+    """Check a rasterised phase map and count the pixels of each phase.
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n, n), int
+        Phase index on the face, ``-1`` off the face.
+    n_phases : int
+        Number of phases ``P``.
+    face : ndarray of bool, shape (n, n), optional
+        ``steady.grid.face_mask(n)``, if the caller has it already.
+
+    Returns
+    -------
+    ndarray, shape (P,), int
+        Face pixels of each phase.
+
+    Raises
+    ------
+    ValueError
+        If the shape is not square, the face pixels (see
+        :func:`steady.grid.face_mask`) do not carry labels ``0..P-1``, a
+        pixel off the face is not ``-1``, or a phase has no pixel.
+    """
+    labels = np.asarray(labels)
+    if labels.ndim != 2 or labels.shape[0] != labels.shape[1]:
+        raise ValueError(f"phase labels must be a square 2-d array, got shape {labels.shape}")
+    if not np.issubdtype(labels.dtype, np.integer):
+        raise ValueError(f"phase labels must be integers, got dtype {labels.dtype}")
+    n_phases = int(n_phases)
+    if n_phases < 1:
+        raise ValueError(f"n_phases must be at least 1, got {n_phases}")
+    if face is None:
+        face = face_mask(labels.shape[0])
+    on_face = labels[face]
+    low, high = int(on_face.min()), int(on_face.max())
+    if low < 0:
+        raise ValueError(f"phase label {low} found on the face; face pixels need labels "
+                         f"0..{n_phases - 1}")
+    if high >= n_phases:
+        raise ValueError(f"unknown phase label {high} on the face: there are {n_phases} phases "
+                         f"(labels 0..{n_phases - 1})")
+    if np.any(labels[~face] != -1):
+        raise ValueError("pixels off the face must carry the label -1")
+    counts = np.bincount(on_face, minlength=n_phases)
+    empty = np.flatnonzero(counts == 0)
+    if empty.size:
+        raise ValueError(f"phase {int(empty[0])} has no pixel on the face "
+                         f"(pixel counts per phase: {counts.tolist()})")
+    return counts
+
+
+def realised_fill_factors(labels, n_phases):
+    """Fraction of the face pixels held by each phase (eq. 13).
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n, n), int
+        Phase index on the face, ``-1`` off the face.
+    n_phases : int
+
+    Returns
+    -------
+    ndarray, shape (P,)
+        Pixel-count fractions; they sum to 1.
+
+    Raises
+    ------
+    ValueError
+        As :func:`validate_labels`.
+    """
+    counts = validate_labels(labels, n_phases)
+    return counts / counts.sum()
+
+
+def extend_off_face(values):
+    """Copy of a face field with every pixel off the face set to its nearest face pixel.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, n)
+        Field on the pixel grid; values off the face
+        (:func:`steady.grid.face_mask`) are not used.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Same dtype; equal to ``values`` on the face.
+    """
+    values = np.asarray(values)
+    face = face_mask(values.shape[0])
+    _, (ii, jj) = ndimage.distance_transform_edt(~face, return_indices=True)
+    return values[ii, jj]
+
+
+def _unit_grid(n):
+    """Pixel-centre coordinates in units of the radius, shape (n,)."""
+    return pixel_centres(n, 1.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Homogeneous:
+    """A single-phase face."""
+
+    @property
+    def n_phases(self):
+        """Number of phases (1)."""
+        return 1
+
+    def min_grid(self):
+        """Smallest accepted grid, :data:`MIN_GRID`."""
+        return MIN_GRID
+
+    def check_grid(self, n):
+        """``n`` as an int; ``ValueError`` if the grid is too coarse."""
+        return _check_grid(n, self.min_grid(), "a homogeneous face")
+
+    def labels(self, n, *, check=True):
+        """Phase 0 on the face, -1 off it; shape (n, n).
+
+        ``check=False`` waives :meth:`check_grid` (error estimates on coarser grids).
+        """
+        n = self.check_grid(n) if check else int(n)
+        return np.where(face_mask(n), 0, -1)
+
+
+def _as_fill_factors(fill_factors):
+    try:
+        values = tuple(float(v) for v in fill_factors)
+    except (TypeError, ValueError):
+        raise ValueError(f"fill factors must be a sequence of numbers, got {fill_factors!r}")
+    if len(values) < 2:
+        raise ValueError(f"fill factors need at least two phases, got {list(values)}")
+    bad = [v for v in values if not (np.isfinite(v) and 0.0 < v < 1.0)]
+    if bad:
+        raise ValueError(f"fill factors must each lie in (0, 1), got {list(values)}")
+    if abs(math.fsum(values) - 1.0) > _FILL_SUM_TOL:
+        raise ValueError(f"fill factors must sum to 1, got {list(values)} "
+                         f"(sum {math.fsum(values)!r})")
+    return values
+
+
+def _apportion(fractions, total):
+    """Integers proportional to ``fractions`` summing to ``total``.
+
+    Largest-remainder rounding: each count is ``floor`` or ``ceil`` of
+    ``fraction * total``, which is as close to the fill factors as whole
+    seeds allow.
+    """
+    exact = np.asarray(fractions) * total
+    counts = np.floor(exact).astype(int)
+    remainder = total - counts.sum()
+    # Stable sort: ties go to the lower phase index, reproducibly.
+    order = np.argsort(-(exact - counts), kind="stable")
+    counts[order[:remainder]] += 1
+    return counts
+
+
+@dataclasses.dataclass(frozen=True)
+class Voronoi:
+    """Voronoi cells of random seeds, each seed labelled with a phase.
+
+    Parameters
+    ----------
+    n_seeds : int
+        Seeds, uniform in the square ``[-1, 1]^2`` (units of ``a``).  The
+        paper uses ``20^2, 40^2, 80^2, 160^2``.
+    fill_factors : sequence of float, shape (P,)
+        Target share of the seeds of each phase, each in (0, 1), summing
+        to 1.  Exactly ``round(rho_i N)`` seeds (largest remainder) get
+        phase ``i``, in random order; the realised area fractions on the
+        face scatter around the targets (see :func:`realised_fill_factors`).
+    seed : int
+        Seed of :func:`numpy.random.default_rng`; the geometry is a pure
+        function of the three parameters.
+
+    Notes
+    -----
+    Cells are rasterised by the nearest seed to each pixel centre; seeds
+    outside the disk still shape the cells near the rim.
+    """
+
+    n_seeds: int
+    fill_factors: tuple
+    seed: int
+
+    def __post_init__(self):
+        if (isinstance(self.n_seeds, bool) or not isinstance(self.n_seeds, (int, np.integer))
+                or self.n_seeds < 1):
+            raise ValueError(f"n_seeds must be a positive integer, got {self.n_seeds!r}")
+        if (isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer))
+                or self.seed < 0):
+            raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        fill = _as_fill_factors(self.fill_factors)
+        counts = _apportion(fill, int(self.n_seeds))
+        if np.any(counts == 0):
+            raise ValueError(
+                f"{self.n_seeds} seeds are too few for fill factors {list(fill)}: phase "
+                f"{int(np.flatnonzero(counts == 0)[0])} would get no seed")
+        object.__setattr__(self, "n_seeds", int(self.n_seeds))
+        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "fill_factors", fill)
+
+    @property
+    def n_phases(self):
+        """Number of phases, ``len(fill_factors)``."""
+        return len(self.fill_factors)
+
+    @functools.cached_property
+    def _seeds(self):
+        rng = np.random.default_rng(self.seed)
+        points = rng.uniform(-1.0, 1.0, size=(self.n_seeds, 2))
+        counts = _apportion(self.fill_factors, self.n_seeds)
+        phases = rng.permutation(np.repeat(np.arange(self.n_phases), counts))
+        points.flags.writeable = False
+        phases.flags.writeable = False
+        return points, phases, spatial.cKDTree(points)
+
+    @property
+    def seed_points(self):
+        """Seed positions, shape (n_seeds, 2), units of ``a`` (read-only)."""
+        return self._seeds[0]
+
+    @property
+    def seed_phases(self):
+        """Phase of each seed, shape (n_seeds,) (read-only)."""
+        return self._seeds[1]
+
+    def min_grid(self):
+        """``max(8, ceil(2 sqrt(n_seeds)))``: two pixels per mean seed spacing."""
+        return max(MIN_GRID, math.ceil(2.0 * math.sqrt(self.n_seeds)))
+
+    def check_grid(self, n):
+        """``n`` as an int; ``ValueError`` if the grid is too coarse."""
+        return _check_grid(n, self.min_grid(), f"{self.n_seeds} Voronoi seeds")
+
+    def labels(self, n, *, check=True):
+        """Nearest-seed phase at every face pixel, -1 off it; shape (n, n).
+
+        ``check=False`` waives :meth:`check_grid` (error estimates on coarser grids).
+        """
+        n = self.check_grid(n) if check else int(n)
+        _, phases, tree = self._seeds
+        face = face_mask(n)
+        x = _unit_grid(n)
+        i, j = np.nonzero(face)
+        _, nearest = tree.query(np.column_stack([x[i], x[j]]))
+        out = np.full((n, n), -1, dtype=np.int64)
+        out[i, j] = phases[nearest]
+        return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Rods:
+    """Circular rods of one phase in a matrix of another (paper Fig. 7-8).
+
+    Parameters
+    ----------
+    centres : sequence of (float, float)
+        Rod centres, units of ``a``.
+    radii : sequence of float
+        Rod radii, units of ``a``, one per rod.
+    matrix_phase : int, optional
+        Phase of the face outside the rods (default 0).
+    rod_phases : sequence of int, optional
+        Phase of each rod (default: 1 for every rod).
+
+    Notes
+    -----
+    Rods must lie inside the face (``|c| + r <= 1``) and must not overlap
+    (touching is allowed).  Every phase ``0..P-1``, with
+    ``P = 1 + max(matrix_phase, rod_phases)``, must be used.  A pixel
+    belongs to a rod when its centre lies strictly inside the rod.
+    """
+
+    centres: tuple
+    radii: tuple
+    matrix_phase: int = 0
+    rod_phases: tuple | None = None
+
+    def __post_init__(self):
+        try:
+            centres = tuple((float(c[0]), float(c[1])) for c in self.centres)
+            bad_len = [c for c in self.centres if len(c) != 2]
+        except (TypeError, ValueError, IndexError):
+            raise ValueError(f"rod centres must be pairs of numbers, got {self.centres!r}")
+        if bad_len:
+            raise ValueError(f"rod centres must be pairs of numbers, got {self.centres!r}")
+        try:
+            radii = tuple(float(r) for r in self.radii)
+        except (TypeError, ValueError):
+            raise ValueError(f"rod radii must be numbers, got {self.radii!r}")
+        if not centres:
+            raise ValueError("at least one rod is needed")
+        if len(radii) != len(centres):
+            raise ValueError(f"{len(centres)} rod centres but {len(radii)} radii")
+        for r in radii:
+            if not (np.isfinite(r) and r > 0):
+                raise ValueError(f"rod radii must be positive and finite, got {list(radii)}")
+        for c in centres:
+            if not all(np.isfinite(c)):
+                raise ValueError(f"rod centres must be finite, got {list(centres)}")
+        rod_phases = (1,) * len(centres) if self.rod_phases is None else self.rod_phases
+        phases = (self.matrix_phase, *rod_phases)
+        if any(isinstance(p, bool) or not isinstance(p, (int, np.integer)) or p < 0
+               for p in phases):
+            raise ValueError(f"matrix_phase and rod_phases must be non-negative integers, got "
+                             f"{self.matrix_phase!r} and {self.rod_phases!r}")
+        rod_phases = tuple(int(p) for p in rod_phases)
+        if len(rod_phases) != len(centres):
+            raise ValueError(f"{len(centres)} rods but {len(rod_phases)} rod phases")
+        for k, ((cx, cy), r) in enumerate(zip(centres, radii)):
+            if math.hypot(cx, cy) + r > 1.0 + 1e-12:
+                raise ValueError(f"rod {k} (centre ({cx}, {cy}), radius {r}, units of the punch "
+                                 f"radius) does not lie inside the face")
+        for k in range(len(centres)):
+            for m in range(k + 1, len(centres)):
+                d = math.dist(centres[k], centres[m])
+                if d < radii[k] + radii[m] - 1e-12:
+                    raise ValueError(f"rods {k} and {m} overlap: centres {d:.6g} apart, radii "
+                                     f"{radii[k]} and {radii[m]} (units of the punch radius)")
+        used = set(phases)
+        missing = sorted(set(range(max(used) + 1)) - used)
+        if missing:
+            raise ValueError(f"phase {missing[0]} is used by neither the matrix nor a rod "
+                             f"(matrix_phase={self.matrix_phase}, rod_phases={list(rod_phases)})")
+        object.__setattr__(self, "centres", centres)
+        object.__setattr__(self, "radii", radii)
+        object.__setattr__(self, "matrix_phase", int(self.matrix_phase))
+        object.__setattr__(self, "rod_phases", rod_phases)
+
+    @property
+    def n_phases(self):
+        """Number of phases, ``1 + max(matrix_phase, rod_phases)``."""
+        return 1 + max(self.matrix_phase, *self.rod_phases)
+
+    def min_grid(self):
+        """``max(8, ceil(6 / r_min))``: three pixels per radius of the smallest rod."""
+        return max(MIN_GRID, math.ceil(6.0 / min(self.radii) - 1e-9))
+
+    def check_grid(self, n):
+        """``n`` as an int; ``ValueError`` if the grid is too coarse."""
+        return _check_grid(n, self.min_grid(), f"rods of radius {min(self.radii)} a")
+
+    def labels(self, n, *, check=True):
+        """Rod phase inside each rod, matrix phase elsewhere on the face; shape (n, n).
+
+        ``check=False`` waives :meth:`check_grid` (error estimates on coarser grids).
+        """
+        n = self.check_grid(n) if check else int(n)
+        x = _unit_grid(n)
+        out = np.where(face_mask(n), self.matrix_phase, -1)
+        for (cx, cy), r, phase in zip(self.centres, self.radii, self.rod_phases):
+            inside = (x[:, None] - cx) ** 2 + (x[None, :] - cy) ** 2 < r * r
+            out[inside] = phase
+        return out
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ArrayMap:
+    """A phase map given as pixels.
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n0, n0), int
+        Phase index at each pixel of an ``n0 x n0`` grid over
+        ``[-a, a]^2``.  On the face (:func:`steady.grid.face_mask`) the
+        labels must be ``0..P-1`` with every phase present; off the face any
+        value is ignored (``-1`` is customary).
+    source : str, optional
+        Where the map came from (for messages).
+
+    Notes
+    -----
+    ``labels(n)`` accepts ``n = k n0`` (pixel replication).  The finer face
+    reaches a little further out at the rim than the coarse one; those
+    pixels take the label of the nearest face pixel of the coarse map.
+    """
+
+    labels_array: np.ndarray
+    source: str = "array"
+
+    def __post_init__(self):
+        a = np.asarray(self.labels_array)
+        if a.ndim != 2 or a.shape[0] != a.shape[1]:
+            raise ValueError(f"phase map {self.source} must be a square 2-d array, "
+                             f"got shape {a.shape}")
+        if not (a.dtype == bool or np.issubdtype(a.dtype, np.integer)):
+            raise ValueError(f"phase map {self.source} must hold integers, got dtype {a.dtype}")
+        a = a.astype(np.int64)
+        n0 = a.shape[0]
+        _check_grid(n0, MIN_GRID, f"phase map {self.source}")
+        face = face_mask(n0)
+        n_phases = int(a[face].max()) + 1
+        try:
+            validate_labels(np.where(face, a, -1), n_phases, face=face)
+        except ValueError as err:
+            raise ValueError(f"phase map {self.source}: {err}") from None
+        # Off-face pixels take the label of the nearest face pixel, so that
+        # refined grids (whose face reaches further out) are fully labelled.
+        filled = extend_off_face(a)
+        filled.flags.writeable = False
+        object.__setattr__(self, "labels_array", filled)
+        object.__setattr__(self, "_n_phases", n_phases)
+
+    @property
+    def n_phases(self):
+        """Number of phases: one more than the largest label on the face."""
+        return self._n_phases
+
+    @property
+    def size(self):
+        """Pixels ``n0`` across the map."""
+        return self.labels_array.shape[0]
+
+    def min_grid(self):
+        """The map's own size ``n0``."""
+        return self.size
+
+    def check_grid(self, n):
+        """``n`` as an int; ``ValueError`` unless it is a multiple of the map size."""
+        n0 = self.size
+        n = _check_grid(n, n0, f"phase map {self.source} of {n0} x {n0} pixels")
+        if n % n0:
+            raise ValueError(f"grid size n = {n} is not a multiple of the size {n0} of phase "
+                             f"map {self.source}")
+        return n
+
+    def labels(self, n, *, check=True):
+        """Labels on an ``n x n`` grid, ``n`` a multiple of the map size.
+
+        A pixel map exists only at multiples of its size, so ``check=False``
+        waives nothing.
+        """
+        n = self.check_grid(n)
+        k = n // self.size
+        fine = self.labels_array if k == 1 else np.kron(self.labels_array,
+                                                        np.ones((k, k), dtype=np.int64))
+        return np.where(face_mask(n), fine, -1)
+
+
+def load_phase_map(path, *, max_phases=16):
+    """Read a phase map from a ``.npy`` or ``.png`` file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``.npy``: a square 2-d integer array, phase index per pixel (any
+        value off the face, e.g. -1).  ``.png``: a square image; each
+        distinct grey level (or colour) inside the face is one phase,
+        numbered by increasing value (colours compare as ``(R, G, B)``
+        tuples; the alpha channel is ignored).
+    max_phases : int, optional
+        Refuse images with more distinct levels on the face than this
+        (default 16); an anti-aliased image would otherwise give hundreds
+        of phases.
+
+    Returns
+    -------
+    ArrayMap
+
+    Raises
+    ------
+    ValueError
+        Missing or unreadable file, unsupported suffix, bad contents.
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise ValueError(f"phase map file {str(path)!r} does not exist")
+    suffix = path.suffix.lower()
+    if suffix == ".npy":
+        try:
+            a = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as err:
+            raise ValueError(f"cannot read phase map {str(path)!r}: {err}") from None
+        return ArrayMap(a, source=repr(str(path)))
+    if suffix == ".png":
+        return ArrayMap(_png_labels(path, max_phases), source=repr(str(path)))
+    raise ValueError(f"phase map {str(path)!r} must be a .npy or .png file")
+
+
+def _png_labels(path, max_phases):
+    import matplotlib.image  # deferred: only PNG maps need it
+
+    try:
+        img = matplotlib.image.imread(path)
+    except (OSError, ValueError, SyntaxError) as err:
+        raise ValueError(f"cannot read phase map {str(path)!r}: {err}") from None
+    if img.ndim == 3:
+        img = img[..., :3]  # drop alpha
+    if img.shape[0] != img.shape[1]:
+        raise ValueError(f"phase map {str(path)!r} must be square, got {img.shape[1]} x "
+                         f"{img.shape[0]} pixels")
+    n0 = img.shape[0]
+    if np.issubdtype(img.dtype, np.floating):
+        img = np.rint(img * 65535).astype(np.int64)  # 8- and 16-bit levels stay distinct
+    else:
+        img = img.astype(np.int64)
+    pixels = img.reshape(n0 * n0, -1)
+    face = face_mask(n0).ravel()
+    levels, inverse = np.unique(pixels[face], axis=0, return_inverse=True)
+    if len(levels) > max_phases:
+        raise ValueError(f"phase map {str(path)!r} has {len(levels)} distinct levels on the "
+                         f"face, more than max_phases={max_phases} (anti-aliased image?)")
+    labels = np.full(n0 * n0, -1, dtype=np.int64)
+    labels[face] = inverse.ravel()
+    logger.debug("%s: %d phases from levels %s", path, len(levels), levels.tolist())
+    return labels.reshape(n0, n0)

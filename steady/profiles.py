@@ -1,0 +1,148 @@
+"""Profiles of a face: straight cross sections, ring averages, differential profiles.
+
+The differential profile of the paper (Fig. 7b, 8b) is a cross section minus
+the average of the face over the ring of the same radius: it removes the
+macroscopic curvature (eq. 10) and leaves the effect of the phases.
+
+Fields are ``(n, n)`` arrays on the pixel grid of :mod:`steady.grid`
+(axis 0 is x), NaN off the face.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from .grid import face_mask, pixel_size, polar
+from .phases import extend_off_face
+
+__all__ = ["cross_section", "differential_profile", "ring_average"]
+
+
+def _check_field(field):
+    field = np.asarray(field, dtype=float)
+    if field.ndim != 2 or field.shape[0] != field.shape[1]:
+        raise ValueError(f"field must be a square 2-d array, got shape {field.shape}")
+    return field
+
+
+def _check_radius(radius):
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"radius must be positive and finite (m), got {radius!r}")
+
+
+def cross_section(field, radius, start, end, n_points):
+    """Sample a face along a straight line by bilinear interpolation.
+
+    Parameters
+    ----------
+    field : ndarray, shape (n, n)
+        Values at the pixel centres (e.g. ``SteadyResult.face``, m); values
+        off the face are not used.
+    radius : float, m
+        Punch radius ``a``.
+    start, end : (float, float), m
+        End points ``(x, y)`` of the line.
+    n_points : int
+        Samples, at least 2, evenly spaced from ``start`` to ``end``.
+
+    Returns
+    -------
+    distance : ndarray, shape (n_points,), m
+        Distance of each sample from ``start``.
+    values : ndarray, shape (n_points,)
+        Interpolated values; NaN at samples off the face (``r > a``).
+
+    Notes
+    -----
+    Near the rim the bilinear stencil reaches pixels off the face; those
+    take the value of the nearest face pixel, so that the profile extends
+    to ``r = a``.
+    """
+    field = _check_field(field)
+    _check_radius(radius)
+    distance, points = _line(start, end, n_points)
+    n = field.shape[0]
+    h = pixel_size(n, radius)
+    filled = extend_off_face(field)
+    index = (points + radius) / h - 0.5  # fractional pixel index along each axis
+    values = ndimage.map_coordinates(filled, index, order=1, mode="nearest")
+    values[np.hypot(points[0], points[1]) > radius] = np.nan
+    return distance, values
+
+
+def _line(start, end, n_points):
+    """Distance from ``start`` (n_points,) and points (2, n_points) of a sampled line, m."""
+    if isinstance(n_points, bool) or int(n_points) != n_points or n_points < 2:
+        raise ValueError(f"n_points must be an integer >= 2, got {n_points!r}")
+    start = np.asarray(start, dtype=float)
+    end = np.asarray(end, dtype=float)
+    if start.shape != (2,) or end.shape != (2,):
+        raise ValueError(f"start and end must be (x, y) pairs in m, got {start!r} and {end!r}")
+    t = np.linspace(0.0, 1.0, int(n_points))
+    points = start[:, None] + (end - start)[:, None] * t[None, :]
+    return t * np.linalg.norm(end - start), points
+
+
+def ring_average(field, radius, n_bins):
+    """Average of a face over rings of equal radius.
+
+    Parameters
+    ----------
+    field : ndarray, shape (n, n)
+        Values at the pixel centres; only face pixels are used.
+    radius : float, m
+    n_bins : int
+        Rings of equal width ``a / n_bins`` from 0 to ``a``.  About ``n/2``
+        (one pixel per ring) is a sensible choice.
+
+    Returns
+    -------
+    r : ndarray, shape (n_bins,), m
+        Mid radius of each ring.
+    mean : ndarray, shape (n_bins,)
+        Average over the face pixels whose centre lies in the ring; NaN for
+        a ring that holds no pixel centre.
+    """
+    field = _check_field(field)
+    _check_radius(radius)
+    if int(n_bins) != n_bins or n_bins < 1:
+        raise ValueError(f"n_bins must be a positive integer, got {n_bins!r}")
+    n_bins = int(n_bins)
+    n = field.shape[0]
+    face = face_mask(n)
+    r, _ = polar(n, radius)
+    ring = np.minimum((r[face] / radius * n_bins).astype(int), n_bins - 1)
+    sums = np.bincount(ring, weights=field[face], minlength=n_bins)
+    counts = np.bincount(ring, minlength=n_bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
+    return (np.arange(n_bins) + 0.5) * radius / n_bins, mean
+
+
+def differential_profile(field, radius, start, end, n_points, *, n_bins=None):
+    """Cross section minus the ring average at each sample's radius (Fig. 7b, 8b).
+
+    Parameters
+    ----------
+    field, radius, start, end, n_points
+        As in :func:`cross_section`.
+    n_bins : int, optional
+        Rings for :func:`ring_average`; default ``n // 2`` (one pixel wide).
+
+    Returns
+    -------
+    distance : ndarray, shape (n_points,), m
+    values : ndarray, shape (n_points,)
+        NaN off the face.  Zero, up to interpolation, for an axisymmetric
+        face.
+    """
+    field = _check_field(field)
+    n = field.shape[0]
+    n_bins = max(n // 2, 1) if n_bins is None else n_bins
+    distance, values = cross_section(field, radius, start, end, n_points)
+    r_ring, mean = ring_average(field, radius, n_bins)
+    ok = np.isfinite(mean)
+    _, points = _line(start, end, n_points)
+    r = np.hypot(points[0], points[1])
+    return distance, values - np.interp(r, r_ring[ok], mean[ok])

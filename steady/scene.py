@@ -1,0 +1,301 @@
+"""Scene files: one TOML file describes one punch, load, counter-body and grid.
+
+Example (every key of the core sections)::
+
+    [punch]
+    radius = 0.004                      # m
+    [load]
+    normal_force = 10.0                 # N
+    [counterbody]
+    E_star = 1.3e6                      # Pa
+    [grid]
+    n = 256                             # pixels across the diameter
+    [wear]
+    coefficients = [1.0e-9, 1.7e-9]     # 1/Pa, one per phase
+    exponent = 1.0                      # optional, default 1 (Archard)
+    [phases]
+    map = { kind = "file", path = "phases.npy" }
+
+Map kinds (``[phases] map``):
+
+- ``{ kind = "homogeneous" }``
+- ``{ kind = "voronoi", n_seeds = 1600, fill_factors = [0.5, 0.5], seed = 2024 }``
+- ``{ kind = "rods", centres = [[0.0, 0.0], ...], radii = [0.0025, ...],
+  matrix_phase = 0, rod_phases = [1, ...] }`` -- centres and radii in m
+  (like ``[punch] radius``); ``matrix_phase`` (default 0) and
+  ``rod_phases`` (default 1 for every rod) optional.
+- ``{ kind = "file", path = "phases.npy" }`` -- ``.npy`` or ``.png``, the
+  path relative to the scene file (see :func:`steady.phases.load_phase_map`).
+
+Every key is checked; unknown sections and keys are errors, so that a typo
+cannot pass silently.  Other packages can add sections through
+``extra_sections``; this module knows nothing of them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pathlib
+import types
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from .phases import Homogeneous, Rods, Voronoi, load_phase_map
+
+__all__ = ["CORE_SECTIONS", "Scene", "load_scene", "parse_scene"]
+
+#: Sections every scene file has, with their keys (required, optional).
+CORE_SECTIONS = {
+    "punch": ({"radius"}, set()),
+    "load": ({"normal_force"}, set()),
+    "counterbody": ({"E_star"}, set()),
+    "grid": ({"n"}, set()),
+    "wear": ({"coefficients"}, {"exponent"}),
+    "phases": ({"map"}, set()),
+}
+
+_MAP_KEYS = {
+    "homogeneous": (set(), set()),
+    "voronoi": ({"n_seeds", "fill_factors", "seed"}, set()),
+    "rods": ({"centres", "radii"}, {"matrix_phase", "rod_phases"}),
+    "file": ({"path"}, set()),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """A parsed scene file.
+
+    Attributes
+    ----------
+    radius : float, m
+        Punch radius ``a``.
+    normal_force : float, N
+        ``F_N``.
+    E_star : float, Pa
+        Effective modulus of the counter-body.
+    n : int
+        Pixels across the diameter.
+    wear_coefficients : tuple of float, 1/Pa
+        ``k_i``, one per phase.
+    exponent : float
+        ``m`` in the wear law ``dw/ds = k p^m``.
+    geometry : Homogeneous, Voronoi, Rods or ArrayMap
+        Phase geometry in units of ``a`` (see :mod:`steady.phases`).
+    source_path : pathlib.Path or None
+        The scene file, if read from one.
+    text : str
+        The TOML text as read.
+    extra : mapping
+        Parsed extra sections, by name (only those present in the file).
+    """
+
+    radius: float
+    normal_force: float
+    E_star: float
+    n: int
+    wear_coefficients: tuple
+    exponent: float
+    geometry: object
+    source_path: pathlib.Path | None = None
+    text: str = ""
+    extra: types.MappingProxyType = dataclasses.field(
+        default_factory=lambda: types.MappingProxyType({}))
+
+    @property
+    def n_phases(self):
+        """Number of phases of the geometry."""
+        return self.geometry.n_phases
+
+
+def _number(value, key, unit, *, positive=True):
+    """A finite float (``int`` accepted, ``bool`` not)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{key} must be a number ({unit}), got {value!r}")
+    v = float(value)
+    if not math.isfinite(v) or (positive and v <= 0):
+        raise ValueError(f"{key} must be a positive finite number ({unit}), got {value!r}")
+    return v
+
+
+def _integer(value, key, *, minimum):
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{key} must be an integer, got {value!r}")
+    if value < minimum:
+        raise ValueError(f"{key} must be at least {minimum}, got {value!r}")
+    return value
+
+
+def _list(value, key):
+    if not isinstance(value, list):
+        raise ValueError(f"{key} must be an array, got {value!r}")
+    return value
+
+
+def _check_keys(table, where, required, optional):
+    if not isinstance(table, dict):
+        raise ValueError(f"{where} must be a table, got {table!r}")
+    unknown = sorted(set(table) - required - optional)
+    if unknown:
+        allowed = ", ".join(sorted(required | optional)) or "none"
+        raise ValueError(f"unknown key {unknown[0]!r} in {where} (allowed: {allowed})")
+    missing = sorted(required - set(table))
+    if missing:
+        raise ValueError(f"missing key {missing[0]!r} in {where}")
+
+
+def _geometry(spec, radius, base_dir):
+    where = "[phases] map"
+    if not isinstance(spec, dict):
+        raise ValueError(f"{where} must be an inline table with a 'kind', got {spec!r}")
+    kind = spec.get("kind")
+    if kind not in _MAP_KEYS:
+        raise ValueError(f"{where} kind must be one of {sorted(_MAP_KEYS)}, got {kind!r}")
+    required, optional = _MAP_KEYS[kind]
+    _check_keys(spec, f"{where} (kind {kind!r})", required | {"kind"}, optional)
+    if kind == "homogeneous":
+        return Homogeneous()
+    if kind == "voronoi":
+        n_seeds = _integer(spec["n_seeds"], f"{where} n_seeds", minimum=1)
+        fill = [_number(v, f"{where} fill_factors", "dimensionless")
+                for v in _list(spec["fill_factors"], f"{where} fill_factors")]
+        seed = _integer(spec["seed"], f"{where} seed", minimum=0)
+        try:
+            return Voronoi(n_seeds, tuple(fill), seed)
+        except ValueError as err:
+            raise ValueError(f"{where}: {err}") from None
+    if kind == "rods":
+        centres = []
+        for c in _list(spec["centres"], f"{where} centres"):
+            if not isinstance(c, list) or len(c) != 2:
+                raise ValueError(f"{where} centres must be [x, y] pairs in m, got {c!r}")
+            centres.append(tuple(_number(v, f"{where} centres", "m", positive=False) / radius
+                                 for v in c))
+        radii = [_number(v, f"{where} radii", "m") / radius
+                 for v in _list(spec["radii"], f"{where} radii")]
+        matrix_phase = _integer(spec.get("matrix_phase", 0), f"{where} matrix_phase",
+                                minimum=0)
+        rod_phases = spec.get("rod_phases")
+        if rod_phases is not None:
+            rod_phases = tuple(_integer(v, f"{where} rod_phases", minimum=0)
+                               for v in _list(rod_phases, f"{where} rod_phases"))
+        try:
+            return Rods(tuple(centres), tuple(radii), matrix_phase, rod_phases)
+        except ValueError as err:
+            raise ValueError(f"{where}: {err}") from None
+    # kind == "file"
+    path = spec["path"]
+    if not isinstance(path, str) or not path:
+        raise ValueError(f"{where} path must be a non-empty string, got {path!r}")
+    return load_phase_map(pathlib.Path(base_dir) / path)
+
+
+def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
+    """Parse and check the text of a scene file.
+
+    Parameters
+    ----------
+    text : str
+        TOML text.
+    base_dir : str or path-like
+        Directory against which relative paths in the scene are resolved.
+    extra_sections : mapping of str to callable, optional
+        ``name -> parse(table, base_dir)`` for sections beyond the core
+        ones; each result is kept in ``Scene.extra[name]``.  Sections
+        absent from the file are not called.
+    source_path : path-like, optional
+        Recorded in ``Scene.source_path``.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    ValueError
+        Malformed TOML, unknown or missing section or key, bad value (the
+        message names the key and the value), missing map file.
+    """
+    extra_sections = dict(extra_sections or {})
+    clash = sorted(set(extra_sections) & set(CORE_SECTIONS))
+    if clash:
+        raise ValueError(f"extra section {clash[0]!r} clashes with a core section")
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"malformed TOML: {err}") from None
+    base_dir = pathlib.Path(base_dir)
+    unknown = sorted(set(doc) - set(CORE_SECTIONS) - set(extra_sections))
+    if unknown:
+        allowed = ", ".join(sorted(set(CORE_SECTIONS) | set(extra_sections)))
+        raise ValueError(f"unknown section [{unknown[0]}] (allowed: {allowed})")
+    for name, (required, optional) in CORE_SECTIONS.items():
+        if name not in doc:
+            raise ValueError(f"missing section [{name}]")
+        _check_keys(doc[name], f"[{name}]", required, optional)
+
+    radius = _number(doc["punch"]["radius"], "[punch] radius", "m")
+    normal_force = _number(doc["load"]["normal_force"], "[load] normal_force", "N")
+    E_star = _number(doc["counterbody"]["E_star"], "[counterbody] E_star", "Pa")
+    n = _integer(doc["grid"]["n"], "[grid] n", minimum=2)
+    k = tuple(_number(v, "[wear] coefficients", "1/Pa")
+              for v in _list(doc["wear"]["coefficients"], "[wear] coefficients"))
+    exponent = _number(doc["wear"].get("exponent", 1.0), "[wear] exponent", "dimensionless")
+    geometry = _geometry(doc["phases"]["map"], radius, base_dir)
+    if len(k) != geometry.n_phases:
+        raise ValueError(f"[wear] coefficients has {len(k)} values {list(k)} but the phase "
+                         f"map has {geometry.n_phases} phases")
+    try:
+        geometry.check_grid(n)
+    except ValueError as err:
+        raise ValueError(f"[grid] n: {err}") from None
+
+    extra = {}
+    for name, parse in extra_sections.items():
+        if name in doc:
+            try:
+                extra[name] = parse(doc[name], base_dir)
+            except ValueError as err:
+                raise ValueError(f"[{name}]: {err}") from None
+    return Scene(radius=radius, normal_force=normal_force, E_star=E_star, n=n,
+                 wear_coefficients=k, exponent=exponent, geometry=geometry,
+                 source_path=None if source_path is None else pathlib.Path(source_path),
+                 text=text, extra=types.MappingProxyType(extra))
+
+
+def load_scene(path, *, extra_sections=None):
+    """Read and check a scene file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.toml`` file; relative paths inside it are resolved against
+        its directory.
+    extra_sections : mapping of str to callable, optional
+        As in :func:`parse_scene`.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    ValueError
+        Missing or unreadable file, or any error of :func:`parse_scene`;
+        the message starts with the path.
+    """
+    path = pathlib.Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ValueError(f"scene file {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ValueError(f"cannot read scene file {str(path)!r}: {err}") from None
+    try:
+        return parse_scene(text, path.parent, extra_sections=extra_sections, source_path=path)
+    except ValueError as err:
+        raise ValueError(f"{path}: {err}") from None

@@ -1,0 +1,276 @@
+"""Closed-form limiting worn face of a multi-phase punch (paper eq. 7, 9, 15).
+
+In the steady state every point of the face wears at the same rate.  With a
+local wear law ``dw/ds = k_i p^m`` on phase ``i`` that means
+``k_i p_i^m = C``: the pressure is constant on each phase,
+
+    p_i = F_N k_i^(-1/m) / sum_j A_j k_j^(-1/m)
+
+(eq. 7 for Archard's law ``m = 1``), and the limiting face is the
+half-space displacement under that pressure, ``f_inf = K p`` (eq. 9).  The
+face is defined up to a constant (the rigid offset keeps growing); it is
+reported as ``K p`` itself.
+
+Normalisation (eq. 12, 15): with ``pbar = F_N / (pi a^2)`` and
+``grad_f0 = 4 pbar / (pi E*)``, the normalised face
+``f_inf / (grad_f0 a)`` and the normalised rms slope ``rms / grad_f0`` depend
+only on the phase geometry, the wear ratios and the exponent.  For a
+homogeneous cylinder the normalised face is ``E(r/a)`` (eq. 10) and the
+normalised rms slope tends to 1 under refinement
+(:func:`steady.reference.cylinder_rms_slope`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+
+import numpy as np
+
+from . import reference
+from .accuracy import estimate_rms_slope
+from .grid import face_mask, pixel_size
+from .halfspace import HalfSpace
+from .phases import validate_labels
+from .pressures import phase_pressures
+
+__all__ = ["SteadyResult", "phase_pressures", "solve", "solve_scene"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SteadyResult:
+    """Limiting worn state of a multi-phase punch.
+
+    Attributes
+    ----------
+    labels : ndarray, shape (n, n), int
+        Phase index on the face, -1 off it.
+    pressure : ndarray, shape (n, n), Pa
+        Steady pressure, constant on each phase, zero off the face.
+    phase_pressures : ndarray, shape (P,), Pa
+        Pressure on each phase (eq. 7).
+    face : ndarray, shape (n, n), m
+        Limiting face ``f_inf = K p`` (eq. 9) at the pixel centres; NaN
+        off the face.
+    slope : ndarray, shape (n, n), dimensionless
+        Magnitude of the gradient of ``f_inf``; NaN off the face.
+    rms_slope : float, dimensionless
+        Best estimate of the rms slope over the face: the energy-corrected
+        value of :mod:`steady.accuracy` where ``rms_slope_error`` is set,
+        else ``rms_slope_plain``.
+    reference_slope : float, dimensionless
+        ``grad_f0 = 4 pbar / (pi E*)`` (eq. 12).
+    fill_factors : ndarray, shape (P,)
+        Realised area fractions of the phases (pixel counts, eq. 13).
+    wear_coefficients : ndarray, shape (P,), 1/Pa
+        ``k_i`` of each phase.
+    exponent : float
+        Pressure exponent ``m`` of the wear law.
+    normal_force : float, N
+    radius : float, m
+    E_star : float, Pa
+    rms_slope_plain : float, dimensionless
+        Root mean square of ``slope`` over the face pixels (plain pixel
+        quadrature: first order, low by up to tens of per cent on fine
+        grains).
+    rms_slope_error : float, dimensionless
+        Estimated discretisation error of ``rms_slope``; NaN when not
+        estimated (:func:`solve` alone does not).
+    """
+
+    labels: np.ndarray
+    pressure: np.ndarray
+    phase_pressures: np.ndarray
+    face: np.ndarray
+    slope: np.ndarray
+    rms_slope: float
+    reference_slope: float
+    fill_factors: np.ndarray
+    wear_coefficients: np.ndarray
+    exponent: float
+    normal_force: float
+    radius: float
+    E_star: float
+    rms_slope_plain: float = math.nan
+    rms_slope_error: float = math.nan
+
+    @property
+    def n(self):
+        """Pixels across the diameter."""
+        return self.labels.shape[0]
+
+    @property
+    def n_phases(self):
+        """Number of phases ``P``."""
+        return self.phase_pressures.shape[0]
+
+    @property
+    def pixel_size(self):
+        """Pixel side ``h = 2a/n``, m."""
+        return pixel_size(self.n, self.radius)
+
+    @property
+    def mean_pressure(self):
+        """``pbar = F_N / (pi a^2)``, Pa."""
+        return reference.mean_pressure(self.normal_force, self.radius)
+
+    @property
+    def normalised_rms_slope(self):
+        """``rms_slope / grad_f0`` (eq. 15), dimensionless."""
+        return self.rms_slope / self.reference_slope
+
+    @property
+    def normalised_face(self):
+        """``f_inf / (grad_f0 a)``, shape (n, n), dimensionless; NaN off the face.
+
+        Eq. 15 divided by ``a``; equals ``E(r/a)`` for a homogeneous
+        cylinder (eq. 10).
+        """
+        return self.face / (self.reference_slope * self.radius)
+
+
+def _positive_finite(value, name, unit):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a positive finite number ({unit}), "
+                         f"got {value!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise ValueError(f"{name} must be a positive finite number ({unit}), got {value!r}")
+    return v
+
+
+def _wear_coefficients(wear_coefficients, n_phases):
+    k = np.atleast_1d(np.asarray(wear_coefficients, dtype=float))
+    if k.ndim != 1 or k.size != n_phases:
+        raise ValueError(f"need one wear coefficient per phase ({n_phases}), got "
+                         f"{np.asarray(wear_coefficients).tolist()}")
+    if not np.all(np.isfinite(k) & (k > 0)):
+        raise ValueError(f"wear coefficients must be positive and finite (1/Pa), got "
+                         f"{k.tolist()}")
+    return k
+
+
+def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
+    """Limiting worn face of a multi-phase punch (eq. 7, 9).
+
+    Parameters
+    ----------
+    halfspace : HalfSpace
+        Operator of the ``n x n`` grid over ``[-a, a]^2``; carries ``n``,
+        the pixel size ``h = 2a/n`` and ``E*``.
+    labels : ndarray, shape (n, n), int
+        Phase index ``0..P-1`` on the face (:func:`steady.grid.face_mask`),
+        -1 off it; every phase present.
+    wear_coefficients : array_like, shape (P,), 1/Pa
+        ``k_i = k_wear,i / sigma_0,i``, positive and finite.
+    normal_force : float, N
+        ``F_N``, positive and finite.
+    exponent : float, optional
+        Pressure exponent ``m`` of the local wear law ``dw/ds = k p^m``
+        (default 1, Archard).  Positive and finite.
+
+    Returns
+    -------
+    SteadyResult
+
+    Raises
+    ------
+    ValueError
+        Bad input (named in the message), or a non-finite result.
+
+    Notes
+    -----
+    The punch radius is ``a = n h / 2``.  One forward transform of the
+    pressure feeds the three products (face and two slope components), so a
+    solve costs one forward and three inverse transforms.
+    """
+    if not isinstance(halfspace, HalfSpace):
+        raise ValueError(f"halfspace must be a HalfSpace, got {type(halfspace).__name__}")
+    labels = np.asarray(labels)
+    n = halfspace.n
+    if labels.shape != (n, n):
+        raise ValueError(f"labels must have shape {(n, n)} to match the half-space grid, "
+                         f"got {labels.shape}")
+    normal_force = _positive_finite(normal_force, "normal_force", "N")
+    exponent = _positive_finite(exponent, "exponent", "dimensionless")
+    if not np.issubdtype(labels.dtype, np.integer):
+        raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
+    n_phases = int(labels.max()) + 1
+    k = _wear_coefficients(wear_coefficients, n_phases)
+    on = face_mask(n)
+    counts = validate_labels(labels, n_phases, face=on)
+
+    h = halfspace.h
+    radius = 0.5 * n * h
+    p_phase = phase_pressures(counts, k, normal_force, h * h, exponent=exponent)
+    # Label -1 (off the face) picks the trailing zero.
+    pressure = np.append(p_phase, 0.0)[labels]
+
+    pressure_q = halfspace.forward(pressure)
+    face = halfspace.displacement_q(pressure_q)
+    gx, gy = halfspace.gradient(pressure, pressure_q=pressure_q)
+    slope2 = gx * gx
+    slope2 += gy * gy
+    rms = math.sqrt(np.sum(slope2, where=on) / counts.sum())
+    off = ~on
+    face[off] = np.nan
+    slope = np.sqrt(slope2, out=slope2)
+    slope[off] = np.nan
+    if not math.isfinite(rms):
+        raise ValueError(f"steady solve produced a non-finite rms slope ({rms}); "
+                         f"phase pressures {p_phase.tolist()} Pa")
+    grad_f0 = reference.reference_slope(reference.mean_pressure(normal_force, radius),
+                                        halfspace.E_star)
+    logger.debug("steady n=%d P=%d rms slope %.6g (%.6g grad_f0)", n, n_phases, rms,
+                 rms / grad_f0)
+    return SteadyResult(
+        labels=labels,
+        pressure=pressure,
+        phase_pressures=p_phase,
+        face=face,
+        slope=slope,
+        rms_slope=rms,
+        reference_slope=grad_f0,
+        fill_factors=counts / counts.sum(),
+        wear_coefficients=k,
+        exponent=exponent,
+        normal_force=normal_force,
+        radius=radius,
+        E_star=halfspace.E_star,
+        rms_slope_plain=rms,
+    )
+
+
+def solve_scene(scene, *, n=None, slope_error=True):
+    """Solve the steady state of a :class:`steady.scene.Scene`.
+
+    Parameters
+    ----------
+    scene : Scene
+    n : int, optional
+        Grid size; default ``scene.n``.  The geometry is rasterised at this
+        size.
+    slope_error : bool, optional
+        Replace the plain pixel rms slope by the energy-corrected one with
+        its error estimate (:func:`steady.accuracy.estimate_rms_slope`,
+        default True).  Costs a few solves of the same grid.
+
+    Returns
+    -------
+    SteadyResult
+    """
+    n = scene.n if n is None else n
+    labels = scene.geometry.labels(n)
+    halfspace = HalfSpace(n, pixel_size(n, scene.radius), scene.E_star)
+    result = solve(halfspace, labels, scene.wear_coefficients, scene.normal_force,
+                   exponent=scene.exponent)
+    if not slope_error:
+        return result
+    estimate = estimate_rms_slope(scene.geometry, scene.wear_coefficients, scene.normal_force,
+                                  scene.radius, scene.E_star, n, exponent=scene.exponent)
+    return dataclasses.replace(result, rms_slope=estimate.rms_slope,
+                               rms_slope_error=estimate.error)

@@ -1,0 +1,91 @@
+"""Command line ``python -m steady``: good runs, refusals, error reporting."""
+
+import pathlib
+import subprocess
+import sys
+
+import h5py
+import pytest
+
+SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
+
+SCENE = """\
+[punch]
+radius = 0.004
+[load]
+normal_force = 10.0
+[counterbody]
+E_star = 1.3e6
+[grid]
+n = 40
+[wear]
+coefficients = [1.0e-9, 1.0e-8]
+[phases]
+map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 6007 }
+"""
+
+
+def run(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "steady", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+
+
+def assert_bad_input(proc, fragment):
+    assert proc.returncode == 2, f"exit {proc.returncode}, stderr {proc.stderr!r}"
+    assert proc.stderr.startswith("error:"), f"stderr {proc.stderr!r}"
+    assert "Traceback" not in proc.stderr, f"traceback in {proc.stderr!r}"
+    assert fragment in proc.stderr, f"stderr {proc.stderr!r} lacks {fragment!r}"
+
+
+def test_good_run_writes_result_and_figure(tmp_path):
+    (tmp_path / "s.toml").write_text(SCENE)
+    proc = run("s.toml", "-o", "out/r.h5", "--plot", "out/r.png", cwd=tmp_path)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
+    assert "rms / grad_f0" in proc.stdout, f"summary {proc.stdout!r}"
+    assert (tmp_path / "out" / "r.png").stat().st_size > 10_000, "figure not written"
+    with h5py.File(tmp_path / "out" / "r.h5") as f:
+        for name in ("phase", "pressure", "face", "slope"):
+            assert "units" in f[name].attrs, f"dataset {name} lacks units"
+        assert f["scene"][()].decode() == SCENE, "scene text stored"
+        assert f.attrs["rms_slope"] > 0, "rms slope stored"
+
+    # A second run must not overwrite without --force.
+    before = (tmp_path / "out" / "r.h5").read_bytes()
+    proc = run("s.toml", "-o", "out/r.h5", cwd=tmp_path)
+    assert_bad_input(proc, "exists (use --force to overwrite)")
+    assert (tmp_path / "out" / "r.h5").read_bytes() == before, "file must be untouched"
+    proc = run("s.toml", "-o", "out/r.h5", "--force", cwd=tmp_path)
+    assert proc.returncode == 0, f"--force run failed: {proc.stderr}"
+
+
+@pytest.mark.parametrize("old, new, fragment", [
+    ("normal_force = 10.0", "normal_force = -10.0", "normal_force must be a positive"),
+    ("n = 40", "n = 12", "grid too coarse"),
+    ("[grid]", "[grdi]", "unknown section [grdi]"),
+    ("n = 40", "n = = 40", "malformed TOML"),
+])
+def test_bad_scene(tmp_path, old, new, fragment):
+    (tmp_path / "s.toml").write_text(SCENE.replace(old, new))
+    proc = run("s.toml", "-o", "r.h5", cwd=tmp_path)
+    assert_bad_input(proc, fragment)
+    assert not (tmp_path / "r.h5").exists(), "no output after an error"
+
+
+def test_missing_scene_and_bad_arguments(tmp_path):
+    assert_bad_input(run("nope.toml", "-o", "r.h5", cwd=tmp_path), "does not exist")
+    assert_bad_input(run("nope.toml", cwd=tmp_path), "-o/--output")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["epoxy_cylinder", "voronoi_biphasic", "rods_steel_in_brass",
+                                  "rods_brass_in_steel", "checkerboard"])
+def test_shipped_scenes_run(tmp_path, name):
+    scene = SCENES / f"{name}.toml"
+    proc = run(scene, "-o", tmp_path / "r.h5", "--plot", tmp_path / "r.png", cwd=tmp_path)
+    assert proc.returncode == 0, f"{name}: exit {proc.returncode}: {proc.stderr}"
+    assert (tmp_path / "r.png").stat().st_size > 10_000, f"{name}: figure not written"
+    with h5py.File(tmp_path / "r.h5") as f:
+        ratio = f.attrs["rms_slope"] / f.attrs["rms_slope_ref"]
+    # Normalised rms slopes at n = 256 lie between 0.9 and 1.6 for these scenes
+    # (measured 0.990, 1.447, 0.986, 1.130, 1.219).
+    assert 0.9 < ratio < 1.6, f"{name}: rms / grad_f0 = {ratio}"

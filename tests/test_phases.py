@@ -1,0 +1,197 @@
+"""Phase geometries: rasterisation at any n, fill factors, validation."""
+
+import math
+
+import numpy as np
+import pytest
+
+from steady.grid import face_mask
+from steady.phases import (
+    ArrayMap,
+    Homogeneous,
+    Rods,
+    Voronoi,
+    load_phase_map,
+    realised_fill_factors,
+    validate_labels,
+)
+
+FIVE_RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
+
+
+@pytest.mark.parametrize("n", [8, 33, 64])
+def test_homogeneous_labels_follow_face_mask(n):
+    labels = Homogeneous().labels(n)
+    face = face_mask(n)
+    assert labels.shape == (n, n), f"shape {labels.shape}"
+    assert np.all(labels[face] == 0), "face pixels must be phase 0"
+    assert np.all(labels[~face] == -1), "pixels off the face must be -1"
+
+
+@pytest.mark.parametrize("n", [81, 128])
+def test_voronoi_is_deterministic_and_matches_seed_counts(n):
+    geo = Voronoi(400, (0.3, 0.7), 2718)
+    again = Voronoi(400, [0.3, 0.7], 2718)
+    assert np.array_equal(geo.labels(n), again.labels(n)), "same parameters, same map"
+    counts = np.bincount(geo.seed_phases, minlength=2)
+    assert counts.tolist() == [120, 280], f"seed labels {counts} do not match round(rho N)"
+    other = Voronoi(400, (0.3, 0.7), 2719).labels(n)
+    assert not np.array_equal(geo.labels(n), other), "another seed must give another map"
+
+
+def test_voronoi_realised_fill_factors_scatter_around_targets():
+    # Area fractions of 1600 random cells scatter by ~ 1 / sqrt(1600) ~ 0.025
+    # around the seed fractions; measured |error| 0.004..0.02 over seeds 3101..3105.
+    for seed in range(3101, 3106):
+        rho = realised_fill_factors(Voronoi(1600, (0.5, 0.5), seed).labels(160), 2)
+        assert abs(rho[1] - 0.5) < 0.05, f"seed {seed}: rho_2 = {rho[1]}"
+        assert math.isclose(rho.sum(), 1.0, rel_tol=1e-12), f"fill factors sum {rho.sum()}"
+
+
+def test_voronoi_three_phases_rasterised_at_several_n_is_the_same_geometry():
+    geo = Voronoi(100, (0.2, 0.3, 0.5), 5077)
+    coarse, fine = geo.labels(40), geo.labels(160)
+    assert geo.n_phases == 3, f"n_phases {geo.n_phases}"
+    # Cell edges move by up to a coarse pixel between the two grids, so the
+    # area fractions agree to O(h / cell size); measured max difference 0.0023.
+    r_c, r_f = realised_fill_factors(coarse, 3), realised_fill_factors(fine, 3)
+    assert np.allclose(r_c, r_f, atol=0.03), f"fill factors {r_c} at n=40 vs {r_f} at n=160"
+
+
+def test_rods_labels_and_fill_factor():
+    n = 200
+    labels = FIVE_RODS.labels(n)
+    rho = realised_fill_factors(labels, 2)
+    exact = 5 * 0.25**2  # area fraction of five rods of radius a/4
+    # Pixelated disks: area error ~ perimeter * h / area; measured 0.0008 at n=200.
+    assert abs(rho[1] - exact) < 0.005, f"rod fill factor {rho[1]} vs {exact}"
+    c = n // 2
+    assert labels[c, c] == 1, "centre pixel lies in the central rod"
+
+
+def test_rods_custom_phases():
+    geo = Rods(((0.0, 0.0), (0.5, 0.0)), (0.2, 0.2), matrix_phase=2, rod_phases=(0, 1))
+    rho = realised_fill_factors(geo.labels(64), geo.n_phases)
+    assert geo.n_phases == 3, f"n_phases {geo.n_phases}"
+    assert rho[2] > rho[0], f"matrix must hold most of the face: {rho}"
+
+
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_array_map_replication(k):
+    n0 = 20
+    base = Voronoi(25, (0.4, 0.6), 9151).labels(n0)
+    geo = ArrayMap(base)
+    fine = geo.labels(k * n0)
+    face = face_mask(k * n0)
+    assert np.all(fine[~face] == -1), "off-face pixels must be -1"
+    assert np.all(fine[face] >= 0), "every face pixel of the refined grid must be labelled"
+    coarse_face = face_mask(n0)
+    replicated = np.kron(base, np.ones((k, k), dtype=int))
+    both = face & np.kron(coarse_face, np.ones((k, k), dtype=bool))
+    assert np.array_equal(fine[both], replicated[both]), "replication must keep the labels"
+
+
+def test_array_map_ignores_labels_off_face():
+    base = Homogeneous().labels(16)
+    base[0, 0] = 7  # corner pixel, off the face
+    geo = ArrayMap(base)
+    assert geo.n_phases == 1, f"an off-face label must be ignored, n_phases {geo.n_phases}"
+    assert geo.labels(16)[0, 0] == -1, "off-face pixel must read -1"
+
+
+def test_load_npy_and_png(tmp_path):
+    import matplotlib.image
+
+    labels = Rods(((0.0, 0.0),), (0.5,)).labels(32)
+    np.save(tmp_path / "m.npy", labels)
+    from_npy = load_phase_map(tmp_path / "m.npy")
+    assert np.array_equal(from_npy.labels(32), labels), ".npy map must round-trip"
+    # Grey PNG: rod dark (0.2), matrix light (0.8), off face white.
+    grey = np.where(labels == 1, 0.2, np.where(labels == 0, 0.8, 1.0))
+    matplotlib.image.imsave(tmp_path / "m.png", np.repeat(grey[..., None], 3, axis=2))
+    from_png = load_phase_map(tmp_path / "m.png")
+    # Phases numbered by increasing grey: dark rod -> 0, light matrix -> 1.
+    expected = np.where(labels == 1, 0, np.where(labels == 0, 1, -1))
+    assert np.array_equal(from_png.labels(32), expected), ".png map must number by grey level"
+
+
+@pytest.mark.parametrize("fill, fragment", [
+    ((0.5, 0.6), "sum to 1"),
+    ((1.2, -0.2), "(0, 1)"),
+    ((0.0, 1.0), "(0, 1)"),
+    ((1.0,), "at least two"),
+])
+def test_bad_fill_factors(fill, fragment):
+    with pytest.raises(ValueError, match=None) as err:
+        Voronoi(100, fill, 2024)
+    assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
+    assert str(list(fill)[0]) in str(err.value), f"message {err.value!r} must name the values"
+
+
+def test_too_few_seeds_for_a_phase():
+    with pytest.raises(ValueError, match="phase 1 would get no seed"):
+        Voronoi(10, (0.99, 0.01), 2024)
+
+
+@pytest.mark.parametrize("geo, n, minimum", [
+    (Voronoi(1600, (0.5, 0.5), 2024), 79, 80),
+    (Voronoi(1601, (0.5, 0.5), 2024), 80, 81),
+    (FIVE_RODS, 23, 24),
+    (Homogeneous(), 7, 8),
+])
+def test_grid_too_coarse(geo, n, minimum):
+    with pytest.raises(ValueError, match=f"n = {n}, the minimum is n = {minimum}"):
+        geo.labels(n)
+    assert geo.labels(minimum).shape == (minimum, minimum), "the minimum itself is accepted"
+
+
+def test_array_map_needs_multiple_of_its_size():
+    geo = ArrayMap(Homogeneous().labels(16))
+    with pytest.raises(ValueError, match="n = 24 is not a multiple of the size 16"):
+        geo.labels(24)
+    with pytest.raises(ValueError, match="n = 8, the minimum is n = 16"):
+        geo.labels(8)
+
+
+@pytest.mark.parametrize("kwargs, fragment", [
+    (dict(centres=((0.9, 0.0),), radii=(0.2,)), "does not lie inside the face"),
+    (dict(centres=((0.0, 0.0), (0.3, 0.0)), radii=(0.2, 0.2)), "rods 0 and 1 overlap"),
+    (dict(centres=((0.0, 0.0),), radii=(-0.1,)), "positive"),
+    (dict(centres=((0.0, 0.0),), radii=(0.2,), rod_phases=(2,)), "phase 1 is used by neither"),
+    (dict(centres=(), radii=()), "at least one rod"),
+])
+def test_bad_rods(kwargs, fragment):
+    with pytest.raises(ValueError) as err:
+        Rods(**kwargs)
+    assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
+
+
+def test_labels_validation():
+    labels = Rods(((0.0, 0.0),), (0.5,)).labels(32)
+    with pytest.raises(ValueError, match="unknown phase label 1"):
+        validate_labels(labels, 1)
+    with pytest.raises(ValueError, match="phase 2 has no pixel"):
+        validate_labels(labels, 3)
+    inside = labels.copy()
+    inside[16, 16] = -1
+    with pytest.raises(ValueError, match="label -1 found on the face"):
+        validate_labels(inside, 2)
+    with pytest.raises(ValueError, match="phase map array: phase label -1 found on the face"):
+        ArrayMap(inside)
+    gap = np.where(labels == 1, 2, labels)
+    with pytest.raises(ValueError, match="phase 1 has no pixel"):
+        ArrayMap(gap)
+
+
+def test_load_errors(tmp_path):
+    with pytest.raises(ValueError, match="does not exist"):
+        load_phase_map(tmp_path / "missing.npy")
+    (tmp_path / "m.txt").write_text("0 1")
+    with pytest.raises(ValueError, match=r"\.npy or \.png"):
+        load_phase_map(tmp_path / "m.txt")
+    np.save(tmp_path / "f.npy", np.zeros((16, 16)))
+    with pytest.raises(ValueError, match="must hold integers, got dtype float64"):
+        load_phase_map(tmp_path / "f.npy")
+    (tmp_path / "bad.npy").write_bytes(b"not numpy")
+    with pytest.raises(ValueError, match="cannot read phase map"):
+        load_phase_map(tmp_path / "bad.npy")

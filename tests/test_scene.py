@@ -1,0 +1,163 @@
+"""Scene files: parsing, validation, extra sections, shipped scenes."""
+
+import pathlib
+
+import numpy as np
+import pytest
+
+from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi
+from steady.scene import load_scene, parse_scene
+
+SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
+
+BASE = """\
+[punch]
+radius = 0.004
+[load]
+normal_force = 10.0
+[counterbody]
+E_star = 1.3e6
+[grid]
+n = 64
+[wear]
+coefficients = [1.0e-9, 1.7e-9]
+exponent = 1.0
+[phases]
+map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }
+"""
+
+
+def test_parse_base_scene(tmp_path):
+    scene = parse_scene(BASE, tmp_path)
+    assert scene.radius == 0.004 and scene.normal_force == 10.0, f"{scene}"
+    assert scene.E_star == 1.3e6 and scene.n == 64, f"{scene}"
+    assert scene.wear_coefficients == (1.0e-9, 1.7e-9), f"{scene.wear_coefficients}"
+    assert scene.geometry == Voronoi(100, (0.5, 0.5), 2024), f"{scene.geometry}"
+    assert scene.text == BASE, "raw text must be kept"
+    assert dict(scene.extra) == {}, f"extra {scene.extra}"
+
+
+def test_exponent_defaults_to_one(tmp_path):
+    scene = parse_scene(BASE.replace("exponent = 1.0\n", ""), tmp_path)
+    assert scene.exponent == 1.0, f"exponent {scene.exponent}"
+
+
+def test_rods_in_metres(tmp_path):
+    text = BASE.replace(
+        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
+        'map = { kind = "rods", centres = [[0.0, 0.0], [0.002, 0.0]], radii = [0.001, 0.0008] }')
+    scene = parse_scene(text, tmp_path)
+    assert isinstance(scene.geometry, Rods), f"{scene.geometry}"
+    assert np.allclose(scene.geometry.centres, [(0.0, 0.0), (0.5, 0.0)]), "centres in units of a"
+    assert np.allclose(scene.geometry.radii, [0.25, 0.2]), "radii in units of a"
+
+
+def test_file_map_relative_to_scene(tmp_path):
+    sub = tmp_path / "maps"
+    sub.mkdir()
+    np.save(sub / "m.npy", Rods(((0.0, 0.0),), (0.5,)).labels(32))
+    text = BASE.replace(
+        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
+        'map = { kind = "file", path = "maps/m.npy" }')
+    (tmp_path / "s.toml").write_text(text)
+    scene = load_scene(tmp_path / "s.toml")
+    assert isinstance(scene.geometry, ArrayMap), f"{scene.geometry}"
+    assert scene.source_path == tmp_path / "s.toml", f"{scene.source_path}"
+
+
+def test_extra_sections(tmp_path):
+    seen = []
+
+    def parse_transient(table, base_dir):
+        seen.append(base_dir)
+        if table.get("steps", 0) < 1:
+            raise ValueError(f"steps must be positive, got {table.get('steps')!r}")
+        return table["steps"]
+
+    text = BASE + "[transient]\nsteps = 5\n"
+    scene = parse_scene(text, tmp_path, extra_sections={"transient": parse_transient})
+    assert scene.extra["transient"] == 5, f"extra {scene.extra}"
+    assert seen == [tmp_path], f"callable got base_dir {seen}"
+    with pytest.raises(ValueError, match=r"\[transient\]: steps must be positive, got 0"):
+        parse_scene(BASE + "[transient]\nsteps = 0\n", tmp_path,
+                    extra_sections={"transient": parse_transient})
+    with pytest.raises(ValueError, match=r"unknown section \[transient\]"):
+        parse_scene(text, tmp_path)
+
+
+@pytest.mark.parametrize("old, new, fragment", [
+    ("radius = 0.004", "radius = -0.004",
+     "[punch] radius must be a positive finite number (m), got -0.004"),
+    ("radius = 0.004", 'radius = "4 mm"', "[punch] radius must be a number (m), got '4 mm'"),
+    ("normal_force = 10.0", "normal_force = 0",
+     "[load] normal_force must be a positive finite number (N), got 0"),
+    ("normal_force = 10.0", "normal_force = nan", "got nan"),
+    ("E_star = 1.3e6", "E_star = true", "[counterbody] E_star must be a number (Pa), got True"),
+    ("n = 64", "n = 64.0", "[grid] n must be an integer, got 64.0"),
+    ("n = 64", "n = 10",
+     "[grid] n: grid too coarse for 100 Voronoi seeds: n = 10, the minimum is n = 20"),
+    ("[1.0e-9, 1.7e-9]", "[1.0e-9, -1.7e-9]",
+     "[wear] coefficients must be a positive finite number (1/Pa), got -1.7e-09"),
+    ("[1.0e-9, 1.7e-9]", "[1.0e-9]",
+     "[wear] coefficients has 1 values [1e-09] but the phase map has 2 phases"),
+    ("[1.0e-9, 1.7e-9]", "1.0e-9", "[wear] coefficients must be an array, got 1e-09"),
+    ("exponent = 1.0", "exponent = -2.0",
+     "[wear] exponent must be a positive finite number (dimensionless), got -2.0"),
+    ("[0.5, 0.5]", "[0.5, 0.6]", "fill factors must sum to 1, got [0.5, 0.6]"),
+    ("[0.5, 0.5]", "[1.5, -0.5]", "[phases] map fill_factors must be a positive finite "
+                                  "number (dimensionless), got -0.5"),
+    ("[0.5, 0.5]", "[1.2, 0.3]", "fill factors must each lie in (0, 1), got [1.2, 0.3]"),
+    ("[0.5, 0.5]", "[1.0, 0.0]", "got 0.0"),
+    ("seed = 2024", "seed = -3", "[phases] map seed must be at least 0, got -3"),
+    ('kind = "voronoi"', 'kind = "hexagons"',
+     "kind must be one of ['file', 'homogeneous', 'rods', 'voronoi'], got 'hexagons'"),
+    ("seed = 2024", "seed = 2024, colour = 1",
+     "unknown key 'colour' in [phases] map (kind 'voronoi')"),
+    ("radius = 0.004", "radius = 0.004\nradus = 0.004", "unknown key 'radus' in [punch]"),
+    ("[grid]", "[grids]", "unknown section [grids]"),
+    ("n = 64\n", "", "missing key 'n' in [grid]"),
+    ("radius = 0.004", "radius = 0.004 0.005", "malformed TOML"),
+])
+def test_bad_keys(tmp_path, old, new, fragment):
+    assert old in BASE, f"test setup: {old!r} not in the base scene"
+    with pytest.raises(ValueError) as err:
+        parse_scene(BASE.replace(old, new, 1), tmp_path)
+    assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
+
+
+def test_bad_rods_scene(tmp_path):
+    text = BASE.replace(
+        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
+        'map = { kind = "rods", centres = [[0.0, 0.0], [0.001, 0.0]], radii = [0.001, 0.001] }')
+    with pytest.raises(ValueError, match=r"\[phases\] map: rods 0 and 1 overlap"):
+        parse_scene(text, tmp_path)
+
+
+def test_missing_files(tmp_path):
+    with pytest.raises(ValueError, match="scene file .*nope.toml' does not exist"):
+        load_scene(tmp_path / "nope.toml")
+    text = BASE.replace(
+        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
+        'map = { kind = "file", path = "gone.npy" }')
+    (tmp_path / "s.toml").write_text(text)
+    with pytest.raises(ValueError) as err:
+        load_scene(tmp_path / "s.toml")
+    assert "s.toml" in str(err.value) and "gone.npy" in str(err.value), f"{err.value!r}"
+    (tmp_path / "bad.toml").write_text("[punch\nradius = 1")
+    with pytest.raises(ValueError, match="bad.toml: malformed TOML"):
+        load_scene(tmp_path / "bad.toml")
+
+
+@pytest.mark.parametrize("name, geometry_type, n_phases", [
+    ("epoxy_cylinder.toml", Homogeneous, 1),
+    ("voronoi_biphasic.toml", Voronoi, 2),
+    ("rods_steel_in_brass.toml", Rods, 2),
+    ("rods_brass_in_steel.toml", Rods, 2),
+    ("checkerboard.toml", ArrayMap, 2),
+])
+def test_shipped_scenes_load(name, geometry_type, n_phases):
+    scene = load_scene(SCENES / name)
+    assert isinstance(scene.geometry, geometry_type), f"{name}: {scene.geometry}"
+    assert scene.n_phases == n_phases, f"{name}: {scene.n_phases} phases"
+    labels = scene.geometry.labels(scene.n)
+    assert labels.shape == (scene.n, scene.n), f"{name}: shape {labels.shape}"

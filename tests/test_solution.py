@@ -1,0 +1,249 @@
+"""Steady solve (eq. 7, 9) against closed forms and the paper's exact properties."""
+
+import math
+
+import numpy as np
+import pytest
+
+from steady import reference
+from steady.grid import face_mask, pixel_size, polar
+from steady.halfspace import HalfSpace
+from steady.phases import Homogeneous, Rods, Voronoi
+from steady.solution import solve
+
+RADIUS = 4e-3  # m
+FORCE = 10.0  # N
+E_STAR = 1.3e6  # Pa
+
+
+def halfspace(n, radius=RADIUS, E_star=E_STAR):
+    return HalfSpace(n, pixel_size(n, radius), E_star)
+
+
+def loglog_order(ns, errors):
+    """Order p of errors ~ n^-p from a least-squares fit in log-log."""
+    return -np.polyfit(np.log(ns), np.log(errors), 1)[0]
+
+
+# Sequence with ratio ~sqrt(2), odd and even n.
+REFINEMENT = [32, 45, 64, 91, 128, 181, 256]
+
+
+def test_homogeneous_face_converges_to_eq10():
+    errors = []
+    for n in REFINEMENT:
+        res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
+        r, _ = polar(n, RADIUS)
+        exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
+        face = face_mask(n)
+        relief = exact[face].max() - exact[face].min()
+        errors.append(np.abs(res.face - exact)[face].max() / relief)
+    assert np.all(np.diff(errors) < 0), f"max face error must decrease: {errors}"
+    # Measured errors 0.0336 .. 0.0059 and fitted order 0.85: the staircase rim
+    # moves the boundary by O(h) where the face has a log-singular slope, so
+    # O(h log h), an apparent order a little below 1 (0.79..0.94 on other
+    # sequences of n between 24 and 513).
+    order = loglog_order(REFINEMENT, errors)
+    assert 0.7 < order < 1.1, f"face error order {order:.3f} (errors {errors})"
+    assert errors[-1] < 0.007, f"max face error {errors[-1]:.4g} of the relief at n=256"
+
+
+def test_homogeneous_rms_slope_converges_to_quadrature():
+    target = reference.cylinder_rms_slope()
+    assert abs(target - 1.0) < 1e-12, f"quadrature reference {target} should be 1"
+    gaps = []
+    for n in REFINEMENT:
+        res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
+        gaps.append(target - res.normalised_rms_slope)
+    assert np.all(np.array(gaps) > 0), f"the grid misses slope at the rim: gaps {gaps}"
+    assert np.all(np.diff(gaps) < 0), f"approach to 1 must be monotone: gaps {gaps}"
+    # Measured gaps 0.066 .. 0.0098 and order 0.91: the mean square of a
+    # log-singular rim slope over a strip of width h, O(h log^2 h).
+    order = loglog_order(REFINEMENT, gaps)
+    assert 0.75 < order < 1.1, f"rms slope order {order:.3f} (gaps {gaps})"
+    assert gaps[-1] < 0.011, f"rms slope gap {gaps[-1]:.4g} at n=256"
+
+
+@pytest.mark.parametrize("n", [63, 64])
+def test_load_and_phase_pressures(n):
+    geo = Voronoi(400, (0.25, 0.35, 0.4), 6113)
+    k = np.array([1.0e-13, 4.0e-13, 2.5e-14])
+    res = solve(halfspace(n), geo.labels(n), k, FORCE)
+    h = pixel_size(n, RADIUS)
+    load = res.pressure.sum() * h * h
+    assert math.isclose(load, FORCE, rel_tol=1e-13), f"load {load} N vs {FORCE} N"
+    ratio = res.phase_pressures[:, None] / res.phase_pressures[None, :]
+    assert np.allclose(ratio, k[None, :] / k[:, None], rtol=1e-13), \
+        f"p_i / p_j must be k_j / k_i: {ratio}"
+    assert np.all(res.pressure[~face_mask(n)] == 0), "no pressure off the face"
+    assert np.all(np.isnan(res.face[~face_mask(n)])), "face is NaN off the face"
+    assert np.all(np.isfinite(res.slope[face_mask(n)])), "slope finite on the face"
+
+
+@pytest.mark.parametrize("m", [0.5, 2.0, 3.0])
+def test_power_law_wear(m):
+    n = 48
+    k = np.array([2.0e-13, 1.0e-12])
+    res = solve(halfspace(n), Voronoi(100, (0.6, 0.4), 7211).labels(n), k, FORCE, exponent=m)
+    rate = k * res.phase_pressures**m
+    assert np.allclose(rate, rate[0], rtol=1e-13), f"k_i p_i^m must be equal: {rate}"
+    expected = (k[1] / k[0]) ** (1 / m)
+    assert math.isclose(res.phase_pressures[0] / res.phase_pressures[1], expected,
+                        rel_tol=1e-13), f"p_0/p_1 vs (k_1/k_0)^(1/m) = {expected}"
+    load = res.pressure.sum() * pixel_size(n, RADIUS) ** 2
+    assert math.isclose(load, FORCE, rel_tol=1e-13), f"load {load} N"
+
+
+@pytest.mark.parametrize("n", [65, 96])
+def test_swapping_phases_and_coefficients_gives_the_same_face(n):
+    labels = Voronoi(400, (0.3, 0.7), 4409).labels(n)
+    hs = halfspace(n)
+    swapped = np.where(labels >= 0, 1 - labels, -1)
+    a = solve(hs, labels, [1e-13, 5e-13], FORCE)
+    b = solve(hs, swapped, [5e-13, 1e-13], FORCE)
+    assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "relabelling changes nothing"
+    # The paper's symmetry slope(rho_2, k2/k1) = slope(1 - rho_2, k1/k2): phase 2
+    # of the second description is the first one's phase 1 (fill 1 - rho_2) and
+    # the ratio is inverted; the physical punch, hence the face, is the same.
+    rho_2 = a.fill_factors[1]
+    c = solve(hs, swapped, [1.0, 1.0 / 5.0], FORCE)  # k2/k1 = 5 -> k1/k2 = 1/5
+    assert math.isclose(c.fill_factors[1], 1 - rho_2, rel_tol=1e-12), "fill factor 1 - rho_2"
+    assert np.allclose(a.face, c.face, rtol=1e-12, equal_nan=True), "same punch, same face"
+    assert math.isclose(a.normalised_rms_slope, c.normalised_rms_slope, rel_tol=1e-12), \
+        f"rms {a.normalised_rms_slope} vs {c.normalised_rms_slope}"
+
+
+def test_splitting_a_phase_with_equal_k_changes_nothing():
+    n = 80
+    three = Voronoi(400, (0.3, 0.3, 0.4), 8087).labels(n)
+    two = np.where(three == 2, 0, three)
+    hs = halfspace(n)
+    a = solve(hs, two, [1e-13, 7e-13], FORCE)
+    b = solve(hs, three, [1e-13, 7e-13, 1e-13], FORCE)
+    assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "split phase changed face"
+    assert math.isclose(a.rms_slope, b.rms_slope, rel_tol=1e-12), "split phase changed rms"
+    assert math.isclose(b.fill_factors[0] + b.fill_factors[2], a.fill_factors[0],
+                        rel_tol=1e-12), "fill factors of the split phase must add up"
+
+
+def test_normalised_results_independent_of_load_and_modulus():
+    n = 72
+    labels = Voronoi(400, (0.5, 0.5), 5303).labels(n)
+    a = solve(halfspace(n), labels, [1e-13, 1e-12], FORCE)
+    b = solve(halfspace(n, E_star=0.21 * E_STAR), labels, [1e-13, 1e-12], 3.7 * FORCE)
+    assert math.isclose(a.normalised_rms_slope, b.normalised_rms_slope, rel_tol=1e-12), \
+        f"rms/grad_f0 {a.normalised_rms_slope} vs {b.normalised_rms_slope}"
+    assert np.allclose(a.normalised_face, b.normalised_face, rtol=1e-12, equal_nan=True), \
+        "normalised face must not depend on F_N and E*"
+    assert not math.isclose(a.rms_slope, b.rms_slope, rel_tol=1e-3), "raw rms must scale"
+    # Homogeneous: the normalised face is E(r/a) (eq. 10), pi/2 on the axis.
+    hom = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
+    centre = hom.normalised_face[n // 2, n // 2]
+    assert abs(centre - math.pi / 2) < 0.02, f"normalised face near the axis {centre} vs pi/2"
+
+
+def test_pillars_limit():
+    # One hard rod of radius 0.2 a (rho_2 = 0.04) in a soft matrix.  As
+    # k_2/k_1 -> 0 the rod carries the load at p_2 = pbar / rho_2 and its top
+    # takes the eq. 10 shape of a cylinder of radius 0.2 a, whose rms slope is
+    # 4 p_2 / (pi E*) = grad_f0 / rho_2 (eq. 18).  That is the rms over the hard
+    # phase: measured rms_hard * rho_2 = 0.929, 0.955, 0.959 for
+    # k_2/k_1 = 1e-1, 1e-2, 1e-4 at n = 256; the 4 % gap is the grid's, the rod
+    # spanning 51 pixels (a homogeneous disk at n = 51 gives 0.96).
+    n = 256
+    labels = Rods(((0.0, 0.0),), (0.2,)).labels(n)
+    hs = halfspace(n)
+    values = []
+    for ratio in (1e-1, 1e-2, 1e-4):
+        res = solve(hs, labels, [1.0, ratio], FORCE)
+        rho_2 = res.fill_factors[1]
+        hard = np.sqrt(np.mean(res.slope[labels == 1] ** 2)) / res.reference_slope
+        values.append(hard * rho_2)
+    assert np.all(np.diff(values) > 0), f"rms_hard rho_2 must grow as k2/k1 -> 0: {values}"
+    assert abs(values[-1] - 1.0) < 0.05, f"rms over the rod {values[-1]:.4f} / (grad_f0/rho_2)"
+    # Over the whole face the matrix around the pillar dilutes the mean
+    # square: measured rms / grad_f0 = 7.55 for 1 / rho_2 = 25.0, i.e. about
+    # 1.5 / sqrt(rho_2), not 1 / rho_2.
+    whole = res.normalised_rms_slope
+    assert 0.2 < whole * rho_2 < 0.4, f"whole-face rms {whole:.3f} vs 1/rho_2 = {1 / rho_2:.3f}"
+    assert 1.2 < whole * math.sqrt(rho_2) < 1.8, f"whole-face rms {whole:.3f} vs 1/sqrt(rho_2)"
+
+
+def test_plain_grid_scale_independence_at_equal_resolution():
+    # The paper's claim (rms slope independent of grain size) on a plain grid
+    # only holds at equal pixels per cell: at fixed n = 320 the normalised rms
+    # for 20^2, 40^2, 80^2, 160^2 seeds measured 1.517, 1.475, 1.403, 1.280
+    # (4 realisations each; finer cells are under-resolved and lose slope).
+    # The grain-size test proper needs the error-corrected estimator.  Here:
+    # 40^2 seeds at n = 160 and 80^2 at n = 320 (4 pixels per seed spacing)
+    # measured 1.3915 +- 0.0067 and 1.3978 +- 0.0105 (6 realisations, std).
+    seeds = (3101, 3102, 3103, 3104, 3105, 3106)
+    means, sems = [], []
+    for n_seeds, n in ((1600, 160), (6400, 320)):
+        hs = halfspace(n)
+        values = [solve(hs, Voronoi(n_seeds, (0.5, 0.5), s).labels(n), [1.0, 10.0],
+                        FORCE).normalised_rms_slope for s in seeds]
+        means.append(np.mean(values))
+        sems.append(np.std(values, ddof=1) / math.sqrt(len(values)))
+    gap = abs(means[1] - means[0])
+    assert gap < 3 * math.hypot(*sems), f"means {means} differ by {gap:.4f}, sem {sems}"
+
+
+def test_plain_grid_rms_of_fine_grains_grows_under_refinement():
+    # 40^2 seeds: measured 1.262 (n=80), 1.392 (n=160), 1.484 (n=320), mean of 6.
+    values = [np.mean([solve(halfspace(n), Voronoi(1600, (0.5, 0.5), s).labels(n),
+                             [1.0, 10.0], FORCE).normalised_rms_slope for s in (3101, 3102)])
+              for n in (80, 160, 320)]
+    assert np.all(np.diff(values) > 0), f"rms must grow with n: {values}"
+
+
+@pytest.mark.parametrize("kwargs, fragment", [
+    (dict(normal_force=-1.0), "normal_force must be a positive finite number (N), got -1.0"),
+    (dict(normal_force=0.0), "got 0.0"),
+    (dict(normal_force=math.inf), "got inf"),
+    (dict(wear_coefficients=[1e-13, 0.0]), "got [1e-13, 0.0]"),
+    (dict(wear_coefficients=[1e-13, -2e-13]), "got [1e-13, -2e-13]"),
+    (dict(wear_coefficients=[1e-13, math.nan]), "got [1e-13, nan]"),
+    (dict(wear_coefficients=[1e-13]), "one wear coefficient per phase (2), got [1e-13]"),
+    (dict(wear_coefficients=[1e-13] * 3), "one wear coefficient per phase (2)"),
+    (dict(exponent=0.0), "exponent must be a positive finite number"),
+    (dict(exponent=math.nan), "got nan"),
+])
+def test_bad_input(kwargs, fragment):
+    n = 32
+    args = dict(wear_coefficients=[1e-13, 2e-13], normal_force=FORCE, exponent=1.0)
+    args.update(kwargs)
+    labels = Rods(((0.0, 0.0),), (0.5,)).labels(n)
+    with pytest.raises(ValueError) as err:
+        solve(halfspace(n), labels, args["wear_coefficients"], args["normal_force"],
+              exponent=args["exponent"])
+    assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
+
+
+def test_bad_labels():
+    n = 32
+    labels = Rods(((0.0, 0.0),), (0.5,)).labels(n)
+    with pytest.raises(ValueError, match="phase 1 has no pixel"):
+        solve(halfspace(n), np.where(labels == 1, 2, labels), [1e-13] * 3, FORCE)
+    with pytest.raises(ValueError, match=r"shape \(32, 32\)"):
+        solve(halfspace(n), labels[:-1], [1e-13] * 2, FORCE)
+
+
+@pytest.mark.slow
+def test_homogeneous_convergence_continues_on_fine_grids():
+    # Measured on n = 256 .. 1024: face errors 0.0059 .. 0.0020 (order 0.80),
+    # rms gaps 0.0097 .. 0.0030 (order 0.87); same bounds as on coarse grids.
+    ns = [256, 362, 512, 724, 1024]
+    errors, gaps = [], []
+    for n in ns:
+        res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
+        r, _ = polar(n, RADIUS)
+        exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
+        face = face_mask(n)
+        errors.append(np.abs(res.face - exact)[face].max() / np.ptp(exact[face]))
+        gaps.append(reference.cylinder_rms_slope() - res.normalised_rms_slope)
+    assert np.all(np.diff(errors) < 0), f"face errors must decrease: {errors}"
+    assert np.all(np.diff(gaps) < 0), f"rms gaps must decrease: {gaps}"
+    for name, values, low in (("face", errors, 0.7), ("rms", gaps, 0.75)):
+        order = loglog_order(ns, values)
+        assert low < order < 1.1, f"{name} order {order:.3f} ({values})"
