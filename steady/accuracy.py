@@ -19,7 +19,7 @@ is smooth everywhere except next to the rim: the log singularities along
 internal phase boundaries drop out.  The exterior integral is computed by
 pixel quadrature on a fine box around the face, on a coarse box
 (block-summed sources) out to ``far_radius`` radii, and analytically
-(monopole about the load centroid) beyond.
+(monopole about the box centre) beyond.
 
 The remaining error comes from the rim, where the pixel quadrature misses
 about the same amount inside and outside (the log singularity of a pressure
@@ -45,11 +45,10 @@ import scipy.fft
 
 from .grid import pixel_size
 from .halfspace import pixel_integral_gradient
-from .phases import MIN_GRID
 from .pressures import phase_pressures
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
-           "estimate_rms_slope", "ladder_error", "monopole_tail"]
+           "estimate_rms_slope", "grid_ladder", "ladder_error", "monopole_tail"]
 
 logger = logging.getLogger(__name__)
 
@@ -389,52 +388,59 @@ class SlopeEstimate:
         return self.error / self.rms_slope
 
 
-def _ladder(geometry, n):
-    """Phase maps for the estimate: ``n/4, n/2, n`` where the geometry allows, else ``n, 2n``.
+def grid_ladder(geometry, n):
+    """Grids for a discretisation-error estimate at grid ``n``, coarse to fine.
 
-    The coarse grids serve only the error estimate; they may go down to half
-    the coarsest grid the geometry accepts for a solve (the corrected
-    estimate is still within a fraction of a per cent there, see
-    ``docs/benchmarks.md``).  A pixel map exists only at multiples of its
-    size and refines instead.
-
-    Returns
-    -------
-    list of (int, ndarray)
-        Grid sizes and labels, coarse to fine.
+    ``n/4, n/2, n`` where the geometry accepts them (``check_grid``: for
+    Voronoi maps two pixels per mean seed spacing); if neither ``n/4`` nor
+    ``n/2`` is accepted, the coarsest accepted grid (a multiple of 8) below
+    ``n``; if there is none, ``n, 2n``.  Only resolved grids enter the
+    estimate (e.g. 160^2 seeds at ``n = 512``: ``320, 512``).  A pixel map
+    exists only at multiples of its size and refines instead.
     """
-    ladder = []
-    floor = max(MIN_GRID, -(-geometry.min_grid() // 2))
+    n = geometry.check_grid(int(n))
+    grids = []
     for d in (4, 2):
-        m = n // d
-        if n % d == 0 and m >= floor:
+        if n % d == 0:
             try:
-                ladder.append((m, geometry.labels(m, check=False)))
+                geometry.check_grid(n // d)
             except ValueError:
                 continue
-    top = geometry.labels(n)
-    if ladder:
-        return ladder + [(n, top)]
-    return [(n, top), (2 * n, geometry.labels(2 * n))]
+            grids.append(n // d)
+    if not grids:
+        m = 8 * -(-geometry.min_grid() // 8)
+        grids = [m] if m < n else []
+    return grids + [n] if grids else [n, 2 * n]
 
 
-def ladder_error(values):
-    """Error estimate of the last of the corrected values on a ladder of grids.
-
-    ``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)`` for three grids (each halving
-    ``h``), which bounds the error of a method of order one or higher;
-    ``|S_2 - S_1|`` for two.
+def ladder_error(grids, values):
+    """Discretisation error of the value on the finest grid of a ladder.
 
     Parameters
     ----------
-    values : sequence of float
-        Values on grids coarse to fine, two or three of them.
+    grids : sequence of int, shape (G,), G >= 2
+        Increasing grid sizes.
+    values : array_like, shape (G, ...)
+        The quantity on each grid.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``max_j |S_{j+1} - S_j| * m_j / (m_{j+1} - m_j) * m_{j+1} / n``:
+        the first-order error of ``S_{j+1}`` from each consecutive pair,
+        carried to the finest grid ``n``.  For the ladder ``n/4, n/2, n``
+        this is ``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)``, the estimate of
+        :func:`estimate_rms_slope`.
     """
-    if len(values) >= 3:
-        return max(abs(values[-1] - values[-2]), abs(values[-2] - values[-3]) / 2)
-    if len(values) == 2:
-        return abs(values[-1] - values[0])
-    raise ValueError(f"an error estimate needs two or three grids, got {len(values)}")
+    m = np.asarray(grids, dtype=float)
+    v = np.asarray(values, dtype=float)
+    if m.size < 2 or v.shape[0] != m.size:
+        raise ValueError(f"need values on at least two grids, one row per grid; got grids "
+                         f"{list(grids)} and values of shape {v.shape}")
+    n = m[-1]
+    factors = m[:-1] / np.diff(m) * m[1:] / n
+    diffs = np.abs(np.diff(v, axis=0))
+    return np.max(diffs * factors.reshape((-1,) + (1,) * (v.ndim - 1)), axis=0)
 
 
 def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star, n, *,
@@ -457,18 +463,16 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
     Returns
     -------
     SlopeEstimate
-        The value on grid ``n`` with the error
-        ``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)`` from the same geometry
-        rasterised at ``n/2`` and ``n/4``.  Where the geometry admits no
-        coarser grid (a pixel map at its own size, or ``n`` near the
-        coarsest grid the geometry accepts) the value comes from ``2n``
-        and the error is ``|S_2n - S_n|``.
+        The value on the finest grid of :func:`grid_ladder` (``n`` unless
+        the geometry admits no coarser grid: then ``2n``) with the error of
+        :func:`ladder_error` (``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)``
+        for the ladder ``n/4, n/2, n``).
     """
-    ladder = _ladder(geometry, int(n))
-    grids = [m for m, _ in ladder]
+    grids = grid_ladder(geometry, n)
     values = []
     plain = None
-    for m, labels in ladder:
+    for m in grids:
+        labels = geometry.labels(m)
         face = labels >= 0
         n_phases = int(labels.max()) + 1
         counts = np.bincount(labels[face], minlength=n_phases)
@@ -479,6 +483,6 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)
         logger.debug("n=%d rms slope corrected %.8g plain %.8g", m, values[-1], plain)
-    return SlopeEstimate(rms_slope=values[-1], error=float(ladder_error(values)),
+    return SlopeEstimate(rms_slope=values[-1], error=float(ladder_error(grids, values)),
                          rms_slope_plain=plain,
                          grids=tuple(grids), values=tuple(values))

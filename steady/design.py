@@ -58,7 +58,9 @@ import h5py
 import numpy as np
 from scipy import interpolate, optimize
 
+from .accuracy import grid_ladder, ladder_error
 from .basis import PhaseBasis
+from .reference import fine_grain_rms_slope
 from .phases import Voronoi
 from .sweep import run_sweep
 
@@ -68,11 +70,11 @@ __all__ = [
     "DesignTable",
     "TABLE_FORMAT",
     "TABLE_VERSION",
+    "VORONOI_SWEEP_VERSION",
+    "VoronoiData",
     "collect_voronoi",
-    "fine_grain_rms_slope",
-    "grid_ladder",
-    "ladder_error",
     "main",
+    "voronoi_points",
     "voronoi_slopes",
     "voronoi_sweep",
 ]
@@ -88,86 +90,6 @@ DEFAULT_TABLE = pathlib.Path(__file__).resolve().parent.parent / "studies" / "da
 
 #: Layout version of the Voronoi sweep points (part of the sweep settings).
 VORONOI_SWEEP_VERSION = 1
-
-
-def fine_grain_rms_slope(fill_factors, wear_coefficients, *, exponent=1.0):
-    """Normalised rms slope of a fine-grained multi-phase punch (closed form).
-
-    Parameters
-    ----------
-    fill_factors : array_like, shape (P,) or (..., P)
-        Area fractions ``rho_i``, summing to 1 along the last axis.
-    wear_coefficients : array_like, shape (P,) or (..., P), 1/Pa
-        ``k_i`` (only their ratios matter).
-    exponent : float, optional
-        ``m`` of the wear law ``k p^m`` (default 1).
-
-    Returns
-    -------
-    ndarray or float, dimensionless
-        ``rms / grad_f0 = sqrt(1 + (pi^2 / 4) sum_i rho_i (p_i / pbar - 1)^2)``
-        with ``p_i ~ k_i^(-1/m)`` (eq. 7); see the module notes.  The limit
-        of grains much smaller than the punch radius.
-    """
-    rho = np.asarray(fill_factors, dtype=float)
-    k = np.asarray(wear_coefficients, dtype=float)
-    weights = (k / k.min(axis=-1, keepdims=True)) ** (-1.0 / exponent)
-    p = weights / np.sum(rho * weights, axis=-1, keepdims=True)  # p_i / pbar
-    variance = np.sum(rho * (p - 1.0) ** 2, axis=-1)
-    return np.sqrt(1.0 + np.pi**2 / 4.0 * variance)
-
-
-def grid_ladder(geometry, n):
-    """Grids for a discretisation-error estimate at grid ``n``, coarse to fine.
-
-    ``n/4, n/2, n`` where the geometry admits them (as
-    :func:`steady.accuracy.estimate_rms_slope`); if neither ``n/4`` nor
-    ``n/2`` is admissible, the coarsest admissible grid (a multiple of 8)
-    below ``n``; if there is none, ``n, 2n``.
-    """
-    n = geometry.check_grid(int(n))
-    grids = []
-    for d in (4, 2):
-        if n % d == 0:
-            try:
-                geometry.check_grid(n // d)
-            except ValueError:
-                continue
-            grids.append(n // d)
-    if not grids:
-        m = 8 * -(-geometry.min_grid() // 8)
-        grids = [m] if m < n else []
-    return grids + [n] if grids else [n, 2 * n]
-
-
-def ladder_error(grids, values):
-    """Discretisation error of the value on the finest grid of a ladder.
-
-    Parameters
-    ----------
-    grids : sequence of int, shape (G,), G >= 2
-        Increasing grid sizes.
-    values : array_like, shape (G, ...)
-        The quantity on each grid.
-
-    Returns
-    -------
-    ndarray, shape (...)
-        ``max_j |S_{j+1} - S_j| * m_j / (m_{j+1} - m_j) * m_{j+1} / n``:
-        the first-order error of ``S_{j+1}`` from each consecutive pair,
-        carried to the finest grid ``n``.  For the ladder ``n/4, n/2, n``
-        this is ``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)``, the estimate of
-        :func:`steady.accuracy.estimate_rms_slope`.
-    """
-    m = np.asarray(grids, dtype=float)
-    v = np.asarray(values, dtype=float)
-    if m.size < 2 or v.shape[0] != m.size:
-        raise ValueError(f"need values on at least two grids, one row per grid; got grids "
-                         f"{list(grids)} and values of shape {v.shape}")
-    n = m[-1]
-    factors = m[:-1] / np.diff(m) * m[1:] / n
-    diffs = np.abs(np.diff(v, axis=0))
-    return np.max(diffs * factors.reshape((-1,) + (1,) * (v.ndim - 1)), axis=0)
 
 
 def voronoi_slopes(point, *, n, ratios):
@@ -192,7 +114,8 @@ def voronoi_slopes(point, *, n, ratios):
         ``grids`` (G,) the ladder of :func:`grid_ladder`;
         ``rms_slope`` (G, K) energy-corrected ``rms / grad_f0`` on each grid;
         ``rms_slope_plain`` (K,) plain pixel value on grid ``n``;
-        ``error`` (K,) :func:`ladder_error`;
+        ``error`` (K,) :func:`ladder_error` of the value on grid ``n`` (for the
+        ladder ``n, 2n``: ``2 |S_2n - S_n|``, its first-order error);
         ``fill_factor`` realised ``rho_2`` on grid ``n``.
     """
     rho = float(point["fill_factor"])
@@ -208,10 +131,12 @@ def voronoi_slopes(point, *, n, ratios):
             plain = sweep.rms_slope_plain / sweep.reference_slope
             fill = float(basis.fill_factors[1])
     values = np.asarray(values)
-    top = grids.index(n)
-    return {"grids": np.asarray(grids), "rms_slope": values,
-            "rms_slope_plain": plain, "error": ladder_error(grids[:top + 1], values[:top + 1])
-            if top > 0 else ladder_error(grids, values), "fill_factor": fill}
+    if grids[-1] == n:
+        error = ladder_error(grids, values)
+    else:  # ladder n, 2n: first-order error of the coarser value S_n
+        error = np.abs(values[1] - values[0]) * grids[1] / (grids[1] - grids[0])
+    return {"grids": np.asarray(grids), "rms_slope": values, "rms_slope_plain": plain,
+            "error": error, "fill_factor": fill}
 
 
 _VORONOI_UNITS = {"grids": "1", "rms_slope": "grad_f0", "rms_slope_plain": "grad_f0",
@@ -491,6 +416,27 @@ class DesignTable:
                              f"{lo:.3g}..{hi:.3g}")
         col = self._column(ratio)
         return tuple(float(col[name](fill_factor)) for name in ("mean", "scatter", "error"))
+
+    def curve(self, ratio, fill_factors=None):
+        """Normalised rms slope along ``rho_2`` at one wear ratio.
+
+        Parameters
+        ----------
+        ratio : float
+            ``k_2 / k_1``.
+        fill_factors : array_like, optional
+            ``rho_2`` values inside the table's range (default: its nodes).
+
+        Returns
+        -------
+        mean, scatter, error : ndarray, grad_f0
+        """
+        x = self.fill_factors if fill_factors is None else np.asarray(fill_factors, float)
+        lo, hi = self.fill_factors[0], self.fill_factors[-1]
+        if np.any(x < lo - 1e-12) or np.any(x > hi + 1e-12):
+            raise ValueError(f"fill factors must lie in the table's range {lo:.3g}..{hi:.3g}")
+        col = self._column(ratio)
+        return tuple(col[name](x) for name in ("mean", "scatter", "error"))
 
     def rms_slope(self, pbar_over_estar, ratio, fill_factor):
         """Steady rms slope (friction proxy) of a design.

@@ -188,12 +188,9 @@ class Homogeneous:
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
         return _check_grid(n, self.min_grid(), "a homogeneous face")
 
-    def labels(self, n, *, check=True):
-        """Phase 0 on the face, -1 off it; shape (n, n).
-
-        ``check=False`` waives :meth:`check_grid` (error estimates on coarser grids).
-        """
-        n = self.check_grid(n) if check else int(n)
+    def labels(self, n):
+        """Phase 0 on the face, -1 off it; shape (n, n)."""
+        n = self.check_grid(n)
         return np.where(face_mask(n), 0, -1)
 
 
@@ -307,12 +304,9 @@ class Voronoi:
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
         return _check_grid(n, self.min_grid(), f"{self.n_seeds} Voronoi seeds")
 
-    def labels(self, n, *, check=True):
-        """Nearest-seed phase at every face pixel, -1 off it; shape (n, n).
-
-        ``check=False`` waives :meth:`check_grid` (error estimates on coarser grids).
-        """
-        n = self.check_grid(n) if check else int(n)
+    def labels(self, n):
+        """Nearest-seed phase at every face pixel, -1 off it; shape (n, n)."""
+        n = self.check_grid(n)
         _, phases, tree = self._seeds
         face = face_mask(n)
         x = _unit_grid(n)
@@ -415,12 +409,9 @@ class Rods:
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
         return _check_grid(n, self.min_grid(), f"rods of radius {min(self.radii)} a")
 
-    def labels(self, n, *, check=True):
-        """Rod phase inside each rod, matrix phase elsewhere on the face; shape (n, n).
-
-        ``check=False`` waives :meth:`check_grid` (error estimates on coarser grids).
-        """
-        n = self.check_grid(n) if check else int(n)
+    def labels(self, n):
+        """Rod phase inside each rod, matrix phase elsewhere on the face; shape (n, n)."""
+        n = self.check_grid(n)
         x = _unit_grid(n)
         out = np.where(face_mask(n), self.matrix_phase, -1)
         for (cx, cy), r, phase in zip(self.centres, self.radii, self.rod_phases):
@@ -499,12 +490,8 @@ class ArrayMap:
                              f"map {self.source}")
         return n
 
-    def labels(self, n, *, check=True):
-        """Labels on an ``n x n`` grid, ``n`` a multiple of the map size.
-
-        A pixel map exists only at multiples of its size, so ``check=False``
-        waives nothing.
-        """
+    def labels(self, n):
+        """Labels on an ``n x n`` grid, ``n`` a multiple of the map size."""
         n = self.check_grid(n)
         k = n // self.size
         fine = self.labels_array if k == 1 else np.kron(self.labels_array,

@@ -12,12 +12,12 @@ __all__ = [
     "cylinder_face",
     "cylinder_face_slope",
     "cylinder_rms_slope",
+    "fine_grain_rms_slope",
     "flat_punch_approach",
     "flat_punch_pressure",
     "hertz",
     "mean_pressure",
     "pillars_rms_slope",
-    "pillars_rms_slope_face",
     "reference_slope",
 ]
 
@@ -144,29 +144,47 @@ def pillars_rms_slope(mean_pressure, E_star, hard_fill_factor):
     -> 0``: each pillar carries ``p_2 = pbar / rho_2`` and, by eq. 12, the
     rms slope over its own area is ``4 p_2 / (pi E*)``.  The paper's
     derivation averages over the pillars only; for the rms over the whole
-    face see :func:`pillars_rms_slope_face`.
+    face see :func:`fine_grain_rms_slope`.
     """
     return reference_slope(mean_pressure, E_star) / _hard_fill_factor(hard_fill_factor)
 
 
-def pillars_rms_slope_face(mean_pressure, E_star, hard_fill_factor):
-    """Pillars asymptote of the rms slope over the whole face, dimensionless.
+def fine_grain_rms_slope(fill_factors, wear_coefficients, *, exponent=1.0):
+    """Normalised rms slope of a fine-grained multi-phase punch (closed form).
 
-    For ``k_hard / k_matrix -> 0`` only the hard phase carries load,
-    ``p_2 = pbar / rho_2``, and Parseval's identity gives the integral of
-    ``|grad f|^2`` over the whole plane exactly: ``(4 / E*^2) p_2^2 A_2``,
-    whatever the shape and arrangement of the inclusions.  Far from the
-    inclusions the field is that of the mean pressure, so the part outside
-    the punch is the homogeneous punch's, a share ``1 - 4/pi^2`` of
-    ``(4 / E*^2) pbar^2 A``.  Hence
+    Parameters
+    ----------
+    fill_factors : array_like, shape (P,) or (..., P)
+        Area fractions ``rho_i``, summing to 1 along the last axis.
+    wear_coefficients : array_like, shape (P,) or (..., P), 1/Pa
+        ``k_i`` (only their ratios matter).
+    exponent : float, optional
+        ``m`` of the wear law ``k p^m`` (default 1).
 
-        rms / grad_f0 -> (pi / 2) sqrt((1 - rho_2 (1 - 4/pi^2)) / rho_2),
+    Returns
+    -------
+    ndarray or float, dimensionless
+        ``rms / grad_f0 = sqrt(1 + (pi^2 / 4) sum_i rho_i (p_i / pbar - 1)^2)``
+        with ``p_i ~ k_i^(-1/m)`` (eq. 7): the limit of grains much smaller
+        than the punch radius; derivation below.
 
-    exact to leading order as ``rho_2 -> 0`` (``(pi/2) / sqrt(rho_2)``, not
-    the ``1 / rho_2`` of eq. 18, which holds over the pillars only).  The
-    exterior share is approximate: measured within 1 % for Voronoi maps with
-    ``rho_2 = 0.05 .. 0.2``.
+    Notes
+    -----
+    Over the whole plane ``int |grad u|^2 dA = (4 / E*^2) int p^2 dA``
+    (Parseval; :mod:`steady.accuracy`).  Split the steady pressure into its
+    mean ``pbar`` and the fluctuation ``p - pbar``.  The mean gives the
+    homogeneous face (normalised rms slope 1, the fraction ``4 / pi^2`` of
+    its plane integral on the face).  When the grains are much smaller than
+    the punch, the fluctuation's field stays on the face (up to a rim layer
+    about one grain wide) and does not correlate with the smooth mean
+    field.  In the pillars limit ``k_2 / k_1 -> 0`` this gives
+    ``sqrt(1 + (pi^2 / 4) (1 / rho_2 - 1))``, about ``(pi / 2) / sqrt(rho_2)``,
+    not the ``1 / rho_2`` of eq. 18 (:func:`pillars_rms_slope`), which holds
+    over the pillars only.
     """
-    rho = _hard_fill_factor(hard_fill_factor)
-    return (reference_slope(mean_pressure, E_star) * np.pi / 2
-            * np.sqrt((1 - rho * (1 - 4 / np.pi**2)) / rho))
+    rho = np.asarray(fill_factors, dtype=float)
+    k = np.asarray(wear_coefficients, dtype=float)
+    weights = (k / k.min(axis=-1, keepdims=True)) ** (-1.0 / exponent)
+    p = weights / np.sum(rho * weights, axis=-1, keepdims=True)  # p_i / pbar
+    variance = np.sum(rho * (p - 1.0) ** 2, axis=-1)
+    return np.sqrt(1.0 + np.pi**2 / 4.0 * variance)

@@ -38,17 +38,30 @@ import json
 import logging
 import os
 import pathlib
+import time
 
 import h5py
 import numpy as np
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "SweepFile", "SweepPoint", "open_executor",
-           "point_key", "run_sweep"]
+__all__ = [
+    "DEFAULT_WORKERS",
+    "FORMAT",
+    "FORMAT_VERSION",
+    "LOCK_WAIT",
+    "SweepFile",
+    "SweepPoint",
+    "open_executor",
+    "point_key",
+    "run_sweep",
+]
 
 logger = logging.getLogger(__name__)
 
 FORMAT = "runin.sweep"
 FORMAT_VERSION = 1
+
+#: Seconds to wait for a sweep file locked by another process.
+LOCK_WAIT = 60.0
 
 #: Local worker processes by default: at most two (the machines these
 #: sweeps are meant for share their cores).
@@ -158,10 +171,19 @@ class SweepFile:
         return json.loads(self.settings_text)
 
     def _open(self, mode):
-        try:
-            return h5py.File(self.path, mode)
-        except OSError as err:
-            raise ValueError(f"cannot open sweep file {str(self.path)!r}: {err}") from None
+        # HDF5 locks the file while it is open: another process reading or
+        # writing the same sweep file (a second study sharing it) holds it
+        # for a moment.  Wait for it rather than lose a finished point.
+        deadline = time.monotonic() + LOCK_WAIT
+        while True:
+            try:
+                return h5py.File(self.path, mode)
+            except OSError as err:
+                locked = "lock" in str(err).lower()
+                if not locked or time.monotonic() > deadline:
+                    raise ValueError(f"cannot open sweep file {str(self.path)!r}: "
+                                     f"{err}") from None
+                time.sleep(0.05)
 
     def _drop_incomplete(self):
         """Remove groups left half-written by an interrupted sweep."""

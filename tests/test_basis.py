@@ -56,7 +56,7 @@ def test_wrong_number_of_coefficients():
 
 @pytest.mark.parametrize("rho", [0.05, 0.2])
 def test_pillars_limit_over_the_whole_face(rho):
-    """k_2/k_1 -> 0: whole-face rms slope -> (pi/2) sqrt((1 - 0.595 rho) / rho) grad_f0.
+    """k_2/k_1 -> 0: whole-face rms slope -> sqrt(1 + (pi^2/4)(1/rho - 1)) grad_f0.
 
     Measured (corrected, n = 256, Voronoi 40^2 seeds): 6.829 vs 6.894
     (rho = 0.05) and 3.250 vs 3.279 (rho = 0.2), both -0.9 %: the share of
@@ -67,7 +67,7 @@ def test_pillars_limit_over_the_whole_face(rho):
 
     basis = PhaseBasis(Voronoi(1600, (1 - rho, rho), 31).labels(256), 1.0, 1.0, faces=False)
     got = basis.rms_slopes([[1.0, 1e-8]], np.pi).normalised[0]
-    want = reference.pillars_rms_slope_face(1.0, 1.0, basis.fill_factors[1]) / (4 / np.pi)
+    want = reference.fine_grain_rms_slope(basis.fill_factors, [1.0, 1e-8])
     assert got == pytest.approx(want, rel=0.015), f"rho={rho}: {got} vs asymptote {want}"
     over_pillars = reference.pillars_rms_slope(1.0, 1.0, basis.fill_factors[1]) / (4 / np.pi)
     # (pi/2) sqrt(rho) of eq. 18: 0.35 at rho = 0.05, 0.70 at 0.2.
