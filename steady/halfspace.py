@@ -182,8 +182,8 @@ class HalfSpace:
         self.workers = workers
         self._m = 2 * n  # padded size
         self._corners = _corner_asinh(n, self.h)
-        self._influence_q = self._even_spectrum(
-            _influence_quadrant(*self._corners) / (np.pi * self.E_star))
+        self._influence_q = self._even_spectrum(self.influence_quadrant())
+        self._influence_q.flags.writeable = False
         self._gradient_q = None
         # Work buffers, reused by every product: the zero padding is written
         # once, and the products need no fresh allocation.
@@ -309,6 +309,26 @@ class HalfSpace:
         if pressure_q is None:
             pressure_q = self.forward(pressure_r)
         return self._product(pressure_q, gx_q), self._product(pressure_q, gy_q)
+
+    def influence_quadrant(self):
+        """Influence coefficients at pixel offsets ``0..n`` along each axis.
+
+        Returns
+        -------
+        ndarray, shape (n + 1, n + 1), m/Pa
+            Displacement at offset ``(i, j)`` pixels from a pixel under unit
+            pressure; the kernel is even in both axes.
+        """
+        return _influence_quadrant(*self._corners) / (np.pi * self.E_star)
+
+    @property
+    def influence_symbol(self):
+        """Real spectrum of the padded ``2n x 2n`` influence kernel, m/Pa.
+
+        ``inverse(forward(p) * influence_symbol)`` is :meth:`displacement`;
+        shape ``(2n, n + 1)``, read-only.
+        """
+        return self._influence_q
 
     @property
     def self_influence(self):

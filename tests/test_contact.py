@@ -1,0 +1,439 @@
+"""Load-controlled contact solver against closed forms and a dense direct solve."""
+
+import logging
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+
+from steady import reference
+from steady.grid import face_mask, pixel_size, polar
+from steady.halfspace import HalfSpace
+from transient import initial_face
+from transient.contact import PRECONDITIONERS, ContactResult, solve_contact
+from transient.preconditioners import influence_quadrant, influence_symbol
+
+# The paper's epoxy cylinder (Fig. 6): a = 4 mm, F = 10 N, E* = 1.3 MPa.
+RADIUS = 4e-3
+E_STAR = 1.3e6
+FORCE = 10.0
+# Tilt at which a (non-rotating) tilted flat punch starts to lift off:
+# the rim coefficient F / (2 pi a) - 2 E* theta a / pi of the pressure vanishes.
+CRITICAL_TILT = FORCE / (4 * RADIUS**2 * E_STAR)
+
+
+def setup(n, E_star=E_STAR):
+    hs = HalfSpace(n, pixel_size(n, RADIUS), E_star)
+    return hs, face_mask(n)
+
+
+def effective_radius(face, hs):
+    """Radius of the disk with the pixelated face's area."""
+    return np.sqrt(face.sum() * hs.h**2 / np.pi)
+
+
+def load(res, hs):
+    return res.pressure.sum() * hs.h**2
+
+
+# -- kernels -------------------------------------------------------------------
+
+@pytest.mark.parametrize("n", [20, 21])
+def test_preconditioner_kernels_match_the_half_space(n):
+    hs, _ = setup(n)
+    p = np.random.default_rng(31337).random((n, n))
+    u = hs.displacement(p)
+    symbol = influence_symbol(hs)
+    assert symbol.min() > 0, "the circulant embedding must be positive definite"
+    via_symbol = hs.inverse(hs.forward(p) * symbol)
+    assert np.allclose(via_symbol, u, rtol=0, atol=1e-13 * np.abs(u).max()), (
+        "influence_symbol must reproduce HalfSpace.displacement")
+    unit = np.zeros((n, n))
+    unit[0, 0] = 1.0
+    assert np.allclose(influence_quadrant(hs), hs.displacement(unit), rtol=1e-12, atol=0), (
+        "influence_quadrant must be the response to a unit pixel pressure")
+
+
+# -- flat punch ------------------------------------------------------------
+
+FLAT_SIZES = (31, 32, 63, 64, 127, 128)
+
+
+@pytest.fixture(scope="module")
+def flat_results():
+    out = {}
+    for n in FLAT_SIZES:
+        hs, face = setup(n)
+        out[n] = (hs, face, solve_contact(hs, face, initial_face.flat(n, RADIUS), FORCE))
+    return out
+
+
+def test_flat_punch_approach_converges_first_order(flat_results):
+    errors = []
+    for n in FLAT_SIZES:
+        hs, face, res = flat_results[n]
+        assert res.success, f"n={n}: {res.message}"
+        assert abs(load(res, hs) / FORCE - 1) < 1e-13, f"n={n}: load {load(res, hs)} N"
+        assert res.contact_fraction == 1.0, f"n={n}: flat punch lifts off {res.contact_fraction}"
+        # Against the disk of the same area as the pixelated face, the
+        # approach error is a clean O(h): measured 7.8e-3, 7.6e-3, 3.8e-3,
+        # 3.6e-3, 1.8e-3, 1.8e-3 for n = 31 ... 128 (the nominal radius adds
+        # an area error that fluctuates with n).
+        exact = reference.flat_punch_approach(FORCE, effective_radius(face, hs), E_STAR)
+        errors.append(abs(res.approach / exact - 1))
+        nominal = reference.flat_punch_approach(FORCE, RADIUS, E_STAR)
+        assert abs(res.approach / nominal - 1) < 1.5e-2, (
+            f"n={n}: approach {res.approach} m vs F/(2aE*) = {nominal} m")
+    order = -np.polyfit(np.log(FLAT_SIZES), np.log(errors), 1)[0]
+    assert 0.9 < order < 1.1, f"approach error order {order:.3f}, errors {errors}"
+    assert errors[-1] < 2.5e-3, f"approach error at n=128: {errors[-1]:.3e} (measured 1.8e-3)"
+
+
+def test_flat_punch_pressure_is_boussinesq_away_from_the_rim(flat_results):
+    errors = []
+    for n in FLAT_SIZES:
+        hs, face, res = flat_results[n]
+        r, _ = polar(n, RADIUS)
+        exact = reference.flat_punch_pressure(r, effective_radius(face, hs), FORCE)
+        inner = face & (r < 0.5 * RADIUS)
+        rms = np.sqrt(np.mean((res.pressure[inner] - exact[inner]) ** 2))
+        errors.append(rms / reference.mean_pressure(FORCE, RADIUS))
+    # Measured 8.8e-3 (n=31) down to 2.1e-3 (n=128), first order.
+    order = -np.polyfit(np.log(FLAT_SIZES), np.log(errors), 1)[0]
+    assert 0.9 < order < 1.1, f"inner pressure error order {order:.3f}, errors {errors}"
+    assert errors[-1] < 3e-3, f"inner rms pressure error at n=128: {errors[-1]:.3e}"
+
+
+def test_flat_punch_rim_carries_the_peak(flat_results):
+    hs, face, res = flat_results[128]
+    r, _ = polar(128, RADIUS)
+    assert r[np.unravel_index(np.argmax(res.pressure), r.shape)] > 0.97 * RADIUS, (
+        "the edge singularity must put the peak pressure on the rim")
+
+
+def test_fourier_iterations_do_not_grow_with_the_grid(flat_results):
+    nits = [flat_results[n][2].nit for n in FLAT_SIZES]
+    # Measured 8 to 10 for n = 31 ... 128, 12 at 512, 14 at 1024; plain
+    # Polonsky-Keer needs 18 to 35 here.
+    assert max(nits) <= 12, f"iterations {nits}"
+
+
+# -- Hertz -------------------------------------------------------------------
+
+HERTZ_FORCE = 0.3  # N: with R = 80 mm, c = 0.6 a, inside the rim, and c/R = 0.03
+
+
+@pytest.mark.parametrize("n", [127, 128])
+def test_crowned_face_is_hertz(n):
+    hs, face = setup(n)
+    sphere = 4 * E_STAR * (0.6 * RADIUS) ** 3 / (3 * HERTZ_FORCE)
+    c, p_max, approach = reference.hertz(HERTZ_FORCE, sphere, E_STAR)
+    res = solve_contact(hs, face, initial_face.crowned(n, RADIUS, sphere), HERTZ_FORCE)
+    assert res.success, res.message
+    assert abs(load(res, hs) / HERTZ_FORCE - 1) < 1e-13, f"load {load(res, hs)} N"
+    r, _ = polar(n, RADIUS)
+    contact = res.pressure > 0
+    assert r[contact].max() < 0.7 * RADIUS, "contact must stay inside the rim"
+    radius = np.sqrt(contact.sum() * hs.h**2 / np.pi)
+    # Measured at n = 127, 128: contact radius +3.1e-3, +3.0e-3 (one pixel
+    # row is h/c = 1.3e-2); peak +1.2e-4, -5.4e-5; approach +3.8e-5
+    # (the exact sphere's r^4/(8R^3) against Hertz's paraboloid: ~6e-5).
+    assert abs(radius / c - 1) < 6e-3, f"contact radius {radius} m vs Hertz {c} m"
+    assert abs(res.pressure.max() / p_max - 1) < 1e-3, (
+        f"peak pressure {res.pressure.max()} Pa vs Hertz {p_max} Pa")
+    assert abs(res.approach / approach - 1) < 2e-4, (
+        f"approach {res.approach} m vs Hertz {approach} m")
+
+
+# -- tilted face ---------------------------------------------------------------
+
+@pytest.mark.parametrize("n", [127, 128])
+def test_tilted_face_in_full_contact_has_the_rigid_punch_moment(n):
+    hs, face = setup(n)
+    tilt = 0.5 * CRITICAL_TILT
+    res = solve_contact(hs, face, initial_face.tilted(n, RADIUS, tilt), FORCE)
+    assert res.success and res.contact_fraction == 1.0, res.message
+    r, theta = polar(n, RADIUS)
+    centroid = np.sum(res.pressure * r * np.cos(theta)) * hs.h**2 / FORCE
+    # A flat punch forced to a tilt theta carries M = 4/3 E* a^3 theta
+    # (Johnson, Contact Mechanics, sec. 3.8); the face recedes towards +x.
+    a_eff = effective_radius(face, hs)
+    expected = -4 / 3 * E_STAR * a_eff**3 * np.tan(tilt) / FORCE
+    # Measured with a_eff: -1.1e-2 (n=63, 64), -5.5e-3 (n=127, 128), -2.7e-3
+    # (n=255, 256): first order, three times the approach error.
+    assert abs(centroid / expected - 1) < 8e-3, f"centroid {centroid} m vs {expected} m"
+    flat_approach = reference.flat_punch_approach(FORCE, a_eff, E_STAR)
+    approach = flat_approach + np.tan(tilt) * RADIUS  # the field is zero at x = -a
+    # Measured +1.8e-3 of the flat approach at n = 127, 128 (as for the flat punch).
+    assert abs(res.approach - approach) < 3e-3 * flat_approach, (
+        f"approach {res.approach} m vs {approach} m")
+
+
+@pytest.mark.parametrize("n", [64, 65])
+def test_tilted_face_lifts_off_on_the_recessed_side(n):
+    hs, face = setup(n)
+    height = initial_face.tilted(n, RADIUS, 2 * CRITICAL_TILT)
+    cold = solve_contact(hs, face, height, FORCE, rtol=1e-10)
+    assert cold.success, cold.message
+    assert 0.3 < cold.contact_fraction < 0.95, f"contact fraction {cold.contact_fraction}"
+    assert abs(load(cold, hs) / FORCE - 1) < 1e-13, "load must be met to round-off"
+    # Lift-off region: along every row of constant y, once lifted stays lifted
+    # towards +x (the recessed side).
+    contact = cold.pressure > 0
+    for j in range(n):
+        column = contact[face[:, j], j]
+        if column.any():
+            last = np.nonzero(column)[0].max()
+            assert column[: last + 1].all(), f"row y={j}: contact not contiguous from -x"
+    r, theta = polar(n, RADIUS)
+    centroid = np.sum(cold.pressure * r * np.cos(theta)) * hs.h**2 / FORCE
+    # Past the critical tilt the centroid moves beyond the full-contact
+    # value at lift-off, -a/3 (measured -0.547 a).
+    assert -0.8 * RADIUS < centroid < -RADIUS / 3, f"centroid {centroid / RADIUS} a"
+    # Gap closed under pressure, open (to the tolerance) elsewhere.
+    gap = cold.displacement + height - cold.approach
+    scale = cold.approach
+    assert np.abs(gap[contact]).max() < 1e-8 * scale, "gap must close where p > 0"
+    assert gap[face & ~contact].min() > -1e-8 * scale, "no interpenetration"
+    # Same answer from a warm start (a rougher, uniform one and a near one).
+    for x0 in (face * 1.0, np.roll(cold.pressure, 1, axis=1)):
+        warm = solve_contact(hs, face, height, FORCE, x0=x0, rtol=1e-10)
+        assert warm.success, warm.message
+        diff = np.abs(warm.pressure - cold.pressure).max() / cold.pressure.max()
+        assert diff < 1e-6, f"warm start differs by {diff:.2e} of the peak pressure"
+        assert abs(warm.approach / cold.approach - 1) < 1e-9, "approach from warm start"
+
+
+def test_warm_start_from_the_solution_converges_at_once():
+    n = 48
+    hs, face = setup(n)
+    height = initial_face.tilted(n, RADIUS, 2 * CRITICAL_TILT, azimuth=0.7)
+    cold = solve_contact(hs, face, height, FORCE)
+    warm = solve_contact(hs, face, height, FORCE, x0=cold.pressure)
+    assert warm.success and warm.nit <= 1, f"warm start took {warm.nit} iterations"
+
+
+# -- diagonal shift against a dense direct solve ------------------------------
+
+def dense_lcp(hs, face, height, force, shift):
+    """Exact solution by a dense NNLS on the face pixels and a root find on d."""
+    n = hs.n
+    ii, jj = np.nonzero(face)
+    m = ii.size
+    columns = np.empty((m, m))
+    for k in range(m):
+        e = np.zeros((n, n))
+        e[ii[k], jj[k]] = 1.0
+        columns[:, k] = hs.displacement(e)[ii, jj]
+    A = 0.5 * (columns + columns.T) + np.diag(shift[ii, jj])
+    L = scipy.linalg.cholesky(A, lower=True)
+    h = height[ii, jj]
+
+    def pressure(d):
+        # min 1/2 p^T A p + (h - d)^T p, p >= 0, as a non-negative least squares.
+        rhs = scipy.linalg.solve_triangular(L, d - h, lower=True)
+        return scipy.optimize.nnls(L.T, rhs, maxiter=50 * m)[0]
+
+    def excess(d):
+        return pressure(d).sum() * hs.h**2 - force
+
+    hi = h.min() + 1e-9
+    while excess(hi) < 0:
+        hi = h.min() + 2 * (hi - h.min())
+    d = scipy.optimize.brentq(excess, h.min(), hi, xtol=1e-16, rtol=1e-15)
+    # Polish on the active set: A_SS p_S = d - h_S with sum(p_S) h^2 = F.
+    active = pressure(d) > 0
+    A_ss = A[np.ix_(active, active)]
+    x1 = np.linalg.solve(A_ss, np.ones(active.sum()))
+    xh = np.linalg.solve(A_ss, h[active])
+    d = (force / hs.h**2 + xh.sum()) / x1.sum()
+    p = np.zeros((n, n))
+    p[ii[active], jj[active]] = d * x1 - xh
+    return p, d
+
+
+@pytest.mark.parametrize("n", [12, 13])
+@pytest.mark.parametrize("magnitude", [0.3, 30.0, 3e4])
+def test_shifted_operator_matches_dense_direct_solve(n, magnitude):
+    hs, face = setup(n)
+    rng = np.random.default_rng(20260521 + n)
+    # Two phases with wear ratios 1e-2 apart, shift in units of the self-influence.
+    phase = rng.random((n, n)) < 0.4
+    shift = hs.self_influence * magnitude * np.where(phase, 1.0, 1e-2)
+    height = initial_face.tilted(n, RADIUS, 3 * CRITICAL_TILT, azimuth=0.3)
+    expected_p, expected_d = dense_lcp(hs, face, height, FORCE, shift)
+    res = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-12)
+    assert res.success, res.message
+    peak = expected_p.max()
+    diff = np.abs(res.pressure - expected_p).max() / peak
+    # Both solve the same discrete problem; measured <= 4.4e-12 of the peak
+    # pressure and <= 1.6e-13 in the approach at rtol = 1e-12.
+    assert diff < 1e-10, f"pressure differs from the dense solve by {diff:.2e} of the peak"
+    assert abs(res.approach - expected_d) < 1e-11 * abs(expected_d), (
+        f"approach {res.approach} m vs dense {expected_d} m")
+    assert np.array_equal(res.pressure > 0, expected_p > 0), "contact sets differ"
+    assert np.allclose(res.displacement, hs.displacement(res.pressure) + shift * res.pressure,
+                       rtol=0, atol=1e-12 * np.abs(res.displacement).max()), (
+        "displacement must be (K + diag shift) p")
+
+
+def test_big_shift_is_nearly_diagonal():
+    n = 40
+    hs, face = setup(n)
+    shift = np.full((n, n), 1e6 * n * hs.self_influence)
+    height = initial_face.tilted(n, RADIUS, 1e-3)
+    res = solve_contact(hs, face, height, FORCE, shift=shift)
+    assert res.success and res.nit <= 3, f"{res.nit} iterations: {res.message}"
+    # Winkler foundation: p = (d - h) / s where positive.
+    winkler = np.where(face, np.maximum(res.approach - height, 0.0) / shift, 0.0)
+    diff = np.abs(res.pressure - winkler).max() / winkler.max()
+    assert diff < 1e-5, f"pressure differs from the Winkler limit by {diff:.2e}"
+
+
+@pytest.mark.parametrize("name", PRECONDITIONERS)
+def test_every_preconditioner_gives_the_same_answer(name):
+    if name == "amg":
+        pytest.importorskip("pyamg")
+    n = 33
+    hs, face = setup(n)
+    rng = np.random.default_rng(9173)
+    shift = hs.self_influence * rng.uniform(0.0, 5.0, (n, n))
+    height = initial_face.crowned(n, RADIUS, 0.05)
+    reference_res = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11,
+                                  preconditioner="none")
+    res = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11, preconditioner=name)
+    assert res.success, f"{name}: {res.message}"
+    diff = np.abs(res.pressure - reference_res.pressure).max() / reference_res.pressure.max()
+    assert diff < 1e-8, f"{name} differs from the plain iteration by {diff:.2e}"
+
+
+# -- result contract --------------------------------------------------------------
+
+def test_result_reports_the_stopping_rule():
+    n = 50
+    hs, face = setup(n)
+    height = initial_face.tilted(n, RADIUS, 2 * CRITICAL_TILT)
+    seen = []
+    res = solve_contact(hs, face, height, FORCE, rtol=1e-9, callback=seen.append)
+    assert isinstance(res, ContactResult)
+    assert len(seen) == res.nit and res.residual_history.size == res.nit + 1, (
+        "one callback per iteration, one residual before each and at the end")
+    assert res.residual == res.residual_history[-1], "final residual is the last in history"
+    contact = res.pressure > 0
+    gap = np.where(face, res.displacement + height - res.approach, 0.0)
+    violation = np.where(contact, gap, np.minimum(gap, 0.0))
+    rms = np.sqrt(np.sum(violation**2) / face.sum())
+    assert np.isclose(rms, res.residual, rtol=1e-6, atol=0), "residual is the rms violation"
+    scale = np.sqrt(np.mean(res.displacement[contact] ** 2))
+    assert res.residual <= 1e-9 * scale, "stopping rule: residual <= rtol * rms displacement"
+    assert res.pressure.min() >= 0 and not res.pressure[~face].any(), "p >= 0, zero off face"
+    assert res.contact_fraction == contact.sum() / face.sum(), "contact fraction"
+    with pytest.raises(dataclass_error()):
+        res.nit = 0
+
+
+def dataclass_error():
+    import dataclasses
+    return dataclasses.FrozenInstanceError
+
+
+def test_no_convergence_is_reported_not_hidden(caplog):
+    n = 64
+    hs, face = setup(n)
+    with caplog.at_level(logging.WARNING, logger="transient.contact"):
+        res = solve_contact(hs, face, np.zeros((n, n)), FORCE, maxiter=2,
+                            preconditioner="none")
+    assert not res.success and "no convergence" in res.message, res.message
+    assert res.nit == 2, f"nit {res.nit}"
+    assert any("no convergence" in rec.getMessage() for rec in caplog.records), (
+        "failure must be logged")
+    assert abs(load(res, hs) / FORCE - 1) < 1e-13, "load met even on failure"
+
+
+def test_zero_force_gives_zero_pressure():
+    n = 16
+    hs, face = setup(n)
+    height = initial_face.tilted(n, RADIUS, 0.01)
+    res = solve_contact(hs, face, height, 0.0)
+    assert res.success and not res.pressure.any(), "no load, no pressure"
+    assert res.approach == height[face].min(), "the face just touches"
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(normal_force=-1.0), "normal_force"),
+    (dict(normal_force=np.nan), "normal_force"),
+    (dict(normal_force=np.inf), "normal_force"),
+    (dict(height=np.full((9, 9), np.nan)), "height"),
+    (dict(height=np.zeros((8, 9))), "height"),
+    (dict(face=np.ones((9, 8), bool)), "face"),
+    (dict(face=np.ones((9, 9))), "face"),
+    (dict(face=np.zeros((9, 9), bool)), "face"),
+    (dict(shift=-np.ones((9, 9))), "shift"),
+    (dict(shift=np.ones((3, 3))), "shift"),
+    (dict(shift=np.full((9, 9), np.inf)), "shift"),
+    (dict(x0=np.ones((2, 2))), "x0"),
+    (dict(rtol=-1.0), "rtol"),
+    (dict(atol=np.nan), "atol"),
+    (dict(rtol=0.0, atol=0.0), "rtol"),
+    (dict(maxiter=0), "maxiter"),
+    (dict(maxiter=2.5), "maxiter"),
+    (dict(preconditioner="multigrid"), "preconditioner"),
+])
+def test_bad_input_raises(change, match):
+    n = 9
+    hs, face = setup(n)
+    args = dict(halfspace=hs, face=face, height=np.zeros((n, n)), normal_force=1.0)
+    args.update(change)
+    kwargs = {k: args.pop(k) for k in list(args) if k not in
+              ("halfspace", "face", "height", "normal_force")}
+    with pytest.raises(ValueError, match=match):
+        solve_contact(args["halfspace"], args["face"], args["height"], args["normal_force"],
+                      **kwargs)
+
+
+# -- large grids ---------------------------------------------------------------------
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [1023, 1024])
+def test_flat_punch_on_a_fine_grid(n):
+    hs, face = setup(n)
+    res = solve_contact(hs, face, np.zeros((n, n)), FORCE)
+    # Measured 14 iterations at n = 1023 and 1024.
+    assert res.success and res.nit <= 17, f"{res.nit} iterations: {res.message}"
+    exact = reference.flat_punch_approach(FORCE, effective_radius(face, hs), E_STAR)
+    # O(h) continuation of the measured 1.8e-3 at n = 128: ~2.3e-4 at n = 1024.
+    assert abs(res.approach / exact - 1) < 4e-4, f"approach error {res.approach / exact - 1}"
+
+
+@pytest.mark.slow
+def test_crowned_face_on_a_fine_grid():
+    n = 512
+    hs, face = setup(n)
+    sphere = 4 * E_STAR * (0.6 * RADIUS) ** 3 / (3 * HERTZ_FORCE)
+    c, p_max, approach = reference.hertz(HERTZ_FORCE, sphere, E_STAR)
+    res = solve_contact(hs, face, initial_face.crowned(n, RADIUS, sphere), HERTZ_FORCE)
+    assert res.success, res.message
+    radius = np.sqrt((res.pressure > 0).sum() * hs.h**2 / np.pi)
+    # Measured +7.9e-4 (contact radius) and +7.2e-5 (peak) at n = 512.
+    assert abs(radius / c - 1) < 2e-3, f"contact radius {radius} vs {c}"
+    assert abs(res.pressure.max() / p_max - 1) < 3e-4, "peak pressure"
+
+
+def test_benchmark_script_smoke(tmp_path):
+    import importlib.util
+    import pathlib
+
+    path = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks" / "bench_contact.py"
+    spec = importlib.util.spec_from_file_location("bench_contact", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    out = tmp_path / "bench.h5"
+    peer_rows, pc_rows = bench.main(["--sizes", "24", "--pc-sizes", "25", "--repeat", "1",
+                                     "--out", str(out), "--skip-peers"])
+    assert out.exists(), "the benchmark writes its HDF5 file"
+    for row in peer_rows:
+        assert row["runin"]["nit"] > 0, f"{row['case']}: no run met the accuracy"
+    assert {row["scene"] for row in pc_rows} >= {"flat", "crowned"}, "preconditioner scenes"
+    for row in pc_rows:
+        assert row["auto"]["nit"] > 0, f"{row['scene']}: auto did not meet the accuracy"

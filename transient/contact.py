@@ -1,0 +1,490 @@
+"""Unilateral normal contact of the punch face on the elastic half-space, load control.
+
+The face can carry pressure on the pixels of ``face``; its height field
+``h(x)`` (m, larger = recessed, farther from the counter-body) holds the
+worn depth plus the initial shape.  Under the normal force ``F`` the
+pressure ``p`` and the rigid approach ``d`` solve the linear
+complementarity problem
+
+    u = (K + diag(shift)) p,    g = u + h - d >= 0,    p >= 0,    p g = 0,
+    sum(p) h_pix^2 = F,
+
+on the face (``p = 0`` off it), with ``K`` the half-space influence
+operator (paper eq. 8).  ``shift = ds * k`` turns the problem into one
+implicit Euler step of the Archard wear law,
+``w_{n+1} = w_n + ds k p_{n+1}`` with ``h = w_n``.
+
+The solver is the constrained conjugate gradient of Polonsky & Keer
+(Wear 231 (1999) 206-219, doi:10.1016/S0043-1648(99)00113-1), with three
+changes:
+
+- a preconditioner: by default the inverse Fourier symbol of the operator
+  (``~ E* |q| / 2``), aliased to the ``n x n`` grid and restricted to the
+  active set (after Vollebregt, J. Comput. Phys. 257 (2014) 333-351,
+  doi:10.1016/j.jcp.2013.10.005).  The iteration count then hardly grows
+  with the grid (8 to 14 for the flat punch from n = 32 to 1024 at
+  ``rtol = 1e-8``), where plain Polonsky-Keer needs 18 to 94;
+- the displacement is updated with the conjugate direction's product (one
+  padded FFT pair per iteration for the operator), the change from the
+  few pixels that enter or leave the active set is summed directly, and
+  it is recomputed by FFT only when many do or every 50 iterations;
+- pixels that penetrate enter the active set with the pressure of the
+  current step length (Polonsky & Keer's rule, made unit-consistent for a
+  preconditioned direction and capped by the pressure ``-g / A_ii`` that
+  closes the gap alone).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import numbers
+
+import numpy as np
+
+from transient.preconditioners import (
+    AMGPreconditioner,
+    FourierPreconditioner,
+    JacobiPreconditioner,
+    influence_quadrant,
+)
+
+__all__ = ["ContactResult", "PRECONDITIONERS", "solve_contact"]
+
+logger = logging.getLogger(__name__)
+
+#: Names accepted by ``solve_contact(preconditioner=...)``.
+PRECONDITIONERS = ("amg", "auto", "fourier", "fourier-padded", "jacobi", "none")
+
+# Pixels entering or leaving the active set up to this count have their
+# displacement change summed directly (one n x n gather each, a few per cent
+# of an FFT pair); more trigger a full FFT recomputation.
+_DIRECT_UPDATE_PIXELS = 8
+# Incremental displacement updates between full recomputations; each adds
+# a round-off of order eps |u|, so the drift stays far below any tolerance.
+_REFRESH = 50
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactResult:
+    """Solution of one load-controlled contact problem.
+
+    Attributes
+    ----------
+    pressure : ndarray, shape (n, n), Pa
+        Contact pressure, non-negative, zero off the face.
+    approach : float, m
+        Rigid approach ``d``: ``u = d - h`` where ``p > 0``.
+    displacement : ndarray, shape (n, n), m
+        ``(K + diag(shift)) p`` on the whole grid, consistent with
+        ``pressure`` to round-off (updated with each step and recomputed
+        by FFT at least every 50 iterations).
+    contact_fraction : float
+        Pixels with ``p > 0`` over face pixels.
+    nit : int
+        Conjugate gradient iterations.
+    residual : float, m
+        Final rms gap violation over the face (see :func:`solve_contact`).
+    residual_history : ndarray, shape (nit + 1,), m
+        Residual before each iteration and at the end.
+    success : bool
+        Whether the stopping rule was met.
+    message : str
+        What happened, in words.
+    """
+
+    pressure: np.ndarray
+    approach: float
+    displacement: np.ndarray
+    contact_fraction: float
+    nit: int
+    residual: float
+    residual_history: np.ndarray
+    success: bool
+    message: str
+
+
+class _Operator:
+    """``A = K + diag(shift)`` with the direct column sums for a few pixels."""
+
+    def __init__(self, halfspace, shift):
+        self.halfspace = halfspace
+        self.shift = shift
+        self.diagonal = halfspace.self_influence + (0.0 if shift is None else shift)
+        self._arange = np.arange(halfspace.n)
+        self.products = 0
+
+    def __call__(self, p):
+        self.products += 1
+        u = np.ascontiguousarray(self.halfspace.displacement(p))
+        if self.shift is not None:
+            u += self.shift * p
+        return u
+
+    def columns(self, ii, jj, values):
+        """``A`` applied to a pressure that is ``values`` on pixels ``(ii, jj)``, else 0."""
+        q, ar = influence_quadrant(self.halfspace), self._arange
+        u = np.zeros((self.halfspace.n, self.halfspace.n))
+        for i, j, v in zip(ii, jj, values):
+            u += v * q[np.abs(ar - i)][:, np.abs(ar - j)]
+        if self.shift is not None:
+            u[ii, jj] += self.shift[ii, jj] * values
+        return u
+
+
+def _initial_pressure(height, face, force, halfspace):
+    """Cold start: Hertz-like pressure on the pixels a rigid estimate puts in contact.
+
+    For a sphere, the contact region ``dh < d / 2`` (``dh = h - min h``)
+    has the radius ``c`` with ``d = 3 F / (4 E* c)`` (Hertz), and
+    ``p ~ sqrt(d / 2 - dh)``.  The same construction on the sorted heights
+    of any face gives a start of the right extent; for a flat face it is
+    uniform.  Unnormalised.
+    """
+    dh_face = height[face] - height[face].min()
+    if not dh_face.any():
+        return face.astype(float)
+    dh = np.sort(dh_face)
+    count = np.arange(1, dh.size + 1)
+    c = np.sqrt(count * halfspace.h**2 / np.pi)
+    half_approach = 0.375 * force / (halfspace.E_star * c)
+    # First set size whose half-approach does not reach the next pixel's height.
+    k = min(int(np.argmax(half_approach <= np.append(dh[1:], np.inf))), dh.size - 1)
+    level = max(float(half_approach[k]), float(dh[k]))
+    excess = np.where(face, level - (height - height[face].min()), 0.0)
+    if np.all(excess[face] >= 0.5 * level):
+        return face.astype(float)
+    return np.sqrt(np.maximum(excess, 0.0))
+
+
+def _check_field(name, value, shape):
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    return arr
+
+
+def _make_preconditioner(name, halfspace, face, shift):
+    if name == "auto":
+        name = "fourier"
+        # A uniform shift keeps the Fourier symbol exact.  A non-uniform one
+        # that exceeds a few self-influences K_00 everywhere makes the problem
+        # nearly diagonal: the free Jacobi preconditioner then needs about as
+        # many iterations as the shift-aware Fourier one (docs/benchmarks.md).
+        if shift is not None:
+            s_face = shift[face]
+            if s_face.max() > s_face.min() and s_face.min() >= 3 * halfspace.self_influence:
+                name = "jacobi"
+    if name == "none":
+        return None
+    if name == "fourier":
+        return FourierPreconditioner(halfspace, shift, face=face)
+    if name == "fourier-padded":
+        return FourierPreconditioner(halfspace, shift, face=face, padded=True)
+    if name == "jacobi":
+        return JacobiPreconditioner(halfspace, shift)
+    if name == "amg":
+        return AMGPreconditioner(halfspace, face, shift)
+    raise ValueError(f"preconditioner must be one of {PRECONDITIONERS}, got {name!r}")
+
+
+def solve_contact(halfspace, face, height, normal_force, *, shift=None, x0=None,
+                  rtol=1e-8, atol=0.0, maxiter=None, preconditioner="auto", callback=None):
+    """Contact pressure and rigid approach of the face under a normal force.
+
+    Solves the complementarity problem of the module docstring by a
+    preconditioned constrained conjugate gradient (Polonsky & Keer 1999).
+
+    Parameters
+    ----------
+    halfspace : steady.halfspace.HalfSpace
+        The elastic half-space operator on the ``n x n`` grid.
+    face : ndarray of bool, shape (n, n)
+        Pixels that can carry pressure; at least one.
+    height : ndarray, shape (n, n), m
+        Height of the face, larger = farther from the counter-body (worn
+        depth plus initial shape).  Must be finite on the face; values off
+        the face are ignored.  Only differences matter.
+    normal_force : float, N
+        Total normal force, finite and non-negative.
+    shift : ndarray, shape (n, n), m/Pa, optional
+        Non-negative diagonal added to the operator: ``K + diag(shift)``
+        (an implicit Euler wear step uses ``shift = ds * k``).  Default: none.
+    x0 : ndarray, shape (n, n), Pa, optional
+        Warm start.  Negative values and values off the face are dropped
+        and the rest is scaled to the load.  Default (or an ``x0`` that is
+        zero on the face): uniform on a flat face, else a Hertz-like
+        pressure on the region a rigid estimate puts in contact.
+    rtol, atol : float, optional
+        Relative (dimensionless, default 1e-8) and absolute (m, default 0)
+        tolerances of the stopping rule below.
+    maxiter : int, optional
+        Maximum number of iterations (default ``max(200, 10 n)``).
+    preconditioner : {"auto", "fourier", "fourier-padded", "jacobi", "amg", "none"}, optional
+        ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
+        ``K + shift`` aliased to the ``n x n`` grid (shift-aware; one
+        unpadded FFT pair per iteration, about a third of a padded one;
+        ``"fourier-padded"`` applies it on the padded grid), unless
+        the shift is non-uniform and at least ``3 K_00`` (``K_00`` the
+        self-influence) on every face pixel, where the problem is nearly
+        diagonal and ``"jacobi"`` (free) is as fast or faster
+        (docs/benchmarks.md).  ``"amg"`` (one
+        smoothed-aggregation V-cycle on a truncated kernel) needs
+        :mod:`pyamg` and is slower in every case measured.
+    callback : callable, optional
+        Called as ``callback(pressure)`` after each iteration with the
+        current pressure (read-only view; copy it to keep it).
+
+    Returns
+    -------
+    ContactResult
+
+    Raises
+    ------
+    ValueError
+        On a wrong shape, a non-finite height on the face, a negative or
+        non-finite force, a negative or non-finite shift, an empty face,
+        bad tolerances or an unknown preconditioner.
+
+    Notes
+    -----
+    Stopping rule.  With ``d`` the mean of ``u + h`` over the active set
+    ``I = {p > 0}`` and the gap ``g = u + h - d``, the residual is the rms,
+    over the face pixels, of the violation of the contact conditions::
+
+        residual = sqrt( (sum_I g^2 + sum_{face \\ I} min(g, 0)^2) / N_face )
+
+    (gap left open under pressure, or interpenetration where there is
+    none), in metres.  The iteration stops when
+    ``residual <= max(rtol * U, atol)`` with ``U`` the rms displacement
+    over the active set, the elastic scale of the problem (for the flat
+    punch ``U = F / (2 a E*)``).  So ``rtol`` is the relative residual of
+    the contact equation ``u = d - h`` on the contact area.  ``p >= 0``
+    holds exactly and the load is met to round-off at every iteration.
+    The returned ``approach`` is ``d``.  The displacement behind the
+    residual is updated with each step; when its accumulated round-off
+    could reach a thousandth of the tolerance, it is recomputed by FFT and
+    the rule checked again.
+    """
+    n = int(halfspace.n)
+    shape = (n, n)
+    face = np.asarray(face)
+    if face.shape != shape:
+        raise ValueError(f"face must have shape {shape}, got {face.shape}")
+    if face.dtype != bool:
+        raise ValueError(f"face must be a boolean mask, got dtype {face.dtype}")
+    n_face = int(face.sum())
+    if n_face == 0:
+        raise ValueError("face has no pixel: nothing can carry the load")
+    height = _check_field("height", height, shape)
+    if not np.all(np.isfinite(height[face])):
+        bad = int((~np.isfinite(height[face])).sum())
+        raise ValueError(f"height must be finite on the face, got {bad} non-finite values")
+    if not isinstance(normal_force, numbers.Real) and np.ndim(normal_force) != 0:
+        raise ValueError(f"normal_force must be a scalar in N, got {normal_force!r}")
+    force = float(normal_force)
+    if not (np.isfinite(force) and force >= 0):
+        raise ValueError(f"normal_force must be finite and non-negative, got {normal_force!r} N")
+    if shift is not None:
+        shift = _check_field("shift", shift, shape)
+        s_face = shift[face]
+        if not np.all(np.isfinite(s_face)):
+            raise ValueError("shift must be finite on the face")
+        if s_face.min() < 0:
+            raise ValueError(f"shift must be non-negative, got min {s_face.min()!r} m/Pa")
+        shift = np.where(face, shift, 0.0)
+        if not shift.any():
+            shift = None
+    if x0 is not None:
+        x0 = _check_field("x0", x0, shape)
+        if not np.all(np.isfinite(x0[face])):
+            raise ValueError("x0 must be finite on the face")
+    for name, tol in (("rtol", rtol), ("atol", atol)):
+        if not (np.isfinite(tol) and tol >= 0):
+            raise ValueError(f"{name} must be finite and non-negative, got {tol!r}")
+    if rtol == 0 and atol == 0:
+        raise ValueError("rtol and atol cannot both be zero")
+    if maxiter is None:
+        maxiter = max(200, 10 * n)
+    if int(maxiter) != maxiter or maxiter < 1:
+        raise ValueError(f"maxiter must be a positive integer, got {maxiter!r}")
+    maxiter = int(maxiter)
+    if preconditioner not in PRECONDITIONERS:
+        raise ValueError(
+            f"preconditioner must be one of {PRECONDITIONERS}, got {preconditioner!r}")
+
+    area = halfspace.h**2
+    operator = _Operator(halfspace, shift)
+    h_face = np.where(face, height, 0.0)
+
+    if force == 0.0:
+        zero = np.zeros(shape)
+        return ContactResult(zero, float(h_face[face].min()), zero.copy(), 0.0, 0, 0.0,
+                             np.zeros(1), True, "zero load: no pressure")
+
+    precondition = _make_preconditioner(preconditioner, halfspace, face, shift)
+
+    # Initial pressure: the warm start if it carries load, else a rigid estimate.
+    p = np.zeros(shape)
+    if x0 is not None:
+        p = np.where(face & (x0 > 0), x0, 0.0)
+    if p.sum() <= 0:
+        p = _initial_pressure(h_face, face, force, halfspace)
+    p *= force / (area * p.sum())
+    u = operator(p)
+
+    # Work arrays; the loop updates in place.
+    face_f = face.astype(float)
+    t = np.zeros(shape)
+    g = np.empty(shape)
+    r = np.empty(shape)
+    history = []
+    gz_old = 1.0
+    restart = True
+    set_changed = True
+    verified = False
+    since_full = 0
+    success = False
+    message = ""
+    it = 0
+    d = float("nan")
+    residual = float("nan")
+    while True:
+        if set_changed:
+            active = p > 0
+            active_f = active.astype(float)
+            n_active = float(active.sum())
+            off_f = face_f - active_f
+            full_contact = n_active == n_face
+        np.add(u, h_face, out=g)
+        d = _dot(g, active_f) / n_active
+        g -= d                        # the gap, on the face
+        np.multiply(g, active_f, out=r)
+        violation = _dot(r, r)
+        if not full_contact:
+            open_violation = np.minimum(g, 0.0)
+            open_violation *= off_f
+            violation += _dot(open_violation, open_violation)
+        residual = float(np.sqrt(violation / n_face))
+        scale = float(np.sqrt(_dot(u * u, active_f) / n_active))
+        tolerance = max(rtol * scale, atol)
+        if not np.isfinite(residual):
+            message = f"non-finite residual at iteration {it}"
+            history.append(residual)
+            break
+        drift = since_full * 100 * np.finfo(float).eps * scale
+        if residual <= tolerance and (verified or drift < 1e-3 * tolerance):
+            history.append(residual)
+            success = True
+            message = (f"converged in {it} iterations: residual {residual:.3e} m "
+                       f"<= {tolerance:.3e} m")
+            break
+        if (residual <= tolerance and not verified) or since_full >= _REFRESH:
+            # Recompute the incrementally updated displacement (drift).
+            u = operator(p)
+            since_full = 0
+            verified = True
+            continue
+        verified = False
+        history.append(residual)
+        if it >= maxiter:
+            message = (f"no convergence in {maxiter} iterations: residual {residual:.3e} m "
+                       f"> {tolerance:.3e} m")
+            break
+        it += 1
+
+        # Preconditioned residual, projected to zero mean on the active set
+        # (the load constraint).
+        z = r.copy() if precondition is None else precondition(r, active)
+        z -= (_dot(z, active_f) / n_active) * active_f
+        gz = _dot(r, z)
+        if restart or gz_old == 0:
+            t = z
+        else:
+            t *= gz / gz_old
+            t += z
+            if set_changed:
+                t *= active_f
+                t -= (_dot(t, active_f) / n_active) * active_f
+        gz_old = gz
+        q = operator(t)
+        tq = _dot(t, q)
+        if not tq > 0:
+            message = f"breakdown at iteration {it}: non-positive curvature {tq!r}"
+            break
+        tau = _dot(r, t) / tq
+        p -= tau * t
+        u -= tau * q
+        since_full += 1
+
+        # Pixels leaving (negative pressure) and entering (penetrating) the set.
+        leaving = p < 0
+        any_leaving = bool(leaving.any())
+        entering = None
+        if not full_contact:
+            entering = (g < 0) & (off_f > 0)
+        restart = entering is not None and bool(entering.any())
+        set_changed = any_leaving or restart
+        if set_changed:
+            dp = np.zeros(shape)
+            dp[leaving] = -p[leaving]
+            if restart:
+                if precondition is None:
+                    # Polonsky & Keer's rule: the steepest-descent step on those pixels.
+                    dp[entering] = -tau * g[entering]
+                else:
+                    # The same step length, as pressure per gap on the active set,
+                    # capped by the pressure that closes each gap alone.
+                    rate = abs(tau) * np.sqrt(_dot(t, t) / max(_dot(r, r), np.finfo(float).tiny))
+                    diagonal = np.broadcast_to(operator.diagonal, shape)[entering]
+                    dp[entering] = -g[entering] * np.minimum(rate, 1.0 / diagonal)
+            p += dp
+            p[leaving] = 0.0
+            ii, jj = np.nonzero(dp)
+            if ii.size <= _DIRECT_UPDATE_PIXELS:
+                u += operator.columns(ii, jj, dp[ii, jj])
+            else:
+                u = operator(p)
+                since_full = 0
+            total = p.sum()
+            if not total > 0:
+                message = f"all pressure lost at iteration {it}"
+                break
+            c = force / (area * total)
+            p *= c
+            u *= c
+        if callback is not None:
+            view = p.view()
+            view.flags.writeable = False
+            callback(view)
+
+    residual_history = np.asarray(history)
+    if not success:
+        logger.warning("contact solver failed: %s", message)
+        if np.all(np.isfinite(p)):
+            u = operator(p)
+            active = p > 0
+            if active.any():
+                d = float((u + h_face)[active].mean())
+    else:
+        logger.debug("contact solver: %s (%d operator products)", message, operator.products)
+    return ContactResult(
+        pressure=p,
+        approach=float(d),
+        displacement=u,
+        contact_fraction=float((p > 0).sum() / n_face),
+        nit=it,
+        residual=residual,
+        residual_history=residual_history,
+        success=success,
+        message=message,
+    )
+
+
+def _dot(a, b):
+    """Sum of the elementwise product of two arrays of the same shape.
+
+    ``einsum`` rather than BLAS: a threaded BLAS dot product can cost more
+    than an FFT pair on a loaded machine.
+    """
+    return float(np.einsum("ij,ij->", a, b))

@@ -1,0 +1,161 @@
+"""Initial height fields of the punch face.
+
+Every function returns the height ``h(x)`` of the face at the pixel centres
+of the ``n x n`` grid covering ``[-a, a]^2`` (:mod:`steady.grid`), in
+metres, with the convention of :func:`transient.contact.solve_contact`:
+larger = farther from the counter-body (recessed).  Only differences
+matter to the contact problem; the fields below are zero at the first
+point of the ideal (continuum) face to touch.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from steady.grid import face_mask, pixel_centres
+
+__all__ = ["crowned", "flat", "from_array", "from_file", "tilted"]
+
+
+def _check_grid(n, radius):
+    if isinstance(n, bool) or int(n) != n or n < 2:
+        raise ValueError(f"grid size n must be an integer >= 2, got {n!r}")
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"radius must be positive and finite, got {radius!r} m")
+    return int(n), float(radius)
+
+
+def _coordinates(n, radius):
+    x = pixel_centres(n, radius)
+    return np.meshgrid(x, x, indexing="ij")
+
+
+def flat(n, radius):
+    """Flat face.
+
+    Parameters
+    ----------
+    n : int
+        Pixels across the diameter.
+    radius : float, m
+        Punch radius ``a``.
+
+    Returns
+    -------
+    ndarray, shape (n, n), m
+        Zeros.
+    """
+    n, radius = _check_grid(n, radius)
+    return np.zeros((n, n))
+
+
+def tilted(n, radius, angle, azimuth=0.0):
+    """Flat face tilted by ``angle`` so that it recedes towards ``azimuth``.
+
+    Parameters
+    ----------
+    n : int
+    radius : float, m
+    angle : float, rad
+        Tilt, ``0 <= angle < pi/2``.
+    azimuth : float, rad, optional
+        Direction (from the x axis) in which the face recedes; default 0.
+
+    Returns
+    -------
+    ndarray, shape (n, n), m
+        ``tan(angle) * (x cos(azimuth) + y sin(azimuth) + a)``: zero at the
+        rim point opposite ``azimuth``, ``2 a tan(angle)`` at the other
+        end.  Under load a rigid flat punch tilted this way (with no
+        rotation allowed) stays in full contact while
+        ``tan(angle) < F / (4 a^2 E*)``; above that the recessed side lifts
+        off.
+    """
+    n, radius = _check_grid(n, radius)
+    if not (np.isfinite(angle) and 0 <= angle < np.pi / 2):
+        raise ValueError(f"angle must lie in [0, pi/2), got {angle!r} rad")
+    if not np.isfinite(azimuth):
+        raise ValueError(f"azimuth must be finite, got {azimuth!r} rad")
+    X, Y = _coordinates(n, radius)
+    return np.tan(angle) * (X * np.cos(azimuth) + Y * np.sin(azimuth) + radius)
+
+
+def crowned(n, radius, sphere_radius):
+    """Spherical cap: the face crowned to a sphere of radius ``sphere_radius``.
+
+    Parameters
+    ----------
+    n : int
+    radius : float, m
+    sphere_radius : float, m
+        Radius of the sphere, at least the punch radius.
+
+    Returns
+    -------
+    ndarray, shape (n, n), m
+        ``R - sqrt(R^2 - r^2)`` (exact sphere; Hertz theory uses its
+        paraboloid ``r^2 / (2 R)``, which differs by ``r^4 / (8 R^3)``).
+        Off the disk the paraboloid continues it.
+    """
+    n, radius = _check_grid(n, radius)
+    if not (np.isfinite(sphere_radius) and sphere_radius >= radius):
+        raise ValueError(
+            f"sphere_radius must be finite and at least the punch radius {radius!r} m, "
+            f"got {sphere_radius!r} m")
+    X, Y = _coordinates(n, radius)
+    r2 = X**2 + Y**2
+    inside = r2 < sphere_radius**2
+    cap = sphere_radius - np.sqrt(np.where(inside, sphere_radius**2 - r2, 0.0))
+    return np.where(inside, cap, r2 / (2 * sphere_radius))
+
+
+def from_array(values, n):
+    """Height field given pixel by pixel.
+
+    Parameters
+    ----------
+    values : array_like, shape (n, n), m
+        Heights at the pixel centres; finite on the face (values off the
+        face are kept as given and ignored by the contact solver).
+    n : int
+        Expected grid size.
+
+    Returns
+    -------
+    ndarray, shape (n, n), m
+        A float copy.
+    """
+    if isinstance(n, bool) or int(n) != n or n < 2:
+        raise ValueError(f"grid size n must be an integer >= 2, got {n!r}")
+    n = int(n)
+    values = np.array(values, dtype=float)
+    if values.shape != (n, n):
+        raise ValueError(f"height field must have shape {(n, n)}, got {values.shape}")
+    bad = ~np.isfinite(values[face_mask(n)])
+    if bad.any():
+        raise ValueError(f"height field must be finite on the face, got {int(bad.sum())} "
+                         "non-finite values")
+    return values
+
+
+def from_file(path, n):
+    """Height field (m) read from a ``.npy`` file; see :func:`from_array`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.npy`` file holding an ``(n, n)`` float array, metres.
+    n : int
+        Expected grid size.
+
+    Returns
+    -------
+    ndarray, shape (n, n), m
+    """
+    path = os.fspath(path)
+    if not path.endswith(".npy"):
+        raise ValueError(f"height file must be a .npy file, got {path!r}")
+    values = np.load(path, allow_pickle=False)
+    return from_array(values, n)
