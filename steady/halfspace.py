@@ -191,40 +191,54 @@ class HalfSpace:
         self._work = np.empty((self._m, n + 1), dtype=complex)
 
     # -- spectra -------------------------------------------------------
-    def _wrap(self, quadrant, parity_x):
-        """Circular ``2n x 2n`` kernel from its values at offsets ``0..n``.
-
-        ``parity_x`` is +1 for a kernel even in x, -1 for odd; every kernel
-        here is even in y.  The entry at offset ``n`` never reaches the
-        face (offsets there span ``-(n-1)..n-1``) and is chosen to keep
-        the exact parity, so that the spectrum is exactly real or
-        imaginary.
-        """
-        n, m = self.n, self._m
-        k = np.empty((m, m))
-        q = quadrant[: n + 1, : n + 1]
-        k[: n + 1, : n + 1] = q
-        k[n + 1:, : n + 1] = parity_x * q[n - 1:0:-1, :]
-        k[:, n + 1:] = k[:, n - 1:0:-1]
-        if parity_x < 0:
-            k[n, :] = 0.0
-        return k
-
+    # The circulant 2n x 2n embeddings of the kernels are even (influence)
+    # or odd in one axis (derivatives), so their spectra follow from the
+    # (n+1) x (n+1) quadrant by type-I cosine and sine transforms, without
+    # building the embedding.  The entry at offset n never reaches the face
+    # (offsets there span -(n-1)..n-1); the transforms take it as the even
+    # extension's value, or as zero for an odd extension.
     def _even_spectrum(self, quadrant):
-        k = self._wrap(quadrant, +1)
-        return scipy.fft.rfft2(k, workers=self.workers).real.copy()
+        """Real spectrum (2n, n + 1) of a kernel even in both axes."""
+        n, w = self.n, self.workers
+        c = scipy.fft.dct(scipy.fft.dct(quadrant, type=1, axis=0, workers=w),
+                          type=1, axis=1, workers=w)
+        return np.concatenate([c, c[n - 1:0:-1]], axis=0)
+
+    def _odd_x_spectrum(self, quadrant):
+        """Imaginary part (2n, n + 1) of the spectrum of a kernel odd in x, even in y.
+
+        ``X_k = -2i sum_j x_j sin(pi j k / n)``: minus i times a type-I sine
+        transform of the interior rows; ``X_{2n-k} = -X_k``.
+        """
+        n, w = self.n, self.workers
+        c = scipy.fft.dct(quadrant[1:n], type=1, axis=1, workers=w)
+        s = scipy.fft.dst(c, type=1, axis=0, workers=w)
+        out = np.empty((2 * n, n + 1))
+        out[0] = out[n] = 0.0
+        out[1:n] = -s
+        out[n + 1:] = s[::-1]
+        return out
+
+    def _odd_y_spectrum(self, quadrant):
+        """Imaginary part (2n, n + 1) of the spectrum of a kernel even in x, odd in y."""
+        n, w = self.n, self.workers
+        c = scipy.fft.dct(quadrant[:, 1:n], type=1, axis=0, workers=w)
+        s = scipy.fft.dst(c, type=1, axis=1, workers=w)
+        out = np.empty((2 * n, n + 1))
+        out[:, 0] = out[:, n] = 0.0
+        out[: n + 1, 1:n] = -s
+        out[n + 1:, 1:n] = -s[n - 1:0:-1]
+        return out
 
     def _ensure_gradient(self):
         if self._gradient_q is None:
             _, asinh = self._corners
             dx = _corner_sum(asinh) / (np.pi * self.E_star)
-            k = self._wrap(dx, -1)
-            # Purely imaginary spectra, stored complex so that a product is
-            # a single pass.  The d/dy kernel is the transpose of d/dx; the
-            # half spectrum is not symmetric under transposition.
-            gx_q = 1j * scipy.fft.rfft2(k, workers=self.workers).imag
-            gy_q = 1j * scipy.fft.rfft2(k.T, workers=self.workers).imag
-            self._gradient_q = (gx_q, gy_q)
+            # d/dy is d/dx transposed.  Both spectra are purely imaginary;
+            # their imaginary parts are kept.
+            self._gradient_q = (self._odd_x_spectrum(dx), self._odd_y_spectrum(dx.T))
+            for a in self._gradient_q:
+                a.flags.writeable = False
             logger.debug("gradient spectra built for n=%d", self.n)
         return self._gradient_q
 
@@ -308,7 +322,10 @@ class HalfSpace:
         gx_q, gy_q = self._ensure_gradient()
         if pressure_q is None:
             pressure_q = self.forward(pressure_r)
-        return self._product(pressure_q, gx_q), self._product(pressure_q, gy_q)
+        # The spectra are i times real arrays: the factor i goes on the
+        # pressure once for both components.
+        i_pressure_q = pressure_q * 1j
+        return self._product(i_pressure_q, gx_q), self._product(i_pressure_q, gy_q)
 
     def influence_quadrant(self):
         """Influence coefficients at pixel offsets ``0..n`` along each axis.
