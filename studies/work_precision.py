@@ -1,0 +1,346 @@
+"""Work-precision of the run-in integrators against a fixed-step explicit Euler loop.
+
+What it reproduces
+    docs/benchmarks.md, "Run-in stepping": for a Voronoi biphasic punch with
+    ``rho_2 = 0.3`` and ``k_2/k_1 = 1e3`` (400 seeds, the paper's epoxy-cylinder
+    load), the error of the run-in history (rms slope at fixed sliding
+    distances) and of the face at the end of the history, against the wall
+    time and the number of contact solves, for every implicit integrator
+    (:mod:`transient.stepping`) at several tolerances and for the baseline
+    users write today: a fixed-step explicit Euler loop around a contact
+    solve, at its largest stable step.  Also: the direct jump to the steady
+    state (implicit Euler with ``ds = 1e8 s*``) against the closed-form face.
+
+    Work is counted in contact solves and in *contact-solve equivalents*:
+    wall time divided by the wall time of one cold contact solve of the flat
+    face on the same grid (median of three).
+
+    The baseline needs ``distance / ds_max`` steps, ``ds_max ~ 1.16 h /
+    (k_max E*)``: at n = 256 that is ~3e5 steps, beyond this machine.  It is
+    therefore run over a window (``BASELINE_WINDOW`` s*) at its stable step,
+    where its error and its wall time per step are measured; its cost over
+    the whole history is the exact step count times the measured time per
+    step (stored with ``extrapolated = True``).  ``--full-baseline`` runs it
+    to the end instead (use at n <= 64), which also checks the extrapolation.
+
+How to run
+    python studies/work_precision.py                    # n = 256, ~10 min on 2 cores
+    python studies/work_precision.py --n 64 --full-baseline   # ~11 min (10 the baseline)
+    python studies/work_precision.py --quick --out DIR  # smoke test, n = 40, ~10 s
+    python studies/work_precision.py --plot-only [--n N] [--out DIR]   # redraw from the HDF5
+
+Writes ``DIR/work_precision_n{n}.h5`` and then draws ``DIR/work_precision_n{n}.png``
+from that file.  Default DIR: ``out/`` at the repository root (the figures in
+docs/figures are copies).  This script keeps its own command line rather than
+``study_io.run_study`` because it takes ``--n`` and ``--full-baseline``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import logging
+import math
+import os
+import pathlib
+import platform
+import sys
+import time
+
+import numpy as np
+
+from steady.grid import pixel_size
+from steady.halfspace import HalfSpace
+from steady.phases import Voronoi
+from steady.solution import solve
+from transient.contact import solve_contact
+from transient.runin import RunOptions, compare_with_steady, face_rms_slope, run_in
+from transient.stepping import WearProblem
+
+# -- parameters ----------------------------------------------------------------
+RADIUS = 4e-3            # m, the paper's epoxy cylinder (Fig. 6)
+FORCE = 10.0             # N
+E_STAR = 1.3e6           # Pa
+K1 = 1e-13               # 1/Pa, matrix (phase 0)
+RATIO = 1e3              # k_2 / k_1
+FILL = (0.7, 0.3)        # rho_1, rho_2
+SEEDS = 400
+SEED = 2029
+N = 256
+CONTACT_RTOL = 1e-10     # every contact solve, baseline included
+# Sliding distances (units of s* = a / (k_1 E*)) where the history is compared;
+# multiples of 1e-4 so that the baseline's fixed steps land on them.
+DISTANCES = (1e-4, 1e-3, 1e-2, 0.1, 0.3, 1.0, 3.0)
+RUNS = {                 # scheme: tolerances (tol: local error / f*)
+    "implicit_euler": (1e-2, 1e-3, 1e-4),
+    "bdf2": (1e-2, 1e-3, 1e-4, 1e-5),
+    "sdirk2": (1e-2, 1e-3, 1e-4, 1e-5),
+}
+REFERENCE = ("sdirk2", 1e-6)
+BASELINE_WINDOW = 1e-3   # s*, baseline measured over [0, window] unless --full-baseline
+FORMAT_VERSION = 1
+
+logger = logging.getLogger("work_precision")
+
+
+def build(n, ratio=RATIO):
+    hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR)
+    labels = Voronoi(SEEDS, FILL, SEED).labels(n)
+    face = labels >= 0
+    k = np.array([K1, K1 * ratio])
+    wear = np.where(face, k[np.maximum(labels, 0)], 0.0)
+    return hs, labels, face, k, wear
+
+
+def unit_cost(hs, face):
+    """Median wall time of a cold contact solve of the flat face, s."""
+    times = []
+    for _ in range(3):
+        t = time.perf_counter()
+        solve_contact(hs, face, np.zeros(face.shape), FORCE, rtol=CONTACT_RTOL)
+        times.append(time.perf_counter() - t)
+    return float(np.median(times))
+
+
+def run_scheme(n, scheme, tol, distances):
+    hs, labels, face, k, wear = build(n)
+    problem = WearProblem(hs, wear, face, FORCE, RADIUS, contact_rtol=CONTACT_RTOL)
+    # No jump: the history up to the last distance is what is measured.
+    options = RunOptions(scheme=scheme, tol=tol, snapshots=distances,
+                         max_distance=distances[-1], jump_spread=0.0,
+                         spread_tol=1e-300, shape_tol=1e-300, max_steps=10 ** 6)
+    t = time.perf_counter()
+    result = run_in(problem, np.zeros((n, n)), options)
+    wall = time.perf_counter() - t
+    s = result.history["distance"]
+    slopes = []
+    for d in distances:
+        i = int(np.argmin(np.abs(s - d * result.run_in_distance)))
+        assert abs(s[i] / (d * result.run_in_distance) - 1) < 1e-9, (s[i], d)
+        slopes.append(result.history["rms_slope"][i])
+    face_end = result.snapshot_height[-1]
+    return dict(wall=wall, solves=result.solves, iterations=result.iterations,
+                steps=result.steps, rejected=result.rejected, slopes=np.array(slopes),
+                face=face_end, s_star=result.run_in_distance, depth_scale=result.depth_scale)
+
+
+def run_baseline(n, distances, end):
+    """The loop users write: fixed-step explicit Euler around a contact solve."""
+    hs, labels, face, k, wear = build(n)
+    problem = WearProblem(hs, wear, face, FORCE, RADIUS)
+    s_star = problem.run_in_distance
+    p = solve_contact(hs, face, np.zeros((n, n)), FORCE, rtol=CONTACT_RTOL).pressure
+    limit = problem.stable_step(p) / s_star
+    per = math.ceil(1e-4 / limit)          # steps per 1e-4 s*, so steps land on distances
+    ds = 1e-4 / per * s_star
+    w = np.zeros((n, n))
+    slopes = np.full(len(distances), np.nan)
+    targets = [round(d / 1e-4) * per for d in distances]
+    steps_end = round(end / 1e-4) * per
+    t = time.perf_counter()
+    res = None
+    for step in range(1, steps_end + 1):
+        w = w + ds * wear * p
+        res = solve_contact(hs, face, w, FORCE, x0=p, rtol=CONTACT_RTOL)
+        p = res.pressure
+        if step in targets:
+            slopes[targets.index(step)] = face_rms_slope(hs, face, w, p, res.approach)
+    wall = time.perf_counter() - t
+    steps_full = round(distances[-1] / 1e-4) * per
+    return dict(ds=ds / s_star, limit=limit, steps=steps_end, wall=wall,
+                per_step=wall / steps_end, steps_full=steps_full,
+                wall_full=wall / steps_end * steps_full,
+                extrapolated=steps_end < steps_full, slopes=slopes,
+                face=np.where(face, w, np.nan) if steps_end == steps_full else None)
+
+
+def steady_jump(n):
+    """Implicit Euler with ds = 1e8 s* from the flat face, against eq. 9."""
+    hs, labels, face, k, wear = build(n)
+    problem = WearProblem(hs, wear, face, FORCE, RADIUS, contact_rtol=CONTACT_RTOL)
+    t = time.perf_counter()
+    result = run_in(problem, np.zeros((n, n)), RunOptions(jump_spread=math.inf))
+    wall = time.perf_counter() - t
+    steady = solve(hs, labels, k, FORCE)
+    cmp = compare_with_steady(result, steady, hs, labels)
+    return dict(wall=wall, solves=result.solves, iterations=result.iterations,
+                face_error=cmp.face_error, face_rms_error=cmp.face_rms_error,
+                rms_slope_error=cmp.rms_slope_error,
+                phase_pressure_error=cmp.phase_pressure_error,
+                spread=float(result.history["spread"][-1]), status=result.status)
+
+
+def shape_error(face, ref):
+    """Rms over the face of the difference (best constant removed) / relief of ``ref``."""
+    on = np.isfinite(ref)
+    d = face[on] - ref[on]
+    return float(np.sqrt(np.mean((d - d.mean()) ** 2)) / (ref[on].max() - ref[on].min()))
+
+
+def compute(n, out, *, full_baseline, runs, distances, reference, window):
+    import h5py
+
+    hs, labels, face, k, wear = build(n)
+    unit = unit_cost(hs, face)
+    logger.info("n=%d: one cold contact solve %.3f s", n, unit)
+    logger.info("reference %s tol %g ...", *reference)
+    ref = run_scheme(n, reference[0], reference[1], distances)
+    logger.info("reference: %d steps, %.1f s", ref["steps"], ref["wall"])
+    path = out / f"work_precision_n{n}.h5"
+    tmp = path.with_name(path.name + ".tmp")
+    with h5py.File(tmp, "w") as f:
+        f.attrs.update(dict(
+            format="runin.work_precision", version=FORMAT_VERSION, n=n, ratio=RATIO,
+            fill_factors=FILL, seeds=SEEDS, seed=SEED, radius=RADIUS, normal_force=FORCE,
+            E_star=E_STAR, k1=K1, contact_rtol=CONTACT_RTOL,
+            unit_cost=unit, unit_cost_units="s (cold contact solve of the flat face)",
+            machine=f"{_cpu()}, {os.cpu_count()} cores, {platform.platform()}",
+            python=sys.version.split()[0], numpy=np.__version__,
+            date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            command=" ".join(["python"] + sys.argv)))
+        d = f.create_dataset("distances", data=np.array(distances))
+        d.attrs["units"] = "s* = a / (k_1 E*)"
+        g = f.create_group("reference")
+        g.attrs.update(scheme=reference[0], tol=reference[1], wall=ref["wall"],
+                       solves=ref["solves"], steps=ref["steps"])
+        g.create_dataset("slopes", data=ref["slopes"]).attrs["units"] = "1"
+        g.create_dataset("face", data=ref["face"]).attrs["units"] = "m"
+        runs_g = f.create_group("runs")
+        for scheme, tols in runs.items():
+            for tol in tols:
+                r = run_scheme(n, scheme, tol, distances)
+                hist_err = float(np.max(np.abs(r["slopes"] / ref["slopes"] - 1)))
+                face_err = shape_error(r["face"], ref["face"])
+                logger.info("%s tol %g: %d steps, %d solves, %.1f s, history error %.2e, "
+                            "face error %.2e", scheme, tol, r["steps"], r["solves"], r["wall"],
+                            hist_err, face_err)
+                rg = runs_g.create_group(f"{scheme}_tol{tol:g}")
+                rg.attrs.update(scheme=scheme, tol=tol, wall=r["wall"], solves=r["solves"],
+                                iterations=r["iterations"], steps=r["steps"],
+                                rejected=r["rejected"], history_error=hist_err,
+                                face_error=face_err, equivalents=r["wall"] / unit)
+                rg.create_dataset("slopes", data=r["slopes"]).attrs["units"] = "1"
+        end = distances[-1] if full_baseline else window
+        b = run_baseline(n, distances, end)
+        within = np.isfinite(b["slopes"])
+        b_err = float(np.max(np.abs(b["slopes"][within] / ref["slopes"][within] - 1)))
+        b_face = shape_error(b["face"], ref["face"]) if b["face"] is not None else np.nan
+        logger.info("baseline: ds %.3g s* (limit %.3g), %d steps in %.1f s, full history "
+                    "%d steps, %.0f s%s, history error %.2e over %d distances", b["ds"],
+                    b["limit"], b["steps"], b["wall"], b["steps_full"], b["wall_full"],
+                    " (extrapolated)" if b["extrapolated"] else "", b_err, within.sum())
+        bg = f.create_group("baseline")
+        bg.attrs.update(ds=b["ds"], stability_limit=b["limit"], steps=b["steps"],
+                        wall=b["wall"], per_step=b["per_step"], steps_full=b["steps_full"],
+                        solves_full=b["steps_full"] + 1, wall_full=b["wall_full"],
+                        equivalents_full=b["wall_full"] / unit,
+                        extrapolated=b["extrapolated"], window=end, history_error=b_err,
+                        history_error_distances=int(within.sum()), face_error=b_face)
+        bg.create_dataset("slopes", data=b["slopes"]).attrs["units"] = "1"
+        j = steady_jump(n)
+        logger.info("steady jump: %d solves, %.2f s (%.1f equivalents), face error %.2e",
+                    j["solves"], j["wall"], j["wall"] / unit, j["face_error"])
+        jg = f.create_group("steady_jump")
+        jg.attrs.update({k_: v for k_, v in j.items()})
+        jg.attrs["equivalents"] = j["wall"] / unit
+    os.replace(tmp, path)
+    return path
+
+
+def _cpu():
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def plot(path, png):
+    """Draw the work-precision figure from the HDF5 file of :func:`compute`."""
+    import h5py
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    with h5py.File(path) as f:
+        n = int(f.attrs["n"])
+        unit = float(f.attrs["unit_cost"])
+        distances = f["distances"][()]
+        ref = f["reference/slopes"][()]
+        runs = {name: dict(g.attrs) for name, g in f["runs"].items()}
+        base = dict(f["baseline"].attrs)
+        base_slopes = f["baseline/slopes"][()]
+        jump = dict(f["steady_jump"].attrs)
+        ref_name = f"{f['reference'].attrs['scheme']}, tol {f['reference'].attrs['tol']:g}"
+        ratio = float(f.attrs["ratio"])
+    fig, ax = plt.subplots(1, 3, figsize=(16, 5))
+    markers = {"implicit_euler": "o-", "bdf2": "s-", "sdirk2": "^-", "explicit_euler": "v-"}
+    for scheme in sorted({r["scheme"] for r in runs.values()}):
+        rs = sorted((r for r in runs.values() if r["scheme"] == scheme), key=lambda r: r["tol"])
+        ax[0].loglog([r["wall"] / unit for r in rs], [r["history_error"] for r in rs],
+                     markers.get(scheme, "o-"), label=scheme)
+        ax[1].loglog([r["solves"] for r in rs], [r["face_error"] for r in rs],
+                     markers.get(scheme, "o-"), label=scheme)
+    label = "explicit Euler loop at ds_max" + (" (cost extrapolated)"
+                                               if base["extrapolated"] else "")
+    ax[0].loglog([base["equivalents_full"]], [max(base["history_error"], 1e-12)], "kX",
+                 ms=10, label=label)
+    if np.isfinite(base["face_error"]):
+        ax[1].loglog([base["solves_full"]], [base["face_error"]], "kX", ms=10, label=label)
+    else:
+        ax[1].axvline(base["solves_full"], color="k", ls=":", label=label + ": solves")
+    ax[0].axhline(1e-3, color="grey", lw=0.8)
+    ax[0].set_xlabel("work (contact-solve equivalents = wall time / cold solve)")
+    ax[0].set_ylabel("history error: max relative error of rms slope")
+    ax[0].set_title(f"n = {n}, k2/k1 = {ratio:g}: run-in history")
+    ax[0].legend(fontsize=8, loc="center right")
+    ax[1].set_xlabel("contact solves")
+    ax[1].set_ylabel(f"face error at s = {distances[-1]:g} s* (rms / relief)")
+    ax[1].set_title(f"steady jump: {int(jump['solves'])} solves, "
+                    f"{jump['equivalents']:.1f} equiv., face error {jump['face_error']:.1e}")
+    ax[1].legend(fontsize=8)
+    ax[2].semilogx(distances, ref, "k.-", label=f"reference ({ref_name})")
+    ok = np.isfinite(base_slopes)
+    ax[2].semilogx(distances[ok], base_slopes[ok], "rx", ms=9, label="explicit Euler loop")
+    ax[2].set_xlabel("sliding distance / s*")
+    ax[2].set_ylabel("rms slope")
+    ax[2].legend(fontsize=8)
+    ax[2].set_title("rms slope at the compared distances")
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--n", type=int, default=N)
+    parser.add_argument("--quick", action="store_true", help="smoke test (n = 40)")
+    parser.add_argument("--full-baseline", action="store_true",
+                        help="run the explicit baseline over the whole history")
+    parser.add_argument("--plot-only", action="store_true")
+    parser.add_argument("--out", type=pathlib.Path,
+                        default=pathlib.Path(__file__).resolve().parent.parent / "out",
+                        help="directory of the HDF5 file and the figure (default: out/)")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    n = 40 if args.quick else args.n
+    args.out.mkdir(parents=True, exist_ok=True)
+    path = args.out / f"work_precision_n{n}.h5"
+    if not args.plot_only:
+        if args.quick:
+            runs = {"implicit_euler": (1e-2,), "bdf2": (1e-2,), "sdirk2": (1e-2,)}
+            compute(n, args.out, full_baseline=True, runs=runs, distances=(1e-4, 1e-3, 1e-2),
+                    reference=("sdirk2", 1e-4), window=1e-2)
+        else:
+            compute(n, args.out, full_baseline=args.full_baseline, runs=RUNS,
+                    distances=DISTANCES, reference=REFERENCE, window=BASELINE_WINDOW)
+    png = path.with_suffix(".png")
+    plot(path, png)
+    print(f"wrote {path} and {png}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,300 @@
+"""The run-in against the closed-form steady state, hard cases, checkpoints and failures.
+
+Convergence tests: run from the initial face until the wear rates equalise,
+then compare with :func:`steady.solution.solve` (eq. 7, 9).  Required: face
+shape (best constant removed) within 1e-3 of the steady relief, rms slope
+within 0.5 %, per-phase pressures within 1e-3.  Measured at n = 32: face
+6e-9 .. 3e-8 (the final jump's error, of order s*/ds = 1e-8), rms slope and
+pressures to round-off; the bounds are the required ones.
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from steady.grid import pixel_size
+from steady.halfspace import HalfSpace
+from steady.phases import Homogeneous, Rods, Voronoi
+from steady.solution import solve
+from transient import initial_face
+from transient.runin import (
+    HISTORY_UNITS,
+    RunOptions,
+    compare_with_steady,
+    read_run,
+    run_in,
+    write_run,
+)
+from transient.stepping import StepFailure, WearProblem
+
+RADIUS = 4e-3      # m
+E_STAR = 1.3e6     # Pa
+FORCE = 10.0       # N
+K1 = 1e-13         # 1/Pa
+# Tilt beyond which a flat punch lifts off on one side (transient.initial_face.tilted).
+CRITICAL_TILT = FORCE / (4 * RADIUS ** 2 * E_STAR)
+# Five rods of radius 0.25 a: one on the axis, four at 0.6 a on the axes
+# (the arrangement of studies/scenes/rods_*.toml).
+RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
+FAST = RunOptions(tol=1e-3)
+
+
+def setup(geometry, ratios, n, *, exponent=1.0):
+    hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR)
+    labels = geometry.labels(n)
+    face = labels >= 0
+    k = K1 * np.asarray(ratios, dtype=float)
+    wear = np.where(face, k[np.maximum(labels, 0)], 0.0)
+    problem = WearProblem(hs, wear, face, FORCE, RADIUS, exponent=exponent)
+    return hs, labels, k, problem
+
+
+def run_and_compare(geometry, ratios, n, *, initial=None, exponent=1.0, options=FAST):
+    hs, labels, k, problem = setup(geometry, ratios, n, exponent=exponent)
+    h0 = np.zeros((n, n)) if initial is None else initial(n)
+    result = run_in(problem, h0, options)
+    assert result.status == "steady", result.message
+    steady = solve(hs, labels, k, FORCE, exponent=exponent)
+    return result, compare_with_steady(result, steady, hs, labels)
+
+
+def assert_agrees(result, cmp, what):
+    assert cmp.face_error < 1e-3, f"{what}: face error {cmp.face_error:.3g} of the relief"
+    assert abs(cmp.rms_slope_error) < 5e-3, f"{what}: rms slope error {cmp.rms_slope_error:.3g}"
+    assert cmp.phase_pressure_error < 1e-3, \
+        f"{what}: phase pressure error {cmp.phase_pressure_error:.3g}"
+    for name, values in result.history.items():
+        assert np.all(np.isfinite(values[1:])), f"{what}: non-finite {name} history"
+
+
+CASES = {
+    "homogeneous": (Homogeneous(), (1.0,), None),
+    "voronoi_0.3_k10": (Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), None),
+    "voronoi_0.3_k0.01": (Voronoi(64, (0.7, 0.3), 2029), (1.0, 1e-2), None),
+    "rods": (RODS, (1.0, 1.7), None),
+    "tilted": (Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0),
+               lambda n: initial_face.tilted(n, RADIUS, 3 * CRITICAL_TILT)),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_run_in_reaches_the_steady_face(case):
+    geometry, ratios, initial = CASES[case]
+    result, cmp = run_and_compare(geometry, ratios, 32, initial=initial)
+    assert_agrees(result, cmp, case)
+    if case == "tilted":
+        cf = result.history["contact_fraction"]
+        assert cf[0] < 0.8, f"tilted start should be in partial contact, got {cf[0]:.3f}"
+        assert cf[-1] == 1.0, "steady state is in full contact"
+
+
+def test_homogeneous_run_in_history_is_physical():
+    result, cmp = run_and_compare(Homogeneous(), (1.0,), 33)
+    h = result.history
+    # The flat punch's edge singularity at s = 0: the rim pixels carry the
+    # largest pressure, which the run-in removes.
+    assert h["peak_pressure"][0] > 3 * result.mean_pressure, "no edge concentration at s = 0"
+    assert h["peak_pressure"][-1] == pytest.approx(result.mean_pressure, rel=1e-6), \
+        "steady pressure of a homogeneous punch is uniform"
+    # The first steps are on the fast (pixel) scale, the last ones huge.
+    assert h["step"][1] < 10 * result.fast_distance, "first step too large for the edge layer"
+    assert h["step"][-1] > 1e6 * result.run_in_distance, "no jump to the steady state"
+    assert np.all(np.diff(h["worn_volume"]) > 0), "worn volume must grow"
+    # Volume balance: d(volume)/ds = sum k p h^2 = k F for a homogeneous punch.
+    assert h["worn_volume"][-1] == pytest.approx(K1 * FORCE * result.distance, rel=1e-9), \
+        "worn volume breaks the balance k F s"
+    assert h["normalised_rms_slope"][0] < h["normalised_rms_slope"][-1], \
+        "rms slope should grow during run-in"
+    assert_agrees(result, cmp, "homogeneous n=33")
+
+
+@pytest.mark.parametrize("exponent", [0.5, 2.0])
+def test_power_law_wear_reaches_its_steady_face(exponent):
+    result, cmp = run_and_compare(Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), 32,
+                                  exponent=exponent)
+    assert_agrees(result, cmp, f"m={exponent}")
+
+
+HARD = {
+    "k1e3_fill0.05": ((0.95, 0.05), 1e3),
+    "k1e-3_fill0.95": ((0.05, 0.95), 1e-3),
+    "k1e-3_fill0.05": ((0.95, 0.05), 1e-3),
+    "k1e3_fill0.95": ((0.05, 0.95), 1e3),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HARD))
+def test_hard_wear_ratios_and_fill_factors(case):
+    fill, ratio = HARD[case]
+    result, cmp = run_and_compare(Voronoi(64, fill, 2029), (1.0, ratio), 32)
+    assert_agrees(result, cmp, case)
+
+
+@pytest.mark.parametrize("ratio", [1e-6, 1e6])
+def test_extreme_wear_ratios(ratio):
+    result, cmp = run_and_compare(Voronoi(64, (0.7, 0.3), 2029), (1.0, ratio), 32)
+    assert_agrees(result, cmp, f"ratio {ratio:g}")
+
+
+def test_direct_jump_reaches_steady_state_in_few_solves():
+    # jump_spread = inf: implicit Euler with ds = 1e8 s* from the flat face.
+    options = RunOptions(jump_spread=math.inf)
+    result, cmp = run_and_compare(Voronoi(64, (0.7, 0.3), 2029), (1.0, 1e3), 48,
+                                  options=options)
+    assert result.solves <= 3, f"{result.solves} contact solves"
+    assert cmp.face_error < 1e-6, f"face error {cmp.face_error:.3g}"
+
+
+@pytest.mark.parametrize("n", [32, 65])
+def test_odd_and_even_grids(n):
+    result, cmp = run_and_compare(RODS, (1.0, 1.7), n)
+    assert_agrees(result, cmp, f"n={n}")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [256, 1024])
+def test_fine_grids_jump_to_steady(n):
+    # Fine grids are the stiff case (fastest relaxation h / (k_max E*)); the
+    # implicit jump does not care.
+    options = RunOptions(jump_spread=math.inf)
+    result, cmp = run_and_compare(Voronoi(400, (0.7, 0.3), 2029), (1.0, 1e3), n,
+                                  options=options)
+    assert_agrees(result, cmp, f"n={n}")
+
+
+@pytest.mark.slow
+def test_full_run_in_at_n_128():
+    result, cmp = run_and_compare(Voronoi(100, (0.7, 0.3), 2029), (1.0, 10.0), 128)
+    assert_agrees(result, cmp, "n=128")
+
+
+# -- checkpoints, resume, failures ------------------------------------------------
+
+def _same_result(a, b):
+    assert a.status == b.status and a.steps == b.steps, (a.status, a.steps, b.status, b.steps)
+    assert np.array_equal(a.height, b.height, equal_nan=True), "face differs"
+    assert np.array_equal(a.pressure, b.pressure), "pressure differs"
+    assert a.offset == b.offset and a.distance == b.distance, "offset or distance differs"
+    for name in HISTORY_UNITS:
+        assert np.array_equal(a.history[name], b.history[name]), f"history {name} differs"
+
+
+def test_resume_from_any_checkpoint_is_bitwise_identical(tmp_path):
+    hs, labels, k, problem = setup(Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), 32)
+    options = RunOptions(tol=1e-3, checkpoint_interval=0.0, snapshots=(0.01, 0.5))
+    checkpoints = []
+    full = run_in(problem, np.zeros((32, 32)), options, on_checkpoint=checkpoints.append)
+    assert full.status == "steady", full.message
+    assert len(checkpoints) == full.steps, "checkpoint_interval = 0 checkpoints every step"
+    for index in (0, len(checkpoints) // 2, len(checkpoints) - 2):
+        path = tmp_path / f"ckpt{index}.h5"
+        write_run(path, checkpoints[index])
+        saved, _, _ = read_run(path)
+        _, _, _, fresh = setup(Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), 32)
+        resumed = run_in(fresh, None, options, resume=saved)
+        _same_result(full, resumed)
+        assert np.array_equal(full.snapshot_height, resumed.snapshot_height, equal_nan=True), \
+            f"snapshots differ after resuming from checkpoint {index}"
+
+
+def test_run_file_round_trip(tmp_path):
+    result, cmp = run_and_compare(RODS, (1.0, 1.7), 32,
+                                  options=RunOptions(tol=1e-3, snapshots=(0.0, 0.1, 1.0)))
+    path = tmp_path / "run.h5"
+    write_run(path, result, arrays={"phase": RODS.labels(32)}, comparison=cmp)
+    back, attrs, arrays = read_run(path)
+    _same_result(result, back)
+    assert attrs["format"] == "runin.transient" and attrs["version"] == 1, \
+        "expected attrs['format'] == 'runin.transient' and attrs['version'] == 1"
+    assert back.snapshot_distance.tolist() == pytest.approx(
+        [0.0, 0.1 * result.run_in_distance, result.run_in_distance], rel=1e-12), \
+        "snapshots not at the requested distances"
+    assert back.snapshot_height.shape == (3, 32, 32), \
+        "expected back.snapshot_height.shape == (3, 32, 32)"
+    assert "phase" in arrays, "expected 'phase' in arrays"
+    import h5py
+
+    with h5py.File(path) as f:
+        assert f["worn_depth"].attrs["units"] == "m", \
+            "expected f['worn_depth'].attrs['units'] == 'm'"
+        assert f["pressure"].attrs["units"] == "Pa", \
+            "expected f['pressure'].attrs['units'] == 'Pa'"
+        assert f["history/distance"].attrs["units"] == "m", \
+            "expected f['history/distance'].attrs['units'] == 'm'"
+        assert f["comparison"].attrs["face_error"] == cmp.face_error, \
+            "expected f['comparison'].attrs['face_error'] == cmp.face_error"
+    assert not (tmp_path / "run.h5.tmp").exists(), "temporary file left behind"
+
+
+def test_read_run_rejects_other_files(tmp_path):
+    import h5py
+
+    path = tmp_path / "other.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = "something else"
+    with pytest.raises(ValueError, match="not a run file"):
+        read_run(path)
+
+
+def test_failed_steps_are_retried_smaller():
+    hs, labels, k, problem = setup(RODS, (1.0, 1.7), 32)
+    real = problem.contact
+    calls = {"n": 0}
+
+    def flaky(height, *, shift=None, x0=None):
+        calls["n"] += 1
+        if calls["n"] in (5, 6, 7):
+            raise StepFailure("injected failure")
+        return real(height, shift=shift, x0=x0)
+
+    problem.contact = flaky
+    result = run_in(problem, np.zeros((32, 32)), FAST)
+    assert result.status == "steady", result.message
+    assert result.failures == 3, f"{result.failures} failures recorded"
+
+
+def test_persistent_failure_stops_with_a_resumable_state():
+    hs, labels, k, problem = setup(RODS, (1.0, 1.7), 32)
+    real = problem.contact
+    calls = {"n": 0}
+
+    def broken(height, *, shift=None, x0=None):
+        calls["n"] += 1
+        if calls["n"] > 10:
+            raise StepFailure("solver gave up")
+        return real(height, shift=shift, x0=x0)
+
+    problem.contact = broken
+    result = run_in(problem, np.zeros((32, 32)), dataclasses.replace(FAST, max_failures=4))
+    assert result.status == "failed", "a persistent failure must stop the run"
+    assert "failed 4 times" in result.message and "solver gave up" in result.message, \
+        "expected 'failed 4 times' in result.message and 'solver gave up' in result.message"
+    assert np.all(np.isfinite(result.pressure)), "failed run returned non-finite pressure"
+    problem.contact = real
+    resumed = run_in(problem, None, FAST, resume=result)
+    assert resumed.status == "steady", resumed.message
+
+
+def test_stopped_run_resumes_to_steady():
+    hs, labels, k, problem = setup(RODS, (1.0, 1.7), 32)
+    stopped = run_in(problem, np.zeros((32, 32)), dataclasses.replace(FAST, max_steps=5))
+    assert stopped.status == "stopped" and "max_steps" in stopped.message, \
+        "expected stopped.status == 'stopped' and 'max_steps' in stopped.message"
+    done = run_in(problem, None, FAST, resume=stopped)
+    assert done.status == "steady", done.message
+    straight = run_in(setup(RODS, (1.0, 1.7), 32)[3], np.zeros((32, 32)), FAST)
+    _same_result(straight, done)
+
+
+@pytest.mark.parametrize("field,value,match", [
+    ("tol", 0.0, "tol must be a positive"),
+    ("spread_tol", -1.0, "spread_tol must be a positive"),
+    ("max_steps", 0, "max_steps must be a positive integer"),
+    ("snapshots", (-1.0,), "snapshots must be non-negative"),
+    ("step", math.inf, "step must be a positive distance"),
+])
+def test_bad_options_are_named(field, value, match):
+    with pytest.raises(ValueError, match=match):
+        RunOptions(**{field: value})

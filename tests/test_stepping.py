@@ -1,0 +1,258 @@
+"""Time integrators of the run-in against the exact solution of the semi-discrete system.
+
+While the whole face stays in contact and ``m = 1``, the discretised run-in
+is a linear ODE: with ``G = K^-1`` on the face pixels, the load condition
+gives ``d = (F / h^2 + 1' G w) / (1' G 1)`` and ``p = G (d 1 - w)``, so
+
+    dw/ds = A w + b,   A = D (G 1 1' G / (1' G 1) - G),   b = D G 1 F / (h^2 1' G 1),
+
+``D = diag(k)``.  Its exact solution is a matrix exponential; on a small
+grid (n = 12, 112 face pixels) it is cheap, and every scheme is tested
+against it: once adaptive (one test parametrised over the registry) and
+once with fixed steps to measure the order from a log-log fit.
+
+The start is the homogeneous steady face, ``w0 = -K pbar``: the pressure is
+uniform and bounded (no edge singularity), and the Voronoi wear map then
+drives a run-in that stays in full contact (checked).
+"""
+
+import functools
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from steady.grid import pixel_size
+from steady.halfspace import HalfSpace
+from steady.phases import Voronoi
+from transient.runin import RunOptions, run_in
+from transient.stepping import (
+    SCHEMES,
+    ExplicitEuler,
+    StepState,
+    WearProblem,
+    get_scheme,
+)
+
+RADIUS = 4e-3      # m
+E_STAR = 1.3e6     # Pa
+FORCE = 10.0       # N
+K1 = 1e-13         # 1/Pa
+N_EXACT = 12
+DISTANCE = 0.5     # s*, end of the compared run-in (spread still ~0.3 there)
+
+
+def make_problem(n, ratio, *, exponent=1.0, rtol=1e-13):
+    hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR)
+    labels = Voronoi(9, (0.6, 0.4), 2027).labels(n)
+    face = labels >= 0
+    k = np.array([K1, K1 * ratio])
+    wear = np.where(face, k[np.maximum(labels, 0)], 0.0)
+    problem = WearProblem(hs, wear, face, FORCE, RADIUS, exponent=exponent, contact_rtol=rtol)
+    return hs, labels, problem
+
+
+def uniform_pressure_face(problem):
+    """``w0 = -K pbar``: the face on which the pressure is uniform."""
+    hs, face = problem.halfspace, problem.face
+    return np.where(face, -hs.displacement(np.where(face, problem.mean_pressure, 0.0)), 0.0)
+
+
+@pytest.fixture(scope="module")
+def exact():
+    """Exact face at DISTANCE s* (matrix exponential of the dense system)."""
+    hs, labels, problem = make_problem(N_EXACT, 10.0)
+    face = problem.face
+    idx = np.flatnonzero(face)
+    size = idx.size
+    K = np.empty((size, size))
+    for j, i in enumerate(idx):
+        e = np.zeros(N_EXACT * N_EXACT)
+        e[i] = 1.0
+        K[:, j] = hs.displacement(e.reshape(N_EXACT, N_EXACT)).ravel()[idx]
+    G = np.linalg.inv(K)
+    G1 = G.sum(axis=1)
+    c = G1.sum()
+    D = problem.wear.ravel()[idx]
+    A = D[:, None] * (np.outer(G1, G1) / c - G)
+    b = D * G1 * FORCE / (hs.h ** 2 * c)
+    M = np.zeros((size + 1, size + 1))
+    M[:size, :size] = A
+    M[:size, size] = b
+    h0 = uniform_pressure_face(problem)
+    y = scipy.linalg.expm(M * DISTANCE * problem.run_in_distance) @ np.append(h0.ravel()[idx],
+                                                                              1.0)
+    return h0, idx, y[:size]
+
+
+def shape_error(result, idx, w_exact):
+    """Rms over the face of the error of the face, best constant removed, / f*."""
+    w = (result.height + result.offset).ravel()[idx]
+    d = w - w_exact
+    return float(np.sqrt(np.mean((d - d.mean()) ** 2))) / result.depth_scale
+
+
+def fixed_run(scheme, steps, h0):
+    _, _, problem = make_problem(N_EXACT, 10.0)
+    options = RunOptions(scheme=scheme, step=DISTANCE / steps, max_distance=DISTANCE,
+                         spread_tol=1e-300, shape_tol=1e-300)
+    result = run_in(problem, h0, options)
+    assert result.status == "stopped", result.message
+    assert result.steps == steps, f"{scheme}: {result.steps} steps, expected {steps}"
+    return result
+
+
+# Global error bound at tol = 1e-5 over 0.5 s*, in f*: measured 2.1e-4 for
+# explicit and implicit Euler (first order: global error ~ sqrt(tol)), 3.5e-5
+# for BDF2, 9.4e-7 for SDIRK2 (its first-order estimate is conservative);
+# bounds about 4x the worst of each order.
+ADAPTIVE_BOUND = {1: 1e-3, 2: 1.5e-4}
+
+
+@pytest.mark.parametrize("name", sorted(SCHEMES))
+def test_adaptive_scheme_matches_exact_run_in(name, exact):
+    h0, idx, w_exact = exact
+    _, _, problem = make_problem(N_EXACT, 10.0)
+    options = RunOptions(scheme=name, tol=1e-5, max_distance=DISTANCE, spread_tol=1e-300,
+                         shape_tol=1e-300)
+    result = run_in(problem, h0, options)
+    assert result.status == "stopped", result.message
+    assert result.distance == pytest.approx(DISTANCE * result.run_in_distance, rel=1e-12), \
+        "run did not end at the requested distance"
+    assert np.all(result.history["contact_fraction"] == 1.0), \
+        f"{name}: contact lost, the exact solution does not apply"
+    err = shape_error(result, idx, w_exact)
+    bound = ADAPTIVE_BOUND[SCHEMES[name].order]
+    assert err < bound, f"{name}: shape error {err:.3g} f* above {bound:g} ({result.steps} steps)"
+    # The rigid part is integrated too: worn volume = F-weighted wear, no drift.
+    w = (result.height + result.offset).ravel()[idx]
+    offset_err = abs(np.mean(w - w_exact)) / result.depth_scale
+    assert offset_err < bound, f"{name}: offset error {offset_err:.3g} f*"
+    assert np.all(np.isfinite(result.history["rms_slope"])), f"{name}: non-finite history"
+
+
+# Fixed step counts per scheme: explicit Euler needs ds below its limit
+# (about 0.019 s* here), the implicit ones are run at large steps.
+ORDER_STEPS = {"explicit_euler": (32, 64, 128)}
+
+
+@pytest.mark.parametrize("name", sorted(SCHEMES))
+def test_order_of_accuracy(name, exact):
+    h0, idx, w_exact = exact
+    steps = ORDER_STEPS.get(name, (16, 32, 64))
+    errors = [shape_error(fixed_run(name, k, h0), idx, w_exact) for k in steps]
+    slope = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    order = SCHEMES[name].order
+    assert abs(slope - order) < 0.2, \
+        f"{name}: measured order {slope:.3f}, expected {order} (errors {errors})"
+
+
+def test_explicit_euler_refuses_steps_beyond_stability_limit():
+    _, _, problem = make_problem(16, 100.0)
+    h0 = uniform_pressure_face(problem)
+    res = problem.contact(h0)
+    state = StepState(h0, res.pressure, res.approach)
+    limit = problem.stable_step(res.pressure)
+    # The limit is of the order of h / (k_max E*) (PHYSICS.md "Wear").
+    assert 0.5 < limit / problem.fast_distance < 2.5, \
+        f"limit {limit:.3g} m vs h/(k_max E*) {problem.fast_distance:.3g} m"
+    with pytest.raises(ValueError, match="stability limit"):
+        ExplicitEuler().step(problem, state, 1.5 * limit)
+    ExplicitEuler().step(problem, state, 0.99 * limit)
+    with pytest.raises(ValueError, match="stability limit"):
+        run_in(problem, h0, RunOptions(scheme="explicit_euler",
+                                       step=2 * limit / problem.run_in_distance))
+
+
+def test_adaptive_explicit_euler_stays_below_its_limit():
+    _, _, problem = make_problem(16, 100.0)
+    result = run_in(problem, uniform_pressure_face(problem),
+                    RunOptions(scheme="explicit_euler", tol=1e-2, max_steps=200))
+    limit = problem.stable_step(result.pressure)
+    assert np.max(result.history["step"]) <= 0.9 * limit * (1 + 1e-12), \
+        "adaptive explicit Euler exceeded 0.9 x its stability limit"
+    assert np.all(np.isfinite(result.history["rms_slope"])), "non-finite history"
+
+
+def test_huge_implicit_step_is_the_steady_state():
+    # (K + ds k) p = d - w: as ds -> infinity, k p -> const (eq. 3-7) with an
+    # error of order s* / ds.
+    _, labels, problem = make_problem(16, 1e3)
+    h0 = np.zeros((16, 16))
+    res0 = problem.contact(h0)
+    for ratio in (1e4, 1e8):
+        state = StepState(h0, res0.pressure, res0.approach)
+        trial = get_scheme("implicit_euler").step(problem, state,
+                                                  ratio * problem.run_in_distance)
+        rate = problem.rate(trial.pressure)[problem.face]
+        spread = (rate.max() - rate.min()) / rate.mean()
+        assert spread < 10.0 / ratio, f"ds = {ratio:g} s*: spread {spread:.3g}"
+
+
+def test_unknown_scheme_is_named():
+    with pytest.raises(ValueError, match="'rk4'.*implicit_euler"):
+        get_scheme("rk4")
+    with pytest.raises(ValueError, match="unknown scheme 'rk4'"):
+        RunOptions(scheme="rk4")
+
+
+@pytest.mark.parametrize("bad", [0.0, -1e-13, np.nan])
+def test_bad_wear_coefficient_is_named(bad):
+    hs = HalfSpace(8, pixel_size(8, RADIUS), E_STAR)
+    face = np.ones((8, 8), bool)
+    with pytest.raises(ValueError, match="wear coefficients must be positive"):
+        WearProblem(hs, np.full((8, 8), bad), face, FORCE, RADIUS)
+
+
+@pytest.mark.parametrize("exponent", [0.5, 2.0])
+def test_power_law_implicit_step_solves_the_nonlinear_stage(exponent):
+    # w = w0 + ds k P(w)^m exactly (Newton on the linearised shift).
+    _, _, problem = make_problem(16, 10.0, exponent=exponent)
+    h0 = uniform_pressure_face(problem)
+    res0 = problem.contact(h0)
+    ds = 0.3 * problem.run_in_distance
+    w, res = problem.implicit(h0, ds, res0.pressure)
+    # The face is consistent with its own contact pressure ...
+    again = problem.contact(w, x0=res.pressure)
+    scale = problem.mean_pressure
+    assert np.max(np.abs(again.pressure - res.pressure)) < 1e-6 * scale, \
+        "implicit stage face and pressure disagree"
+    # ... and with the stage equation.
+    lhs = (w - h0)[problem.face]
+    rhs = ds * problem.rate(res.pressure)[problem.face]
+    dev = (lhs - rhs) - np.mean(lhs - rhs)
+    assert np.max(np.abs(dev)) < 1e-8 * problem.depth_scale * 1e3, \
+        f"stage equation residual {np.max(np.abs(dev)):.3g} m"
+
+
+FINE_DISTANCE = 0.3  # s*
+
+
+@functools.lru_cache(maxsize=None)
+def fine_run(scheme, steps, exponent):
+    """Fixed-step run at n = 32, k2/k1 = 10 (h / (k_max E*) = s*/160), from w0 = -K pbar."""
+    _, _, problem = make_problem(32, 10.0, exponent=exponent)
+    r = run_in(problem, uniform_pressure_face(problem),
+               RunOptions(scheme=scheme, step=FINE_DISTANCE / steps, max_distance=FINE_DISTANCE,
+                          spread_tol=1e-300, shape_tol=1e-300))
+    assert r.status == "stopped", r.message
+    return (r.height + r.offset)[problem.face], r.depth_scale
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("exponent", [1.0, 2.0])
+@pytest.mark.parametrize("name", sorted(SCHEMES))
+def test_order_against_fine_step_reference(name, exponent):
+    # Stiffer than the exact test, power-law wear included; reference: sdirk2
+    # with 512 steps (its error is below 1e-3 of the smallest measured one).
+    w_ref, f_star = fine_run("sdirk2", 512, exponent)
+    steps = (64, 128, 256) if name == "explicit_euler" else (16, 32, 64)
+    errors = []
+    for k in steps:
+        w, _ = fine_run(name, k, exponent)
+        d = w - w_ref
+        errors.append(float(np.sqrt(np.mean((d - d.mean()) ** 2))) / f_star)
+    slope = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    order = SCHEMES[name].order
+    assert abs(slope - order) < 0.25, \
+        f"{name}, m={exponent}: measured order {slope:.3f}, expected {order} ({errors})"

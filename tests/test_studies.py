@@ -1,0 +1,145 @@
+"""Smoke tests of the study scripts: each runs at a small size (``--quick``).
+
+Every study computes into HDF5 and draws its PNG from that file; the tests
+check the files, a physics figure of each study, and that ``--plot-only``
+redraws the figure from the HDF5 file alone.
+"""
+
+import importlib
+import pathlib
+import sys
+
+import h5py
+import numpy as np
+import pytest
+
+STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
+
+SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods"]
+PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
+            "design_table", "runin_history"]
+
+
+@pytest.fixture(scope="module")
+def studies():
+    sys.path.insert(0, str(STUDIES))
+    try:
+        yield {name: importlib.import_module(name) for name in SERIAL + PARALLEL}
+    finally:
+        sys.path.remove(str(STUDIES))
+
+
+@pytest.fixture(scope="module")
+def runs(studies, tmp_path_factory):
+    """Run every study once in quick mode; the parallel ones share one quick sweep."""
+    tmp = tmp_path_factory.mktemp("studies")
+    out = {}
+    for name, module in studies.items():
+        h5, png = tmp / f"{name}.h5", tmp / f"{name}.png"
+        args = ["--quick", "-o", str(h5), "--png", str(png)]
+        if name in PARALLEL:
+            args += ["--workers", "1"]
+        status = module.main(args)
+        out[name] = (status, h5, png)
+    return out
+
+
+@pytest.mark.parametrize("name", SERIAL + PARALLEL)
+def test_quick_run_writes_hdf5_and_png(runs, name):
+    status, h5, png = runs[name]
+    assert status == 0, f"{name} exited with {status}"
+    assert h5.is_file() and png.is_file(), f"{name}: missing outputs"
+    assert png.stat().st_size < 300e3, f"{name}: PNG of {png.stat().st_size} bytes"
+    with h5py.File(h5, "r") as f:
+        assert str(f.attrs["format"]).startswith("runin."), f"{name}: format attribute"
+        assert int(f.attrs["format_version"]) == 1, f"{name}: version attribute"
+        units = [ds.attrs.get("units") for ds in f.values() if isinstance(ds, h5py.Dataset)]
+        assert all(u is not None for u in units), f"{name}: a dataset without units"
+
+
+@pytest.mark.parametrize("name", ["fig2_homogeneous", "fig4_coarseness", "claims"])
+def test_plot_only_redraws_from_the_file(studies, runs, name, tmp_path):
+    _, h5, _ = runs[name]
+    png = tmp_path / "again.png"
+    assert studies[name].main(["--plot-only", "-o", str(h5), "--png", str(png)]) == 0, \
+        f"{name}: --plot-only failed"
+    assert png.stat().st_size > 10e3, f"{name}: redrawn figure is empty"
+
+
+def test_plot_only_without_file_is_an_error(studies, tmp_path, capsys):
+    status = studies["fig2_homogeneous"].main(["--plot-only", "-o", str(tmp_path / "no.h5")])
+    assert status == 2, "missing study file must exit with status 2"
+    assert "does not exist" in capsys.readouterr().err, "message names the problem"
+
+
+def attrs_of(path):
+    with h5py.File(path, "r") as f:
+        return dict(f.attrs)
+
+
+def test_fig2_face_matches_eq10(runs):
+    """n = 64: face within 2 % of eq. 10 (f_bar is about 1 .. 1.57); corrected rms near 1."""
+    a = attrs_of(runs["fig2_homogeneous"][1])
+    assert a["max_face_error"] < 0.02, f"face error {a['max_face_error']}"
+    with h5py.File(runs["fig2_homogeneous"][1], "r") as f:
+        s = f["rms_slope"][()]
+    assert abs(s[-1] - 1) < 5e-3, f"corrected rms slope {s[-1]} at n = 64"
+
+
+def test_fig3_error_bar_and_pressures(runs):
+    """k_2/k_1 = 10: phase 2 carries a tenth of phase 1's pressure (eq. 7)."""
+    with h5py.File(runs["fig3_biphasic"][1], "r") as f:
+        p = f["phase_pressures"][()]
+        a = dict(f.attrs)
+    assert p[0] / p[1] == pytest.approx(10.0, rel=1e-12), f"pressures {p}"
+    assert 1.0 < a["rms_slope"] < 2.0 and a["rms_slope_error"] < 0.05, a
+
+
+def test_fig6_profile_height(runs):
+    """Centre 445 um above the rim: 4 pbar a / (pi E*) (pi/2 - 1) for the epoxy scene.
+
+    At n = 64 the sections deviate from eq. 10 by 2.3 um (0.5 %) inside r < 0.9 a and by
+    33 um (7.5 %) at the rim, where the slope is log-singular and the last pixel centre
+    sits h/2 inside.
+    """
+    a = attrs_of(runs["fig6_epoxy"][1])
+    pbar = 10.0 / (np.pi * 0.004**2)
+    expected = 4 * pbar * 0.004 / (np.pi * 1.3e6) * (np.pi / 2 - 1)
+    assert a["centre_height"] == pytest.approx(expected, rel=1e-9), "eq. 10 centre height"
+    assert a["max_deviation_inner"] < 0.01 * expected, f"solver vs eq. 10 at n = 64: {a}"
+    assert a["max_deviation"] < 0.1 * expected, f"solver vs eq. 10 at the rim: {a}"
+
+
+def test_fig78_rods_signs(runs):
+    """k_steel/k_brass = 1.7: steel wears faster, so steel rods sit low, brass rods high."""
+    a = attrs_of(runs["fig78_rods"][1])
+    assert a["steel_in_brass_side_rods"] < 0 < a["brass_in_steel_side_rods"], a
+
+
+def test_fig4_map_is_symmetric_in_the_mean(runs):
+    with h5py.File(runs["fig4_coarseness"][1], "r") as f:
+        mean = f["mean"][()]
+    assert np.all(mean >= 0.98), f"normalised rms slope below 1: {mean.min()}"
+    assert np.allclose(mean[:, mean.shape[1] // 2], mean[0, mean.shape[1] // 2], rtol=1e-12), \
+        "k_2 = k_1 must give one value for every fill factor"
+
+
+def test_claims_quick(runs):
+    a = attrs_of(runs["claims"][1])
+    assert a["symmetry_swapped_max_relative_difference"] < 1e-12, \
+        "the same map with phases swapped must give the same rms slope"
+    assert a["pillars_max_over_bound"] <= 1e-9, "a value above the Parseval bound"
+
+
+def test_runin_reaches_the_steady_face(runs):
+    a = attrs_of(runs["runin_history"][1])
+    for case in ("voronoi_k10", "rods_brass_in_steel"):
+        assert a[f"{case}_face_error"] < 1e-4, f"{case}: face error {a[f'{case}_face_error']}"
+
+
+def test_scale_independence_quick(runs):
+    with h5py.File(runs["scale_independence"][1], "r") as f:
+        resid = f["residual_mean"][()]
+        sem = f["residual_sem"][()]
+    assert np.all(np.abs(resid) < 0.15), f"residual against the closed form {resid}"
+    assert np.all(sem > 0), "scatter of the realisations"

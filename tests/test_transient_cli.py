@@ -1,0 +1,244 @@
+"""``python -m transient``: output file, errors, checkpoints killed with SIGKILL, resume."""
+
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from transient.runin import HISTORY_UNITS, read_run
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+SCENE = """\
+[punch]
+radius = 0.004
+[load]
+normal_force = 10.0
+[counterbody]
+E_star = 1.3e6
+[grid]
+n = {n}
+[wear]
+coefficients = [1.0e-13, 1.0e-12]
+[phases]
+map = {{ kind = "voronoi", n_seeds = 64, fill_factors = [0.7, 0.3], seed = 2029 }}
+[transient]
+tol = {tol}
+snapshots = [0.1, 1.0]
+{extra}
+"""
+
+
+def write_scene(path, *, n=32, tol=1e-3, extra=""):
+    path.write_text(SCENE.format(n=n, tol=tol, extra=extra))
+    return path
+
+
+def cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "transient", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_run_writes_result_and_agreement(tmp_path):
+    scene = write_scene(tmp_path / "s.toml")
+    out = tmp_path / "run.h5"
+    png = tmp_path / "run.png"
+    proc = cli(scene, "-o", out, "--plot", png, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == "", f"stderr not quiet off a terminal: {proc.stderr!r}"
+    assert "agreement with the steady face" in proc.stdout, \
+        "expected 'agreement with the steady face' in proc.stdout"
+    assert "face shape error" in proc.stdout and "rms slope" in proc.stdout, \
+        "expected 'face shape error' in proc.stdout and 'rms slope' in proc.stdout"
+    assert png.stat().st_size > 10000, "no figure"
+    with h5py.File(out) as f:
+        assert f.attrs["format"] == "runin.transient" and f.attrs["version"] == 1, \
+            "expected f.attrs['format'] == 'runin.transient' and f.attrs['version'] == 1"
+        assert f.attrs["status"] == "steady", "expected f.attrs['status'] == 'steady'"
+        assert f["worn_depth"].attrs["units"] == "m", \
+            "expected f['worn_depth'].attrs['units'] == 'm'"
+        assert f["pressure"].attrs["units"] == "Pa", \
+            "expected f['pressure'].attrs['units'] == 'Pa'"
+        assert f["phase"].shape == (32, 32), "expected f['phase'].shape == (32, 32)"
+        for name, unit in HISTORY_UNITS.items():
+            assert f[f"history/{name}"].attrs["units"] == unit, \
+                "expected f[f'history/{name}'].attrs['units'] == unit"
+        assert f["snapshots/height"].shape == (2, 32, 32), \
+            "expected f['snapshots/height'].shape == (2, 32, 32)"
+        cmp = f["comparison"].attrs
+        assert cmp["face_error"] < 1e-3 and abs(cmp["rms_slope_error"]) < 5e-3, \
+            "expected cmp['face_error'] < 1e-3 and abs(cmp['rms_slope_error']) < 5e-3"
+        assert cmp["phase_pressure_error"] < 1e-3, "expected cmp['phase_pressure_error'] < 1e-3"
+        assert "[transient]" in f.attrs["scene"], "expected '[transient]' in f.attrs['scene']"
+
+
+def test_existing_output_needs_force_or_resume(tmp_path):
+    scene = write_scene(tmp_path / "s.toml")
+    out = tmp_path / "run.h5"
+    out.write_bytes(b"precious")
+    proc = cli(scene, "-o", out, cwd=tmp_path)
+    assert proc.returncode == 2, "existing output must be refused with exit 2"
+    assert proc.stderr.startswith("error: ") and "--force" in proc.stderr, \
+        "expected proc.stderr.startswith('error: ') and '--force' in proc.stderr"
+    assert "Traceback" not in proc.stderr, "traceback on a usage error"
+    assert out.read_bytes() == b"precious", "existing file overwritten"
+    proc = cli(scene, "-o", out, "--force", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize("extra,match", [
+    ("bogus = 1", "unknown key 'bogus'"),
+    ('scheme = "rk4"', "unknown scheme 'rk4'"),
+    ("tol = -1.0", "tol must be a positive"),
+])
+def test_bad_transient_section(tmp_path, extra, match):
+    text = SCENE.format(n=32, tol=1e-3, extra="").replace("tol = 0.001\n", "") + extra + "\n"
+    scene = tmp_path / "s.toml"
+    scene.write_text(text)
+    proc = cli(scene, "-o", tmp_path / "run.h5", cwd=tmp_path)
+    assert proc.returncode == 2, proc.stdout
+    assert proc.stderr.startswith("error: ") and match in proc.stderr, proc.stderr
+    assert "Traceback" not in proc.stderr, "traceback on a usage error"
+
+
+def test_bad_initial_face_section(tmp_path):
+    scene = write_scene(tmp_path / "s.toml",
+                        extra='[initial_face]\nkind = "tilted"\nangle = 2.0\n')
+    proc = cli(scene, "-o", tmp_path / "run.h5", cwd=tmp_path)
+    assert proc.returncode == 2 and "angle must lie in [0, pi/2)" in proc.stderr, proc.stderr
+
+
+def test_bad_command_line(tmp_path):
+    proc = cli(tmp_path / "missing.toml", "-o", tmp_path / "run.h5", cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: "), \
+        "expected proc.returncode == 2 and proc.stderr.startswith('error: ')"
+    assert "does not exist" in proc.stderr, "expected 'does not exist' in proc.stderr"
+    proc = cli(tmp_path / "missing.toml", "-o", tmp_path / "run.h5", "--tol", "-3",
+               cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: "), \
+        "expected proc.returncode == 2 and proc.stderr.startswith('error: ')"
+
+
+def test_stopped_run_exits_1_and_resumes(tmp_path):
+    scene = write_scene(tmp_path / "s.toml")
+    out = tmp_path / "run.h5"
+    proc = cli(scene, "-o", out, "--max-steps", "4", cwd=tmp_path)
+    assert proc.returncode == 1 and "continue with --resume" in proc.stderr, proc.stderr
+    assert read_run(out)[0].status == "stopped", "expected read_run(out)[0].status == 'stopped'"
+    proc = cli(scene, "-o", out, "--resume", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert read_run(out)[0].status == "steady", "expected read_run(out)[0].status == 'steady'"
+
+
+def test_resume_refuses_another_scene(tmp_path):
+    scene = write_scene(tmp_path / "s.toml")
+    out = tmp_path / "run.h5"
+    assert cli(scene, "-o", out, "--max-steps", "2", cwd=tmp_path).returncode == 1, \
+        "expected cli(scene, '-o', out, '--max-steps', '2', cwd=tmp_path).returncode == 1"
+    other = tmp_path / "o.toml"
+    other.write_text(scene.read_text().replace("1.0e-12]", "2.0e-12]"))
+    proc = cli(other, "-o", out, "--resume", cwd=tmp_path)
+    assert proc.returncode == 2 and "wear coefficients" in proc.stderr, proc.stderr
+
+
+def test_sigkill_at_any_moment_then_resume_is_bitwise_identical(tmp_path):
+    # A run long enough to be killed mid-way (n = 48, tol 1e-5: ~300 steps),
+    # checkpointed after every step.
+    scene = write_scene(tmp_path / "s.toml", n=48, tol=1e-5)
+    reference = tmp_path / "reference.h5"
+    proc = cli(scene, "-o", reference, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    ref, _, _ = read_run(reference)
+
+    out = tmp_path / "killed.h5"
+    kills = 0
+    for delay_steps in (30, 90):   # of about 250 steps
+        args = [sys.executable, "-m", "transient", str(scene), "-o", str(out),
+                "--checkpoint-interval", "0"]
+        if out.exists():
+            args.append("--resume")
+        child = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 300
+        steps = None
+        while time.monotonic() < deadline and child.poll() is None:
+            if out.exists():
+                try:
+                    steps = read_run(out)[0].steps
+                except Exception:  # noqa: BLE001 -- any failed read: poll again
+                    steps = -1
+                if steps >= delay_steps:
+                    break
+            time.sleep(0.02)
+        assert child.poll() is None, \
+            f"run ended (status {child.returncode}) before it could be killed at step " \
+            f"{delay_steps} (last seen {steps})"
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait()
+        kills += 1
+        saved, _, _ = read_run(out)            # never left unreadable
+        assert saved.status == "running", "a killed run's file must hold a running checkpoint"
+        assert 0 < saved.steps < ref.steps, "checkpoint not taken mid-run"
+
+    proc = cli(scene, "-o", out, "--resume", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    final, _, _ = read_run(out)
+    assert kills == 2, "the run was not killed twice"
+    assert final.steps == ref.steps and final.status == "steady", \
+        "resumed run took another path than the uninterrupted one"
+    # Bitwise: the stored state determines the rest of the run.
+    assert np.array_equal(final.worn_depth, ref.worn_depth, equal_nan=True), \
+        "worn depth not bitwise equal to the uninterrupted run"
+    assert np.array_equal(final.pressure, ref.pressure), \
+        "pressure not bitwise equal to the uninterrupted run"
+    for name in HISTORY_UNITS:
+        assert np.array_equal(final.history[name], ref.history[name]), name
+
+
+def test_resume_of_a_finished_run_is_a_no_op(tmp_path):
+    scene = write_scene(tmp_path / "s.toml")
+    out = tmp_path / "run.h5"
+    assert cli(scene, "-o", out, cwd=tmp_path).returncode == 0, \
+        "expected cli(scene, '-o', out, cwd=tmp_path).returncode == 0"
+    before = read_run(out)[0]
+    proc = cli(scene, "-o", out, "--resume", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    after = read_run(out)[0]
+    assert after.steps == before.steps, "expected after.steps == before.steps"
+    assert np.array_equal(after.worn_depth, before.worn_depth, equal_nan=True), \
+        "expected np.array_equal(after.worn_depth, before.worn_depth, equal_nan=True)"
+
+
+def test_shipped_transient_scenes_parse():
+    from transient.scene import load_transient_scene
+
+    scenes = sorted((ROOT / "studies" / "scenes").glob("*transient*.toml"))
+    assert scenes, "no transient scene shipped"
+    for path in scenes:
+        scene, settings, initial = load_transient_scene(path)
+        assert scene.n >= 32, path
+
+
+def test_work_precision_study_smoke(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "studies" / "work_precision.py"),
+                           "--quick", "--out", str(tmp_path)], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    h5 = tmp_path / "work_precision_n40.h5"
+    assert h5.exists() and (tmp_path / "work_precision_n40.png").stat().st_size > 10000, \
+        "expected h5.exists() and (tmp_path / 'work_precision_n40.png').stat().st_size > 10000"
+    with h5py.File(h5) as f:
+        assert f.attrs["format"] == "runin.work_precision", \
+            "expected f.attrs['format'] == 'runin.work_precision'"
+        assert f["steady_jump"].attrs["face_error"] < 1e-6, \
+            "expected f['steady_jump'].attrs['face_error'] < 1e-6"
+        assert f["steady_jump"].attrs["solves"] <= 3, \
+            "expected f['steady_jump'].attrs['solves'] <= 3"
+        for name in ("implicit_euler_tol0.01", "bdf2_tol0.01", "sdirk2_tol0.01"):
+            assert np.isfinite(f[f"runs/{name}"].attrs["history_error"]), name

@@ -1,0 +1,252 @@
+"""Scene sections of the run-in: ``[transient]`` and ``[initial_face]``.
+
+They are registered with :func:`steady.scene.load_scene` through its
+``extra_sections`` (``steady`` knows nothing of them)::
+
+    [transient]
+    scheme = "sdirk2"           # registered integrator (transient.stepping.SCHEMES)
+    tol = 1e-5                  # local error per step, rms shape / f*
+    spread_tol = 1e-6           # steady: (max - min) / mean of k p^m over the contact ...
+    shape_tol = 1e-6            # ... and shape change per s*, in f*
+    jump_spread = 1e-3          # jump to the steady state below this spread (0: never)
+    jump_step = 1e8             # s*, length of a jump
+    max_distance = 1e12         # s*, stop (resumable) beyond this distance
+    max_steps = 100000
+    step = 0.01                 # s*, optional: fixed steps, no adaptivity
+    initial_step = 1e-5         # s*, optional: first adaptive step
+    snapshots = [0.1, 1.0, 3.0] # s*, face and pressure stored there
+    contact_rtol = 1e-10        # relative tolerance of every contact solve
+    checkpoint_interval = 10.0  # s of wall clock between checkpoints
+
+    [initial_face]
+    kind = "tilted"             # "flat" (default), "tilted", "crowned" or "file"
+    angle = 1e-3                # rad (tilted)
+    azimuth = 0.0               # rad (tilted, optional)
+    # sphere_radius = 0.5       # m (crowned)
+    # path = "face.npy"         # (file) (n, n) height in m, beside the scene file
+
+Distances are in units of the run-in distance ``s* = a / (k_min E*)``
+(PHYSICS.md, "Natural scales").  Every key is optional and checked; unknown
+keys are errors.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pathlib
+
+import numpy as np
+
+from steady.scene import load_scene
+
+from .runin import RunOptions
+
+__all__ = [
+    "InitialFace",
+    "TransientSettings",
+    "initial_height",
+    "load_transient_scene",
+    "parse_initial_face",
+    "parse_transient",
+]
+
+_FLOAT_KEYS = {"tol", "spread_tol", "shape_tol", "jump_spread", "jump_step", "max_distance",
+               "step", "initial_step", "checkpoint_interval", "contact_rtol"}
+_INT_KEYS = {"max_steps", "max_failures"}
+_TRANSIENT_KEYS = _FLOAT_KEYS | _INT_KEYS | {"scheme", "snapshots"}
+
+_FACE_KEYS = {
+    "flat": (set(), set()),
+    "tilted": ({"angle"}, {"azimuth"}),
+    "crowned": ({"sphere_radius"}, set()),
+    "file": ({"path"}, set()),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class TransientSettings:
+    """The ``[transient]`` section.
+
+    Attributes
+    ----------
+    options : transient.runin.RunOptions
+    contact_rtol : float
+        Relative tolerance of every contact solve (default 1e-10).
+    """
+
+    options: RunOptions = dataclasses.field(default_factory=RunOptions)
+    contact_rtol: float = 1e-10
+
+
+@dataclasses.dataclass(frozen=True)
+class InitialFace:
+    """The ``[initial_face]`` section: how to build the initial height field.
+
+    Attributes
+    ----------
+    kind : str
+        ``"flat"``, ``"tilted"``, ``"crowned"`` or ``"file"``.
+    angle : float, rad
+    azimuth : float, rad
+    sphere_radius : float, m
+    path : pathlib.Path or None
+        Absolute path of the ``.npy`` file.
+    """
+
+    kind: str = "flat"
+    angle: float = 0.0
+    azimuth: float = 0.0
+    sphere_radius: float = math.inf
+    path: pathlib.Path | None = None
+
+    def height(self, n, radius):
+        """Initial height on the ``n x n`` grid of a punch of radius ``radius`` (m).
+
+        Returns
+        -------
+        ndarray, shape (n, n), m
+            Larger = recessed.
+        """
+        from . import initial_face
+
+        if self.kind == "flat":
+            return initial_face.flat(n, radius)
+        if self.kind == "tilted":
+            return initial_face.tilted(n, radius, self.angle, self.azimuth)
+        if self.kind == "crowned":
+            return initial_face.crowned(n, radius, self.sphere_radius)
+        return initial_face.from_file(self.path, n)
+
+
+def _float(table, key):
+    value = table[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{key} must be a number, got {value!r}")
+    return float(value)
+
+
+def parse_transient(table, base_dir):
+    """Parse a ``[transient]`` table (``extra_sections`` callback).
+
+    Parameters
+    ----------
+    table : dict
+    base_dir : pathlib.Path
+        Unused (no paths in this section).
+
+    Returns
+    -------
+    TransientSettings
+
+    Raises
+    ------
+    ValueError
+        Unknown key or bad value, named.
+    """
+    unknown = sorted(set(table) - _TRANSIENT_KEYS)
+    if unknown:
+        raise ValueError(f"unknown key {unknown[0]!r} (allowed: "
+                         f"{', '.join(sorted(_TRANSIENT_KEYS))})")
+    kw = {}
+    for key in _FLOAT_KEYS & set(table):
+        kw[key] = _float(table, key)
+    for key in _INT_KEYS & set(table):
+        value = table[key]
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"{key} must be an integer, got {value!r}")
+        kw[key] = value
+    if "scheme" in table:
+        if not isinstance(table["scheme"], str):
+            raise ValueError(f"scheme must be a string, got {table['scheme']!r}")
+        kw["scheme"] = table["scheme"]
+    if "snapshots" in table:
+        snaps = table["snapshots"]
+        if not isinstance(snaps, list) or any(isinstance(v, bool) or not
+                                              isinstance(v, (int, float)) for v in snaps):
+            raise ValueError(f"snapshots must be an array of distances in s*, got {snaps!r}")
+        kw["snapshots"] = tuple(float(v) for v in snaps)
+    contact_rtol = kw.pop("contact_rtol", 1e-10)
+    if not (math.isfinite(contact_rtol) and 0 < contact_rtol < 1):
+        raise ValueError(f"contact_rtol must lie in (0, 1), got {contact_rtol!r}")
+    return TransientSettings(options=RunOptions(**kw), contact_rtol=contact_rtol)
+
+
+def parse_initial_face(table, base_dir):
+    """Parse an ``[initial_face]`` table (``extra_sections`` callback).
+
+    Parameters
+    ----------
+    table : dict
+    base_dir : pathlib.Path
+        Directory of the scene file (for ``kind = "file"``).
+
+    Returns
+    -------
+    InitialFace
+    """
+    kind = table.get("kind", "flat")
+    if kind not in _FACE_KEYS:
+        raise ValueError(f"kind must be one of {sorted(_FACE_KEYS)}, got {kind!r}")
+    required, optional = _FACE_KEYS[kind]
+    allowed = required | optional | {"kind"}
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ValueError(f"unknown key {unknown[0]!r} for kind {kind!r} (allowed: "
+                         f"{', '.join(sorted(allowed))})")
+    missing = sorted(required - set(table))
+    if missing:
+        raise ValueError(f"missing key {missing[0]!r} for kind {kind!r}")
+    if kind == "tilted":
+        angle = _float(table, "angle")
+        azimuth = _float(table, "azimuth") if "azimuth" in table else 0.0
+        if not (math.isfinite(angle) and 0 <= angle < math.pi / 2):
+            raise ValueError(f"angle must lie in [0, pi/2) rad, got {angle!r}")
+        if not math.isfinite(azimuth):
+            raise ValueError(f"azimuth must be finite (rad), got {azimuth!r}")
+        return InitialFace(kind, angle=angle, azimuth=azimuth)
+    if kind == "crowned":
+        r = _float(table, "sphere_radius")
+        if not (math.isfinite(r) and r > 0):
+            raise ValueError(f"sphere_radius must be positive (m), got {r!r}")
+        return InitialFace(kind, sphere_radius=r)
+    if kind == "file":
+        path = table["path"]
+        if not isinstance(path, str) or not path:
+            raise ValueError(f"path must be a non-empty string, got {path!r}")
+        full = pathlib.Path(base_dir) / path
+        if not full.is_file():
+            raise ValueError(f"initial face file {str(full)!r} does not exist")
+        return InitialFace(kind, path=full)
+    return InitialFace()
+
+
+def load_transient_scene(path):
+    """Read a scene file with its ``[transient]`` and ``[initial_face]`` sections.
+
+    Returns
+    -------
+    scene : steady.scene.Scene
+    settings : TransientSettings
+        Defaults when the section is absent.
+    initial : InitialFace
+        Flat when the section is absent.
+
+    Raises
+    ------
+    ValueError
+        Any error of :func:`steady.scene.load_scene` or of the two sections.
+    """
+    scene = load_scene(path, extra_sections={"transient": parse_transient,
+                                             "initial_face": parse_initial_face})
+    settings = scene.extra.get("transient", TransientSettings())
+    initial = scene.extra.get("initial_face", InitialFace())
+    return scene, settings, initial
+
+
+def initial_height(initial, n, radius):
+    """Initial face height, checked: ndarray, shape (n, n), m (see :class:`InitialFace`)."""
+    h = np.asarray(initial.height(n, radius), dtype=float)
+    if h.shape != (n, n):
+        raise ValueError(f"initial face has shape {h.shape}, expected {(n, n)}")
+    return h
