@@ -262,12 +262,14 @@ class HalfSpace:
         self._padded[:n, :n] = field_r
         return scipy.fft.rfft2(self._padded, workers=self.workers)
 
-    def inverse(self, spectrum_q):
+    def inverse(self, spectrum_q, *, overwrite=False):
         """Real field on the face from a padded half spectrum.
 
         Parameters
         ----------
         spectrum_q : ndarray, shape (2n, n + 1), complex
+        overwrite : bool, optional
+            The spectrum may be destroyed (default False).
 
         Returns
         -------
@@ -275,15 +277,14 @@ class HalfSpace:
         """
         n, m = self.n, self._m
         # Only the face's n rows are kept after the column transform.
-        cols = scipy.fft.ifft(spectrum_q, axis=0, workers=self.workers)[:n]
+        cols = scipy.fft.ifft(spectrum_q, axis=0, workers=self.workers,
+                              overwrite_x=overwrite)[:n]
         return scipy.fft.irfft(cols, n=m, axis=1, workers=self.workers)[:, :n]
 
     def _product(self, pressure_q, kernel_q):
         """Field on the face of ``kernel_q * pressure_q``, through the work buffer."""
         np.multiply(pressure_q, kernel_q, out=self._work)
-        n, m = self.n, self._m
-        cols = scipy.fft.ifft(self._work, axis=0, workers=self.workers, overwrite_x=True)[:n]
-        return scipy.fft.irfft(cols, n=m, axis=1, workers=self.workers)[:, :n]
+        return self.inverse(self._work, overwrite=True)
 
     # -- operators -----------------------------------------------------
     def displacement(self, pressure_r):
