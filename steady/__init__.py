@@ -7,14 +7,20 @@ pressure on each phase and the half-space displacement under it.  Modules:
 - :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
 - :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
 - :mod:`steady.phases` -- phase geometries rasterised at any grid size;
-- :mod:`steady.pressures` -- the steady phase pressures (eq. 7);
+- :mod:`steady.pressures` -- the steady phase pressures (eq. 7) and their field;
 - :mod:`steady.solution` -- the steady solve;
 - :mod:`steady.accuracy` -- the energy-corrected rms slope and its error bar;
 - :mod:`steady.basis` -- per-phase fields for sweeps over wear coefficients;
 - :mod:`steady.profiles` -- cross sections and differential profiles;
 - :mod:`steady.scene` -- TOML scene files;
-- :mod:`steady.output` -- HDF5 result files;
-- :mod:`steady.plotting` -- figures (imported on demand: it loads matplotlib).
+- :mod:`steady.output` -- HDF5 result files and the atomic HDF5 writer;
+- :mod:`steady.plotting` -- figures (imported on demand: it loads matplotlib);
+- :mod:`steady.sweep` -- resumable parameter sweeps on executors;
+- :mod:`steady.voronoi_sweep` -- the sweep over random biphasic Voronoi maps;
+- :mod:`steady.design` -- the design table and the fill factor for a target
+  rms slope (command ``runin-design``).
+
+The command ``runin-steady`` (``python -m steady``) solves a scene file.
 """
 
 from . import reference
@@ -22,7 +28,7 @@ from .accuracy import SlopeEnergy, SlopeEstimate, estimate_rms_slope
 from .basis import PhaseBasis, SweepSlopes
 from .grid import face_mask, pixel_centres, pixel_size, polar
 from .halfspace import HalfSpace
-from .output import StoredResult, read_result, write_result
+from .output import StoredResult, atomic_h5, read_result, write_result
 from .phases import (
     ArrayMap,
     Homogeneous,
@@ -32,9 +38,9 @@ from .phases import (
     realised_fill_factors,
     validate_labels,
 )
+from .pressures import phase_pressures, pressure_field
 from .profiles import cross_section, differential_profile, ring_average
 from .scene import Scene, load_scene, parse_scene
-from .pressures import phase_pressures
 from .solution import SteadyResult, solve, solve_scene
 
 __all__ = [
@@ -50,6 +56,7 @@ __all__ = [
     "StoredResult",
     "SweepSlopes",
     "Voronoi",
+    "atomic_h5",
     "cross_section",
     "differential_profile",
     "estimate_rms_slope",
@@ -61,6 +68,7 @@ __all__ = [
     "pixel_centres",
     "pixel_size",
     "polar",
+    "pressure_field",
     "read_result",
     "realised_fill_factors",
     "reference",

@@ -1,13 +1,14 @@
 """Command line: limiting worn face of the punch described by a scene file.
 
-Usage::
+Usage (``runin-steady`` once installed, or ``python -m steady``)::
 
-    python -m steady SCENE.toml -o OUT.h5 [--plot OUT.png] [--force] [--no-slope-error] [-v]
+    runin-steady SCENE.toml -o OUT.h5 [--plot OUT.png] [--force] [--no-slope-error] [-v]
 
 Solves the steady state (eq. 7, 9), writes the HDF5 result
 (:mod:`steady.output`), optionally draws the figure from that file, and
-prints a short summary.  Bad input gives ``error: ...`` on stderr and exit
-status 2.
+prints a short summary.  The run-in sections of a scene (``[transient]``,
+``[initial_face]``) are ignored, with a note on stderr.  Bad input gives
+``error: ...`` on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import math
 import pathlib
 import sys
 
+from .command_line import program_name
 from .output import write_result
 from .scene import load_scene
 from .solution import solve_scene
@@ -33,9 +35,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser():
-    """The argument parser of ``python -m steady``."""
+    """The argument parser of ``runin-steady`` (``python -m steady``)."""
     parser = _Parser(
-        prog="python -m steady",
+        prog=program_name("python -m steady"),
         description="Limiting worn face of a multi-phase punch on an elastic half-space.")
     parser.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
     parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
@@ -80,6 +82,9 @@ def run(args):
     if args.plot and args.plot.resolve() == args.output.resolve():
         raise ValueError(f"--plot and -o name the same file {str(args.output)!r}")
     scene = load_scene(args.scene)
+    if scene.ignored_sections:
+        print("note: ignoring run-in sections "
+              + ", ".join(f"[{name}]" for name in scene.ignored_sections), file=sys.stderr)
     result = solve_scene(scene, slope_error=args.slope_error)
     lines = summary_lines(result)
     write_result(args.output, result, scene, force=args.force)
@@ -94,7 +99,18 @@ def run(args):
 
 
 def main(argv=None):
-    """Entry point of ``python -m steady``; returns the exit status."""
+    """Entry point of ``runin-steady`` and ``python -m steady``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0, 2 for bad input, 1 for an operating-system error.
+    """
     args = build_parser().parse_args(argv)
     level = logging.WARNING - 10 * min(args.verbose, 2)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")

@@ -9,7 +9,7 @@ depends on the grain size.  This module removes most of that error.
 Method
 ------
 For any pressure ``p`` on the plane, Parseval's theorem and the half-space
-symbol ``u_q = 2 p_q / (E* |q|)`` give the exact identity
+symbol ``u_q = 2 p_q / (E* |q|)`` give the exact identity::
 
     integral over the plane of |grad u|^2 dA = (4 / E*^2) integral of p^2 dA,
 
@@ -45,7 +45,7 @@ import scipy.fft
 
 from .grid import pixel_size
 from .halfspace import pixel_integral_gradient
-from .pressures import phase_pressures
+from .pressures import pressure_field
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
            "estimate_rms_slope", "grid_ladder", "ladder_error", "monopole_tail"]
@@ -98,13 +98,14 @@ class SlopeIntegrals:
         return np.sqrt(self.face / self.face_area)
 
 
-def edge_jumps(pressure_r, face):
+def edge_jumps(pressure_r, face_mask):
     """Squared pressure jumps summed over pixel edges.
 
     Parameters
     ----------
     pressure_r : ndarray, shape (n, n), Pa
-    face : ndarray of bool, shape (n, n)
+    face_mask : ndarray of bool, shape (n, n)
+        Pixels of the face.
 
     Returns
     -------
@@ -114,7 +115,7 @@ def edge_jumps(pressure_r, face):
         Over edges between a face pixel and a pixel off the face
         (including the grid's border).
     """
-    interior, rim = _edge_differences(np.where(face, pressure_r, 0.0)[None], face)
+    interior, rim = _edge_differences(np.where(face_mask, pressure_r, 0.0)[None], face_mask)
     return float(np.sum(interior**2)), float(np.sum(rim**2))
 
 
@@ -230,22 +231,23 @@ class SlopeEnergy:
         self._coarse_inner = slice(extra, extra + nc)
         self._coarse_extra = extra
 
-    def __call__(self, pressure_r, face):
+    def __call__(self, pressure_r, face_mask):
         """Integrals of ``|grad f|^2`` for a pressure on the face.
 
         Parameters
         ----------
         pressure_r : ndarray, shape (n, n), Pa
             Zero off the face.
-        face : ndarray of bool, shape (n, n)
+        face_mask : ndarray of bool, shape (n, n)
+            Pixels of the face.
 
         Returns
         -------
         SlopeIntegrals
         """
-        return self.gram([pressure_r], face).integrals([1.0])
+        return self.gram([pressure_r], face_mask).integrals([1.0])
 
-    def gram(self, fields, face):
+    def gram(self, fields, face_mask):
         """Quadratic forms of the slope integrals over a set of pressure fields.
 
         Every integral in :class:`SlopeIntegrals` is a quadratic form of the
@@ -257,17 +259,18 @@ class SlopeEnergy:
         ----------
         fields : sequence of ndarray, shape (n, n), Pa
             Pressure fields (zero off the face).
-        face : ndarray of bool, shape (n, n)
+        face_mask : ndarray of bool, shape (n, n)
+            Pixels of the face.
 
         Returns
         -------
         SlopeGram
         """
         n, h, m, c = self.n, self.h, self.margin, self.c
-        fields = np.asarray([np.where(face, f, 0.0) for f in fields])
+        fields = np.asarray([np.where(face_mask, f, 0.0) for f in fields])
         area = h * h
         on_face = np.zeros((self.fine, self.fine), dtype=bool)
-        on_face[m:m + n, m:m + n] = face
+        on_face[m:m + n, m:m + n] = face_mask
         inner = np.zeros(self._coarse.m, dtype=bool)
         inner[self._coarse_inner] = True
         coarse_outside = ~(inner[:, None] & inner[None, :])
@@ -298,18 +301,18 @@ class SlopeEnergy:
                     + tail * np.outer(forces, forces))
         flat = fields.reshape(len(fields), -1)
         total = 4.0 / self.E_star**2 * (flat @ flat.T) * area
-        interior, rim = _edge_differences(fields, face)
-        return SlopeGram(face_area=float(face.sum()) * area, total=total,
+        interior, rim = _edge_differences(fields, face_mask)
+        return SlopeGram(face_area=float(face_mask.sum()) * area, total=total,
                          face=gram(face_rows) * area, exterior=exterior,
                          interior_jumps=interior @ interior.T, rim_jumps=rim @ rim.T)
 
 
-def _edge_differences(fields, face):
+def _edge_differences(fields, face_mask):
     """Field differences across pixel edges, split into interior and rim edges.
 
     Returns two arrays of shape (len(fields), edges).
     """
-    f = np.pad(face, 1)
+    f = np.pad(face_mask, 1)
     p = np.pad(fields, ((0, 0), (1, 1), (1, 1)))
     interior, rim = [], []
     for axis in (1, 2):
@@ -381,11 +384,6 @@ class SlopeEstimate:
     rms_slope_plain: float
     grids: tuple
     values: tuple
-
-    @property
-    def relative_error(self):
-        """``error / rms_slope``."""
-        return self.error / self.rms_slope
 
 
 def grid_ladder(geometry, n):
@@ -473,13 +471,10 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
     plain = None
     for m in grids:
         labels = geometry.labels(m)
-        face = labels >= 0
-        n_phases = int(labels.max()) + 1
-        counts = np.bincount(labels[face], minlength=n_phases)
         h = pixel_size(m, radius)
-        p = phase_pressures(counts, wear_coefficients, normal_force, h * h, exponent=exponent)
-        pressure = np.where(face, np.append(p, 0.0)[labels], 0.0)
-        integrals = SlopeEnergy(m, h, E_star)(pressure, face)
+        pressure, _, _ = pressure_field(labels, wear_coefficients, normal_force, h * h,
+                                        exponent=exponent)
+        integrals = SlopeEnergy(m, h, E_star)(pressure, labels >= 0)
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)
         logger.debug("n=%d rms slope corrected %.8g plain %.8g", m, values[-1], plain)

@@ -83,9 +83,8 @@ class PhaseBasis:
         self.radius = float(radius)
         self.E_star = float(E_star)
         self.h = pixel_size(n, self.radius)
-        face = labels >= 0
         indicators = [(labels == i).astype(float) for i in range(self.n_phases)]
-        self._gram = SlopeEnergy(n, self.h, self.E_star).gram(indicators, face)
+        self._gram = SlopeEnergy(n, self.h, self.E_star).gram(indicators, labels >= 0)
         self._faces = None
         if faces:
             hs = HalfSpace(n, self.h, self.E_star)
@@ -110,13 +109,10 @@ class PhaseBasis:
         ndarray, shape (P,) or (K, P), Pa
         """
         k = np.asarray(wear_coefficients, dtype=float)
-        rows = np.atleast_2d(k)
-        if rows.shape[-1] != self.n_phases:
+        if k.ndim not in (1, 2) or k.shape[-1] != self.n_phases:
             raise ValueError(f"need {self.n_phases} wear coefficients per row, got "
                              f"shape {k.shape}")
-        out = np.array([phase_pressures(self.counts, row, normal_force, self.h**2,
-                                        exponent=exponent) for row in rows])
-        return out[0] if k.ndim == 1 else out
+        return phase_pressures(self.counts, k, normal_force, self.h**2, exponent=exponent)
 
     def rms_slopes(self, wear_coefficients, normal_force, *, exponent=1.0):
         """Rms slopes for many wear-coefficient rows.

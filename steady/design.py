@@ -4,52 +4,31 @@ The steady rms slope of a biphasic punch is ``grad_f0`` times a normalised
 value that depends only on the fill factor ``rho_2`` and the wear ratio
 ``k_2 / k_1`` (eq. 15; ``grad_f0 = 4 pbar / (pi E*)``, eq. 12).  This module
 
-- computes that normalised value over random Voronoi maps, all wear ratios
-  of one map at once (:class:`steady.basis.PhaseBasis`), as a resumable
-  sweep (:mod:`steady.sweep`): :func:`voronoi_slopes`,
-  :func:`voronoi_sweep`, :func:`collect_voronoi`;
-- tabulates its realisation mean and scatter (:class:`DesignTable`, an
-  HDF5 file) and interpolates it monotonically (PCHIP in the fill factor
-  and in ``log10`` of the wear ratio);
+- tabulates its realisation mean and scatter over random Voronoi maps
+  (:class:`DesignTable`, an HDF5 file built from the sweep of
+  :mod:`steady.voronoi_sweep`) and interpolates it monotonically (PCHIP in
+  the fill factor and in ``log10`` of the wear ratio);
 - inverts it: given ``pbar / E*``, the wear ratio and a target rms slope,
   the fill factor ``rho_2`` with its realisation scatter
   (:meth:`DesignTable.fill_factor_for`), and the reverse
   (:meth:`DesignTable.rms_slope`);
-- gives the fine-grain limit in closed form
-  (:func:`fine_grain_rms_slope`), against which the table is checked.
+- answers both from the command line with the table shipped in the package
+  (:data:`DEFAULT_TABLE`).
 
-Fine-grain limit
-----------------
-Over the whole plane ``int |grad u|^2 dA = (4 / E*^2) int p^2 dA``
-(Parseval; :mod:`steady.accuracy`).  Split the steady pressure into its
-mean ``pbar`` and the fluctuation ``p - pbar``.  The mean gives the
-homogeneous face (normalised rms slope 1, of which the fraction
-``4 / pi^2`` of the plane integral falls on the face).  When the grains are
-much smaller than the punch, the fluctuation's field stays on the face
-(up to a rim layer about one grain wide) and does not correlate with the
-smooth mean field, so that
+The fine-grain limit in closed form,
+:func:`steady.reference.fine_grain_rms_slope`, is the check of the table.
 
-    (rms / grad_f0)^2 = 1 + (pi^2 / 4) sum_i rho_i (p_i / pbar - 1)^2.
+Command line (``runin-design``, or ``python -m steady.design``)::
 
-For two phases with ``r = k_2 / k_1`` and Archard's law this is
-``1 + (pi^2 / 4) rho_1 rho_2 (r - 1)^2 / (rho_1 r + rho_2)^2``: symmetric
-under ``(rho_2, r) -> (1 - rho_2, 1 / r)``, and in the pillars limit
-``r -> 0`` it tends to ``sqrt(1 + (pi^2 / 4) (1 / rho_2 - 1))``, not to the
-``1 / rho_2`` of eq. 18, which would exceed the Parseval bound
-``(pi / 2) / sqrt(rho_2)``.
-
-Command line (``python -m steady.design``)::
-
-    python -m steady.design --pbar-over-estar 0.08 --wear-ratio 1e-2 --target-slope 1.0
-    python -m steady.design --pbar-over-estar 0.08 --wear-ratio 1e-2 --fill-factor 0.1
+    runin-design --pbar-over-estar 0.08 --wear-ratio 1e-2 --target-slope 1.0
+    runin-design --pbar-over-estar 0.08 --wear-ratio 1e-2 --fill-factor 0.1
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
-import functools
-import logging
+import importlib.resources
 import math
 import pathlib
 import sys
@@ -58,11 +37,9 @@ import h5py
 import numpy as np
 from scipy import interpolate, optimize
 
-from .accuracy import grid_ladder, ladder_error
-from .basis import PhaseBasis
+from .command_line import program_name
+from .output import atomic_h5
 from .reference import fine_grain_rms_slope
-from .phases import Voronoi
-from .sweep import run_sweep
 
 __all__ = [
     "DEFAULT_TABLE",
@@ -70,212 +47,15 @@ __all__ = [
     "DesignTable",
     "TABLE_FORMAT",
     "TABLE_VERSION",
-    "VORONOI_SWEEP_VERSION",
-    "VoronoiData",
-    "collect_voronoi",
     "main",
-    "voronoi_points",
-    "voronoi_slopes",
-    "voronoi_sweep",
 ]
-
-logger = logging.getLogger(__name__)
 
 TABLE_FORMAT = "runin.design_table"
 TABLE_VERSION = 1
 
-#: The table shipped with the studies (``python studies/design_table.py`` builds it).
-DEFAULT_TABLE = pathlib.Path(__file__).resolve().parent.parent / "studies" / "data" / \
-    "design_table.h5"
-
-#: Layout version of the Voronoi sweep points (part of the sweep settings).
-VORONOI_SWEEP_VERSION = 1
-
-
-def voronoi_slopes(point, *, n, ratios):
-    """Normalised rms slopes of one biphasic Voronoi map for many wear ratios.
-
-    The sweep task of :func:`voronoi_sweep` (module level, picklable).
-
-    Parameters
-    ----------
-    point : mapping
-        ``n_seeds`` (int), ``fill_factor`` (``rho_2``, float), ``seed`` (int):
-        the map ``Voronoi(n_seeds, (1 - rho_2, rho_2), seed)``; phase 1 of
-        the paper is index 0, phase 2 is index 1.
-    n : int
-        Grid of the values.
-    ratios : sequence of float, shape (K,)
-        Wear ratios ``k_2 / k_1``.
-
-    Returns
-    -------
-    dict
-        ``grids`` (G,) the ladder of :func:`grid_ladder`;
-        ``rms_slope`` (G, K) energy-corrected ``rms / grad_f0`` on each grid;
-        ``rms_slope_plain`` (K,) plain pixel value on grid ``n``;
-        ``error`` (K,) :func:`ladder_error` of the value on grid ``n`` (for the
-        ladder ``n, 2n``: ``2 |S_2n - S_n|``, its first-order error);
-        ``fill_factor`` realised ``rho_2`` on grid ``n``.
-    """
-    rho = float(point["fill_factor"])
-    geometry = Voronoi(int(point["n_seeds"]), (1.0 - rho, rho), int(point["seed"]))
-    grids = grid_ladder(geometry, n)
-    k = np.column_stack([np.ones(len(ratios)), np.asarray(ratios, dtype=float)])
-    values, plain, fill = [], None, None
-    for m in grids:
-        basis = PhaseBasis(geometry.labels(m), 1.0, 1.0, faces=False)
-        sweep = basis.rms_slopes(k, np.pi)  # pbar = 1 Pa, E* = 1 Pa
-        values.append(sweep.normalised)
-        if m == n:
-            plain = sweep.rms_slope_plain / sweep.reference_slope
-            fill = float(basis.fill_factors[1])
-    values = np.asarray(values)
-    if grids[-1] == n:
-        error = ladder_error(grids, values)
-    else:  # ladder n, 2n: first-order error of the coarser value S_n
-        error = np.abs(values[1] - values[0]) * grids[1] / (grids[1] - grids[0])
-    return {"grids": np.asarray(grids), "rms_slope": values, "rms_slope_plain": plain,
-            "error": error, "fill_factor": fill}
-
-
-_VORONOI_UNITS = {"grids": "1", "rms_slope": "grad_f0", "rms_slope_plain": "grad_f0",
-                  "error": "grad_f0", "fill_factor": "1"}
-
-
-def voronoi_points(n_seeds, fill_factors, seeds):
-    """Sweep points for every (coarseness, fill factor, realisation)."""
-    return [{"n_seeds": int(c), "fill_factor": round(float(r), 10), "seed": int(s)}
-            for c in n_seeds for r in fill_factors for s in seeds]
-
-
-def voronoi_sweep(path, *, n, ratios, n_seeds, fill_factors, seeds, executor=None,
-                  workers=None, scheduler=None, progress=False):
-    """Run (or resume) the Voronoi sweep into a sweep file.
-
-    Parameters
-    ----------
-    path : str or path-like
-        Sweep file (:mod:`steady.sweep`); its settings are ``n`` and
-        ``ratios``, so that sweeps over other coarseness levels, fill
-        factors or realisations with the same grid and ratios share it.
-    n : int
-        Grid of the values (:func:`grid_ladder` adds coarser ones).
-    ratios : sequence of float
-        Wear ratios ``k_2 / k_1``.
-    n_seeds, fill_factors, seeds : sequences
-        Coarseness levels, fill factors ``rho_2`` and realisation seeds.
-    executor, workers, scheduler, progress
-        As :func:`steady.sweep.run_sweep`.
-
-    Returns
-    -------
-    SweepFile
-    """
-    ratios = [float(r) for r in ratios]
-    settings = {"task": "steady.design.voronoi_slopes", "version": VORONOI_SWEEP_VERSION,
-                "n": int(n), "ratios": ratios}
-    task = functools.partial(voronoi_slopes, n=int(n), ratios=ratios)
-    return run_sweep(task, voronoi_points(n_seeds, fill_factors, seeds), path,
-                     settings=settings, units=_VORONOI_UNITS, executor=executor,
-                     workers=workers, scheduler=scheduler, progress=progress,
-                     description=f"Voronoi sweep n={n}")
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class VoronoiData:
-    """Values of a Voronoi sweep on a regular (level, fill factor, realisation) grid.
-
-    Attributes
-    ----------
-    n_seeds : ndarray, shape (C,)
-    fill_factors : ndarray, shape (R,)
-        Nominal ``rho_2``.
-    seeds : ndarray, shape (M,)
-    ratios : ndarray, shape (K,)
-        ``k_2 / k_1``.
-    rms_slope : ndarray, shape (C, R, M, K), grad_f0
-        Energy-corrected normalised rms slope on grid ``n``.
-    rms_slope_plain : ndarray, shape (C, R, M, K), grad_f0
-    error : ndarray, shape (C, R, M, K), grad_f0
-        Discretisation error estimate of each value.
-    realised : ndarray, shape (C, R, M)
-        Realised ``rho_2`` on grid ``n``.
-    n : int
-    """
-
-    n_seeds: np.ndarray
-    fill_factors: np.ndarray
-    seeds: np.ndarray
-    ratios: np.ndarray
-    rms_slope: np.ndarray
-    rms_slope_plain: np.ndarray
-    error: np.ndarray
-    realised: np.ndarray
-    n: int
-
-    @property
-    def mean(self):
-        """Realisation mean, shape (C, R, K)."""
-        return self.rms_slope.mean(axis=2)
-
-    @property
-    def scatter(self):
-        """Realisation standard deviation (ddof 1), shape (C, R, K)."""
-        return self.rms_slope.std(axis=2, ddof=1) if self.seeds.size > 1 else \
-            np.zeros_like(self.mean)
-
-    @property
-    def mean_error(self):
-        """Discretisation error of the mean (mean of the errors), shape (C, R, K)."""
-        return self.error.mean(axis=2)
-
-
-def collect_voronoi(sweep_file, n_seeds, fill_factors, seeds):
-    """Gather the points of a Voronoi sweep file into arrays.
-
-    Parameters
-    ----------
-    sweep_file : SweepFile
-    n_seeds, fill_factors, seeds : sequences
-        The grid of points wanted; every one must be in the file.
-
-    Returns
-    -------
-    VoronoiData
-
-    Raises
-    ------
-    ValueError
-        A point is missing (the message names it).
-    """
-    settings = sweep_file.settings
-    ratios = np.asarray(settings["ratios"])
-    index = {}
-    for point in sweep_file.read():
-        p = point.params
-        index[(p["n_seeds"], round(p["fill_factor"], 10), p["seed"])] = point.values
-    shape = (len(n_seeds), len(fill_factors), len(seeds))
-    out = {name: np.empty(shape + (ratios.size,)) for name in
-           ("rms_slope", "rms_slope_plain", "error")}
-    realised = np.empty(shape)
-    for ci, c in enumerate(n_seeds):
-        for ri, r in enumerate(fill_factors):
-            for si, s in enumerate(seeds):
-                key = (int(c), round(float(r), 10), int(s))
-                if key not in index:
-                    raise ValueError(f"sweep file {str(sweep_file.path)!r} has no point "
-                                     f"n_seeds={key[0]}, fill_factor={key[1]}, seed={key[2]}")
-                v = index[key]
-                grids = list(v["grids"])
-                top = grids.index(settings["n"])
-                out["rms_slope"][ci, ri, si] = v["rms_slope"][top]
-                out["rms_slope_plain"][ci, ri, si] = v["rms_slope_plain"]
-                out["error"][ci, ri, si] = v["error"]
-                realised[ci, ri, si] = v["fill_factor"]
-    return VoronoiData(n_seeds=np.asarray(n_seeds), fill_factors=np.asarray(fill_factors),
-                       seeds=np.asarray(seeds), ratios=ratios, realised=realised,
-                       n=int(settings["n"]), **out)
+#: The table shipped as package data (``python studies/design_table.py``
+#: builds it): a :class:`pathlib.Path` in an installed package.
+DEFAULT_TABLE = importlib.resources.files("steady") / "data" / "design_table.h5"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -343,20 +123,34 @@ class DesignTable:
 
     @classmethod
     def from_voronoi(cls, data, level=0, attrs=None):
-        """Table of one coarseness level of a :class:`VoronoiData`."""
+        """Table of one coarseness level of a :class:`steady.voronoi_sweep.VoronoiData`."""
         attrs = dict(attrs or {})
         attrs.update(n=data.n, n_seeds=int(data.n_seeds[level]),
                      realisations=int(data.seeds.size))
         return cls(data.fill_factors, data.ratios, data.mean[level], data.scatter[level],
                    data.mean_error[level], attrs)
 
-    def write(self, path):
-        """Write the table to HDF5 (layout ``runin.design_table``, version 1)."""
+    def write(self, path, *, force=False):
+        """Write the table to HDF5 (layout ``runin.design_table``, version 1).
+
+        Parameters
+        ----------
+        path : str or path-like
+        force : bool, optional
+            Replace an existing file (default False).
+
+        Returns
+        -------
+        pathlib.Path
+
+        Raises
+        ------
+        ValueError
+            ``path`` exists and ``force`` is False, or is a directory
+            (:func:`steady.output.atomic_h5`).
+        """
         path = pathlib.Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with h5py.File(path, "w") as f:
-            f.attrs["format"] = TABLE_FORMAT
-            f.attrs["format_version"] = TABLE_VERSION
+        with atomic_h5(path, format=TABLE_FORMAT, version=TABLE_VERSION, force=force) as f:
             for k, v in self.attrs.items():
                 f.attrs[k] = v
             for name, unit in (("fill_factors", "1"), ("ratios", "1"), ("mean", "grad_f0"),
@@ -367,14 +161,30 @@ class DesignTable:
 
     @classmethod
     def read(cls, path=None):
-        """Read a table (default :data:`DEFAULT_TABLE`).
+        """Read a table.
+
+        Parameters
+        ----------
+        path : str or path-like, optional
+            Default: the table shipped with the package,
+            :data:`DEFAULT_TABLE`.
+
+        Returns
+        -------
+        DesignTable
 
         Raises
         ------
         ValueError
             Missing or foreign file.
         """
-        path = pathlib.Path(DEFAULT_TABLE if path is None else path)
+        if path is None:
+            with importlib.resources.as_file(DEFAULT_TABLE) as shipped:
+                return cls._read(pathlib.Path(shipped))
+        return cls._read(pathlib.Path(path))
+
+    @classmethod
+    def _read(cls, path):
         if not path.is_file():
             raise ValueError(f"design table {str(path)!r} does not exist; build it with "
                              f"'python studies/design_table.py'")
@@ -530,9 +340,20 @@ def _reference(pbar_over_estar):
 
 
 def main(argv=None):
-    """Command line: fill factor for a target rms slope, or rms slope for a fill factor."""
+    """Command line ``runin-design``: fill factor for a target rms slope, or the reverse.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0, or 2 for bad input (``error: ...`` on stderr).
+    """
     parser = argparse.ArgumentParser(
-        prog="python -m steady.design",
+        prog=program_name("python -m steady.design"),
         description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
                     "rho_2 of phase 2 that gives a target rms slope, or the rms slope of a "
                     "fill factor.  Phase 2 is the hard phase when the wear ratio is below 1.")

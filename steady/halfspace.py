@@ -22,6 +22,7 @@ FFT pair.  The buffers make an instance unsafe to share between threads.
 
 from __future__ import annotations
 
+import functools
 import logging
 
 import numpy as np
@@ -182,7 +183,7 @@ class HalfSpace:
         self.workers = workers
         self._m = 2 * n  # padded size
         self._corners = _corner_asinh(n, self.h)
-        self._influence_q = self._even_spectrum(self.influence_quadrant())
+        self._influence_q = self._even_spectrum(self.influence_quadrant)
         self._influence_q.flags.writeable = False
         self._gradient_q = None
         # Work buffers, reused by every product: the zero padding is written
@@ -328,16 +329,30 @@ class HalfSpace:
         i_pressure_q = pressure_q * 1j
         return self._product(i_pressure_q, gx_q), self._product(i_pressure_q, gy_q)
 
+    @functools.cached_property
     def influence_quadrant(self):
-        """Influence coefficients at pixel offsets ``0..n`` along each axis.
+        """Influence coefficients at pixel offsets ``0..n`` along each axis, m/Pa.
 
-        Returns
-        -------
-        ndarray, shape (n + 1, n + 1), m/Pa
-            Displacement at offset ``(i, j)`` pixels from a pixel under unit
-            pressure; the kernel is even in both axes.
+        Displacement at offset ``(i, j)`` pixels from a pixel under unit
+        pressure; the kernel is even in both axes.  Shape ``(n + 1, n + 1)``,
+        computed once, read-only.
         """
-        return _influence_quadrant(*self._corners) / (np.pi * self.E_star)
+        quadrant = _influence_quadrant(*self._corners) / (np.pi * self.E_star)
+        quadrant.flags.writeable = False
+        return quadrant
+
+    @functools.cached_property
+    def aliased_symbol(self):
+        """Symbol of the ``n``-periodic aliasing of the influence kernel, m/Pa.
+
+        The padded symbol at the even wavenumbers (positive, like it); shape
+        ``(n, n // 2 + 1)``, the spectrum layout of an unpadded ``rfft2``.
+        Computed once, read-only.  The Fourier preconditioner of the contact
+        solver inverts it.
+        """
+        symbol = np.ascontiguousarray(self._influence_q[::2, ::2])
+        symbol.flags.writeable = False
+        return symbol
 
     @property
     def influence_symbol(self):

@@ -1,8 +1,15 @@
-"""HDF5 files of steady results (layout ``runin.steady``, version 1).
+"""HDF5 files: the atomic writer of the project and the steady result files.
 
-Layout (root group)::
+:func:`atomic_h5` writes every HDF5 file that is written whole: a
+temporary file beside the target, renamed into place when complete, with
+the layout name and version in the root attributes ``format`` and
+``format_version``.  (Sweep files, which grow point by point, have their
+own mechanism: :mod:`steady.sweep`.)
 
-    attributes
+Steady result files (layout ``runin.steady``, version 1), root group::
+
+Attributes
+----------
         format            "runin.steady"
         format_version    1
         rms_slope         rms of |grad f_inf| over the face, best  (units: rms_slope_units)
@@ -29,6 +36,7 @@ string attribute ``x_units``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import pathlib
@@ -39,7 +47,8 @@ import numpy as np
 
 from .solution import SteadyResult
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "read_result", "write_result"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "atomic_h5", "read_result",
+           "write_result"]
 
 FORMAT = "runin.steady"
 FORMAT_VERSION = 1
@@ -79,12 +88,95 @@ class StoredResult:
     path: pathlib.Path
 
 
-def write_result(path, result, scene=None, *, force=False):
-    """Write a steady result (and its scene) to an HDF5 file.
+def _umask():
+    """The process's file-mode creation mask."""
+    # Reading the mask means setting it: set it back at once.
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
-    The file is written to a temporary file in the same directory and moved
-    into place (:func:`os.replace`), so a reader never sees half a file.
-    Missing parent directories are created.
+
+@contextlib.contextmanager
+def atomic_h5(path, *, format, version, force=False):
+    """Write an HDF5 file atomically: a temporary file, then :func:`os.replace`.
+
+    Every HDF5 file of the project that is written whole goes through this
+    helper, so that a reader never sees half a file and an interrupted
+    write leaves nothing behind.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to write; missing parent directories are created.
+    format : str
+        Layout name, stored in the root attribute ``format``.
+    version : int
+        Layout version, stored in the root attribute ``format_version``.
+    force : bool, optional
+        Replace an existing file (default False).
+
+    Yields
+    ------
+    h5py.File
+        The temporary file, open for writing, with ``format`` and
+        ``format_version`` set.  On leaving the block without an exception
+        it is flushed to disk and renamed to ``path``; on any exception
+        (including ``KeyboardInterrupt``) it is removed and the exception
+        propagates, leaving an existing ``path`` untouched.
+
+    Raises
+    ------
+    ValueError
+        ``path`` is a directory, or exists and ``force`` is False.
+
+    Notes
+    -----
+    The temporary file ``.<name>.<random>.tmp`` sits in the directory of
+    ``path`` (a rename across file systems is not atomic).  The new file
+    gets the permissions of a file created normally (``0o666`` less the
+    umask), not the ``0o600`` of :func:`tempfile.mkstemp`.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "example.h5"
+    >>> with atomic_h5(path, format="runin.example", version=1) as f:
+    ...     f["x"] = [1.0, 2.0]
+    >>> sorted(p.name for p in path.parent.iterdir())
+    ['example.h5']
+    """
+    path = pathlib.Path(path)
+    if path.is_dir():
+        raise ValueError(f"output {str(path)!r} is a directory")
+    if path.exists() and not force:
+        raise ValueError(f"output {str(path)!r} exists (use force to overwrite)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    tmp = pathlib.Path(tmp)
+    os.close(fd)
+    try:
+        os.chmod(tmp, 0o666 & ~_umask())
+        with h5py.File(tmp, "w") as f:
+            f.attrs["format"] = format
+            f.attrs["format_version"] = version
+            yield f
+            f.flush()
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def write_result(path, result, scene=None, *, force=False):
+    """Write a steady result (and its scene) to an HDF5 file, atomically.
+
+    See :func:`atomic_h5`: a reader never sees half a file; missing parent
+    directories are created.
 
     Parameters
     ----------
@@ -105,26 +197,12 @@ def write_result(path, result, scene=None, *, force=False):
         If ``path`` exists and ``force`` is False, or is a directory.
     """
     path = pathlib.Path(path)
-    if path.is_dir():
-        raise ValueError(f"output {str(path)!r} is a directory")
-    if path.exists() and not force:
-        raise ValueError(f"output {str(path)!r} exists (use force to overwrite)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        with h5py.File(tmp, "w") as f:
-            _write(f, result, scene)
-        os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=force) as f:
+        _write(f, result, scene)
     return path
 
 
 def _write(f, result, scene):
-    f.attrs["format"] = FORMAT
-    f.attrs["format_version"] = FORMAT_VERSION
     values = {
         "rms_slope": result.rms_slope,
         "rms_slope_error": result.rms_slope_error,

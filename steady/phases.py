@@ -39,6 +39,7 @@ import pathlib
 import numpy as np
 from scipy import ndimage, spatial
 
+from . import grid
 from .grid import face_mask, pixel_centres
 
 __all__ = [
@@ -71,7 +72,7 @@ def _check_grid(n, minimum, what):
     return int(n)
 
 
-def validate_labels(labels, n_phases, *, face=None):
+def validate_labels(labels, n_phases, *, face_mask=None):
     """Check a rasterised phase map and count the pixels of each phase.
 
     Parameters
@@ -80,8 +81,8 @@ def validate_labels(labels, n_phases, *, face=None):
         Phase index on the face, ``-1`` off the face.
     n_phases : int
         Number of phases ``P``.
-    face : ndarray of bool, shape (n, n), optional
-        ``steady.grid.face_mask(n)``, if the caller has it already.
+    face_mask : ndarray of bool, shape (n, n), optional
+        :func:`steady.grid.face_mask` of ``n``, if the caller has it already.
 
     Returns
     -------
@@ -103,19 +104,18 @@ def validate_labels(labels, n_phases, *, face=None):
     n_phases = int(n_phases)
     if n_phases < 1:
         raise ValueError(f"n_phases must be at least 1, got {n_phases}")
-    if face is None:
-        face = face_mask(labels.shape[0])
-    on_face = labels[face]
-    low, high = int(on_face.min()), int(on_face.max())
+    mask = grid.face_mask(labels.shape[0]) if face_mask is None else face_mask
+    face_labels = labels[mask]
+    low, high = int(face_labels.min()), int(face_labels.max())
     if low < 0:
         raise ValueError(f"phase label {low} found on the face; face pixels need labels "
                          f"0..{n_phases - 1}")
     if high >= n_phases:
         raise ValueError(f"unknown phase label {high} on the face: there are {n_phases} phases "
                          f"(labels 0..{n_phases - 1})")
-    if np.any(labels[~face] != -1):
+    if np.any(labels[~mask] != -1):
         raise ValueError("pixels off the face must carry the label -1")
-    counts = np.bincount(on_face, minlength=n_phases)
+    counts = np.bincount(face_labels, minlength=n_phases)
     empty = np.flatnonzero(counts == 0)
     if empty.size:
         raise ValueError(f"phase {int(empty[0])} has no pixel on the face "
@@ -161,8 +161,8 @@ def extend_off_face(values):
         Same dtype; equal to ``values`` on the face.
     """
     values = np.asarray(values)
-    face = face_mask(values.shape[0])
-    _, (ii, jj) = ndimage.distance_transform_edt(~face, return_indices=True)
+    on_face = face_mask(values.shape[0])
+    _, (ii, jj) = ndimage.distance_transform_edt(~on_face, return_indices=True)
     return values[ii, jj]
 
 
@@ -287,11 +287,6 @@ class Voronoi:
         return points, phases, spatial.cKDTree(points)
 
     @property
-    def seed_points(self):
-        """Seed positions, shape (n_seeds, 2), units of ``a`` (read-only)."""
-        return self._seeds[0]
-
-    @property
     def seed_phases(self):
         """Phase of each seed, shape (n_seeds,) (read-only)."""
         return self._seeds[1]
@@ -308,9 +303,8 @@ class Voronoi:
         """Nearest-seed phase at every face pixel, -1 off it; shape (n, n)."""
         n = self.check_grid(n)
         _, phases, tree = self._seeds
-        face = face_mask(n)
         x = _unit_grid(n)
-        i, j = np.nonzero(face)
+        i, j = np.nonzero(face_mask(n))
         _, nearest = tree.query(np.column_stack([x[i], x[j]]))
         out = np.full((n, n), -1, dtype=np.int64)
         out[i, j] = phases[nearest]
@@ -454,10 +448,10 @@ class ArrayMap:
         a = a.astype(np.int64)
         n0 = a.shape[0]
         _check_grid(n0, MIN_GRID, f"phase map {self.source}")
-        face = face_mask(n0)
-        n_phases = int(a[face].max()) + 1
+        on_face = face_mask(n0)
+        n_phases = int(a[on_face].max()) + 1
         try:
-            validate_labels(np.where(face, a, -1), n_phases, face=face)
+            validate_labels(np.where(on_face, a, -1), n_phases, face_mask=on_face)
         except ValueError as err:
             raise ValueError(f"phase map {self.source}: {err}") from None
         # Off-face pixels take the label of the nearest face pixel, so that
@@ -557,12 +551,12 @@ def _png_labels(path, max_phases):
     else:
         img = img.astype(np.int64)
     pixels = img.reshape(n0 * n0, -1)
-    face = face_mask(n0).ravel()
-    levels, inverse = np.unique(pixels[face], axis=0, return_inverse=True)
+    on_face = face_mask(n0).ravel()
+    levels, inverse = np.unique(pixels[on_face], axis=0, return_inverse=True)
     if len(levels) > max_phases:
         raise ValueError(f"phase map {str(path)!r} has {len(levels)} distinct levels on the "
                          f"face, more than max_phases={max_phases} (anti-aliased image?)")
     labels = np.full(n0 * n0, -1, dtype=np.int64)
-    labels[face] = inverse.ravel()
+    labels[on_face] = inverse.ravel()
     logger.debug("%s: %d phases from levels %s", path, len(levels), levels.tolist())
     return labels.reshape(n0, n0)

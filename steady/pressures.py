@@ -1,14 +1,27 @@
 """Steady pressure on each phase (paper eq. 7).
 
 In the steady state every point wears at the same rate, ``k_i p_i^m = C``,
-and the phases together carry the normal force.
+and the phases together carry the normal force.  :func:`phase_pressures`
+is the one place eq. 7 is written; :func:`pressure_field` spreads it over
+the pixels of a phase map.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["phase_pressures"]
+from .phases import validate_labels
+
+__all__ = ["phase_pressures", "pressure_field"]
+
+
+def _phase_pressures(counts, k, normal_force, pixel_area, exponent):
+    # Scale by the smallest k first: k^(-1/m) of extreme ratios stays finite.
+    weights = (k / k.min()) ** (-1.0 / exponent)
+    return normal_force * weights / (pixel_area * np.dot(counts, weights))
+
+
+_phase_pressures_rows = np.vectorize(_phase_pressures, signature="(p),(p),(),(),()->(p)")
 
 
 def phase_pressures(counts, wear_coefficients, normal_force, pixel_area, *, exponent=1.0):
@@ -16,10 +29,12 @@ def phase_pressures(counts, wear_coefficients, normal_force, pixel_area, *, expo
 
     Parameters
     ----------
-    counts : array_like, shape (P,), int
-        Face pixels of each phase.
-    wear_coefficients : array_like, shape (P,), 1/Pa
-        ``k_i``, positive.
+    counts : array_like, shape (P,) or (..., P)
+        Face pixels of each phase (int), or any measure proportional to
+        the phase areas (e.g. fill factors with ``pixel_area`` 1).
+    wear_coefficients : array_like, shape (P,) or (..., P), 1/Pa
+        ``k_i``, positive.  Leading dimensions of ``counts`` and
+        ``wear_coefficients`` broadcast: one row per set of phases.
     normal_force : float, N
     pixel_area : float, m^2
         ``h^2``.
@@ -28,11 +43,61 @@ def phase_pressures(counts, wear_coefficients, normal_force, pixel_area, *, expo
 
     Returns
     -------
-    ndarray, shape (P,), Pa
+    ndarray, shape (P,) or (..., P), Pa
         ``p_i = F k_i^(-1/m) / sum_j A_j k_j^(-1/m)`` with
         ``A_j = counts_j h^2``, so that ``sum_i A_i p_i = F``.
+
+    Examples
+    --------
+    Two phases of equal area, the second wearing ten times faster, carry
+    the pressures ``10 : 1``:
+
+    >>> phase_pressures([50, 50], [1e-9, 1e-8], 11.0, 1.0)
+    array([0.2 , 0.02])
     """
+    counts = np.asarray(counts)
     k = np.asarray(wear_coefficients, dtype=float)
-    # Scale by the smallest k first: k^(-1/m) of extreme ratios stays finite.
-    weights = (k / k.min()) ** (-1.0 / exponent)
-    return normal_force * weights / (pixel_area * np.dot(counts, weights))
+    if counts.ndim == 1 and k.ndim == 1:
+        return _phase_pressures(counts, k, normal_force, pixel_area, exponent)
+    return _phase_pressures_rows(counts, k, normal_force, pixel_area, exponent)
+
+
+def pressure_field(labels, wear_coefficients, normal_force, pixel_area, *, exponent=1.0,
+                   face_mask=None):
+    """Steady pressure at every pixel of a phase map (eq. 7).
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n, n), int
+        Phase index ``0..P-1`` on the face, -1 off it; every phase present
+        (checked, :func:`steady.phases.validate_labels`).
+    wear_coefficients : array_like, shape (P,), 1/Pa
+        ``k_i``, positive.
+    normal_force : float, N
+    pixel_area : float, m^2
+        ``h^2``.
+    exponent : float, optional
+        ``m`` in ``dw/ds = k p^m`` (default 1, Archard).
+    face_mask : ndarray of bool, shape (n, n), optional
+        :func:`steady.grid.face_mask` of ``n``, if the caller has it.
+
+    Returns
+    -------
+    pressure : ndarray, shape (n, n), Pa
+        ``p_i`` on the pixels of phase ``i``, zero off the face.
+    phase_pressures : ndarray, shape (P,), Pa
+        :func:`phase_pressures`.
+    counts : ndarray, shape (P,), int
+        Face pixels of each phase.
+
+    Raises
+    ------
+    ValueError
+        Labels that do not fit ``P = len(wear_coefficients)`` phases.
+    """
+    labels = np.asarray(labels)
+    k = np.atleast_1d(np.asarray(wear_coefficients, dtype=float))
+    counts = validate_labels(labels, k.size, face_mask=face_mask)
+    p = phase_pressures(counts, k, normal_force, pixel_area, exponent=exponent)
+    # Label -1 (off the face) picks the trailing zero.
+    return np.append(p, 0.0)[labels], p, counts

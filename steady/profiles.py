@@ -110,10 +110,10 @@ def ring_average(field, radius, n_bins):
         raise ValueError(f"n_bins must be a positive integer, got {n_bins!r}")
     n_bins = int(n_bins)
     n = field.shape[0]
-    face = face_mask(n)
+    on_face = face_mask(n)
     r, _ = polar(n, radius)
-    ring = np.minimum((r[face] / radius * n_bins).astype(int), n_bins - 1)
-    sums = np.bincount(ring, weights=field[face], minlength=n_bins)
+    ring = np.minimum((r[on_face] / radius * n_bins).astype(int), n_bins - 1)
+    sums = np.bincount(ring, weights=field[on_face], minlength=n_bins)
     counts = np.bincount(ring, minlength=n_bins)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)

@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import integrate, special
 
+from .pressures import phase_pressures
+
 __all__ = [
     "cylinder_face",
     "cylinder_face_slope",
@@ -180,11 +182,16 @@ def fine_grain_rms_slope(fill_factors, wear_coefficients, *, exponent=1.0):
     field.  In the pillars limit ``k_2 / k_1 -> 0`` this gives
     ``sqrt(1 + (pi^2 / 4) (1 / rho_2 - 1))``, about ``(pi / 2) / sqrt(rho_2)``,
     not the ``1 / rho_2`` of eq. 18 (:func:`pillars_rms_slope`), which holds
-    over the pillars only.
+    over the pillars only and would exceed the Parseval bound
+    ``(pi / 2) / sqrt(rho_2)`` over the whole face.
+
+    For two phases with ``r = k_2 / k_1`` and Archard's law,
+    ``(rms / grad_f0)^2 = 1 + (pi^2 / 4) rho_1 rho_2 (r - 1)^2 / (rho_1 r + rho_2)^2``:
+    symmetric under ``(rho_2, r) -> (1 - rho_2, 1 / r)``.  This closed form
+    is the check of the design table (:mod:`steady.design`).
     """
     rho = np.asarray(fill_factors, dtype=float)
-    k = np.asarray(wear_coefficients, dtype=float)
-    weights = (k / k.min(axis=-1, keepdims=True)) ** (-1.0 / exponent)
-    p = weights / np.sum(rho * weights, axis=-1, keepdims=True)  # p_i / pbar
+    # Unit force on unit area: the phase pressures are p_i / pbar.
+    p = phase_pressures(rho, wear_coefficients, 1.0, 1.0, exponent=exponent)
     variance = np.sum(rho * (p - 1.0) ** 2, axis=-1)
     return np.sqrt(1.0 + np.pi**2 / 4.0 * variance)

@@ -29,7 +29,10 @@ Map kinds (``[phases] map``):
 
 Every key is checked; unknown sections and keys are errors, so that a typo
 cannot pass silently.  Other packages can add sections through
-``extra_sections``; this module knows nothing of them.
+``extra_sections``; this module knows nothing of their contents.  The
+sections of the run-in (:data:`RUN_IN_SECTIONS`), when no parser is given
+for them, are recorded in ``Scene.ignored_sections`` and otherwise left
+alone, so that one scene file serves the steady and the run-in commands.
 """
 
 from __future__ import annotations
@@ -46,7 +49,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from .phases import Homogeneous, Rods, Voronoi, load_phase_map
 
-__all__ = ["CORE_SECTIONS", "Scene", "load_scene", "parse_scene"]
+__all__ = ["CORE_SECTIONS", "RUN_IN_SECTIONS", "Scene", "load_scene", "parse_scene"]
 
 #: Sections every scene file has, with their keys (required, optional).
 CORE_SECTIONS = {
@@ -57,6 +60,11 @@ CORE_SECTIONS = {
     "wear": ({"coefficients"}, {"exponent"}),
     "phases": ({"map"}, set()),
 }
+
+#: Sections read by the run-in command (package ``transient``).  Without a
+#: parser for them in ``extra_sections`` they are skipped, not refused: the
+#: steady state does not depend on them.  Only the names are known here.
+RUN_IN_SECTIONS = ("initial_face", "transient")
 
 _MAP_KEYS = {
     "homogeneous": (set(), set()),
@@ -92,6 +100,9 @@ class Scene:
         The TOML text as read.
     extra : mapping
         Parsed extra sections, by name (only those present in the file).
+    ignored_sections : tuple of str
+        Run-in sections (:data:`RUN_IN_SECTIONS`) present in the file but
+        not parsed (no ``extra_sections`` parser for them), sorted.
     """
 
     radius: float
@@ -105,6 +116,7 @@ class Scene:
     text: str = ""
     extra: types.MappingProxyType = dataclasses.field(
         default_factory=lambda: types.MappingProxyType({}))
+    ignored_sections: tuple = ()
 
     @property
     def n_phases(self):
@@ -206,7 +218,9 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     extra_sections : mapping of str to callable, optional
         ``name -> parse(table, base_dir)`` for sections beyond the core
         ones; each result is kept in ``Scene.extra[name]``.  Sections
-        absent from the file are not called.
+        absent from the file are not called.  Run-in sections
+        (:data:`RUN_IN_SECTIONS`) without a parser here are skipped and
+        listed in ``Scene.ignored_sections``.
     source_path : path-like, optional
         Recorded in ``Scene.source_path``.
 
@@ -229,10 +243,16 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     except tomllib.TOMLDecodeError as err:
         raise ValueError(f"malformed TOML: {err}") from None
     base_dir = pathlib.Path(base_dir)
-    unknown = sorted(set(doc) - set(CORE_SECTIONS) - set(extra_sections))
+    ignored = tuple(sorted(name for name in RUN_IN_SECTIONS
+                           if name in doc and name not in extra_sections))
+    unknown = sorted(set(doc) - set(CORE_SECTIONS) - set(extra_sections) - set(ignored))
     if unknown:
-        allowed = ", ".join(sorted(set(CORE_SECTIONS) | set(extra_sections)))
+        allowed = ", ".join(sorted(set(CORE_SECTIONS) | set(extra_sections)
+                                   | set(RUN_IN_SECTIONS)))
         raise ValueError(f"unknown section [{unknown[0]}] (allowed: {allowed})")
+    for name in ignored:
+        if not isinstance(doc[name], dict):
+            raise ValueError(f"[{name}] must be a table, got {doc[name]!r}")
     for name, (required, optional) in CORE_SECTIONS.items():
         if name not in doc:
             raise ValueError(f"missing section [{name}]")
@@ -264,7 +284,7 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     return Scene(radius=radius, normal_force=normal_force, E_star=E_star, n=n,
                  wear_coefficients=k, exponent=exponent, geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
-                 text=text, extra=types.MappingProxyType(extra))
+                 text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored)
 
 
 def load_scene(path, *, extra_sections=None):

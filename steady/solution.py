@@ -32,10 +32,9 @@ from . import reference
 from .accuracy import estimate_rms_slope
 from .grid import face_mask, pixel_size
 from .halfspace import HalfSpace
-from .phases import validate_labels
-from .pressures import phase_pressures
+from .pressures import pressure_field
 
-__all__ = ["SteadyResult", "phase_pressures", "solve", "solve_scene"]
+__all__ = ["SteadyResult", "solve", "solve_scene"]
 
 logger = logging.getLogger(__name__)
 
@@ -201,22 +200,19 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
         raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
     n_phases = int(labels.max()) + 1
     k = _wear_coefficients(wear_coefficients, n_phases)
-    on = face_mask(n)
-    counts = validate_labels(labels, n_phases, face=on)
-
+    on_face = face_mask(n)
     h = halfspace.h
     radius = 0.5 * n * h
-    p_phase = phase_pressures(counts, k, normal_force, h * h, exponent=exponent)
-    # Label -1 (off the face) picks the trailing zero.
-    pressure = np.append(p_phase, 0.0)[labels]
+    pressure, p_phase, counts = pressure_field(labels, k, normal_force, h * h,
+                                               exponent=exponent, face_mask=on_face)
 
     pressure_q = halfspace.forward(pressure)
     face = halfspace.displacement_q(pressure_q)
     gx, gy = halfspace.gradient(pressure, pressure_q=pressure_q)
     slope2 = gx * gx
     slope2 += gy * gy
-    rms = math.sqrt(np.sum(slope2, where=on) / counts.sum())
-    off = ~on
+    rms = math.sqrt(np.sum(slope2, where=on_face) / counts.sum())
+    off = ~on_face
     face[off] = np.nan
     slope = np.sqrt(slope2, out=slope2)
     slope[off] = np.nan

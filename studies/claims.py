@@ -31,14 +31,13 @@ Writes ``out/claims.h5`` and ``docs/figures/claims.png``.
 import sys
 
 import numpy as np
+import study_io
+import voronoi_study
 
 from steady.basis import PhaseBasis
 from steady.design import DesignTable
 from steady.phases import Voronoi
 from steady.reference import fine_grain_rms_slope
-
-import study_io
-import voronoi_study
 
 NAME = "claims"
 EXTRA_FILLS = [0.01, 0.02, 0.03, 0.04]

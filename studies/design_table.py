@@ -1,6 +1,6 @@
 """The design table: normalised rms slope over fill factor and wear ratio, with its scatter.
 
-Builds the table behind ``python -m steady.design`` (:class:`steady.design.DesignTable`):
+Builds the table behind ``runin-design`` (:class:`steady.design.DesignTable`):
 the realisation mean, the realisation scatter (standard deviation) and the
 discretisation error of the normalised rms slope ``rms / grad_f0`` of
 biphasic Voronoi maps with 80^2 seeds (fine grains: the finite-size effect is
@@ -17,22 +17,22 @@ Run::
     python studies/design_table.py --quick    # a few seconds
     python studies/design_table.py --plot-only
 
-Writes ``studies/data/design_table.h5`` (the shipped table) and
-``docs/figures/design_table.png``.
+Writes ``steady/data/design_table.h5`` (the table shipped as package data of
+``steady``) and ``docs/figures/design_table.png``.
 """
 
 import sys
 
 import numpy as np
+import study_io
+import voronoi_study
 
 from steady.design import DesignTable
 from steady.reference import fine_grain_rms_slope
 
-import study_io
-import voronoi_study
-
 NAME = "design_table"
-TABLE = study_io.ROOT / "studies" / "data" / "design_table.h5"
+#: The shipped table, in the source tree (package data of ``steady``).
+TABLE = study_io.ROOT / "steady" / "data" / "design_table.h5"
 PARAMS = dict(voronoi_study.FULL, table_level=6400,
               extra_fills=[0.01, 0.02, 0.03, 0.04, 0.96, 0.97, 0.98, 0.99])
 QUICK = dict(voronoi_study.QUICK, table_level=100, extra_fills=[0.05, 0.95])
@@ -47,7 +47,7 @@ def compute(path, params, *, workers=None, scheduler=None, progress=False):
                                     fill_factors=fills, seeds=params["seeds"], workers=workers,
                                     scheduler=scheduler, progress=progress)
     table = DesignTable.from_voronoi(data, attrs={"source": "studies/design_table.py"})
-    return table.write(path)
+    return table.write(path, force=True)
 
 
 def plot(path, png):

@@ -20,13 +20,12 @@ Writes ``out/fig2_homogeneous.h5`` and ``docs/figures/fig2_homogeneous.png``.
 import sys
 
 import numpy as np
+import study_io
 
 from steady import reference
 from steady.basis import PhaseBasis
 from steady.grid import polar
 from steady.phases import Homogeneous
-
-import study_io
 
 NAME = "fig2_homogeneous"
 PARAMS = {"n": 512, "refinement": [32, 64, 128, 256, 512, 1024]}

@@ -21,13 +21,12 @@ Writes ``out/fig3_biphasic.h5`` and ``docs/figures/fig3_biphasic.png``.
 import sys
 
 import numpy as np
+import study_io
 from matplotlib.colors import ListedColormap
 
-from steady.basis import PhaseBasis
 from steady.accuracy import grid_ladder, ladder_error
+from steady.basis import PhaseBasis
 from steady.phases import Voronoi
-
-import study_io
 
 NAME = "fig3_biphasic"
 PARAMS = {"n": 512, "n_seeds": 1600, "fill_factor": 0.5, "seed": 2718, "ratio": 10.0}

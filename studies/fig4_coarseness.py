@@ -25,12 +25,11 @@ The sweep points go to (or are reused from) ``out/voronoi_sweep_n<n>.h5``
 import sys
 
 import numpy as np
+import study_io
+import voronoi_study
 from matplotlib.colors import ListedColormap
 
 from steady.phases import Voronoi
-
-import study_io
-import voronoi_study
 
 NAME = "fig4_coarseness"
 PARAMS = dict(voronoi_study.FULL, map_level=1600, picture_fill=0.5, picture_n=512,

@@ -25,13 +25,12 @@ and ``docs/figures/fig5_collapse.png``.
 import sys
 
 import numpy as np
-
-from steady.basis import PhaseBasis
-from steady.reference import fine_grain_rms_slope
-from steady.phases import Voronoi
-
 import study_io
 import voronoi_study
+
+from steady.basis import PhaseBasis
+from steady.phases import Voronoi
+from steady.reference import fine_grain_rms_slope
 
 NAME = "fig5_collapse"
 PARAMS = dict(voronoi_study.FULL, curve_ratios=[1e-3, 1e-2, 1e-1, 1e1, 1e3],

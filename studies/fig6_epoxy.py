@@ -20,13 +20,12 @@ Writes ``out/fig6_epoxy.h5`` and ``docs/figures/fig6_epoxy.png``.
 import sys
 
 import numpy as np
+import study_io
 
 from steady import reference
 from steady.profiles import cross_section
 from steady.scene import load_scene
 from steady.solution import solve_scene
-
-import study_io
 
 NAME = "fig6_epoxy"
 SCENE = study_io.ROOT / "studies" / "scenes" / "epoxy_cylinder.toml"

@@ -23,6 +23,7 @@ Writes ``out/fig78_rods.h5`` and ``docs/figures/fig78_rods.png``.
 import sys
 
 import numpy as np
+import study_io
 from matplotlib.patches import Circle
 
 from steady.grid import polar
@@ -30,8 +31,6 @@ from steady.phases import Rods
 from steady.profiles import differential_profile
 from steady.scene import load_scene
 from steady.solution import solve_scene
-
-import study_io
 
 NAME = "fig78_rods"
 SCENES = {"steel_in_brass": "rods_steel_in_brass.toml",

@@ -28,15 +28,13 @@ import pathlib
 import sys
 
 import numpy as np
+import study_io
 
 from steady.grid import pixel_size
 from steady.halfspace import HalfSpace
 from steady.phases import Voronoi
 from steady.scene import load_scene
-from steady.solution import solve
 from steady.sweep import run_sweep
-
-import study_io
 
 NAME = "runin_history"
 CASES = {
@@ -55,36 +53,37 @@ _UNITS = {"distance": "s*", "normalised_rms_slope": "grad_f0", "spread": "1",
           "rms_slope_error": "1", "steps": "1", "solves": "1", "wall_time": "s"}
 
 
-def _setup(case, n, n_seeds, fill, seed):
-    """Labels, wear coefficients (1/Pa), force (N), radius (m) and E* (Pa) of a case."""
+def _problem(case, n, n_seeds, fill, seed):
+    """The wear problem of a case on the ``n x n`` grid."""
+    from transient.problem import WearProblem
+
     spec = CASES[case]
     if spec["kind"] == "voronoi":
         labels = Voronoi(n_seeds, (1 - fill, fill), seed).labels(n)
-        return labels, np.array([1.0, spec["ratio"]]), np.pi, 1.0, 1.0
+        # pbar = 1 Pa, a = 1 m, E* = 1 Pa: the normalised history.
+        return WearProblem(HalfSpace(n, pixel_size(n, 1.0), 1.0), labels,
+                           [1.0, spec["ratio"]], np.pi, 1.0)
     scene = load_scene(study_io.ROOT / "studies" / "scenes" / spec["scene"])
-    return (scene.geometry.labels(n), np.asarray(scene.wear_coefficients, float),
-            scene.normal_force, scene.radius, scene.E_star)
+    return WearProblem.from_scene(scene, n=n)
 
 
 def run_case(point, *, n, n_seeds, fill, seed, tol):
     """One run-in from a flat face (sweep task)."""
     from steady.basis import PhaseBasis
+    from transient.comparison import compare_with_steady
     from transient.initial_face import flat
-    from transient.runin import RunOptions, compare_with_steady, run_in
-    from transient.stepping import WearProblem
+    from transient.runin import RunOptions, run_in
 
-    labels, k, force, radius, E_star = _setup(point["case"], n, n_seeds, fill, seed)
-    face = labels >= 0
-    hs = HalfSpace(n, pixel_size(n, radius), E_star)
-    problem = WearProblem(hs, np.where(face, k[np.maximum(labels, 0)], 0.0), face, force,
-                          radius)
-    result = run_in(problem, flat(n, radius), RunOptions(tol=tol))
+    problem = _problem(point["case"], n, n_seeds, fill, seed)
+    result = run_in(problem, flat(n, problem.radius), RunOptions(tol=tol))
     if not result.success:
         raise RuntimeError(f"run-in of {point['case']} ended {result.status}: "
                            f"{result.message}")
-    steady = solve(hs, labels, k, force)
-    comparison = compare_with_steady(result, steady, hs, labels)
-    corrected = PhaseBasis(labels, radius, E_star, faces=False).rms_slopes([k], force)
+    steady = problem.solve_steady()
+    comparison = compare_with_steady(result, steady, problem)
+    corrected = PhaseBasis(problem.labels, problem.radius, problem.halfspace.E_star,
+                           faces=False).rms_slopes([problem.wear_coefficients],
+                                                   problem.normal_force)
     h = result.history
     return {"distance": h["distance"] / result.run_in_distance,
             "normalised_rms_slope": h["normalised_rms_slope"], "spread": h["spread"],

@@ -28,14 +28,13 @@ The sweep points go to (or are reused from) ``out/voronoi_sweep_n<n>.h5``
 import sys
 
 import numpy as np
-
-from steady.accuracy import SlopeEnergy
-from steady.reference import fine_grain_rms_slope
-from steady.phases import Voronoi
-from steady.solution import phase_pressures
-
 import study_io
 import voronoi_study
+
+from steady.accuracy import SlopeEnergy
+from steady.phases import Voronoi
+from steady.pressures import pressure_field
+from steady.reference import fine_grain_rms_slope
 
 NAME = "scale_independence"
 PARAMS = dict(voronoi_study.FULL, fill=0.5, seeds=list(range(1000, 1050)),
@@ -64,15 +63,14 @@ def rim_leak(n_seeds, fill, seed, n, ratio):
     """
     h = 2.0 / n
     labels = Voronoi(n_seeds, (1 - fill, fill), seed).labels(n)
-    face = labels >= 0
-    p = phase_pressures(np.bincount(labels[face]), [1.0, ratio], np.pi, h * h)
-    pressure = np.where(face, np.append(p, 0.0)[labels], 0.0)
-    pbar = pressure[face].mean()
-    mean = np.where(face, pbar, 0.0)
-    gram = SlopeEnergy(n, h, 1.0).gram([mean, pressure - mean], face)
-    on_face = gram.total - gram.exterior
+    on_face = labels >= 0
+    pressure, _, _ = pressure_field(labels, [1.0, ratio], np.pi, h * h)
+    pbar = pressure[on_face].mean()
+    mean = np.where(on_face, pbar, 0.0)
+    gram = SlopeEnergy(n, h, 1.0).gram([mean, pressure - mean], on_face)
+    inside = gram.total - gram.exterior
     g0 = 4 * pbar / np.pi
-    return gram.exterior[1, 1] / gram.total[1, 1], 2 * on_face[0, 1] / gram.face_area / g0**2
+    return gram.exterior[1, 1] / gram.total[1, 1], 2 * inside[0, 1] / gram.face_area / g0**2
 
 
 def compute(path, params, *, workers=None, scheduler=None, progress=False):

@@ -28,6 +28,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from steady.output import atomic_h5
+
 __all__ = ["FORMAT_VERSION", "ROOT", "figure", "plain_log_ticks", "read_study", "run_study",
            "save_figure", "write_study"]
 
@@ -41,7 +43,10 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 
 def write_study(path, name, params, datasets, attrs=None):
-    """Write a study's numbers to HDF5, atomically (temporary file, then rename).
+    """Write a study's numbers to HDF5, replacing an earlier run's file.
+
+    Written atomically (:func:`steady.output.atomic_h5`): an interrupted run
+    leaves the previous file, not half a file.
 
     Parameters
     ----------
@@ -60,11 +65,8 @@ def write_study(path, name, params, datasets, attrs=None):
     pathlib.Path
     """
     path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with h5py.File(tmp, "w") as f:
-        f.attrs["format"] = f"runin.study.{name}"
-        f.attrs["format_version"] = FORMAT_VERSION
+    with atomic_h5(path, format=f"runin.study.{name}", version=FORMAT_VERSION,
+                   force=True) as f:
         f.attrs["params"] = json.dumps(params, sort_keys=True, default=_jsonable)
         for key, (value, unit) in (attrs or {}).items():
             f.attrs[key] = value
@@ -72,7 +74,6 @@ def write_study(path, name, params, datasets, attrs=None):
         for key, (value, unit) in datasets.items():
             ds = f.create_dataset(key, data=np.asarray(value))
             ds.attrs["units"] = unit
-    tmp.replace(path)
     logger.info("wrote %s", path)
     return path
 

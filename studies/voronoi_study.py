@@ -2,7 +2,7 @@
 
 One sweep file holds, for a grid ``n`` and a list of wear ratios, the
 normalised rms slope of biphasic Voronoi maps at every (coarseness level,
-fill factor, realisation) computed so far (:func:`steady.design.voronoi_sweep`;
+fill factor, realisation) computed so far (:func:`steady.voronoi_sweep.voronoi_sweep`;
 one :class:`steady.basis.PhaseBasis` per map gives every wear ratio).  The
 studies ask for the points they need; points already in the file are not
 computed again, so that the studies share one sweep and an interrupted
@@ -21,10 +21,9 @@ from __future__ import annotations
 import pathlib
 
 import numpy as np
-
-from steady.design import collect_voronoi, voronoi_sweep
-
 import study_io
+
+from steady.voronoi_sweep import collect_voronoi, voronoi_sweep
 
 __all__ = ["FULL", "QUICK", "index_of", "sweep_data", "sweep_path"]
 
@@ -47,7 +46,8 @@ QUICK = {
 
 def sweep_path(params, output):
     """The sweep file: ``params['sweep']`` if given, else ``out/voronoi_sweep_n<n>.h5``
-    (full runs) or beside ``output`` (quick runs)."""
+    (full runs) or beside ``output`` (quick runs).
+    """
     if params.get("sweep"):
         return pathlib.Path(params["sweep"])
     if params.get("quick"):
@@ -61,7 +61,7 @@ def sweep_data(params, output, *, levels, fill_factors, seeds, workers=None, sch
 
     Returns
     -------
-    steady.design.VoronoiData
+    steady.voronoi_sweep.VoronoiData
     """
     path = sweep_path(params, output)
     sweep = voronoi_sweep(path, n=params["n"], ratios=params["ratios"], n_seeds=levels,

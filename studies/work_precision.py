@@ -51,11 +51,13 @@ import numpy as np
 
 from steady.grid import pixel_size
 from steady.halfspace import HalfSpace
+from steady.output import atomic_h5
 from steady.phases import Voronoi
-from steady.solution import solve
+from transient.comparison import compare_with_steady
 from transient.contact import solve_contact
-from transient.runin import RunOptions, compare_with_steady, face_rms_slope, run_in
-from transient.stepping import WearProblem
+from transient.diagnostics import face_rms_slope
+from transient.problem import WearProblem
+from transient.runin import RunOptions, run_in
 
 # -- parameters ----------------------------------------------------------------
 RADIUS = 4e-3            # m, the paper's epoxy cylinder (Fig. 6)
@@ -83,13 +85,11 @@ FORMAT_VERSION = 1
 logger = logging.getLogger("work_precision")
 
 
-def build(n, ratio=RATIO):
+def build(n, *, contact_rtol=CONTACT_RTOL):
+    """The study's wear problem on the ``n x n`` grid."""
     hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR)
     labels = Voronoi(SEEDS, FILL, SEED).labels(n)
-    face = labels >= 0
-    k = np.array([K1, K1 * ratio])
-    wear = np.where(face, k[np.maximum(labels, 0)], 0.0)
-    return hs, labels, face, k, wear
+    return WearProblem(hs, labels, [K1, K1 * RATIO], FORCE, RADIUS, contact_rtol=contact_rtol)
 
 
 def unit_cost(hs, face):
@@ -103,8 +103,7 @@ def unit_cost(hs, face):
 
 
 def run_scheme(n, scheme, tol, distances):
-    hs, labels, face, k, wear = build(n)
-    problem = WearProblem(hs, wear, face, FORCE, RADIUS, contact_rtol=CONTACT_RTOL)
+    problem = build(n)
     # No jump: the history up to the last distance is what is measured.
     options = RunOptions(scheme=scheme, tol=tol, snapshots=distances,
                          max_distance=distances[-1], jump_spread=0.0,
@@ -126,8 +125,8 @@ def run_scheme(n, scheme, tol, distances):
 
 def run_baseline(n, distances, end):
     """The loop users write: fixed-step explicit Euler around a contact solve."""
-    hs, labels, face, k, wear = build(n)
-    problem = WearProblem(hs, wear, face, FORCE, RADIUS)
+    problem = build(n, contact_rtol=1e-10)
+    hs, face, wear = problem.halfspace, problem.face_mask, problem.coefficient_field
     s_star = problem.run_in_distance
     p = solve_contact(hs, face, np.zeros((n, n)), FORCE, rtol=CONTACT_RTOL).pressure
     limit = problem.stable_step(p) / s_star
@@ -156,13 +155,11 @@ def run_baseline(n, distances, end):
 
 def steady_jump(n):
     """Implicit Euler with ds = 1e8 s* from the flat face, against eq. 9."""
-    hs, labels, face, k, wear = build(n)
-    problem = WearProblem(hs, wear, face, FORCE, RADIUS, contact_rtol=CONTACT_RTOL)
+    problem = build(n)
     t = time.perf_counter()
     result = run_in(problem, np.zeros((n, n)), RunOptions(jump_spread=math.inf))
     wall = time.perf_counter() - t
-    steady = solve(hs, labels, k, FORCE)
-    cmp = compare_with_steady(result, steady, hs, labels)
+    cmp = compare_with_steady(result, problem.solve_steady(), problem)
     return dict(wall=wall, solves=result.solves, iterations=result.iterations,
                 face_error=cmp.face_error, face_rms_error=cmp.face_rms_error,
                 rms_slope_error=cmp.rms_slope_error,
@@ -178,19 +175,17 @@ def shape_error(face, ref):
 
 
 def compute(n, out, *, full_baseline, runs, distances, reference, window):
-    import h5py
-
-    hs, labels, face, k, wear = build(n)
-    unit = unit_cost(hs, face)
+    problem = build(n)
+    unit = unit_cost(problem.halfspace, problem.face_mask)
     logger.info("n=%d: one cold contact solve %.3f s", n, unit)
     logger.info("reference %s tol %g ...", *reference)
     ref = run_scheme(n, reference[0], reference[1], distances)
     logger.info("reference: %d steps, %.1f s", ref["steps"], ref["wall"])
     path = out / f"work_precision_n{n}.h5"
-    tmp = path.with_name(path.name + ".tmp")
-    with h5py.File(tmp, "w") as f:
+    with atomic_h5(path, format="runin.work_precision", version=FORMAT_VERSION,
+                   force=True) as f:
         f.attrs.update(dict(
-            format="runin.work_precision", version=FORMAT_VERSION, n=n, ratio=RATIO,
+            n=n, ratio=RATIO,
             fill_factors=FILL, seeds=SEEDS, seed=SEED, radius=RADIUS, normal_force=FORCE,
             E_star=E_STAR, k1=K1, contact_rtol=CONTACT_RTOL,
             unit_cost=unit, unit_cost_units="s (cold contact solve of the flat face)",
@@ -243,7 +238,6 @@ def compute(n, out, *, full_baseline, runs, distances, reference, window):
         jg = f.create_group("steady_jump")
         jg.attrs.update({k_: v for k_, v in j.items()})
         jg.attrs["equivalents"] = j["wall"] / unit
-    os.replace(tmp, path)
     return path
 
 
@@ -260,10 +254,8 @@ def _cpu():
 def plot(path, png):
     """Draw the work-precision figure from the HDF5 file of :func:`compute`."""
     import h5py
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     with h5py.File(path) as f:
         n = int(f.attrs["n"])
@@ -276,7 +268,9 @@ def plot(path, png):
         jump = dict(f["steady_jump"].attrs)
         ref_name = f"{f['reference'].attrs['scheme']}, tol {f['reference'].attrs['tol']:g}"
         ratio = float(f.attrs["ratio"])
-    fig, ax = plt.subplots(1, 3, figsize=(16, 5))
+    fig = Figure(figsize=(16, 5))
+    FigureCanvasAgg(fig)
+    ax = fig.subplots(1, 3)
     markers = {"implicit_euler": "o-", "bdf2": "s-", "sdirk2": "^-", "explicit_euler": "v-"}
     for scheme in sorted({r["scheme"] for r in runs.values()}):
         rs = sorted((r for r in runs.values() if r["scheme"] == scheme), key=lambda r: r["tol"])
@@ -311,7 +305,6 @@ def plot(path, png):
     ax[2].set_title("rms slope at the compared distances")
     fig.tight_layout()
     fig.savefig(png, dpi=110)
-    plt.close(fig)
 
 
 def main(argv=None):

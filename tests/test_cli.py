@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import h5py
+import numpy as np
 import pytest
 
 SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
@@ -74,6 +75,34 @@ def test_bad_scene(tmp_path, old, new, fragment):
 def test_missing_scene_and_bad_arguments(tmp_path):
     assert_bad_input(run("nope.toml", "-o", "r.h5", cwd=tmp_path), "does not exist")
     assert_bad_input(run("nope.toml", cwd=tmp_path), "-o/--output")
+
+
+def test_usage_names_the_command_as_typed(tmp_path):
+    proc = run("--help", cwd=tmp_path)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
+    assert proc.stdout.startswith("usage: python -m steady "), f"usage {proc.stdout[:80]!r}"
+
+
+def test_run_in_scene_is_accepted_with_a_note(tmp_path):
+    """The sections of the run-in are skipped with one note line; unknown ones stay errors."""
+    text = SCENE + '[transient]\ntol = 1e-4\n[initial_face]\nkind = "tilted"\nangle = 0.3\n'
+    (tmp_path / "s.toml").write_text(text)
+    proc = run("s.toml", "-o", "r.h5", cwd=tmp_path)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
+    assert proc.stderr == "note: ignoring run-in sections [initial_face], [transient]\n", \
+        f"stderr {proc.stderr!r}"
+    with h5py.File(tmp_path / "r.h5") as f:
+        assert f["scene"][()].decode() == text, "the whole scene text is stored"
+    (tmp_path / "u.toml").write_text(SCENE + "[transient_settings]\ntol = 1e-4\n")
+    assert_bad_input(run("u.toml", "-o", "u.h5", cwd=tmp_path),
+                     "unknown section [transient_settings]")
+    (tmp_path / "plain.toml").write_text(SCENE)
+    proc = run("plain.toml", "-o", "p.h5", cwd=tmp_path)
+    assert proc.returncode == 0 and proc.stderr == "", \
+        f"no note without run-in sections: {proc.stderr!r}"
+    with h5py.File(tmp_path / "r.h5") as f, h5py.File(tmp_path / "p.h5") as g:
+        assert np.array_equal(f["face"][()], g["face"][()], equal_nan=True), \
+            "the run-in sections must not change the steady face"
 
 
 @pytest.mark.slow

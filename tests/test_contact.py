@@ -1,6 +1,7 @@
 """Load-controlled contact solver against closed forms and a dense direct solve."""
 
 import logging
+import sys
 
 import numpy as np
 import pytest
@@ -11,8 +12,8 @@ from steady import reference
 from steady.grid import face_mask, pixel_size, polar
 from steady.halfspace import HalfSpace
 from transient import initial_face
-from transient.contact import PRECONDITIONERS, ContactResult, solve_contact
-from transient.preconditioners import influence_quadrant, influence_symbol
+from transient.contact import ContactResult, solve_contact
+from transient.preconditioners import PRECONDITIONERS
 
 # The paper's epoxy cylinder (Fig. 6): a = 4 mm, F = 10 N, E* = 1.3 MPa.
 RADIUS = 4e-3
@@ -44,15 +45,25 @@ def test_preconditioner_kernels_match_the_half_space(n):
     hs, _ = setup(n)
     p = np.random.default_rng(31337).random((n, n))
     u = hs.displacement(p)
-    symbol = influence_symbol(hs)
+    symbol = hs.influence_symbol
     assert symbol.min() > 0, "the circulant embedding must be positive definite"
     via_symbol = hs.inverse(hs.forward(p) * symbol)
     assert np.allclose(via_symbol, u, rtol=0, atol=1e-13 * np.abs(u).max()), (
         "influence_symbol must reproduce HalfSpace.displacement")
     unit = np.zeros((n, n))
     unit[0, 0] = 1.0
-    assert np.allclose(influence_quadrant(hs), hs.displacement(unit), rtol=1e-12, atol=0), (
-        "influence_quadrant must be the response to a unit pixel pressure")
+    assert np.allclose(hs.influence_quadrant[:n, :n], hs.displacement(unit), rtol=1e-12,
+                       atol=0), "influence_quadrant must be the response to a unit pixel pressure"
+    # The aliased symbol is the spectrum of the 2n-circulant kernel folded to n x n.
+    i = np.arange(2 * n)
+    fold = np.minimum(i, 2 * n - i)
+    circulant = hs.influence_quadrant[fold][:, fold]
+    folded = circulant.reshape(2, n, 2, n).sum(axis=(0, 2))
+    expected = np.fft.rfft2(folded).real
+    aliased = hs.aliased_symbol
+    assert np.allclose(aliased, expected, rtol=0, atol=1e-12 * expected.max()), (
+        "aliased_symbol must be the spectrum of the n-periodic folded kernel")
+    assert aliased.min() > 0, "the aliased symbol must be positive"
 
 
 # -- flat punch ------------------------------------------------------------
@@ -291,7 +302,7 @@ def test_big_shift_is_nearly_diagonal():
     assert diff < 1e-5, f"pressure differs from the Winkler limit by {diff:.2e}"
 
 
-@pytest.mark.parametrize("name", PRECONDITIONERS)
+@pytest.mark.parametrize("name", sorted(PRECONDITIONERS))
 def test_every_preconditioner_gives_the_same_answer(name):
     if name == "amg":
         pytest.importorskip("pyamg")
@@ -366,9 +377,9 @@ def test_zero_force_gives_zero_pressure():
     (dict(normal_force=np.inf), "normal_force"),
     (dict(height=np.full((9, 9), np.nan)), "height"),
     (dict(height=np.zeros((8, 9))), "height"),
-    (dict(face=np.ones((9, 8), bool)), "face"),
-    (dict(face=np.ones((9, 9))), "face"),
-    (dict(face=np.zeros((9, 9), bool)), "face"),
+    (dict(face_mask=np.ones((9, 8), bool)), "face_mask"),
+    (dict(face_mask=np.ones((9, 9))), "face_mask"),
+    (dict(face_mask=np.zeros((9, 9), bool)), "face has no pixel"),
     (dict(shift=-np.ones((9, 9))), "shift"),
     (dict(shift=np.ones((3, 3))), "shift"),
     (dict(shift=np.full((9, 9), np.inf)), "shift"),
@@ -383,13 +394,22 @@ def test_zero_force_gives_zero_pressure():
 def test_bad_input_raises(change, match):
     n = 9
     hs, face = setup(n)
-    args = dict(halfspace=hs, face=face, height=np.zeros((n, n)), normal_force=1.0)
+    args = dict(halfspace=hs, face_mask=face, height=np.zeros((n, n)), normal_force=1.0)
     args.update(change)
     kwargs = {k: args.pop(k) for k in list(args) if k not in
-              ("halfspace", "face", "height", "normal_force")}
+              ("halfspace", "face_mask", "height", "normal_force")}
     with pytest.raises(ValueError, match=match):
-        solve_contact(args["halfspace"], args["face"], args["height"], args["normal_force"],
-                      **kwargs)
+        solve_contact(args["halfspace"], args["face_mask"], args["height"],
+                      args["normal_force"], **kwargs)
+
+
+def test_amg_without_pyamg_names_the_extra(monkeypatch):
+    # A missing optional dependency is an input error that says how to install it.
+    monkeypatch.setitem(sys.modules, "pyamg", None)
+    n = 9
+    hs, face = setup(n)
+    with pytest.raises(ValueError, match=r"pip install 'runin\[amg\]'"):
+        solve_contact(hs, face, np.zeros((n, n)), FORCE, preconditioner="amg")
 
 
 # -- large grids ---------------------------------------------------------------------

@@ -1,13 +1,22 @@
 """Design rule: fine-grain closed form, grid ladders, the tabulated curve and its inversion."""
 
+import importlib.resources
+import os
+import pathlib
+import subprocess
+import sys
+
+import h5py
 import numpy as np
 import pytest
 
+import steady
 from steady import reference
 from steady.accuracy import estimate_rms_slope, grid_ladder, ladder_error
-from steady.design import DEFAULT_TABLE, DesignTable, main, voronoi_slopes
-from steady.reference import fine_grain_rms_slope
+from steady.design import DEFAULT_TABLE, TABLE_FORMAT, DesignTable, main
 from steady.phases import Voronoi
+from steady.reference import fine_grain_rms_slope
+from steady.voronoi_sweep import voronoi_slopes
 
 
 def two_phase(rho, ratio):
@@ -119,13 +128,42 @@ def test_unreachable_target_names_the_range():
         table.rms_slope(-1.0, 1e-2, 0.1)
 
 
+def test_fine_grain_closed_form_uses_eq7_at_round_off():
+    """The closed form takes p_i / pbar from eq. 7 (steady.pressures); the direct
+    two-phase expression agrees to round-off, rows broadcast like single calls.
+    """
+    rng = np.random.default_rng(6151)
+    rho = rng.uniform(0.01, 0.99, 200)
+    ratio = 10.0 ** rng.uniform(-4, 4, 200)
+    got = two_phase(rho, ratio)
+    direct = np.sqrt(1 + np.pi**2 / 4 * (1 - rho) * rho * (ratio - 1) ** 2
+                     / ((1 - rho) * ratio + rho) ** 2)
+    assert np.allclose(got, direct, rtol=1e-13, atol=0), \
+        f"max relative deviation {np.max(np.abs(got / direct - 1)):.2e}"
+    single = [fine_grain_rms_slope([1 - r, r], [1.0, q]) for r, q in zip(rho[:5], ratio[:5])]
+    assert np.array_equal(got[:5], single), "rows must equal single calls bit for bit"
+
+
+def test_shipped_table_is_package_data():
+    """The default table is package data of steady, found through importlib.resources."""
+    package_dir = pathlib.Path(steady.__file__).parent
+    assert pathlib.Path(str(DEFAULT_TABLE)) == package_dir / "data" / "design_table.h5", \
+        f"DEFAULT_TABLE {DEFAULT_TABLE} is not inside the package {package_dir}"
+    with importlib.resources.as_file(DEFAULT_TABLE) as path:
+        assert path.is_file(), f"package data {path} missing"
+        with h5py.File(path, "r") as f:
+            assert f.attrs["format"] == TABLE_FORMAT, "the package data is a design table"
+    table = DesignTable.read()
+    assert table.attrs["n_seeds"] == 6400, f"default table attributes {table.attrs}"
+
+
 def test_shipped_table_agrees_with_the_closed_form():
     """The shipped table (80^2 seeds, n = 512) is within 1.5 % of the fine-grain form.
 
     Measured: at most 0.81 % for 0.05 <= rho_2 <= 0.95 (1.4 % at rho_2 = 0.99,
     k_2/k_1 = 1e4, where the few phase-1 grains scatter most).
     """
-    table = DesignTable.read(DEFAULT_TABLE)
+    table = DesignTable.read()
     assert table.attrs["n"] >= 512 and table.attrs["realisations"] >= 10, table.attrs
     mean = two_phase(table.fill_factors[:, None], table.ratios[None, :])
     inner = (table.fill_factors >= 0.05) & (table.fill_factors <= 0.95)
@@ -133,6 +171,18 @@ def test_shipped_table_agrees_with_the_closed_form():
     assert dev.max() < 0.015, f"table vs closed form: max deviation {dev.max():.4f}"
     assert np.all(table.error[inner] < np.maximum(table.scatter[inner], 1e-6) + 5e-3), \
         "discretisation error above the realisation scatter"
+
+
+def test_write_refuses_an_existing_file_without_force(tmp_path):
+    table = synthetic_table()
+    path = tmp_path / "table.h5"
+    path.write_bytes(b"keep me")
+    with pytest.raises(ValueError, match="table.h5' exists"):
+        table.write(path)
+    assert path.read_bytes() == b"keep me", "existing file must be untouched"
+    table.write(path, force=True)
+    assert DesignTable.read(path).attrs == {"n_seeds": 6400}, "force replaces the file"
+    assert sorted(os.listdir(tmp_path)) == ["table.h5"], "no temporary file left"
 
 
 def test_command_line(tmp_path, capsys):
@@ -146,6 +196,14 @@ def test_command_line(tmp_path, capsys):
     assert "rms slope =" in out and "fine-grain closed form" in out, out
     assert main(args + ["--target-slope", "50"]) == 2, "unreachable target"
     assert "not reachable" in capsys.readouterr().err, "message on stderr"
+
+
+def test_module_usage_names_the_command_as_typed():
+    proc = subprocess.run([sys.executable, "-m", "steady.design", "--help"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
+    assert proc.stdout.startswith("usage: python -m steady.design "), \
+        f"usage {proc.stdout[:80]!r}"
 
 
 def test_error_at_the_coarsest_accepted_grid():

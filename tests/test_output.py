@@ -1,10 +1,15 @@
-"""HDF5 result files: round trip, units, refusal to overwrite, validation on read."""
+"""HDF5 files: the atomic writer; result files (round trip, units, refusal to overwrite,
+validation on read).
+"""
+
+import os
+import stat
 
 import h5py
 import numpy as np
 import pytest
 
-from steady.output import FORMAT, FORMAT_VERSION, read_result, write_result
+from steady.output import FORMAT, FORMAT_VERSION, atomic_h5, read_result, write_result
 from steady.scene import parse_scene
 from steady.solution import solve_scene
 
@@ -87,3 +92,66 @@ def test_read_rejects_bad_files(tmp_path, solved):
         del f["slope"]
     with pytest.raises(ValueError, match="partial.h5' lacks 'slope'"):
         read_result(other)
+
+
+def test_atomic_h5_writes_format_attributes_and_parents(tmp_path):
+    path = tmp_path / "a" / "b" / "x.h5"
+    with atomic_h5(path, format="runin.test", version=3) as f:
+        f["values"] = np.arange(4.0)
+        assert not path.exists(), "the target appears only when the block completes"
+    with h5py.File(path, "r") as f:
+        assert f.attrs["format"] == "runin.test", f"format {f.attrs['format']!r}"
+        assert f.attrs["format_version"] == 3, f"format_version {f.attrs['format_version']!r}"
+        assert "version" not in f.attrs, "one name for the version attribute"
+        assert np.array_equal(f["values"][()], np.arange(4.0)), "dataset written"
+    assert os.listdir(path.parent) == ["x.h5"], "no temporary file left"
+
+
+@pytest.mark.parametrize("interrupt", [RuntimeError("disk on fire"), KeyboardInterrupt()])
+def test_atomic_h5_removes_the_temporary_file_on_error(tmp_path, interrupt):
+    """Any exception, KeyboardInterrupt included: no temporary file, the old file untouched."""
+    path = tmp_path / "x.h5"
+    path.write_bytes(b"previous run")
+    with pytest.raises(type(interrupt)):
+        with atomic_h5(path, format="runin.test", version=1, force=True) as f:
+            f["values"] = np.arange(3.0)
+            raise interrupt
+    assert path.read_bytes() == b"previous run", "existing file must be untouched"
+    assert os.listdir(tmp_path) == ["x.h5"], f"left behind: {os.listdir(tmp_path)}"
+    new = tmp_path / "new.h5"
+    with pytest.raises(type(interrupt)):
+        with atomic_h5(new, format="runin.test", version=1):
+            raise interrupt
+    assert sorted(os.listdir(tmp_path)) == ["x.h5"], f"left behind: {os.listdir(tmp_path)}"
+
+
+def test_atomic_h5_refuses_existing_files_and_directories(tmp_path):
+    path = tmp_path / "x.h5"
+    path.write_bytes(b"keep me")
+    with pytest.raises(ValueError, match="x.h5' exists"):
+        with atomic_h5(path, format="runin.test", version=1):
+            pytest.fail("the block must not run for an existing file")
+    assert path.read_bytes() == b"keep me", "existing file must be untouched"
+    (tmp_path / "d.h5").mkdir()
+    for force in (False, True):
+        with pytest.raises(ValueError, match="d.h5' is a directory"):
+            with atomic_h5(tmp_path / "d.h5", format="runin.test", version=1, force=force):
+                pytest.fail("the block must not run for a directory")
+    assert sorted(os.listdir(tmp_path)) == ["d.h5", "x.h5"], "nothing created"
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o077, 0o002])
+def test_atomic_h5_permissions_honour_the_umask(tmp_path, umask):
+    """Like a file created with open(): 0o666 less the umask (not mkstemp's 0o600)."""
+    previous = os.umask(umask)
+    try:
+        with atomic_h5(tmp_path / "x.h5", format="runin.test", version=1) as f:
+            f["values"] = np.arange(2.0)
+        with open(tmp_path / "plain", "w"):
+            pass
+    finally:
+        os.umask(previous)
+    mode = stat.S_IMODE((tmp_path / "x.h5").stat().st_mode)
+    plain = stat.S_IMODE((tmp_path / "plain").stat().st_mode)
+    assert mode == 0o666 & ~umask == plain, \
+        f"umask {umask:o}: mode {mode:o}, a plain file gets {plain:o}"

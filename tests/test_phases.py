@@ -22,10 +22,10 @@ FIVE_RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)),
 @pytest.mark.parametrize("n", [8, 33, 64])
 def test_homogeneous_labels_follow_face_mask(n):
     labels = Homogeneous().labels(n)
-    face = face_mask(n)
+    on_face = face_mask(n)
     assert labels.shape == (n, n), f"shape {labels.shape}"
-    assert np.all(labels[face] == 0), "face pixels must be phase 0"
-    assert np.all(labels[~face] == -1), "pixels off the face must be -1"
+    assert np.all(labels[on_face] == 0), "face pixels must be phase 0"
+    assert np.all(labels[~on_face] == -1), "pixels off the face must be -1"
 
 
 @pytest.mark.parametrize("n", [81, 128])
@@ -82,12 +82,12 @@ def test_array_map_replication(k):
     base = Voronoi(25, (0.4, 0.6), 9151).labels(n0)
     geo = ArrayMap(base)
     fine = geo.labels(k * n0)
-    face = face_mask(k * n0)
-    assert np.all(fine[~face] == -1), "off-face pixels must be -1"
-    assert np.all(fine[face] >= 0), "every face pixel of the refined grid must be labelled"
-    coarse_face = face_mask(n0)
+    on_face = face_mask(k * n0)
+    assert np.all(fine[~on_face] == -1), "off-face pixels must be -1"
+    assert np.all(fine[on_face] >= 0), "every face pixel of the refined grid must be labelled"
+    coarse_mask = face_mask(n0)
     replicated = np.kron(base, np.ones((k, k), dtype=int))
-    both = face & np.kron(coarse_face, np.ones((k, k), dtype=bool))
+    both = on_face & np.kron(coarse_mask, np.ones((k, k), dtype=bool))
     assert np.array_equal(fine[both], replicated[both]), "replication must keep the labels"
 
 
@@ -176,6 +176,9 @@ def test_labels_validation():
     inside[16, 16] = -1
     with pytest.raises(ValueError, match="label -1 found on the face"):
         validate_labels(inside, 2)
+    counts = validate_labels(labels, 2, face_mask=face_mask(32))
+    assert counts.tolist() == np.bincount(labels[labels >= 0]).tolist(), \
+        f"counts with the caller's mask: {counts}"
     with pytest.raises(ValueError, match="phase map array: phase label -1 found on the face"):
         ArrayMap(inside)
     gap = np.where(labels == 1, 2, labels)

@@ -13,51 +13,25 @@ import math
 
 import numpy as np
 import pytest
+from conftest import CRITICAL_TILT, FORCE, GEOMETRIES, K1, RADIUS, RODS, wear_problem
 
-from steady.grid import pixel_size
-from steady.halfspace import HalfSpace
-from steady.phases import Homogeneous, Rods, Voronoi
-from steady.solution import solve
+from steady.phases import Voronoi
 from transient import initial_face
-from transient.runin import (
-    HISTORY_UNITS,
-    RunOptions,
-    compare_with_steady,
-    read_run,
-    run_in,
-    write_run,
-)
-from transient.stepping import StepFailure, WearProblem
+from transient.comparison import compare_with_steady
+from transient.output import read_run, write_run
+from transient.problem import StepFailure
+from transient.runin import HISTORY_UNITS, RunOptions, run_in
 
-RADIUS = 4e-3      # m
-E_STAR = 1.3e6     # Pa
-FORCE = 10.0       # N
-K1 = 1e-13         # 1/Pa
-# Tilt beyond which a flat punch lifts off on one side (transient.initial_face.tilted).
-CRITICAL_TILT = FORCE / (4 * RADIUS ** 2 * E_STAR)
-# Five rods of radius 0.25 a: one on the axis, four at 0.6 a on the axes
-# (the arrangement of studies/scenes/rods_*.toml).
-RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
 FAST = RunOptions(tol=1e-3)
-
-
-def setup(geometry, ratios, n, *, exponent=1.0):
-    hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR)
-    labels = geometry.labels(n)
-    face = labels >= 0
-    k = K1 * np.asarray(ratios, dtype=float)
-    wear = np.where(face, k[np.maximum(labels, 0)], 0.0)
-    problem = WearProblem(hs, wear, face, FORCE, RADIUS, exponent=exponent)
-    return hs, labels, k, problem
+VORONOI = GEOMETRIES["voronoi"]
 
 
 def run_and_compare(geometry, ratios, n, *, initial=None, exponent=1.0, options=FAST):
-    hs, labels, k, problem = setup(geometry, ratios, n, exponent=exponent)
+    problem = wear_problem(geometry, ratios, n, exponent=exponent)
     h0 = np.zeros((n, n)) if initial is None else initial(n)
     result = run_in(problem, h0, options)
     assert result.status == "steady", result.message
-    steady = solve(hs, labels, k, FORCE, exponent=exponent)
-    return result, compare_with_steady(result, steady, hs, labels)
+    return result, compare_with_steady(result, problem.solve_steady(), problem)
 
 
 def assert_agrees(result, cmp, what):
@@ -70,11 +44,11 @@ def assert_agrees(result, cmp, what):
 
 
 CASES = {
-    "homogeneous": (Homogeneous(), (1.0,), None),
-    "voronoi_0.3_k10": (Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), None),
-    "voronoi_0.3_k0.01": (Voronoi(64, (0.7, 0.3), 2029), (1.0, 1e-2), None),
+    "homogeneous": (GEOMETRIES["homogeneous"], (1.0,), None),
+    "voronoi_0.3_k10": (VORONOI, (1.0, 10.0), None),
+    "voronoi_0.3_k0.01": (VORONOI, (1.0, 1e-2), None),
     "rods": (RODS, (1.0, 1.7), None),
-    "tilted": (Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0),
+    "tilted": (VORONOI, (1.0, 10.0),
                lambda n: initial_face.tilted(n, RADIUS, 3 * CRITICAL_TILT)),
 }
 
@@ -91,12 +65,12 @@ def test_run_in_reaches_the_steady_face(case):
 
 
 def test_homogeneous_run_in_history_is_physical():
-    result, cmp = run_and_compare(Homogeneous(), (1.0,), 33)
+    result, cmp = run_and_compare("homogeneous", (1.0,), 33)
     h = result.history
     # The flat punch's edge singularity at s = 0: the rim pixels carry the
     # largest pressure, which the run-in removes.
-    assert h["peak_pressure"][0] > 3 * result.mean_pressure, "no edge concentration at s = 0"
-    assert h["peak_pressure"][-1] == pytest.approx(result.mean_pressure, rel=1e-6), \
+    assert h["peak_pressure"][0] > 3 * result.pixel_mean_pressure, "no edge concentration at s = 0"
+    assert h["peak_pressure"][-1] == pytest.approx(result.pixel_mean_pressure, rel=1e-6), \
         "steady pressure of a homogeneous punch is uniform"
     # The first steps are on the fast (pixel) scale, the last ones huge.
     assert h["step"][1] < 10 * result.fast_distance, "first step too large for the edge layer"
@@ -112,7 +86,7 @@ def test_homogeneous_run_in_history_is_physical():
 
 @pytest.mark.parametrize("exponent", [0.5, 2.0])
 def test_power_law_wear_reaches_its_steady_face(exponent):
-    result, cmp = run_and_compare(Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), 32,
+    result, cmp = run_and_compare(VORONOI, (1.0, 10.0), 32,
                                   exponent=exponent)
     assert_agrees(result, cmp, f"m={exponent}")
 
@@ -134,14 +108,14 @@ def test_hard_wear_ratios_and_fill_factors(case):
 
 @pytest.mark.parametrize("ratio", [1e-6, 1e6])
 def test_extreme_wear_ratios(ratio):
-    result, cmp = run_and_compare(Voronoi(64, (0.7, 0.3), 2029), (1.0, ratio), 32)
+    result, cmp = run_and_compare(VORONOI, (1.0, ratio), 32)
     assert_agrees(result, cmp, f"ratio {ratio:g}")
 
 
 def test_direct_jump_reaches_steady_state_in_few_solves():
     # jump_spread = inf: implicit Euler with ds = 1e8 s* from the flat face.
     options = RunOptions(jump_spread=math.inf)
-    result, cmp = run_and_compare(Voronoi(64, (0.7, 0.3), 2029), (1.0, 1e3), 48,
+    result, cmp = run_and_compare(VORONOI, (1.0, 1e3), 48,
                                   options=options)
     assert result.solves <= 3, f"{result.solves} contact solves"
     assert cmp.face_error < 1e-6, f"face error {cmp.face_error:.3g}"
@@ -159,7 +133,7 @@ def test_fine_grids_jump_to_steady(n):
     # Fine grids are the stiff case (fastest relaxation h / (k_max E*)); the
     # implicit jump does not care.
     options = RunOptions(jump_spread=math.inf)
-    result, cmp = run_and_compare(Voronoi(400, (0.7, 0.3), 2029), (1.0, 1e3), n,
+    result, cmp = run_and_compare(GEOMETRIES["voronoi_fine"], (1.0, 1e3), n,
                                   options=options)
     assert_agrees(result, cmp, f"n={n}")
 
@@ -182,7 +156,7 @@ def _same_result(a, b):
 
 
 def test_resume_from_any_checkpoint_is_bitwise_identical(tmp_path):
-    hs, labels, k, problem = setup(Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), 32)
+    problem = wear_problem(VORONOI, (1.0, 10.0), 32)
     options = RunOptions(tol=1e-3, checkpoint_interval=0.0, snapshots=(0.01, 0.5))
     checkpoints = []
     full = run_in(problem, np.zeros((32, 32)), options, on_checkpoint=checkpoints.append)
@@ -192,7 +166,7 @@ def test_resume_from_any_checkpoint_is_bitwise_identical(tmp_path):
         path = tmp_path / f"ckpt{index}.h5"
         write_run(path, checkpoints[index])
         saved, _, _ = read_run(path)
-        _, _, _, fresh = setup(Voronoi(64, (0.7, 0.3), 2029), (1.0, 10.0), 32)
+        fresh = wear_problem(VORONOI, (1.0, 10.0), 32)
         resumed = run_in(fresh, None, options, resume=saved)
         _same_result(full, resumed)
         assert np.array_equal(full.snapshot_height, resumed.snapshot_height, equal_nan=True), \
@@ -206,8 +180,9 @@ def test_run_file_round_trip(tmp_path):
     write_run(path, result, arrays={"phase": RODS.labels(32)}, comparison=cmp)
     back, attrs, arrays = read_run(path)
     _same_result(result, back)
-    assert attrs["format"] == "runin.transient" and attrs["version"] == 1, \
-        "expected attrs['format'] == 'runin.transient' and attrs['version'] == 1"
+    assert attrs["format"] == "runin.transient" and attrs["format_version"] == 2, \
+        f"layout {attrs['format']!r} version {attrs['format_version']!r}, expected " \
+        "'runin.transient' version 2"
     assert back.snapshot_distance.tolist() == pytest.approx(
         [0.0, 0.1 * result.run_in_distance, result.run_in_distance], rel=1e-12), \
         "snapshots not at the requested distances"
@@ -225,7 +200,8 @@ def test_run_file_round_trip(tmp_path):
             "expected f['history/distance'].attrs['units'] == 'm'"
         assert f["comparison"].attrs["face_error"] == cmp.face_error, \
             "expected f['comparison'].attrs['face_error'] == cmp.face_error"
-    assert not (tmp_path / "run.h5.tmp").exists(), "temporary file left behind"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.h5"], \
+        f"temporary file left behind: {sorted(p.name for p in tmp_path.iterdir())}"
 
 
 def test_read_run_rejects_other_files(tmp_path):
@@ -239,7 +215,7 @@ def test_read_run_rejects_other_files(tmp_path):
 
 
 def test_failed_steps_are_retried_smaller():
-    hs, labels, k, problem = setup(RODS, (1.0, 1.7), 32)
+    problem = wear_problem(RODS, (1.0, 1.7), 32)
     real = problem.contact
     calls = {"n": 0}
 
@@ -256,7 +232,7 @@ def test_failed_steps_are_retried_smaller():
 
 
 def test_persistent_failure_stops_with_a_resumable_state():
-    hs, labels, k, problem = setup(RODS, (1.0, 1.7), 32)
+    problem = wear_problem(RODS, (1.0, 1.7), 32)
     real = problem.contact
     calls = {"n": 0}
 
@@ -278,13 +254,13 @@ def test_persistent_failure_stops_with_a_resumable_state():
 
 
 def test_stopped_run_resumes_to_steady():
-    hs, labels, k, problem = setup(RODS, (1.0, 1.7), 32)
+    problem = wear_problem(RODS, (1.0, 1.7), 32)
     stopped = run_in(problem, np.zeros((32, 32)), dataclasses.replace(FAST, max_steps=5))
     assert stopped.status == "stopped" and "max_steps" in stopped.message, \
         "expected stopped.status == 'stopped' and 'max_steps' in stopped.message"
     done = run_in(problem, None, FAST, resume=stopped)
     assert done.status == "steady", done.message
-    straight = run_in(setup(RODS, (1.0, 1.7), 32)[3], np.zeros((32, 32)), FAST)
+    straight = run_in(wear_problem(RODS, (1.0, 1.7), 32), np.zeros((32, 32)), FAST)
     _same_result(straight, done)
 
 

@@ -78,11 +78,41 @@ def test_extra_sections(tmp_path):
     scene = parse_scene(text, tmp_path, extra_sections={"transient": parse_transient})
     assert scene.extra["transient"] == 5, f"extra {scene.extra}"
     assert seen == [tmp_path], f"callable got base_dir {seen}"
+    assert scene.ignored_sections == (), f"a parsed section is not ignored: {scene}"
     with pytest.raises(ValueError, match=r"\[transient\]: steps must be positive, got 0"):
         parse_scene(BASE + "[transient]\nsteps = 0\n", tmp_path,
                     extra_sections={"transient": parse_transient})
-    with pytest.raises(ValueError, match=r"unknown section \[transient\]"):
-        parse_scene(text, tmp_path)
+    with pytest.raises(ValueError, match=r"unknown section \[wear_history\]"):
+        parse_scene(BASE + "[wear_history]\nsteps = 5\n", tmp_path,
+                    extra_sections={"transient": parse_transient})
+
+
+def test_run_in_sections_are_ignored_without_a_parser(tmp_path):
+    """One scene file serves both commands: steady records the run-in sections it skips."""
+    text = (BASE + '[transient]\nscheme = "sdirk2"\nnot_checked_here = 1\n'
+            + '[initial_face]\nkind = "tilted"\nangle = 1e-3\n')
+    scene = parse_scene(text, tmp_path)
+    assert scene.ignored_sections == ("initial_face", "transient"), \
+        f"ignored sections {scene.ignored_sections}"
+    assert dict(scene.extra) == {}, f"nothing parsed: {scene.extra}"
+    plain = parse_scene(BASE, tmp_path)
+    assert plain.ignored_sections == (), f"no run-in section: {plain.ignored_sections}"
+    assert (scene.radius, scene.n, scene.geometry) == (plain.radius, plain.n, plain.geometry), \
+        "the run-in sections must not change the steady scene"
+    # With a parser for one of them, only the other is ignored.
+    scene = parse_scene(text, tmp_path, extra_sections={"initial_face": lambda t, d: t["kind"]})
+    assert scene.ignored_sections == ("transient",), f"{scene.ignored_sections}"
+    assert scene.extra["initial_face"] == "tilted", f"{scene.extra}"
+    with pytest.raises(ValueError, match=r"unknown section \[transients\]"):
+        parse_scene(BASE + "[transients]\nsteps = 5\n", tmp_path)
+    with pytest.raises(ValueError, match=r"\[transient\] must be a table, got 5"):
+        parse_scene("transient = 5\n" + BASE, tmp_path)
+
+
+def test_shipped_run_in_scene_loads_for_steady():
+    scene = load_scene(SCENES / "tilted_transient.toml")
+    assert scene.ignored_sections == ("initial_face", "transient"), \
+        f"ignored sections {scene.ignored_sections}"
 
 
 @pytest.mark.parametrize("old, new, fragment", [

@@ -9,6 +9,7 @@ from steady import reference
 from steady.grid import face_mask, pixel_size, polar
 from steady.halfspace import HalfSpace
 from steady.phases import Homogeneous, Rods, Voronoi
+from steady.pressures import phase_pressures, pressure_field
 from steady.solution import solve
 
 RADIUS = 4e-3  # m
@@ -35,9 +36,9 @@ def test_homogeneous_face_converges_to_eq10():
         res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
         r, _ = polar(n, RADIUS)
         exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
-        face = face_mask(n)
-        relief = exact[face].max() - exact[face].min()
-        errors.append(np.abs(res.face - exact)[face].max() / relief)
+        on_face = face_mask(n)
+        relief = exact[on_face].max() - exact[on_face].min()
+        errors.append(np.abs(res.face - exact)[on_face].max() / relief)
     assert np.all(np.diff(errors) < 0), f"max face error must decrease: {errors}"
     # Measured errors 0.0336 .. 0.0059 and fitted order 0.85: the staircase rim
     # moves the boundary by O(h) where the face has a log-singular slope, so
@@ -78,6 +79,25 @@ def test_load_and_phase_pressures(n):
     assert np.all(res.pressure[~face_mask(n)] == 0), "no pressure off the face"
     assert np.all(np.isnan(res.face[~face_mask(n)])), "face is NaN off the face"
     assert np.all(np.isfinite(res.slope[face_mask(n)])), "slope finite on the face"
+
+
+@pytest.mark.parametrize("n", [63, 64])
+def test_pressure_field_is_the_solver_pressure(n):
+    """Eq. 7 is written once: the field, per-phase values and counts of the solve."""
+    labels = Voronoi(400, (0.25, 0.35, 0.4), 6113).labels(n)
+    k = np.array([1.0e-13, 4.0e-13, 2.5e-14])
+    res = solve(halfspace(n), labels, k, FORCE, exponent=2.0)
+    h = pixel_size(n, RADIUS)
+    field, p, counts = pressure_field(labels, k, FORCE, h * h, exponent=2.0)
+    assert np.array_equal(field, res.pressure), "pressure field differs from the solve"
+    assert np.array_equal(p, res.phase_pressures), "phase pressures differ from the solve"
+    assert np.array_equal(counts / counts.sum(), res.fill_factors), "pixel counts"
+    rows = np.array([k, k[::-1], 3.0 * k])
+    batch = phase_pressures(counts, rows, FORCE, h * h, exponent=2.0)
+    single = [phase_pressures(counts, row, FORCE, h * h, exponent=2.0) for row in rows]
+    assert np.array_equal(batch, single), "rows must equal single calls bit for bit"
+    with pytest.raises(ValueError, match="phase 3 has no pixel"):
+        pressure_field(labels, np.append(k, 1e-13), FORCE, h * h)
 
 
 @pytest.mark.parametrize("m", [0.5, 2.0, 3.0])
@@ -239,8 +259,8 @@ def test_homogeneous_convergence_continues_on_fine_grids():
         res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
         r, _ = polar(n, RADIUS)
         exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
-        face = face_mask(n)
-        errors.append(np.abs(res.face - exact)[face].max() / np.ptp(exact[face]))
+        on_face = face_mask(n)
+        errors.append(np.abs(res.face - exact)[on_face].max() / np.ptp(exact[on_face]))
         gaps.append(reference.cylinder_rms_slope() - res.normalised_rms_slope)
     assert np.all(np.diff(errors) < 0), f"face errors must decrease: {errors}"
     assert np.all(np.diff(gaps) < 0), f"rms gaps must decrease: {gaps}"

@@ -21,48 +21,36 @@ import functools
 import numpy as np
 import pytest
 import scipy.linalg
+from conftest import FORCE, halfspace, wear_problem
 
-from steady.grid import pixel_size
-from steady.halfspace import HalfSpace
-from steady.phases import Voronoi
+from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
-from transient.stepping import (
-    SCHEMES,
-    ExplicitEuler,
-    StepState,
-    WearProblem,
-    get_scheme,
-)
+from transient.stepping import SCHEMES, ExplicitEuler, StepState, get_scheme
 
-RADIUS = 4e-3      # m
-E_STAR = 1.3e6     # Pa
-FORCE = 10.0       # N
-K1 = 1e-13         # 1/Pa
 N_EXACT = 12
 DISTANCE = 0.5     # s*, end of the compared run-in (spread still ~0.3 there)
 
 
 def make_problem(n, ratio, *, exponent=1.0, rtol=1e-13):
-    hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR)
-    labels = Voronoi(9, (0.6, 0.4), 2027).labels(n)
-    face = labels >= 0
-    k = np.array([K1, K1 * ratio])
-    wear = np.where(face, k[np.maximum(labels, 0)], 0.0)
-    problem = WearProblem(hs, wear, face, FORCE, RADIUS, exponent=exponent, contact_rtol=rtol)
-    return hs, labels, problem
+    """The 9-seed Voronoi map (fits n = 12) with wear ratio ``ratio``."""
+    return wear_problem("voronoi_small", (1.0, ratio), n, exponent=exponent,
+                        contact_rtol=rtol)
 
 
 def uniform_pressure_face(problem):
     """``w0 = -K pbar``: the face on which the pressure is uniform."""
-    hs, face = problem.halfspace, problem.face
-    return np.where(face, -hs.displacement(np.where(face, problem.mean_pressure, 0.0)), 0.0)
+    hs, face_mask = problem.halfspace, problem.face_mask
+    return np.where(face_mask, -hs.displacement(np.where(face_mask,
+                                                          problem.pixel_mean_pressure, 0.0)),
+                    0.0)
 
 
 @pytest.fixture(scope="module")
 def exact():
     """Exact face at DISTANCE s* (matrix exponential of the dense system)."""
-    hs, labels, problem = make_problem(N_EXACT, 10.0)
-    face = problem.face
+    problem = make_problem(N_EXACT, 10.0)
+    hs = problem.halfspace
+    face = problem.face_mask
     idx = np.flatnonzero(face)
     size = idx.size
     K = np.empty((size, size))
@@ -73,7 +61,7 @@ def exact():
     G = np.linalg.inv(K)
     G1 = G.sum(axis=1)
     c = G1.sum()
-    D = problem.wear.ravel()[idx]
+    D = problem.coefficient_field.ravel()[idx]
     A = D[:, None] * (np.outer(G1, G1) / c - G)
     b = D * G1 * FORCE / (hs.h ** 2 * c)
     M = np.zeros((size + 1, size + 1))
@@ -93,7 +81,7 @@ def shape_error(result, idx, w_exact):
 
 
 def fixed_run(scheme, steps, h0):
-    _, _, problem = make_problem(N_EXACT, 10.0)
+    problem = make_problem(N_EXACT, 10.0)
     options = RunOptions(scheme=scheme, step=DISTANCE / steps, max_distance=DISTANCE,
                          spread_tol=1e-300, shape_tol=1e-300)
     result = run_in(problem, h0, options)
@@ -112,7 +100,7 @@ ADAPTIVE_BOUND = {1: 1e-3, 2: 1.5e-4}
 @pytest.mark.parametrize("name", sorted(SCHEMES))
 def test_adaptive_scheme_matches_exact_run_in(name, exact):
     h0, idx, w_exact = exact
-    _, _, problem = make_problem(N_EXACT, 10.0)
+    problem = make_problem(N_EXACT, 10.0)
     options = RunOptions(scheme=name, tol=1e-5, max_distance=DISTANCE, spread_tol=1e-300,
                          shape_tol=1e-300)
     result = run_in(problem, h0, options)
@@ -148,12 +136,12 @@ def test_order_of_accuracy(name, exact):
 
 
 def test_explicit_euler_refuses_steps_beyond_stability_limit():
-    _, _, problem = make_problem(16, 100.0)
+    problem = make_problem(16, 100.0)
     h0 = uniform_pressure_face(problem)
     res = problem.contact(h0)
     state = StepState(h0, res.pressure, res.approach)
     limit = problem.stable_step(res.pressure)
-    # The limit is of the order of h / (k_max E*) (PHYSICS.md "Wear").
+    # The limit is of the order of h / (k_max E*) (docs/model.md, "Wear and time integration").
     assert 0.5 < limit / problem.fast_distance < 2.5, \
         f"limit {limit:.3g} m vs h/(k_max E*) {problem.fast_distance:.3g} m"
     with pytest.raises(ValueError, match="stability limit"):
@@ -165,7 +153,7 @@ def test_explicit_euler_refuses_steps_beyond_stability_limit():
 
 
 def test_adaptive_explicit_euler_stays_below_its_limit():
-    _, _, problem = make_problem(16, 100.0)
+    problem = make_problem(16, 100.0)
     result = run_in(problem, uniform_pressure_face(problem),
                     RunOptions(scheme="explicit_euler", tol=1e-2, max_steps=200))
     limit = problem.stable_step(result.pressure)
@@ -177,14 +165,14 @@ def test_adaptive_explicit_euler_stays_below_its_limit():
 def test_huge_implicit_step_is_the_steady_state():
     # (K + ds k) p = d - w: as ds -> infinity, k p -> const (eq. 3-7) with an
     # error of order s* / ds.
-    _, labels, problem = make_problem(16, 1e3)
+    problem = make_problem(16, 1e3)
     h0 = np.zeros((16, 16))
     res0 = problem.contact(h0)
     for ratio in (1e4, 1e8):
         state = StepState(h0, res0.pressure, res0.approach)
         trial = get_scheme("implicit_euler").step(problem, state,
                                                   ratio * problem.run_in_distance)
-        rate = problem.rate(trial.pressure)[problem.face]
+        rate = problem.rate(trial.pressure)[problem.face_mask]
         spread = (rate.max() - rate.min()) / rate.mean()
         assert spread < 10.0 / ratio, f"ds = {ratio:g} s*: spread {spread:.3g}"
 
@@ -196,30 +184,30 @@ def test_unknown_scheme_is_named():
         RunOptions(scheme="rk4")
 
 
-@pytest.mark.parametrize("bad", [0.0, -1e-13, np.nan])
+@pytest.mark.parametrize("bad", [0.0, -1e-13, np.nan, np.inf])
 def test_bad_wear_coefficient_is_named(bad):
-    hs = HalfSpace(8, pixel_size(8, RADIUS), E_STAR)
-    face = np.ones((8, 8), bool)
-    with pytest.raises(ValueError, match="wear coefficients must be positive"):
-        WearProblem(hs, np.full((8, 8), bad), face, FORCE, RADIUS)
+    labels = np.zeros((8, 8), dtype=int)
+    with pytest.raises(ValueError, match="wear coefficients must be positive") as err:
+        WearProblem(halfspace(8), labels, [bad], FORCE, 4e-3)
+    assert repr(float(bad)) in str(err.value), f"bad value not named: {err.value}"
 
 
 @pytest.mark.parametrize("exponent", [0.5, 2.0])
 def test_power_law_implicit_step_solves_the_nonlinear_stage(exponent):
     # w = w0 + ds k P(w)^m exactly (Newton on the linearised shift).
-    _, _, problem = make_problem(16, 10.0, exponent=exponent)
+    problem = make_problem(16, 10.0, exponent=exponent)
     h0 = uniform_pressure_face(problem)
     res0 = problem.contact(h0)
     ds = 0.3 * problem.run_in_distance
     w, res = problem.implicit(h0, ds, res0.pressure)
     # The face is consistent with its own contact pressure ...
     again = problem.contact(w, x0=res.pressure)
-    scale = problem.mean_pressure
+    scale = problem.pixel_mean_pressure
     assert np.max(np.abs(again.pressure - res.pressure)) < 1e-6 * scale, \
         "implicit stage face and pressure disagree"
     # ... and with the stage equation.
-    lhs = (w - h0)[problem.face]
-    rhs = ds * problem.rate(res.pressure)[problem.face]
+    lhs = (w - h0)[problem.face_mask]
+    rhs = ds * problem.rate(res.pressure)[problem.face_mask]
     dev = (lhs - rhs) - np.mean(lhs - rhs)
     assert np.max(np.abs(dev)) < 1e-8 * problem.depth_scale * 1e3, \
         f"stage equation residual {np.max(np.abs(dev)):.3g} m"
@@ -231,12 +219,12 @@ FINE_DISTANCE = 0.3  # s*
 @functools.lru_cache(maxsize=None)
 def fine_run(scheme, steps, exponent):
     """Fixed-step run at n = 32, k2/k1 = 10 (h / (k_max E*) = s*/160), from w0 = -K pbar."""
-    _, _, problem = make_problem(32, 10.0, exponent=exponent)
+    problem = make_problem(32, 10.0, exponent=exponent)
     r = run_in(problem, uniform_pressure_face(problem),
                RunOptions(scheme=scheme, step=FINE_DISTANCE / steps, max_distance=FINE_DISTANCE,
                           spread_tol=1e-300, shape_tol=1e-300))
     assert r.status == "stopped", r.message
-    return (r.height + r.offset)[problem.face], r.depth_scale
+    return (r.height + r.offset)[problem.face_mask], r.depth_scale
 
 
 @pytest.mark.slow

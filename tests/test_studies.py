@@ -78,7 +78,7 @@ def attrs_of(path):
 
 
 def test_fig2_face_matches_eq10(runs):
-    """n = 64: face within 2 % of eq. 10 (f_bar is about 1 .. 1.57); corrected rms near 1."""
+    """N = 64: face within 2 % of eq. 10 (f_bar is about 1 .. 1.57); corrected rms near 1."""
     a = attrs_of(runs["fig2_homogeneous"][1])
     assert a["max_face_error"] < 0.02, f"face error {a['max_face_error']}"
     with h5py.File(runs["fig2_homogeneous"][1], "r") as f:

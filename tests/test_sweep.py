@@ -7,8 +7,8 @@ import h5py
 import numpy as np
 import pytest
 
-from steady.design import collect_voronoi, voronoi_slopes, voronoi_sweep
 from steady.sweep import SweepFile, open_executor, point_key, run_sweep
+from steady.voronoi_sweep import collect_voronoi, voronoi_slopes, voronoi_sweep
 
 SETTINGS = {"grid": 16, "what": "square"}
 

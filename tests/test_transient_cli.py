@@ -11,33 +11,20 @@ import h5py
 import numpy as np
 import pytest
 
-from transient.runin import HISTORY_UNITS, read_run
+from transient.output import read_run
+from transient.runin import HISTORY_UNITS
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
-SCENE = """\
-[punch]
-radius = 0.004
-[load]
-normal_force = 10.0
-[counterbody]
-E_star = 1.3e6
-[grid]
-n = {n}
-[wear]
-coefficients = [1.0e-13, 1.0e-12]
-[phases]
-map = {{ kind = "voronoi", n_seeds = 64, fill_factors = [0.7, 0.3], seed = 2029 }}
-[transient]
-tol = {tol}
-snapshots = [0.1, 1.0]
-{extra}
-"""
 
-
-def write_scene(path, *, n=32, tol=1e-3, extra=""):
-    path.write_text(SCENE.format(n=n, tol=tol, extra=extra))
-    return path
+@pytest.fixture
+def write_scene(scene_file):
+    """The gallery's run-in scene with the tolerance, grid and keys a test asks for."""
+    def write(*, n=32, tol=1e-3, filename="s.toml", coefficients=(1.0e-13, 1.0e-12),
+              **transient):
+        return scene_file("runin", filename=filename, n=n, coefficients=coefficients,
+                          transient={"tol": tol, "snapshots": (0.1, 1.0), **transient})
+    return write
 
 
 def cli(*args, cwd):
@@ -45,8 +32,8 @@ def cli(*args, cwd):
                           capture_output=True, text=True, timeout=600)
 
 
-def test_run_writes_result_and_agreement(tmp_path):
-    scene = write_scene(tmp_path / "s.toml")
+def test_run_writes_result_and_agreement(tmp_path, write_scene):
+    scene = write_scene()
     out = tmp_path / "run.h5"
     png = tmp_path / "run.png"
     proc = cli(scene, "-o", out, "--plot", png, cwd=tmp_path)
@@ -58,8 +45,8 @@ def test_run_writes_result_and_agreement(tmp_path):
         "expected 'face shape error' in proc.stdout and 'rms slope' in proc.stdout"
     assert png.stat().st_size > 10000, "no figure"
     with h5py.File(out) as f:
-        assert f.attrs["format"] == "runin.transient" and f.attrs["version"] == 1, \
-            "expected f.attrs['format'] == 'runin.transient' and f.attrs['version'] == 1"
+        assert f.attrs["format"] == "runin.transient" and f.attrs["format_version"] == 2, \
+            f"layout {f.attrs['format']!r} version {f.attrs['format_version']!r}"
         assert f.attrs["status"] == "steady", "expected f.attrs['status'] == 'steady'"
         assert f["worn_depth"].attrs["units"] == "m", \
             "expected f['worn_depth'].attrs['units'] == 'm'"
@@ -78,8 +65,8 @@ def test_run_writes_result_and_agreement(tmp_path):
         assert "[transient]" in f.attrs["scene"], "expected '[transient]' in f.attrs['scene']"
 
 
-def test_existing_output_needs_force_or_resume(tmp_path):
-    scene = write_scene(tmp_path / "s.toml")
+def test_existing_output_needs_force_or_resume(tmp_path, write_scene):
+    scene = write_scene()
     out = tmp_path / "run.h5"
     out.write_bytes(b"precious")
     proc = cli(scene, "-o", out, cwd=tmp_path)
@@ -92,26 +79,24 @@ def test_existing_output_needs_force_or_resume(tmp_path):
     assert proc.returncode == 0, proc.stderr
 
 
-@pytest.mark.parametrize("extra,match", [
-    ("bogus = 1", "unknown key 'bogus'"),
-    ('scheme = "rk4"', "unknown scheme 'rk4'"),
-    ("tol = -1.0", "tol must be a positive"),
+@pytest.mark.parametrize("keys,match", [
+    ({"bogus": 1}, "unknown key 'bogus'"),
+    ({"scheme": "rk4"}, "unknown scheme 'rk4'"),
+    ({"tol": -1.0}, "tol must be a positive"),
 ])
-def test_bad_transient_section(tmp_path, extra, match):
-    text = SCENE.format(n=32, tol=1e-3, extra="").replace("tol = 0.001\n", "") + extra + "\n"
-    scene = tmp_path / "s.toml"
-    scene.write_text(text)
+def test_bad_transient_section(tmp_path, scene_file, keys, match):
+    scene = scene_file("runin", transient=keys)
     proc = cli(scene, "-o", tmp_path / "run.h5", cwd=tmp_path)
     assert proc.returncode == 2, proc.stdout
     assert proc.stderr.startswith("error: ") and match in proc.stderr, proc.stderr
     assert "Traceback" not in proc.stderr, "traceback on a usage error"
 
 
-def test_bad_initial_face_section(tmp_path):
-    scene = write_scene(tmp_path / "s.toml",
-                        extra='[initial_face]\nkind = "tilted"\nangle = 2.0\n')
+def test_bad_initial_face_section(tmp_path, scene_file):
+    scene = scene_file("runin", initial_face={"kind": "tilted", "angle": 2.0})
     proc = cli(scene, "-o", tmp_path / "run.h5", cwd=tmp_path)
     assert proc.returncode == 2 and "angle must lie in [0, pi/2)" in proc.stderr, proc.stderr
+    assert "[initial_face]" in proc.stderr, f"section not named: {proc.stderr!r}"
 
 
 def test_bad_command_line(tmp_path):
@@ -125,8 +110,8 @@ def test_bad_command_line(tmp_path):
         "expected proc.returncode == 2 and proc.stderr.startswith('error: ')"
 
 
-def test_stopped_run_exits_1_and_resumes(tmp_path):
-    scene = write_scene(tmp_path / "s.toml")
+def test_stopped_run_exits_1_and_resumes(tmp_path, write_scene):
+    scene = write_scene()
     out = tmp_path / "run.h5"
     proc = cli(scene, "-o", out, "--max-steps", "4", cwd=tmp_path)
     assert proc.returncode == 1 and "continue with --resume" in proc.stderr, proc.stderr
@@ -136,21 +121,20 @@ def test_stopped_run_exits_1_and_resumes(tmp_path):
     assert read_run(out)[0].status == "steady", "expected read_run(out)[0].status == 'steady'"
 
 
-def test_resume_refuses_another_scene(tmp_path):
-    scene = write_scene(tmp_path / "s.toml")
+def test_resume_refuses_another_scene(tmp_path, write_scene):
+    scene = write_scene()
     out = tmp_path / "run.h5"
     assert cli(scene, "-o", out, "--max-steps", "2", cwd=tmp_path).returncode == 1, \
         "expected cli(scene, '-o', out, '--max-steps', '2', cwd=tmp_path).returncode == 1"
-    other = tmp_path / "o.toml"
-    other.write_text(scene.read_text().replace("1.0e-12]", "2.0e-12]"))
+    other = write_scene(filename="o.toml", coefficients=(1.0e-13, 2.0e-12))
     proc = cli(other, "-o", out, "--resume", cwd=tmp_path)
     assert proc.returncode == 2 and "wear coefficients" in proc.stderr, proc.stderr
 
 
-def test_sigkill_at_any_moment_then_resume_is_bitwise_identical(tmp_path):
+def test_sigkill_at_any_moment_then_resume_is_bitwise_identical(tmp_path, write_scene):
     # A run long enough to be killed mid-way (n = 48, tol 1e-5: ~300 steps),
     # checkpointed after every step.
-    scene = write_scene(tmp_path / "s.toml", n=48, tol=1e-5)
+    scene = write_scene(n=48, tol=1e-5)
     reference = tmp_path / "reference.h5"
     proc = cli(scene, "-o", reference, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
@@ -201,8 +185,8 @@ def test_sigkill_at_any_moment_then_resume_is_bitwise_identical(tmp_path):
         assert np.array_equal(final.history[name], ref.history[name]), name
 
 
-def test_resume_of_a_finished_run_is_a_no_op(tmp_path):
-    scene = write_scene(tmp_path / "s.toml")
+def test_resume_of_a_finished_run_is_a_no_op(tmp_path, write_scene):
+    scene = write_scene()
     out = tmp_path / "run.h5"
     assert cli(scene, "-o", out, cwd=tmp_path).returncode == 0, \
         "expected cli(scene, '-o', out, cwd=tmp_path).returncode == 0"

@@ -6,41 +6,52 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 
 - :mod:`transient.contact` -- unilateral contact under load control (also
   the implicit wear step, with a diagonal shift);
-- :mod:`transient.preconditioners` -- preconditioners of the contact solver;
-- :mod:`transient.initial_face` -- initial face shapes;
+- :mod:`transient.preconditioners` -- registered preconditioners of the
+  contact solver;
+- :mod:`transient.initial_face` -- registered initial face shapes;
+- :mod:`transient.problem` -- the discretised wear problem and its factory
+  from a scene;
 - :mod:`transient.stepping` -- the registered time integrators;
-- :mod:`transient.runin` -- the run loop, steady-state detection, history,
-  checkpoints and the comparison with the steady face;
-- :mod:`transient.scene` -- the ``[transient]`` and ``[initial_face]`` scene sections.
+- :mod:`transient.control` -- step control and stop tests;
+- :mod:`transient.diagnostics` -- what the history records of the face;
+- :mod:`transient.runin` -- the run loop, steady-state detection, history
+  and checkpoints;
+- :mod:`transient.comparison` -- agreement with the steady face;
+- :mod:`transient.output` -- HDF5 run files;
+- :mod:`transient.scene` -- the ``[transient]`` and ``[initial_face]`` scene
+  sections;
+- :mod:`transient.plotting` -- figures of run files (imported on demand: it
+  loads matplotlib).
 """
 
-from .contact import PRECONDITIONERS, ContactResult, solve_contact
-from .initial_face import crowned, flat, from_array, from_file, tilted
+from .comparison import SteadyComparison, compare_with_steady
+from .contact import ContactResult, solve_contact
+from .control import StepController, StopTests
+from .diagnostics import face_rms_slope, wear_rate_spread
+from .initial_face import (
+    INITIAL_FACES,
+    crowned,
+    flat,
+    from_array,
+    from_file,
+    initial_height,
+    register_initial_face,
+    tilted,
+)
+from .output import FORMAT, FORMAT_VERSION, read_run, write_run
 from .preconditioners import (
+    PRECONDITIONERS,
     AMGPreconditioner,
     FourierPreconditioner,
     JacobiPreconditioner,
-    influence_quadrant,
-    influence_symbol,
+    make_preconditioner,
+    register_preconditioner,
 )
-from .runin import (
-    FORMAT,
-    HISTORY_UNITS,
-    VERSION,
-    RunOptions,
-    RunResult,
-    SteadyComparison,
-    compare_with_steady,
-    face_rms_slope,
-    read_run,
-    run_in,
-    wear_rate_spread,
-    write_run,
-)
+from .problem import StepFailure, WearProblem
+from .runin import HISTORY_UNITS, RunOptions, RunResult, run_in
 from .scene import (
     InitialFace,
     TransientSettings,
-    initial_height,
     load_transient_scene,
     parse_initial_face,
     parse_transient,
@@ -52,10 +63,8 @@ from .stepping import (
     ExplicitEuler,
     ImplicitEuler,
     Scheme,
-    StepFailure,
     StepState,
     Trial,
-    WearProblem,
     get_scheme,
     register_scheme,
 )
@@ -66,8 +75,10 @@ __all__ = [
     "ContactResult",
     "ExplicitEuler",
     "FORMAT",
+    "FORMAT_VERSION",
     "FourierPreconditioner",
     "HISTORY_UNITS",
+    "INITIAL_FACES",
     "ImplicitEuler",
     "InitialFace",
     "JacobiPreconditioner",
@@ -78,11 +89,12 @@ __all__ = [
     "SDIRK2",
     "Scheme",
     "SteadyComparison",
+    "StepController",
     "StepFailure",
     "StepState",
+    "StopTests",
     "TransientSettings",
     "Trial",
-    "VERSION",
     "WearProblem",
     "compare_with_steady",
     "crowned",
@@ -91,13 +103,14 @@ __all__ = [
     "from_array",
     "from_file",
     "get_scheme",
-    "influence_quadrant",
-    "influence_symbol",
     "initial_height",
     "load_transient_scene",
+    "make_preconditioner",
     "parse_initial_face",
     "parse_transient",
     "read_run",
+    "register_initial_face",
+    "register_preconditioner",
     "register_scheme",
     "run_in",
     "solve_contact",

@@ -32,11 +32,7 @@ import sys
 
 import numpy as np
 
-__all__ = [
-    "build_parser",
-    "main",
-    "plot_run",
-]
+__all__ = ["build_parser", "main"]
 
 logger = logging.getLogger(__name__)
 
@@ -102,13 +98,13 @@ def _options(settings, args):
     return dataclasses.replace(settings.options, **overrides)
 
 
-def _inputs(scene, labels):
+def _inputs(scene, problem):
     """Root attributes and datasets that identify the run's inputs."""
     attrs = {"scene": scene.text, "scene_path": str(scene.source_path or ""),
-             "n": scene.n, "radius": scene.radius, "normal_force": scene.normal_force,
+             "n": problem.n, "radius": scene.radius, "normal_force": scene.normal_force,
              "E_star": scene.E_star, "exponent": scene.exponent,
-             "wear_coefficients": np.asarray(scene.wear_coefficients, dtype=float)}
-    return attrs, {"phase": labels}
+             "wear_coefficients": problem.wear_coefficients}
+    return attrs, {"phase": problem.labels}
 
 
 def _check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0):
@@ -122,69 +118,9 @@ def _check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored,
                          f"({stored_attrs.get('wear_coefficients')!r}); use --force")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
-    face = arrays["phase"] >= 0
-    if not np.array_equal(stored.initial_height[face], h0[face]):
+    face_mask = arrays["phase"] >= 0
+    if not np.array_equal(stored.initial_height[face_mask], h0[face_mask]):
         raise ValueError(f"{str(path)!r} was run from another initial face; use --force")
-
-
-def plot_run(run_path, png_path):
-    """Draw a run file: history (rms slope, spread) and the final face and pressure.
-
-    Parameters
-    ----------
-    run_path : path-like
-        HDF5 file of ``python -m transient``.
-    png_path : path-like
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .runin import read_run
-
-    result, attrs, arrays = read_run(run_path)
-    h = result.history
-    s = h["distance"] / result.run_in_distance
-    fig, ax = plt.subplots(2, 2, figsize=(10, 8))
-    pos = s > 0
-    a = ax[0, 0]
-    a.semilogx(s[pos], h["normalised_rms_slope"][pos], ".-", label="K p, exact kernel")
-    if "rms_slope_fd" in h:
-        a.semilogx(s[pos], h["rms_slope_fd"][pos] / result.reference_slope, "--",
-                   label="worn face, finite differences")
-    if "steady_rms_slope" in attrs:
-        a.axhline(attrs["steady_rms_slope"] / result.reference_slope, color="k", ls=":",
-                  label="steady (eq. 9)")
-    a.legend(fontsize=8)
-    a.set_xlabel("sliding distance / s*")
-    a.set_ylabel("rms slope / grad_f0")
-    a.set_title(f"{result.scheme}: {result.steps} steps, {result.solves} contact solves")
-    a = ax[0, 1]
-    a.loglog(s[pos], np.maximum(h["spread"][pos], 1e-17), ".-", label="wear-rate spread")
-    sr = h["shape_rate"][pos]
-    a.loglog(s[pos], np.maximum(sr, 1e-17), ".-", label="shape change (f* per s*)")
-    a.set_xlabel("sliding distance / s*")
-    a.legend()
-    a.set_title(f"status: {result.status}")
-    n = result.height.shape[0]
-    radius = float(attrs.get("radius", 1.0))
-    ext = [-radius * 1e3, radius * 1e3, -radius * 1e3, radius * 1e3]
-    face = result.face_height - np.nanmin(result.face_height)
-    im = ax[1, 0].imshow((face / result.depth_scale).T, origin="lower", extent=ext)
-    fig.colorbar(im, ax=ax[1, 0], label="face height / f*")
-    ax[1, 0].set_title(f"final face (n = {n})")
-    pr = np.where(np.isfinite(result.worn_depth), result.pressure / result.mean_pressure,
-                  np.nan)
-    im = ax[1, 1].imshow(pr.T, origin="lower", extent=ext)
-    fig.colorbar(im, ax=ax[1, 1], label="pressure / pbar")
-    ax[1, 1].set_title("final pressure")
-    for a in ax[1]:
-        a.set_xlabel("x (mm)")
-        a.set_ylabel("y (mm)")
-    fig.tight_layout()
-    fig.savefig(png_path, dpi=110)
-    plt.close(fig)
 
 
 class _Progress:
@@ -210,13 +146,11 @@ class _Progress:
 
 def run(args):
     """Do the work for parsed arguments; return the exit status."""
-    from steady.halfspace import HalfSpace
-    from steady.grid import pixel_size
-    from steady.solution import solve
-
-    from .runin import compare_with_steady, read_run, run_in, write_run
-    from .scene import initial_height, load_transient_scene
-    from .stepping import WearProblem
+    from .comparison import compare_with_steady
+    from .output import read_run, write_run
+    from .problem import WearProblem
+    from .runin import run_in
+    from .scene import load_transient_scene
 
     scene, settings, initial = load_transient_scene(args.scene)
     options = _options(settings, args)
@@ -226,16 +160,9 @@ def run(args):
     if out.exists() and not (args.resume or args.force):
         raise ValueError(f"{str(out)!r} exists; use --resume to continue it or --force to "
                          f"start over")
-    n = scene.n
-    labels = scene.geometry.labels(n)
-    halfspace = HalfSpace(n, pixel_size(n, scene.radius), scene.E_star)
-    face = labels >= 0
-    k = np.asarray(scene.wear_coefficients, dtype=float)
-    wear = np.where(face, k[np.maximum(labels, 0)], 0.0)
-    problem = WearProblem(halfspace, wear, face, scene.normal_force, scene.radius,
-                          exponent=scene.exponent, contact_rtol=settings.contact_rtol)
-    h0 = initial_height(initial, n, scene.radius)
-    attrs, arrays = _inputs(scene, labels)
+    problem = WearProblem.from_scene(scene)
+    h0 = initial.height(problem.n, scene.radius)
+    attrs, arrays = _inputs(scene, problem)
 
     resume = None
     if args.resume and out.exists() and not args.force:
@@ -256,8 +183,7 @@ def run(args):
         bar.close()
     comparison = None
     if result.success:
-        steady = solve(halfspace, labels, k, scene.normal_force, exponent=scene.exponent)
-        comparison = compare_with_steady(result, steady, halfspace, labels)
+        comparison = compare_with_steady(result, problem.solve_steady(), problem)
         run_attrs.update({"steady_rms_slope": comparison.steady_rms_slope})
     write_run(out, result, attrs=run_attrs, arrays=arrays, comparison=comparison)
     print(f"{result.status}: {result.message}")
@@ -270,6 +196,8 @@ def run(args):
         print("agreement with the steady face (eq. 9):")
         print(comparison.summary())
     if args.plot is not None:
+        from .plotting import plot_run  # deferred: matplotlib is slow to import
+
         plot_run(out, args.plot)
         print(f"figure: {args.plot}")
     if not result.success:

@@ -1,6 +1,6 @@
 """Unilateral normal contact of the punch face on the elastic half-space, load control.
 
-The face can carry pressure on the pixels of ``face``; its height field
+The face can carry pressure on the pixels of ``face_mask``; its height field
 ``h(x)`` (m, larger = recessed, farther from the counter-body) holds the
 worn depth plus the initial shape.  Under the normal force ``F`` the
 pressure ``p`` and the rigid approach ``d`` solve the linear
@@ -42,19 +42,11 @@ import numbers
 
 import numpy as np
 
-from transient.preconditioners import (
-    AMGPreconditioner,
-    FourierPreconditioner,
-    JacobiPreconditioner,
-    influence_quadrant,
-)
+from .preconditioners import PRECONDITIONERS, make_preconditioner
 
-__all__ = ["ContactResult", "PRECONDITIONERS", "solve_contact"]
+__all__ = ["ContactResult", "solve_contact"]
 
 logger = logging.getLogger(__name__)
-
-#: Names accepted by ``solve_contact(preconditioner=...)``.
-PRECONDITIONERS = ("amg", "auto", "fourier", "fourier-padded", "jacobi", "none")
 
 # Pixels entering or leaving the active set up to this count have their
 # displacement change summed directly (one n x n gather each, a few per cent
@@ -123,7 +115,7 @@ class _Operator:
 
     def columns(self, ii, jj, values):
         """``A`` applied to a pressure that is ``values`` on pixels ``(ii, jj)``, else 0."""
-        q, ar = influence_quadrant(self.halfspace), self._arange
+        q, ar = self.halfspace.influence_quadrant, self._arange
         u = np.zeros((self.halfspace.n, self.halfspace.n))
         for i, j, v in zip(ii, jj, values):
             u += v * q[np.abs(ar - i)][:, np.abs(ar - j)]
@@ -132,7 +124,7 @@ class _Operator:
         return u
 
 
-def _initial_pressure(height, face, force, halfspace):
+def _initial_pressure(height, on_face, force, halfspace):
     """Cold start: Hertz-like pressure on the pixels a rigid estimate puts in contact.
 
     For a sphere, the contact region ``dh < d / 2`` (``dh = h - min h``)
@@ -141,9 +133,9 @@ def _initial_pressure(height, face, force, halfspace):
     of any face gives a start of the right extent; for a flat face it is
     uniform.  Unnormalised.
     """
-    dh_face = height[face] - height[face].min()
+    dh_face = height[on_face] - height[on_face].min()
     if not dh_face.any():
-        return face.astype(float)
+        return on_face.astype(float)
     dh = np.sort(dh_face)
     count = np.arange(1, dh.size + 1)
     c = np.sqrt(count * halfspace.h**2 / np.pi)
@@ -151,9 +143,9 @@ def _initial_pressure(height, face, force, halfspace):
     # First set size whose half-approach does not reach the next pixel's height.
     k = min(int(np.argmax(half_approach <= np.append(dh[1:], np.inf))), dh.size - 1)
     level = max(float(half_approach[k]), float(dh[k]))
-    excess = np.where(face, level - (height - height[face].min()), 0.0)
-    if np.all(excess[face] >= 0.5 * level):
-        return face.astype(float)
+    excess = np.where(on_face, level - (height - height[on_face].min()), 0.0)
+    if np.all(excess[on_face] >= 0.5 * level):
+        return on_face.astype(float)
     return np.sqrt(np.maximum(excess, 0.0))
 
 
@@ -164,31 +156,7 @@ def _check_field(name, value, shape):
     return arr
 
 
-def _make_preconditioner(name, halfspace, face, shift):
-    if name == "auto":
-        name = "fourier"
-        # A uniform shift keeps the Fourier symbol exact.  A non-uniform one
-        # that exceeds a few self-influences K_00 everywhere makes the problem
-        # nearly diagonal: the free Jacobi preconditioner then needs about as
-        # many iterations as the shift-aware Fourier one (docs/benchmarks.md).
-        if shift is not None:
-            s_face = shift[face]
-            if s_face.max() > s_face.min() and s_face.min() >= 3 * halfspace.self_influence:
-                name = "jacobi"
-    if name == "none":
-        return None
-    if name == "fourier":
-        return FourierPreconditioner(halfspace, shift, face=face)
-    if name == "fourier-padded":
-        return FourierPreconditioner(halfspace, shift, face=face, padded=True)
-    if name == "jacobi":
-        return JacobiPreconditioner(halfspace, shift)
-    if name == "amg":
-        return AMGPreconditioner(halfspace, face, shift)
-    raise ValueError(f"preconditioner must be one of {PRECONDITIONERS}, got {name!r}")
-
-
-def solve_contact(halfspace, face, height, normal_force, *, shift=None, x0=None,
+def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=None,
                   rtol=1e-8, atol=0.0, maxiter=None, preconditioner="auto", callback=None):
     """Contact pressure and rigid approach of the face under a normal force.
 
@@ -199,8 +167,8 @@ def solve_contact(halfspace, face, height, normal_force, *, shift=None, x0=None,
     ----------
     halfspace : steady.halfspace.HalfSpace
         The elastic half-space operator on the ``n x n`` grid.
-    face : ndarray of bool, shape (n, n)
-        Pixels that can carry pressure; at least one.
+    face_mask : ndarray of bool, shape (n, n)
+        Pixels of the face, which can carry pressure; at least one.
     height : ndarray, shape (n, n), m
         Height of the face, larger = farther from the counter-body (worn
         depth plus initial shape).  Must be finite on the face; values off
@@ -268,17 +236,17 @@ def solve_contact(halfspace, face, height, normal_force, *, shift=None, x0=None,
     """
     n = int(halfspace.n)
     shape = (n, n)
-    face = np.asarray(face)
-    if face.shape != shape:
-        raise ValueError(f"face must have shape {shape}, got {face.shape}")
-    if face.dtype != bool:
-        raise ValueError(f"face must be a boolean mask, got dtype {face.dtype}")
-    n_face = int(face.sum())
+    on_face = np.asarray(face_mask)
+    if on_face.shape != shape:
+        raise ValueError(f"face_mask must have shape {shape}, got {on_face.shape}")
+    if on_face.dtype != bool:
+        raise ValueError(f"face_mask must be a boolean mask, got dtype {on_face.dtype}")
+    n_face = int(on_face.sum())
     if n_face == 0:
         raise ValueError("face has no pixel: nothing can carry the load")
     height = _check_field("height", height, shape)
-    if not np.all(np.isfinite(height[face])):
-        bad = int((~np.isfinite(height[face])).sum())
+    if not np.all(np.isfinite(height[on_face])):
+        bad = int((~np.isfinite(height[on_face])).sum())
         raise ValueError(f"height must be finite on the face, got {bad} non-finite values")
     if not isinstance(normal_force, numbers.Real) and np.ndim(normal_force) != 0:
         raise ValueError(f"normal_force must be a scalar in N, got {normal_force!r}")
@@ -287,17 +255,17 @@ def solve_contact(halfspace, face, height, normal_force, *, shift=None, x0=None,
         raise ValueError(f"normal_force must be finite and non-negative, got {normal_force!r} N")
     if shift is not None:
         shift = _check_field("shift", shift, shape)
-        s_face = shift[face]
+        s_face = shift[on_face]
         if not np.all(np.isfinite(s_face)):
             raise ValueError("shift must be finite on the face")
         if s_face.min() < 0:
             raise ValueError(f"shift must be non-negative, got min {s_face.min()!r} m/Pa")
-        shift = np.where(face, shift, 0.0)
+        shift = np.where(on_face, shift, 0.0)
         if not shift.any():
             shift = None
     if x0 is not None:
         x0 = _check_field("x0", x0, shape)
-        if not np.all(np.isfinite(x0[face])):
+        if not np.all(np.isfinite(x0[on_face])):
             raise ValueError("x0 must be finite on the face")
     for name, tol in (("rtol", rtol), ("atol", atol)):
         if not (np.isfinite(tol) and tol >= 0):
@@ -310,31 +278,31 @@ def solve_contact(halfspace, face, height, normal_force, *, shift=None, x0=None,
         raise ValueError(f"maxiter must be a positive integer, got {maxiter!r}")
     maxiter = int(maxiter)
     if preconditioner not in PRECONDITIONERS:
-        raise ValueError(
-            f"preconditioner must be one of {PRECONDITIONERS}, got {preconditioner!r}")
+        raise ValueError(f"preconditioner must be one of {sorted(PRECONDITIONERS)}, "
+                         f"got {preconditioner!r}")
 
     area = halfspace.h**2
     operator = _Operator(halfspace, shift)
-    h_face = np.where(face, height, 0.0)
+    h_face = np.where(on_face, height, 0.0)
 
     if force == 0.0:
         zero = np.zeros(shape)
-        return ContactResult(zero, float(h_face[face].min()), zero.copy(), 0.0, 0, 0.0,
+        return ContactResult(zero, float(h_face[on_face].min()), zero.copy(), 0.0, 0, 0.0,
                              np.zeros(1), True, "zero load: no pressure")
 
-    precondition = _make_preconditioner(preconditioner, halfspace, face, shift)
+    precondition = make_preconditioner(preconditioner, halfspace, on_face, shift)
 
     # Initial pressure: the warm start if it carries load, else a rigid estimate.
     p = np.zeros(shape)
     if x0 is not None:
-        p = np.where(face & (x0 > 0), x0, 0.0)
+        p = np.where(on_face & (x0 > 0), x0, 0.0)
     if p.sum() <= 0:
-        p = _initial_pressure(h_face, face, force, halfspace)
+        p = _initial_pressure(h_face, on_face, force, halfspace)
     p *= force / (area * p.sum())
     u = operator(p)
 
     # Work arrays; the loop updates in place.
-    face_f = face.astype(float)
+    face_f = on_face.astype(float)
     t = np.zeros(shape)
     g = np.empty(shape)
     r = np.empty(shape)

@@ -6,17 +6,98 @@ metres, with the convention of :func:`transient.contact.solve_contact`:
 larger = farther from the counter-body (recessed).  Only differences
 matter to the contact problem; the fields below are zero at the first
 point of the ideal (continuum) face to touch.
+
+Every shape is registered by the kind the scene section ``[initial_face]``
+names (:data:`INITIAL_FACES`, :func:`register_initial_face`), with the
+parameters it takes; :func:`initial_height` builds one by kind.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import numpy as np
 
 from steady.grid import face_mask, pixel_centres
 
-__all__ = ["crowned", "flat", "from_array", "from_file", "tilted"]
+__all__ = [
+    "INITIAL_FACES",
+    "InitialFaceKind",
+    "crowned",
+    "flat",
+    "from_array",
+    "from_file",
+    "initial_height",
+    "register_initial_face",
+    "tilted",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class InitialFaceKind:
+    """A registered initial face shape.
+
+    Attributes
+    ----------
+    kind : str
+        Its name in ``[initial_face] kind``.
+    build : callable
+        ``build(n, radius, **parameters)``, returns the height, shape (n, n), m.
+    required, optional : tuple of str
+        Its parameters (``path`` is a file name; every other one a number).
+    """
+
+    kind: str
+    build: object
+    required: tuple = ()
+    optional: tuple = ()
+
+
+#: Registered initial face shapes by kind (see :func:`register_initial_face`).
+INITIAL_FACES = {}
+
+
+def register_initial_face(kind, *, required=(), optional=()):
+    """Register ``build(n, radius, **parameters)`` as the initial face ``kind`` (a decorator)."""
+    def decorate(build):
+        INITIAL_FACES[kind] = InitialFaceKind(kind, build, tuple(required), tuple(optional))
+        return build
+    return decorate
+
+
+def initial_height(kind, n, radius, **parameters):
+    """Initial face height of a registered kind, checked.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`INITIAL_FACES`.
+    n : int
+        Pixels across the diameter.
+    radius : float, m
+    **parameters
+        The kind's parameters.
+
+    Returns
+    -------
+    ndarray, shape (n, n), m
+
+    Examples
+    --------
+    >>> h = initial_height("tilted", 16, 4e-3, angle=1e-3)
+    >>> h.shape, float(h.min()) >= 0.0
+    ((16, 16), True)
+    """
+    try:
+        spec = INITIAL_FACES[kind]
+    except KeyError:
+        raise ValueError(f"initial face kind must be one of {sorted(INITIAL_FACES)}, "
+                         f"got {kind!r}") from None
+    h = np.asarray(spec.build(n, radius, **parameters), dtype=float)
+    if h.shape != (n, n):
+        raise ValueError(f"initial face has shape {h.shape}, expected {(n, n)}")
+    return h
 
 
 def _check_grid(n, radius):
@@ -32,6 +113,7 @@ def _coordinates(n, radius):
     return np.meshgrid(x, x, indexing="ij")
 
 
+@register_initial_face("flat")
 def flat(n, radius):
     """Flat face.
 
@@ -51,6 +133,7 @@ def flat(n, radius):
     return np.zeros((n, n))
 
 
+@register_initial_face("tilted", required=("angle",), optional=("azimuth",))
 def tilted(n, radius, angle, azimuth=0.0):
     """Flat face tilted by ``angle`` so that it recedes towards ``azimuth``.
 
@@ -82,6 +165,7 @@ def tilted(n, radius, angle, azimuth=0.0):
     return np.tan(angle) * (X * np.cos(azimuth) + Y * np.sin(azimuth) + radius)
 
 
+@register_initial_face("crowned", required=("sphere_radius",))
 def crowned(n, radius, sphere_radius):
     """Spherical cap: the face crowned to a sphere of radius ``sphere_radius``.
 
@@ -159,3 +243,9 @@ def from_file(path, n):
         raise ValueError(f"height file must be a .npy file, got {path!r}")
     values = np.load(path, allow_pickle=False)
     return from_array(values, n)
+
+
+@register_initial_face("file", required=("path",))
+def _file(n, radius, path):
+    """Height field of a ``.npy`` file (the scene's ``kind = "file"``)."""
+    return from_file(path, n)

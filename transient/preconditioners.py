@@ -17,7 +17,12 @@ needs.
   limit ``shift >> self-influence``.
 - :class:`AMGPreconditioner`: one smoothed-aggregation V-cycle (pyamg) on
   a sparse surrogate of ``A`` (the influence kernel truncated to a few
-  pixels, plus the shift).  Kept for comparison; needs :mod:`pyamg`.
+  pixels, plus the shift).  Kept for comparison; needs the optional extra
+  ``runin[amg]``.
+
+Every preconditioner is registered by name (:data:`PRECONDITIONERS`,
+:func:`register_preconditioner`); :func:`make_preconditioner` builds one
+for a contact problem, and ``"auto"`` chooses among the others.
 
 References
 ----------
@@ -29,86 +34,60 @@ J. Comput. Phys. 257 (2014) 333-351, doi:10.1016/j.jcp.2013.10.005.
 from __future__ import annotations
 
 import logging
-import weakref
 
 import numpy as np
 import scipy.fft
 import scipy.sparse
 
-
 __all__ = [
     "AMGPreconditioner",
     "FourierPreconditioner",
     "JacobiPreconditioner",
-    "influence_quadrant",
-    "influence_symbol",
+    "PRECONDITIONERS",
+    "make_preconditioner",
+    "register_preconditioner",
 ]
 
 logger = logging.getLogger(__name__)
 
+#: Preconditioner factories by name, ``factory(halfspace, face_mask, shift)``
+#: (see :func:`register_preconditioner`); ``"none"`` maps to None.
+PRECONDITIONERS = {"none": None}
 
-# Kernels per half-space, built on first use and dropped with the half-space.
-_KERNELS = weakref.WeakKeyDictionary()
-
-
-def _kernels(halfspace):
-    """``(quadrant (n+1, n+1), symbol (2n, n+1))`` of a half-space, cached."""
-    key = (halfspace.n, halfspace.h, halfspace.E_star)
-    cached = _KERNELS.get(halfspace)
-    if cached is not None and cached[0] == key:
-        return cached[1], cached[2]
-    quadrant = halfspace.influence_quadrant()
-    quadrant.flags.writeable = False
-    symbol = halfspace.influence_symbol
-    _KERNELS[halfspace] = (key, quadrant, symbol)
-    return quadrant, symbol
+# A non-uniform shift at least this many self-influences K_00 on every face
+# pixel makes the operator nearly diagonal: "auto" then takes Jacobi, which
+# needs about as many iterations as the Fourier blend and costs nothing
+# (docs/benchmarks.md, "Contact solver").
+_DIAGONAL_DOMINANCE = 3.0
 
 
-def _inverse_symbol(halfspace, padded):
-    """``1 / influence_symbol`` (``padded``) or of its ``n``-periodic aliasing, cached."""
-    _kernels(halfspace)
-    cached = _KERNELS[halfspace]
-    if len(cached) < 4:
-        symbol = cached[2]
-        inverse = (1.0 / symbol, 1.0 / np.ascontiguousarray(symbol[::2, ::2]))
-        for array in inverse:
-            array.flags.writeable = False
-        cached = cached + inverse
-        _KERNELS[halfspace] = cached
-    return cached[3] if padded else cached[4]
+def register_preconditioner(name):
+    """Register a preconditioner factory under ``name`` (a decorator).
 
-
-def influence_quadrant(halfspace):
-    """Influence coefficients at non-negative pixel offsets.
-
-    Parameters
-    ----------
-    halfspace : steady.halfspace.HalfSpace
-
-    Returns
-    -------
-    ndarray, shape (n, n), m/Pa, read-only
-        Displacement at offset ``(i, j)`` pixels from a pixel loaded by a
-        unit pressure; the kernel is even in both axes.  Cached per
-        half-space.
+    The factory is called as ``factory(halfspace, face_mask, shift)`` with
+    ``shift`` an ``(n, n)`` array in m/Pa or None, and returns a callable
+    ``z = precondition(residual, active)``.
     """
-    n = halfspace.n
-    return _kernels(halfspace)[0][:n, :n]
+    def decorate(factory):
+        PRECONDITIONERS[name] = factory
+        return factory
+    return decorate
 
 
-def influence_symbol(halfspace):
-    """Real spectrum of the ``2n x 2n`` circulant embedding of the influence kernel.
+def make_preconditioner(name, halfspace, face_mask, shift):
+    """The preconditioner ``name`` for one contact problem, or None for ``"none"``.
 
-    Built with the same even extension as the half-space operator, so that
-    ``halfspace.inverse(halfspace.forward(p) * symbol)`` equals
-    ``halfspace.displacement(p)`` to round-off.  Cached per half-space.
-
-    Returns
-    -------
-    ndarray, shape (2n, n + 1), m/Pa, read-only
-        Positive for the exact pixel kernel (checked at ``n`` = 32 to 1024).
+    Raises
+    ------
+    ValueError
+        If no preconditioner has that name.
     """
-    return _kernels(halfspace)[1]
+    try:
+        factory = PRECONDITIONERS[name]
+    except KeyError:
+        raise ValueError(f"preconditioner must be one of {sorted(PRECONDITIONERS)}, "
+                         f"got {name!r}") from None
+    return None if factory is None else factory(halfspace, face_mask, shift)
 
 
 class JacobiPreconditioner:
@@ -150,13 +129,13 @@ class FourierPreconditioner:
     ----------
     halfspace : steady.halfspace.HalfSpace
     shift : ndarray, shape (n, n), m/Pa, or None
-    face : ndarray of bool, shape (n, n), optional
+    face_mask : ndarray of bool, shape (n, n), optional
         Pixels over which the shift's range is taken (default: all).
     padded : bool, optional
         Apply on the zero-padded ``2n x 2n`` grid (default False).
     """
 
-    def __init__(self, halfspace, shift=None, *, face=None, padded=False):
+    def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False):
         self.halfspace = halfspace
         self.padded = bool(padded)
         k00 = halfspace.self_influence
@@ -164,18 +143,13 @@ class FourierPreconditioner:
         self.diagonal = None
         s_ref = 0.0
         if shift is not None:
-            s_face = shift if face is None else shift[face]
+            s_face = shift if face_mask is None else shift[face_mask]
             s_ref = float(s_face.min())
             if float(s_face.max()) > s_ref * (1 + 1e-12):
                 self.weight = np.sqrt((k00 + s_ref) / (k00 + shift))
                 self.diagonal = (1.0 - self.weight**2) / (k00 + shift)
-        if s_ref == 0:
-            self.inverse_symbol = _inverse_symbol(halfspace, self.padded)
-        else:
-            symbol = influence_symbol(halfspace)
-            if not self.padded:
-                symbol = symbol[::2, ::2]
-            self.inverse_symbol = 1.0 / (symbol + s_ref)
+        symbol = halfspace.influence_symbol if self.padded else halfspace.aliased_symbol
+        self.inverse_symbol = 1.0 / symbol if s_ref == 0 else 1.0 / (symbol + s_ref)
 
     def _apply(self, field):
         hs = self.halfspace
@@ -208,20 +182,24 @@ class AMGPreconditioner:
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
-    face : ndarray of bool, shape (n, n)
+    face_mask : ndarray of bool, shape (n, n)
     shift : ndarray, shape (n, n), m/Pa, or None
     radius : int, optional
         Truncation radius of the kernel, pixels (default 2).
     """
 
-    def __init__(self, halfspace, face, shift=None, *, radius=2):
-        import pyamg  # optional dependency, imported on use
+    def __init__(self, halfspace, face_mask, shift=None, *, radius=2):
+        try:
+            import pyamg  # optional dependency, imported on use
+        except ImportError:
+            raise ValueError("the 'amg' preconditioner needs pyamg: install the optional "
+                             "extra with pip install 'runin[amg]'") from None
 
         n = halfspace.n
         radius = int(radius)
-        quadrant = influence_quadrant(halfspace)[: radius + 1, : radius + 1]
+        quadrant = halfspace.influence_quadrant[: radius + 1, : radius + 1]
         index = -np.ones((n, n), dtype=np.int64)
-        ii, jj = np.nonzero(face)
+        ii, jj = np.nonzero(face_mask)
         index[ii, jj] = np.arange(ii.size)
         rows, cols, vals = [], [], []
         for di in range(-radius, radius + 1):
@@ -230,7 +208,7 @@ class AMGPreconditioner:
                     continue
                 i2, j2 = ii + di, jj + dj
                 ok = (i2 >= 0) & (i2 < n) & (j2 >= 0) & (j2 < n)
-                ok[ok] &= face[i2[ok], j2[ok]]
+                ok[ok] &= face_mask[i2[ok], j2[ok]]
                 rows.append(index[ii[ok], jj[ok]])
                 cols.append(index[i2[ok], j2[ok]])
                 vals.append(np.full(ok.sum(), quadrant[abs(di), abs(dj)]))
@@ -259,3 +237,39 @@ class AMGPreconditioner:
         z = np.zeros(self._shape)
         z[ii, jj] = x / self._scale
         return np.where(active, z, 0.0)
+
+
+@register_preconditioner("jacobi")
+def _jacobi(halfspace, face_mask, shift):
+    return JacobiPreconditioner(halfspace, shift)
+
+
+@register_preconditioner("fourier")
+def _fourier(halfspace, face_mask, shift):
+    return FourierPreconditioner(halfspace, shift, face_mask=face_mask)
+
+
+@register_preconditioner("fourier-padded")
+def _fourier_padded(halfspace, face_mask, shift):
+    return FourierPreconditioner(halfspace, shift, face_mask=face_mask, padded=True)
+
+
+@register_preconditioner("amg")
+def _amg(halfspace, face_mask, shift):
+    return AMGPreconditioner(halfspace, face_mask, shift)
+
+
+@register_preconditioner("auto")
+def _auto(halfspace, face_mask, shift):
+    """Fourier, unless a non-uniform shift makes the operator nearly diagonal (Jacobi).
+
+    A uniform shift keeps the Fourier symbol exact; a non-uniform one of at
+    least ``_DIAGONAL_DOMINANCE`` self-influences everywhere on the face
+    leaves little for the Fourier part to do.
+    """
+    if shift is not None:
+        s_face = shift[face_mask]
+        if (s_face.max() > s_face.min()
+                and s_face.min() >= _DIAGONAL_DOMINANCE * halfspace.self_influence):
+            return _jacobi(halfspace, face_mask, shift)
+    return _fourier(halfspace, face_mask, shift)

@@ -1,22 +1,23 @@
 """The run-in: wear a punch face from its initial shape to the steady state.
 
-:func:`run_in` integrates ``dw/ds = k P(w)^m`` (see :mod:`transient.stepping`)
-from the initial face with a registered scheme, with adaptive steps from
-the scheme's error estimate, until the wear rates equalise; it records a
-history, takes snapshots and hands resumable checkpoints to a callback.
-:func:`compare_with_steady` measures the agreement of the final face with
-the closed-form steady face (eq. 9, :func:`steady.solution.solve`).
-:func:`write_run` / :func:`read_run` store a run in HDF5.
+:func:`run_in` integrates ``dw/ds = k P(w)^m`` (the schemes of
+:mod:`transient.stepping` on a :class:`transient.problem.WearProblem`) from
+the initial face, with adaptive steps from the scheme's error estimate,
+until the wear rates equalise; it records a history
+(:mod:`transient.diagnostics`), takes snapshots and hands resumable
+checkpoints to a callback.  Step lengths and stop tests come from
+:mod:`transient.control`; the comparison with the steady face lives in
+:mod:`transient.comparison`, the run file in :mod:`transient.output`.
 
 Step control
 ------------
 The local error estimate of a step is measured on the *shape*: its mean
 over the face is removed (the rigid offset is irrelevant and integrated
 exactly) and its rms over the face is compared with ``tol * f*``
-(``f* = pbar a / E*``, PHYSICS.md "Natural scales").  Accepted steps grow
+(``f* = pbar a / E*``, docs/model.md "Natural scales").  Accepted steps grow
 by at most the scheme's ``max_growth``; rejected or failed steps shrink.
 Steps land exactly on the snapshot distances.  Explicit Euler is further
-limited to 0.9 times its stability limit.
+limited to a fraction of its stability limit.
 
 Steady state
 ------------
@@ -37,9 +38,9 @@ gives ``k p -> C``: the steady pressure (eq. 7) with an error of order
 pending, the run takes implicit Euler steps of ``jump_step`` s* (default
 ``1e8``) until the criteria hold; a single such step is normally enough.
 The face after an implicit stage is rebuilt from its pressure,
-``w = d - K p`` on the contact (the displacement the contact solver
-returns minus the shift), so that the solver's residual, which scales with
-the shifted operator, does not enter the face.
+``w = d - K p`` on the contact (``K p`` recomputed by one FFT product), so
+that the solver's residual, which scales with the shifted operator, does
+not enter the face.
 
 Reproducibility
 ---------------
@@ -54,8 +55,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import os
-import pathlib
 import time
 import types
 
@@ -63,29 +62,14 @@ import numpy as np
 
 from steady import reference
 
-from .stepping import StepFailure, StepState, get_scheme
+from .control import DIVERGENCE_RELIEF, StepController, StopTests
+from .diagnostics import face_rms_slope, masked_gradient, shape_rms, wear_rate_spread
+from .problem import StepFailure
+from .stepping import StepState, get_scheme
 
-__all__ = [
-    "FORMAT",
-    "HISTORY_UNITS",
-    "RunOptions",
-    "RunResult",
-    "SteadyComparison",
-    "VERSION",
-    "compare_with_steady",
-    "face_rms_slope",
-    "read_run",
-    "run_in",
-    "wear_rate_spread",
-    "write_run",
-]
+__all__ = ["HISTORY_UNITS", "RunOptions", "RunResult", "run_in"]
 
 logger = logging.getLogger(__name__)
-
-#: ``format`` attribute of a run file.
-FORMAT = "runin.transient"
-#: Layout version of a run file.
-VERSION = 1
 
 #: History datasets and their units.
 HISTORY_UNITS = {
@@ -102,8 +86,6 @@ HISTORY_UNITS = {
     "worn_volume": "m^3",
     "solves": "1",
 }
-
-_STATUSES = ("running", "steady", "stopped", "failed")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -222,10 +204,10 @@ class RunResult:
     snapshot_height : ndarray, shape (k, n, n), m
         ``worn depth + initial shape`` at the snapshots (NaN off the face).
     snapshot_pressure : ndarray, shape (k, n, n), Pa
-    depth_scale, run_in_distance, fast_distance, mean_pressure,
+    depth_scale, run_in_distance, fast_distance, pixel_mean_pressure,
     reference_slope : float
-        ``f*`` (m), ``s*`` (m), ``h / (k_max E*)`` (m), ``F / A`` (Pa),
-        ``grad_f0`` (eq. 12).
+        ``f*`` (m), ``s*`` (m), ``h / (k_max E*)`` (m), ``F`` over the
+        face's pixel area (Pa), ``grad_f0`` (eq. 12).
     """
 
     status: str
@@ -254,7 +236,7 @@ class RunResult:
     depth_scale: float
     run_in_distance: float
     fast_distance: float
-    mean_pressure: float
+    pixel_mean_pressure: float
     reference_slope: float
 
     @property
@@ -263,7 +245,7 @@ class RunResult:
         return self.status == "steady"
 
     @property
-    def face(self):
+    def face_mask(self):
         """Pixels of the punch face, shape (n, n), bool."""
         return np.isfinite(self.worn_depth)
 
@@ -273,7 +255,7 @@ class RunResult:
         return self.height + self.offset - self.initial_height
 
     @property
-    def face_height(self):
+    def face(self):
         """Face height ``d - w`` in the convention of the steady face ``f_inf = K p``, m.
 
         Equals ``K p`` on the contact; defined up to a constant; NaN off the face.
@@ -281,108 +263,8 @@ class RunResult:
         return self.approach - self.height
 
 
-def _rms_face(field, face):
-    v = field[face]
-    return float(np.sqrt(np.mean(v * v)))
-
-
-def _shape_rms(field, face):
-    v = field[face]
-    v = v - v.mean()
-    return float(np.sqrt(np.mean(v * v)))
-
-
-def _masked_gradient(field, mask, h):
-    """Finite-difference gradient using only pixels in ``mask`` (central where possible)."""
-    out = []
-    for axis in (0, 1):
-        f = np.where(mask, field, 0.0)
-        fp = np.roll(f, -1, axis)
-        fm = np.roll(f, 1, axis)
-        mp = np.roll(mask, -1, axis)
-        mm = np.roll(mask, 1, axis)
-        idx = np.arange(mask.shape[axis])
-        edge_p = (idx == mask.shape[axis] - 1)
-        edge_m = (idx == 0)
-        shape = [1, 1]
-        shape[axis] = -1
-        mp = mp & ~edge_p.reshape(shape)
-        mm = mm & ~edge_m.reshape(shape)
-        g = np.where(mp & mm, (fp - fm) / (2 * h),
-                     np.where(mp, (fp - f) / h, np.where(mm, (f - fm) / h, 0.0)))
-        out.append(np.where(mask, g, 0.0))
-    return out
-
-
-def face_rms_slope(halfspace, face, height, pressure, approach):
-    """Rms slope of the worn face over the face pixels, dimensionless.
-
-    On the contact the face is ``d - w = K p``, whose gradient is the exact
-    kernel derivative convolved with the pressure (the definition of
-    :func:`steady.solution.solve`, so that the final value compares with
-    it); the gap ``w - (d - K p)`` off the contact adds its finite-difference
-    gradient.
-
-    This is the slope of the half-space surface under the pixel pressure.
-    For the flat punch at ``s = 0`` it is not zero but about 0.6 ``grad_f0``
-    (measured 0.589, 0.596, 0.598, 0.600 at n = 32, 64, 128, 256): the
-    pixel pressure of the edge singularity, ``~ (a/h)^(1/2)``, makes ``K p``
-    ripple between the pixel centres of the rim, whose share of the face
-    falls like ``h/a``, so the rms does not vanish under refinement.  The
-    run-in removes it with the singularity.  The history also records
-    ``rms_slope_fd``, finite differences of the worn face itself (zero for
-    a flat face).
-
-    Parameters
-    ----------
-    halfspace : HalfSpace
-    face : ndarray of bool, shape (n, n)
-    height : ndarray, shape (n, n), m
-    pressure : ndarray, shape (n, n), Pa
-        Contact pressure of ``height``.
-    approach : float, m
-
-    Returns
-    -------
-    float
-    """
-    pressure_q = halfspace.forward(pressure)
-    gx, gy = halfspace.gradient(pressure, pressure_q=pressure_q)
-    contact = pressure > 0
-    if np.any(face & ~contact):
-        kp = halfspace.displacement_q(pressure_q)
-        gap = np.where(face, height - (approach - kp), 0.0)
-        gap = np.where(contact, 0.0, np.maximum(gap, 0.0))
-        dx, dy = _masked_gradient(gap, face, halfspace.h)
-        gx = gx - dx
-        gy = gy - dy
-    s2 = gx * gx + gy * gy
-    return float(np.sqrt(np.mean(s2[face])))
-
-
-def wear_rate_spread(problem, pressure):
-    """Spread of the wear rate, the steady-state test (eq. 3).
-
-    Parameters
-    ----------
-    problem : transient.stepping.WearProblem
-    pressure : ndarray, shape (n, n), Pa
-
-    Returns
-    -------
-    float
-        ``(max - min) / mean`` of ``k p^m`` over the face; 1 when some face
-        pixel is out of contact (its rate is 0).
-    """
-    face = problem.face
-    if np.any(pressure[face] <= 0):
-        return 1.0
-    r = problem.rate(pressure)[face]
-    return float((r.max() - r.min()) / r.mean())
-
-
 class _Run:
-    """Mutable state of a run in progress."""
+    """Mutable state of a run in progress, and the loop that advances it."""
 
     def __init__(self, problem, options):
         self.problem = problem
@@ -390,50 +272,56 @@ class _Run:
         self.scheme = get_scheme(options.scheme)
         self.s_star = problem.run_in_distance
         self.f_star = problem.depth_scale
-        hs = problem.halfspace
+        self.controller = StepController(options, self.s_star)
+        self.stop = StopTests(options, self.s_star)
         self.grad_f0 = reference.reference_slope(
-            reference.mean_pressure(problem.normal_force, problem.radius), hs.E_star)
+            reference.mean_pressure(problem.normal_force, problem.radius),
+            problem.halfspace.E_star)
         self.history = {name: [] for name in HISTORY_UNITS}
         self.snap_d, self.snap_h, self.snap_p = [], [], []
 
     # -- recording -----------------------------------------------------
     def record(self, step, shape_rate):
+        """Append the current point to the history."""
         p = self.problem
+        face_mask = p.face_mask
         hist = self.history
-        rms = face_rms_slope(p.halfspace, p.face, self.height, self.pressure, self.approach)
+        rms = face_rms_slope(p.halfspace, face_mask, self.height, self.pressure, self.approach)
         hist["distance"].append(self.s)
         hist["step"].append(step)
         hist["rms_slope"].append(rms)
         hist["normalised_rms_slope"].append(rms / self.grad_f0)
-        gx, gy = _masked_gradient(self.height, p.face, p.halfspace.h)
-        hist["rms_slope_fd"].append(float(np.sqrt(np.mean((gx * gx + gy * gy)[p.face]))))
+        gx, gy = masked_gradient(self.height, face_mask, p.halfspace.h)
+        hist["rms_slope_fd"].append(float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask]))))
         hist["spread"].append(wear_rate_spread(p, self.pressure))
         hist["shape_rate"].append(shape_rate)
         hist["peak_pressure"].append(float(self.pressure.max()))
-        hist["contact_fraction"].append(float(np.mean(self.pressure[p.face] > 0)))
+        hist["contact_fraction"].append(float(np.mean(self.pressure[face_mask] > 0)))
         hist["approach"].append(self.approach + self.offset)
         worn = self.height + self.offset - self.initial_height
-        hist["worn_volume"].append(float(np.sum(worn[p.face])) * p.halfspace.h ** 2)
+        hist["worn_volume"].append(float(np.sum(worn[face_mask])) * p.halfspace.h ** 2)
         hist["solves"].append(p.solves)
 
     def snapshot(self):
-        face = self.problem.face
+        """Store the face and the pressure at the current distance."""
+        face_mask = self.problem.face_mask
         self.snap_d.append(self.s)
-        self.snap_h.append(np.where(face, self.height + self.offset, np.nan))
+        self.snap_h.append(np.where(face_mask, self.height + self.offset, np.nan))
         self.snap_p.append(self.pressure.copy())
 
     def result(self, status, message):
+        """The run so far as a :class:`RunResult`."""
         n = self.problem.n
         k = len(self.snap_d)
-        face = self.problem.face
+        face_mask = self.problem.face_mask
         return RunResult(
             status=status, message=message, scheme=self.scheme.name, distance=self.s,
             steps=self.steps, rejected=self.rejected, failures=self.failures,
             solves=self.problem.solves, iterations=self.problem.iterations,
             wall_time=self.wall_time + (time.monotonic() - self.t0),
-            height=np.where(face, self.height, np.nan), offset=self.offset,
+            height=np.where(face_mask, self.height, np.nan), offset=self.offset,
             pressure=self.pressure.copy(), approach=self.approach,
-            initial_height=np.where(face, self.initial_height, np.nan),
+            initial_height=np.where(face_mask, self.initial_height, np.nan),
             previous_height=None if self.prev_height is None else self.prev_height.copy(),
             previous_rate=None if self.prev_rate is None else self.prev_rate.copy(),
             previous_step=self.prev_step, next_step=self.next_step,
@@ -445,20 +333,22 @@ class _Run:
             snapshot_pressure=np.array(self.snap_p).reshape(k, n, n),
             depth_scale=self.f_star, run_in_distance=self.s_star,
             fast_distance=self.problem.fast_distance,
-            mean_pressure=self.problem.mean_pressure, reference_slope=self.grad_f0)
+            pixel_mean_pressure=self.problem.pixel_mean_pressure,
+            reference_slope=self.grad_f0)
 
     # -- set-up --------------------------------------------------------
     def start(self, initial_height):
+        """Start from ``initial_height`` (m): first contact solve, first record."""
         p = self.problem
-        face = p.face
-        h0 = np.where(face, np.asarray(initial_height, dtype=float), 0.0)
+        face_mask = p.face_mask
+        h0 = np.where(face_mask, np.asarray(initial_height, dtype=float), 0.0)
         if h0.shape != (p.n, p.n):
             raise ValueError(f"initial_height must have shape {(p.n, p.n)}, got {h0.shape}")
-        if not np.all(np.isfinite(h0[face])):
+        if not np.all(np.isfinite(h0[face_mask])):
             raise ValueError("initial_height must be finite on the face")
         self.initial_height = h0
-        self.offset = float(h0[face].mean())
-        self.height = np.where(face, h0 - self.offset, 0.0)
+        self.offset = float(h0[face_mask].mean())
+        self.height = np.where(face_mask, h0 - self.offset, 0.0)
         res = p.contact(self.height)
         self.pressure = res.pressure
         self.approach = float(res.approach)
@@ -467,26 +357,21 @@ class _Run:
         self.wall_time = 0.0
         self.prev_height = self.prev_rate = None
         self.prev_step = None
-        o = self.options
-        if o.step is not None:
-            self.next_step = o.step * self.s_star
-        elif o.initial_step is not None:
-            self.next_step = o.initial_step * self.s_star
-        else:
-            self.next_step = 0.01 * math.sqrt(o.tol) * p.halfspace.h / p.radius * self.s_star
+        self.next_step = self.controller.first_step(p.halfspace.h, p.radius)
         self.record(0.0, math.inf)
         self.snap_index = 0
         self._take_due_snapshots()
 
     def restore(self, saved):
+        """Continue from a checkpoint (a :class:`RunResult`)."""
         p = self.problem
-        face = p.face
+        face_mask = p.face_mask
         if saved.height.shape != (p.n, p.n):
             raise ValueError(f"checkpoint grid {saved.height.shape} does not match the "
                              f"problem's {(p.n, p.n)}")
 
         def clean(a):
-            return None if a is None else np.where(face, a, 0.0)
+            return None if a is None else np.where(face_mask, a, 0.0)
 
         self.initial_height = clean(saved.initial_height)
         self.height = clean(saved.height)
@@ -516,117 +401,110 @@ class _Run:
 
     # -- stepping ------------------------------------------------------
     def pending_target(self):
+        """Distance of the next snapshot (m), or None."""
         snaps = self.options.snapshots
         if self.snap_index < len(snaps):
             return snaps[self.snap_index] * self.s_star
         return None
 
+    def plan(self, jump, target):
+        """Scheme and length (m) of the next attempt."""
+        p = self.problem
+        if jump:
+            return get_scheme("implicit_euler"), self.options.jump_step * self.s_star
+        ds = self.next_step
+        if self.scheme.explicit:
+            ds = self.controller.explicit_limit(ds, p.stable_step(self.pressure))
+        return self.scheme, self.controller.land(ds, self.s, target, self.stop.end())
+
+    def attempt(self, scheme, ds, jump):
+        """One trial step and its scaled error; raises :class:`StepFailure`."""
+        p = self.problem
+        face_mask = p.face_mask
+        # A jump starts from the closed-form steady pressure, its limit.
+        state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
+                          self.approach, self.prev_height, self.prev_rate, self.prev_step)
+        trial = scheme.step(p, state, ds)
+        err = shape_rms(trial.error, face_mask) / (self.options.tol * self.f_star)
+        if not (math.isfinite(err) and np.all(np.isfinite(trial.height[face_mask]))):
+            raise StepFailure("non-finite face or error estimate")
+        if shape_rms(trial.height, face_mask) > DIVERGENCE_RELIEF * self.f_star:
+            raise StepFailure(f"face relief above {DIVERGENCE_RELIEF:g} f*: divergence")
+        return trial, err
+
+    def accept(self, trial, ds):
+        """Move to the trial point; the rigid part of the wear goes into ``offset``."""
+        p = self.problem
+        face_mask = p.face_mask
+        new_height = np.where(face_mask, trial.height, 0.0)
+        c = float(new_height[face_mask].mean())
+        new_height = np.where(face_mask, new_height - c, 0.0)
+        change = shape_rms(new_height - self.height, face_mask)
+        shape_rate = change / self.f_star / (ds / self.s_star)
+        self.prev_height = np.where(face_mask, self.height - c, 0.0)
+        self.prev_rate = p.rate(self.pressure)
+        self.prev_step = ds
+        self.height = new_height
+        self.offset += c
+        self.pressure = trial.pressure
+        self.approach = trial.approach - c
+        self.s += ds
+        self.steps += 1
+        self.record(ds, shape_rate)
+        self._take_due_snapshots()
+
     def loop(self, on_step, on_checkpoint):
-        o, p, scheme = self.options, self.problem, self.scheme
-        face = p.face
-        tol_abs = o.tol * self.f_star
-        last_ckpt = time.monotonic()
+        """Step until a stop test says the run is over; return ``(status, message)``.
+
+        Each pass: the stop tests, the choice of a jump or a regular step
+        (landing on the next snapshot), one attempt, then accept it, reject
+        it (error above tolerance: retry shorter) or count a failure (retry
+        at a fraction; give up after ``max_failures`` in a row).
+        """
+        o = self.options
+        controller = self.controller
+        fixed = controller.fixed
+        last_checkpoint = time.monotonic()
         consecutive = 0
-        jumps = 0
-        fixed = o.step is not None
         while True:
-            spread = self.history["spread"][-1]
-            shape_rate = self.history["shape_rate"][-1]
-            if spread < o.spread_tol and shape_rate < o.shape_tol:
-                return "steady", (f"steady state at s = {self.s:.6g} m "
-                                  f"({self.s / self.s_star:.6g} s*): wear-rate spread "
-                                  f"{spread:.3g}, shape change {shape_rate:.3g} f*/s*")
-            if self.s >= o.max_distance * self.s_star * (1 - 1e-12):
-                return "stopped", (f"reached max_distance {o.max_distance:.6g} s* before the "
-                                   f"steady state (spread {spread:.3g}); resume with a "
-                                   f"larger max_distance")
-            if self.steps >= o.max_steps:
-                return "stopped", (f"reached max_steps {o.max_steps} before the steady state "
-                                   f"(s = {self.s / self.s_star:.6g} s*, spread "
-                                   f"{spread:.3g}); resume with a larger max_steps")
+            stop = self.stop.check(self)
+            if stop is not None:
+                return stop
             target = self.pending_target()
-            jump = (not fixed and target is None and spread < o.jump_spread)
+            jump = self.stop.jump_due(self, target, fixed)
             if jump:
-                jumps += 1
-                if jumps > 5:
-                    return "stopped", (f"the wear-rate spread stagnates at {spread:.3g} above "
-                                       f"spread_tol {o.spread_tol:.3g} after {jumps - 1} "
-                                       f"jumps: loosen spread_tol or tighten the contact "
-                                       f"tolerance")
-                ds = o.jump_step * self.s_star
-                step_scheme = get_scheme("implicit_euler")
-            else:
-                ds = self.next_step
-                step_scheme = scheme
-                if scheme.explicit:
-                    limit = 0.9 * p.stable_step(self.pressure)
-                    if fixed and ds > limit / 0.9:
-                        raise ValueError(
-                            f"fixed step {ds / self.s_star:.6g} s* exceeds the explicit Euler "
-                            f"stability limit {limit / 0.9 / self.s_star:.6g} s*")
-                    ds = min(ds, limit)
-            remaining = o.max_distance * self.s_star - self.s
-            ds = min(ds, remaining)
-            if target is not None:
-                if target - self.s <= ds * (1 + 1e-9):
-                    ds = target - self.s
-            # A jump starts from the closed-form steady pressure, its limit.
-            state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
-                              self.approach, self.prev_height, self.prev_rate, self.prev_step)
+                stop = self.stop.count_jump(self)
+                if stop is not None:
+                    return stop
+            scheme, ds = self.plan(jump, target)
             try:
-                trial = step_scheme.step(p, state, ds)
-                err = _shape_rms(trial.error, face) / tol_abs
-                if not (math.isfinite(err) and np.all(np.isfinite(trial.height[face]))):
-                    raise StepFailure("non-finite face or error estimate")
-                if _shape_rms(trial.height, face) > 1e6 * self.f_star:
-                    raise StepFailure("face relief above 1e6 f*: divergence")
+                trial, err = self.attempt(scheme, ds, jump)
             except StepFailure as exc:
                 self.failures += 1
                 consecutive += 1
-                logger.info("step of %.3g s* failed (%s); retrying smaller", ds / self.s_star,
-                            exc)
+                logger.info("step of %.3g s* failed (%s); retrying smaller",
+                            ds / self.s_star, exc)
                 if consecutive >= o.max_failures or fixed:
                     return "failed", (f"step of {ds / self.s_star:.3g} s* at s = "
                                       f"{self.s / self.s_star:.6g} s* failed {consecutive} "
                                       f"times: {exc}")
-                self.next_step = 0.25 * ds
+                self.next_step = controller.after_failure(ds)
                 continue
             consecutive = 0
-            q = step_scheme.error_order
             if not fixed and not jump and err > 1.0:
                 self.rejected += 1
-                self.next_step = ds * max(0.1, 0.9 * err ** (-1.0 / (q + 1)))
+                self.next_step = controller.after_reject(ds, err, scheme)
                 logger.debug("rejected %.3g s* (err %.3g)", ds / self.s_star, err)
                 continue
-            # Accept.
-            new_height = np.where(face, trial.height, 0.0)
-            c = float(new_height[face].mean())
-            new_height = np.where(face, new_height - c, 0.0)
-            change = _shape_rms(new_height - self.height, face)
-            shape_rate = change / self.f_star / (ds / self.s_star)
-            self.prev_height = np.where(face, self.height - c, 0.0)
-            self.prev_rate = p.rate(self.pressure)
-            self.prev_step = ds
-            self.height = new_height
-            self.offset += c
-            self.pressure = trial.pressure
-            self.approach = trial.approach - c
-            self.s += ds
-            self.steps += 1
-            if fixed:
-                self.next_step = o.step * self.s_star
-            elif not jump:
-                growth = min(scheme.max_growth,
-                             0.9 * err ** (-1.0 / (q + 1)) if err > 0 else scheme.max_growth)
-                self.next_step = ds * max(0.2, growth)
-            self.record(ds, shape_rate)
-            self._take_due_snapshots()
+            if not jump:
+                self.next_step = controller.after_accept(ds, err, scheme)
+            self.accept(trial, ds)
             if on_step is not None:
                 on_step(self)
             if on_checkpoint is not None and \
-                    time.monotonic() - last_ckpt >= o.checkpoint_interval:
+                    time.monotonic() - last_checkpoint >= o.checkpoint_interval:
                 on_checkpoint(self.result("running", "in progress"))
-                last_ckpt = time.monotonic()
+                last_checkpoint = time.monotonic()
 
 
 def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
@@ -635,7 +513,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
 
     Parameters
     ----------
-    problem : transient.stepping.WearProblem
+    problem : transient.problem.WearProblem
     initial_height : ndarray, shape (n, n), m
         Initial face (larger = recessed); see :mod:`transient.initial_face`.
     options : RunOptions, optional
@@ -675,219 +553,3 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     log = logger.info if status == "steady" else logger.warning
     log("%s: %s", status, message)
     return run.result(status, message)
-
-
-@dataclasses.dataclass(frozen=True)
-class SteadyComparison:
-    """Agreement of a run's final face with the closed-form steady face (eq. 9).
-
-    Attributes
-    ----------
-    face_error : float
-        ``max |(d - w) + c - f_inf| / relief(f_inf)`` over the face, ``c`` the
-        best (minimax) constant, relief = max - min of ``f_inf``.
-    face_rms_error : float
-        Rms of the same difference with the least-squares constant, / relief.
-    rms_slope, steady_rms_slope : float
-        Plain pixel rms slopes of the run's face and of ``f_inf`` (exact kernel
-        gradient at the pixel centres of the face).
-    rms_slope_error : float
-        ``rms_slope / steady_rms_slope - 1``.
-    phase_pressures, steady_phase_pressures : ndarray, shape (P,), Pa
-        Mean pressure on each phase, run and eq. 7.
-    phase_pressure_error : float
-        ``max_i |p_i / p_i,steady - 1|``.
-    """
-
-    face_error: float
-    face_rms_error: float
-    rms_slope: float
-    steady_rms_slope: float
-    rms_slope_error: float
-    phase_pressures: np.ndarray
-    steady_phase_pressures: np.ndarray
-    phase_pressure_error: float
-
-    def summary(self):
-        """One line per figure, for the terminal."""
-        pp = ", ".join(f"{a:.6g}/{b:.6g}" for a, b in
-                       zip(self.phase_pressures, self.steady_phase_pressures))
-        return (f"face shape error (max, / steady relief): {self.face_error:.3e}\n"
-                f"face shape error (rms, / steady relief): {self.face_rms_error:.3e}\n"
-                f"rms slope: {self.rms_slope:.6g} vs steady {self.steady_rms_slope:.6g} "
-                f"(relative {self.rms_slope_error:+.3e})\n"
-                f"phase pressures (run/steady, Pa): {pp} "
-                f"(max relative {self.phase_pressure_error:.3e})")
-
-
-def compare_with_steady(result, steady, halfspace, labels):
-    """Compare a run's face with the steady face.
-
-    Parameters
-    ----------
-    result : RunResult
-    steady : steady.solution.SteadyResult
-        For the same grid, phases, wear coefficients, force and exponent.
-    halfspace : HalfSpace
-    labels : ndarray, shape (n, n), int
-        Phase of each pixel, -1 off the face.
-
-    Returns
-    -------
-    SteadyComparison
-    """
-    face = labels >= 0
-    fin = steady.face[face]
-    ft = result.face_height[face]
-    diff = ft - fin
-    relief = float(fin.max() - fin.min())
-    mid = 0.5 * (diff.max() + diff.min())
-    face_error = float(np.max(np.abs(diff - mid)) / relief)
-    face_rms = float(np.sqrt(np.mean((diff - diff.mean()) ** 2)) / relief)
-    rms = face_rms_slope(halfspace, face, np.where(face, result.height, 0.0),
-                         result.pressure, result.approach)
-    # The plain pixel rms slope: the definition the run measures (the steady
-    # module may also carry a corrected continuum estimate in ``rms_slope``).
-    steady_rms = float(getattr(steady, "rms_slope_plain", math.nan))
-    if not math.isfinite(steady_rms):
-        steady_rms = float(steady.rms_slope)
-    n_phases = len(steady.phase_pressures)
-    pp = np.array([result.pressure[labels == i].mean() for i in range(n_phases)])
-    return SteadyComparison(
-        face_error=face_error, face_rms_error=face_rms, rms_slope=rms,
-        steady_rms_slope=steady_rms,
-        rms_slope_error=rms / steady_rms - 1.0,
-        phase_pressures=pp, steady_phase_pressures=np.asarray(steady.phase_pressures),
-        phase_pressure_error=float(np.max(np.abs(pp / steady.phase_pressures - 1.0))))
-
-
-# -- HDF5 -------------------------------------------------------------------
-
-_SCALARS = ("status", "message", "scheme", "distance", "steps", "rejected", "failures",
-            "solves", "iterations", "wall_time", "offset", "approach", "depth_scale",
-            "run_in_distance", "fast_distance", "mean_pressure", "reference_slope")
-_OPTIONAL_SCALARS = ("previous_step", "next_step")
-
-
-def write_run(path, result, *, attrs=None, arrays=None, comparison=None):
-    """Write a run (or checkpoint) atomically: a temporary file, then ``os.replace``.
-
-    Parameters
-    ----------
-    path : str or path-like
-    result : RunResult
-    attrs : mapping, optional
-        Extra root attributes (scene text, parameters).
-    arrays : mapping of str to ndarray, optional
-        Extra root datasets (e.g. ``phase``).
-    comparison : SteadyComparison, optional
-        Stored in the group ``comparison``.
-    """
-    import h5py
-
-    path = pathlib.Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    with h5py.File(tmp, "w") as f:
-        f.attrs["format"] = FORMAT
-        f.attrs["version"] = VERSION
-        for name in _SCALARS:
-            f.attrs[name] = getattr(result, name)
-        for name in _OPTIONAL_SCALARS:
-            value = getattr(result, name)
-            f.attrs[name] = np.nan if value is None else value
-        for name, value in (attrs or {}).items():
-            f.attrs[name] = value
-        units = {"worn_depth": "m", "pressure": "Pa", "height": "m",
-                 "initial_height": "m"}
-        f.create_dataset("worn_depth", data=result.worn_depth).attrs["units"] = "m"
-        f.create_dataset("pressure", data=result.pressure).attrs["units"] = "Pa"
-        for name, value in (arrays or {}).items():
-            f.create_dataset(name, data=value)
-        st = f.create_group("state")
-        st.attrs["description"] = "everything a resumed run needs (face up to offset)"
-        for name in ("height", "initial_height"):
-            st.create_dataset(name, data=getattr(result, name)).attrs["units"] = units[name]
-        for name, unit in (("previous_height", "m"), ("previous_rate", "1")):
-            value = getattr(result, name)
-            if value is not None:
-                st.create_dataset(name, data=value).attrs["units"] = unit
-        hist = f.create_group("history")
-        for name, value in result.history.items():
-            hist.create_dataset(name, data=value).attrs["units"] = HISTORY_UNITS[name]
-        snaps = f.create_group("snapshots")
-        snaps.create_dataset("distance", data=result.snapshot_distance).attrs["units"] = "m"
-        snaps.create_dataset("height", data=result.snapshot_height,
-                             compression="gzip").attrs["units"] = "m"
-        snaps.create_dataset("pressure", data=result.snapshot_pressure,
-                             compression="gzip").attrs["units"] = "Pa"
-        if comparison is not None:
-            g = f.create_group("comparison")
-            for fld in dataclasses.fields(comparison):
-                value = getattr(comparison, fld.name)
-                if isinstance(value, np.ndarray):
-                    g.create_dataset(fld.name, data=value).attrs["units"] = "Pa"
-                else:
-                    g.attrs[fld.name] = value
-        f.flush()
-    fd = os.open(tmp, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-    os.replace(tmp, path)
-
-
-def read_run(path):
-    """Read a run file written by :func:`write_run`.
-
-    Returns
-    -------
-    result : RunResult
-    attrs : dict
-        All root attributes.
-    arrays : dict
-        Root datasets other than ``worn_depth`` and ``pressure``.
-
-    Raises
-    ------
-    ValueError
-        Not a run file, or an unknown layout version.
-    """
-    import h5py
-
-    path = pathlib.Path(path)
-    try:
-        f = h5py.File(path, "r")
-    except OSError as err:
-        raise ValueError(f"cannot read run file {str(path)!r}: {err}") from None
-    with f:
-        if f.attrs.get("format") != FORMAT:
-            raise ValueError(f"{str(path)!r} is not a run file (format "
-                             f"{f.attrs.get('format')!r}, expected {FORMAT!r})")
-        if int(f.attrs.get("version", -1)) != VERSION:
-            raise ValueError(f"{str(path)!r} has layout version {f.attrs.get('version')!r}, "
-                             f"expected {VERSION}")
-        attrs = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
-        st = f["state"]
-        opt = {}
-        for name in _OPTIONAL_SCALARS:
-            v = float(attrs[name])
-            opt[name] = None if math.isnan(v) else v
-        kw = {name: attrs[name] for name in _SCALARS}
-        for name in ("steps", "rejected", "failures", "solves", "iterations"):
-            kw[name] = int(kw[name])
-        for name in ("status", "message", "scheme"):
-            kw[name] = str(kw[name])
-        result = RunResult(
-            **kw, **opt,
-            height=st["height"][()], initial_height=st["initial_height"][()],
-            pressure=f["pressure"][()],
-            previous_height=st["previous_height"][()] if "previous_height" in st else None,
-            previous_rate=st["previous_rate"][()] if "previous_rate" in st else None,
-            history=types.MappingProxyType({k: v[()] for k, v in f["history"].items()}),
-            snapshot_distance=f["snapshots/distance"][()],
-            snapshot_height=f["snapshots/height"][()],
-            snapshot_pressure=f["snapshots/pressure"][()])
-        arrays = {k: f[k][()] for k in f if isinstance(f[k], h5py.Dataset)
-                  and k not in ("worn_depth", "pressure")}
-    return result, attrs, arrays

@@ -26,8 +26,9 @@ They are registered with :func:`steady.scene.load_scene` through its
     # path = "face.npy"         # (file) (n, n) height in m, beside the scene file
 
 Distances are in units of the run-in distance ``s* = a / (k_min E*)``
-(PHYSICS.md, "Natural scales").  Every key is optional and checked; unknown
-keys are errors.
+(docs/model.md, "Natural scales").  Every key is optional and checked; unknown
+keys are errors.  The initial face kinds and their keys are those registered
+in :mod:`transient.initial_face`.
 """
 
 from __future__ import annotations
@@ -35,17 +36,16 @@ from __future__ import annotations
 import dataclasses
 import math
 import pathlib
-
-import numpy as np
+import types
 
 from steady.scene import load_scene
 
+from .initial_face import INITIAL_FACES, initial_height
 from .runin import RunOptions
 
 __all__ = [
     "InitialFace",
     "TransientSettings",
-    "initial_height",
     "load_transient_scene",
     "parse_initial_face",
     "parse_transient",
@@ -55,14 +55,6 @@ _FLOAT_KEYS = {"tol", "spread_tol", "shape_tol", "jump_spread", "jump_step", "ma
                "step", "initial_step", "checkpoint_interval", "contact_rtol"}
 _INT_KEYS = {"max_steps", "max_failures"}
 _TRANSIENT_KEYS = _FLOAT_KEYS | _INT_KEYS | {"scheme", "snapshots"}
-
-_FACE_KEYS = {
-    "flat": (set(), set()),
-    "tilted": ({"angle"}, {"azimuth"}),
-    "crowned": ({"sphere_radius"}, set()),
-    "file": ({"path"}, set()),
-}
-
 
 @dataclasses.dataclass(frozen=True)
 class TransientSettings:
@@ -86,19 +78,16 @@ class InitialFace:
     Attributes
     ----------
     kind : str
-        ``"flat"``, ``"tilted"``, ``"crowned"`` or ``"file"``.
-    angle : float, rad
-    azimuth : float, rad
-    sphere_radius : float, m
-    path : pathlib.Path or None
-        Absolute path of the ``.npy`` file.
+        A registered kind (:data:`transient.initial_face.INITIAL_FACES`):
+        ``"flat"`` (default), ``"tilted"``, ``"crowned"`` or ``"file"``.
+    parameters : mapping
+        The kind's parameters: numbers (rad, m), or for ``"file"`` the
+        absolute ``path`` of the ``.npy`` file.
     """
 
     kind: str = "flat"
-    angle: float = 0.0
-    azimuth: float = 0.0
-    sphere_radius: float = math.inf
-    path: pathlib.Path | None = None
+    parameters: types.MappingProxyType = dataclasses.field(
+        default_factory=lambda: types.MappingProxyType({}))
 
     def height(self, n, radius):
         """Initial height on the ``n x n`` grid of a punch of radius ``radius`` (m).
@@ -107,16 +96,16 @@ class InitialFace:
         -------
         ndarray, shape (n, n), m
             Larger = recessed.
-        """
-        from . import initial_face
 
-        if self.kind == "flat":
-            return initial_face.flat(n, radius)
-        if self.kind == "tilted":
-            return initial_face.tilted(n, radius, self.angle, self.azimuth)
-        if self.kind == "crowned":
-            return initial_face.crowned(n, radius, self.sphere_radius)
-        return initial_face.from_file(self.path, n)
+        Raises
+        ------
+        ValueError
+            A parameter out of range for this grid and punch, named.
+        """
+        try:
+            return initial_height(self.kind, n, radius, **self.parameters)
+        except ValueError as err:
+            raise ValueError(f"[initial_face]: {err}") from None
 
 
 def _float(table, key):
@@ -184,41 +173,41 @@ def parse_initial_face(table, base_dir):
     Returns
     -------
     InitialFace
+
+    Raises
+    ------
+    ValueError
+        Unknown kind or key, missing key, a value of the wrong type or a
+        missing file, named.
     """
     kind = table.get("kind", "flat")
-    if kind not in _FACE_KEYS:
-        raise ValueError(f"kind must be one of {sorted(_FACE_KEYS)}, got {kind!r}")
-    required, optional = _FACE_KEYS[kind]
-    allowed = required | optional | {"kind"}
+    if kind not in INITIAL_FACES:
+        raise ValueError(f"kind must be one of {sorted(INITIAL_FACES)}, got {kind!r}")
+    spec = INITIAL_FACES[kind]
+    allowed = set(spec.required) | set(spec.optional) | {"kind"}
     unknown = sorted(set(table) - allowed)
     if unknown:
         raise ValueError(f"unknown key {unknown[0]!r} for kind {kind!r} (allowed: "
                          f"{', '.join(sorted(allowed))})")
-    missing = sorted(required - set(table))
+    missing = sorted(set(spec.required) - set(table))
     if missing:
         raise ValueError(f"missing key {missing[0]!r} for kind {kind!r}")
-    if kind == "tilted":
-        angle = _float(table, "angle")
-        azimuth = _float(table, "azimuth") if "azimuth" in table else 0.0
-        if not (math.isfinite(angle) and 0 <= angle < math.pi / 2):
-            raise ValueError(f"angle must lie in [0, pi/2) rad, got {angle!r}")
-        if not math.isfinite(azimuth):
-            raise ValueError(f"azimuth must be finite (rad), got {azimuth!r}")
-        return InitialFace(kind, angle=angle, azimuth=azimuth)
-    if kind == "crowned":
-        r = _float(table, "sphere_radius")
-        if not (math.isfinite(r) and r > 0):
-            raise ValueError(f"sphere_radius must be positive (m), got {r!r}")
-        return InitialFace(kind, sphere_radius=r)
-    if kind == "file":
-        path = table["path"]
-        if not isinstance(path, str) or not path:
-            raise ValueError(f"path must be a non-empty string, got {path!r}")
-        full = pathlib.Path(base_dir) / path
-        if not full.is_file():
-            raise ValueError(f"initial face file {str(full)!r} does not exist")
-        return InitialFace(kind, path=full)
-    return InitialFace()
+    parameters = {}
+    for key in sorted(set(table) - {"kind"}):
+        if key == "path":
+            path = table[key]
+            if not isinstance(path, str) or not path:
+                raise ValueError(f"path must be a non-empty string, got {path!r}")
+            full = pathlib.Path(base_dir) / path
+            if not full.is_file():
+                raise ValueError(f"initial face file {str(full)!r} does not exist")
+            parameters[key] = full
+        else:
+            value = _float(table, key)
+            if not math.isfinite(value):
+                raise ValueError(f"{key} must be finite, got {value!r}")
+            parameters[key] = value
+    return InitialFace(kind, types.MappingProxyType(parameters))
 
 
 def load_transient_scene(path):
@@ -242,11 +231,3 @@ def load_transient_scene(path):
     settings = scene.extra.get("transient", TransientSettings())
     initial = scene.extra.get("initial_face", InitialFace())
     return scene, settings, initial
-
-
-def initial_height(initial, n, radius):
-    """Initial face height, checked: ndarray, shape (n, n), m (see :class:`InitialFace`)."""
-    h = np.asarray(initial.height(n, radius), dtype=float)
-    if h.shape != (n, n):
-        raise ValueError(f"initial face has shape {h.shape}, expected {(n, n)}")
-    return h

@@ -1,12 +1,14 @@
 """Time integrators for the run-in wear of a punch on an elastic half-space.
 
-The discretised run-in is the system (PHYSICS.md, "Wear" and "Contact")
+The discretised run-in is the system (docs/model.md, "Wear and time integration")
 
     dw/ds = k p^m,        p = P(w),
 
-where ``w`` (m, shape (n, n)) is the height of the punch face above its lowest
-point -- worn depth plus initial shape, larger = recessed --, ``k`` the wear
-coefficient of each pixel's phase (1/Pa), ``m`` the wear exponent and
+where ``w`` (m, shape (n, n)) is the height of the punch face -- worn depth
+plus initial shape, larger = recessed, defined up to a constant (the run
+keeps its face mean in a separate offset) --, ``k`` the wear coefficient of
+each pixel's phase (1/Pa for ``m = 1``, Pa^-m in general), ``m`` the wear
+exponent and
 ``P(w)`` the pressure of the unilateral contact under the prescribed normal
 force.  ``P`` is not a smooth function of ``w``: the pressure is the
 multiplier of a complementarity problem, so the system is a differential
@@ -17,12 +19,15 @@ so it is stiff, and stiffer with refinement and with the wear ratio.
 
 Schemes
 -------
-Every scheme is registered by name (:data:`SCHEMES`, :func:`get_scheme`):
+Every scheme is registered by name with the class decorator
+:func:`register_scheme` (:data:`SCHEMES`, :func:`get_scheme`); the problem
+it steps is a :class:`transient.problem.WearProblem`:
 
 ``explicit_euler``
     ``w+ = w + ds k P(w)^m``: one unshifted contact solve per step; stable
     only for ``ds < 2 lambda_min(K) / max(k m p^(m-1))`` (about
-    ``1.16 h / (k_max E*)`` for ``m = 1``, see :meth:`WearProblem.stable_step`).
+    ``1.16 h / (k_max E*)`` for ``m = 1``, see
+    :meth:`transient.problem.WearProblem.stable_step`).
     A step beyond that limit is refused.
 ``implicit_euler``
     ``w+ = w + ds k P(w+)^m``: the step *is* a contact problem with the
@@ -59,12 +64,9 @@ the derivative is unbounded at ``p = 0``; ``p0`` is floored at
 from __future__ import annotations
 
 import dataclasses
-import logging
 import math
 
 import numpy as np
-
-from .contact import solve_contact
 
 __all__ = [
     "BDF2",
@@ -73,259 +75,37 @@ __all__ = [
     "SCHEMES",
     "SDIRK2",
     "Scheme",
-    "StepFailure",
     "StepState",
     "Trial",
-    "WearProblem",
     "get_scheme",
     "register_scheme",
 ]
 
-logger = logging.getLogger(__name__)
-
-# Lower bound of the eigenvalues of the pixel influence matrix, in units of
-# h / E*: the minimum of the symbol of the zero-padded circulant (which
-# bounds every principal submatrix from below).  Used only when the
-# half-space does not expose its spectrum.
-_MIN_SYMBOL = 0.5806
+SCHEMES = {}
+"""Registered integrators by name (see :func:`register_scheme`)."""
 
 
-class StepFailure(RuntimeError):
-    """A step could not be completed (contact solver failed, non-finite values,
-    Newton iteration did not converge); the caller retries with a smaller step."""
+def register_scheme(cls):
+    """Class decorator: register an instance of a :class:`Scheme` under its ``name``."""
+    if not cls.name:
+        raise ValueError(f"scheme {cls.__name__} has no name")
+    SCHEMES[cls.name] = cls()
+    return cls
 
 
-class WearProblem:
-    """The discretised wear system ``dw/ds = k P(w)^m`` on one grid.
+def get_scheme(name):
+    """The registered scheme called ``name``.
 
-    Parameters
-    ----------
-    halfspace : steady.halfspace.HalfSpace
-        Elastic half-space operator of the grid (n pixels, pixel size h).
-    wear : ndarray, shape (n, n), 1/Pa
-        Wear coefficient ``k`` of each pixel's phase; ignored off the face.
-    face : ndarray of bool, shape (n, n)
-        Pixels of the punch face.
-    normal_force : float, N
-        Prescribed normal force ``F_N``.
-    radius : float, m
-        Punch radius ``a`` (sets the natural scales).
-    exponent : float, optional
-        Wear exponent ``m`` (default 1, Archard).
-    contact_rtol : float, optional
-        Relative tolerance of every contact solve (default 1e-10).
-    contact_maxiter : int, optional
-        Iteration cap of every contact solve (default: the solver's).
-    newton_rtol : float, optional
-        Stop the power-law Newton iteration when the pressure changes by less
-        than this times the mean pressure (default 1e-9).  Unused for m = 1.
-    newton_maxiter : int, optional
-        Newton iteration cap (default 30).
-    pressure_floor : float, optional
-        Floor of the linearisation pressure for ``m < 1``, in units of the mean
-        pressure (default 1e-6).
-
-    Attributes
-    ----------
-    solves : int
-        Contact solves done so far (counter, for work accounting).
-    iterations : int
-        Contact-solver iterations done so far.
+    Raises
+    ------
+    ValueError
+        If no scheme has that name.
     """
-
-    def __init__(self, halfspace, wear, face, normal_force, radius, *, exponent=1.0,
-                 contact_rtol=1e-10, contact_maxiter=None, newton_rtol=1e-9,
-                 newton_maxiter=30, pressure_floor=1e-6):
-        n = halfspace.n
-        face = np.asarray(face, dtype=bool)
-        wear = np.asarray(wear, dtype=float)
-        if face.shape != (n, n) or wear.shape != (n, n):
-            raise ValueError(f"face and wear must have shape {(n, n)}, got {face.shape} "
-                             f"and {wear.shape}")
-        if not face.any():
-            raise ValueError("face has no pixel")
-        kf = wear[face]
-        if not (np.all(np.isfinite(kf)) and np.all(kf > 0)):
-            raise ValueError(f"wear coefficients must be positive and finite on the face, "
-                             f"got range [{kf.min()!r}, {kf.max()!r}] 1/Pa")
-        if not (np.isfinite(normal_force) and normal_force > 0):
-            raise ValueError(f"normal_force must be positive, got {normal_force!r} N")
-        if not (np.isfinite(radius) and radius > 0):
-            raise ValueError(f"radius must be positive, got {radius!r} m")
-        if not (np.isfinite(exponent) and exponent > 0):
-            raise ValueError(f"wear exponent must be positive, got {exponent!r}")
-        self.halfspace = halfspace
-        self.n = n
-        self.face = face
-        self.wear = np.where(face, wear, 0.0)
-        self.normal_force = float(normal_force)
-        self.radius = float(radius)
-        self.exponent = float(exponent)
-        self.contact_rtol = float(contact_rtol)
-        self.contact_maxiter = contact_maxiter
-        self.newton_rtol = float(newton_rtol)
-        self.newton_maxiter = int(newton_maxiter)
-        self.pressure_floor = float(pressure_floor)
-        self.area = float(face.sum()) * halfspace.h ** 2
-        self.solves = 0
-        self.iterations = 0
-
-    # -- natural scales (PHYSICS.md) ------------------------------------
-    @property
-    def mean_pressure(self):
-        """``pbar = F_N / A`` over the face, Pa."""
-        return self.normal_force / self.area
-
-    @property
-    def depth_scale(self):
-        """``f* = pbar a / E*``, m."""
-        return self.mean_pressure * self.radius / self.halfspace.E_star
-
-    @property
-    def run_in_distance(self):
-        """``s* = a / (k_min E*)``, m: the slow (run-in) sliding distance.
-
-        For ``m != 1`` the rate constant is ``k m pbar^(m-1)``.
-        """
-        return self.radius / (self._rate_constant(self.wear[self.face].min())
-                              * self.halfspace.E_star)
-
-    @property
-    def fast_distance(self):
-        """``h / (k_max E*)``, m: the fastest (one-pixel) relaxation distance."""
-        return self.halfspace.h / (self._rate_constant(self.wear[self.face].max())
-                                   * self.halfspace.E_star)
-
-    def _rate_constant(self, k):
-        m = self.exponent
-        return k * m * self.mean_pressure ** (m - 1.0)
-
-    def steady_pressure(self):
-        """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (n, n).
-
-        The limit of an implicit Euler step as ``ds -> infinity``: the warm
-        start of a jump.
-        """
-        k = self.wear[self.face]
-        p = np.zeros((self.n, self.n))
-        p[self.face] = (k / k.min()) ** (-1.0 / self.exponent)
-        return p * (self.normal_force / (p.sum() * self.halfspace.h ** 2))
-
-    # -- the right-hand side -------------------------------------------
-    def rate(self, pressure):
-        """Wear rate ``k p^m``, m/m (dimensionless), shape (n, n); zero off the face."""
-        p = np.maximum(pressure, 0.0)
-        if self.exponent == 1.0:
-            return self.wear * p
-        return self.wear * p ** self.exponent
-
-    def stable_step(self, pressure):
-        """Largest stable explicit-Euler step at ``pressure``, m.
-
-        ``2 / lambda_max`` with ``lambda_max <= max(k m p^(m-1)) / lambda_min(K)``;
-        ``lambda_min(K)`` is bounded below by the minimum of the zero-padded
-        circulant's symbol, which bounds every principal submatrix (any contact
-        set) from below.
-        """
-        spectrum = getattr(self.halfspace, "influence_symbol", None)
-        if spectrum is not None:
-            lam_min = float(np.min(spectrum))
-        else:
-            lam_min = _MIN_SYMBOL * self.halfspace.h / self.halfspace.E_star
-        m = self.exponent
-        if m == 1.0:
-            slope = float(self.wear[self.face].max())
-        else:
-            p = np.maximum(pressure[self.face], self.pressure_floor * self.mean_pressure)
-            slope = float(np.max(self.wear[self.face] * m * p ** (m - 1.0)))
-        return 2.0 * lam_min / slope
-
-    # -- contact solves ------------------------------------------------
-    def contact(self, height, *, shift=None, x0=None):
-        """One contact solve, counted; raises :class:`StepFailure` on failure.
-
-        Parameters
-        ----------
-        height : ndarray, shape (n, n), m
-        shift : ndarray, shape (n, n), m/Pa, optional
-        x0 : ndarray, shape (n, n), Pa, optional
-            Warm start.
-
-        Returns
-        -------
-        transient.contact.ContactResult
-        """
-        if not np.all(np.isfinite(height[self.face])):
-            raise StepFailure("non-finite face height")
-        res = solve_contact(self.halfspace, self.face, height, self.normal_force,
-                            shift=shift, x0=x0, rtol=self.contact_rtol,
-                            maxiter=self.contact_maxiter)
-        self.solves += 1
-        self.iterations += int(res.nit)
-        if not res.success:
-            raise StepFailure(f"contact solve failed: {res.message} "
-                              f"(nit={res.nit}, residual={res.residual:.3g})")
-        if not (np.all(np.isfinite(res.pressure)) and np.isfinite(res.approach)):
-            raise StepFailure("contact solve returned non-finite pressure")
-        return res
-
-    def _rebuild(self, height, c, res):
-        """Face and approach of an implicit stage ``w = height + c k P(w)^m``.
-
-        On the contact the face is rebuilt as ``d - K p`` with ``K p`` recomputed
-        from the pressure (one FFT product) and ``d`` the mean of
-        ``height + c k p^m + K p`` there: the solver's residual, which scales
-        with the shifted operator and so with ``c``, is projected out of the
-        shape (it would reach ``rtol * ds / s*`` of ``f*`` after a jump), while
-        the rigid part keeps the exact mean of the update.
-        """
-        p = res.pressure
-        contact = self.face & (p > 0)
-        w = height + c * self.rate(p)
-        if not contact.any():
-            return w, res
-        kp = self.halfspace.displacement(p)
-        d = float(np.mean((w + kp)[contact]))
-        w = np.where(contact, d - kp, w)
-        return w, dataclasses.replace(res, approach=d)
-
-    def implicit(self, height, c, x0):
-        """Solve ``w = height + c k P(w)^m`` for ``w``.
-
-        Parameters
-        ----------
-        height : ndarray, shape (n, n), m
-        c : float, m
-            Sliding distance multiplying the implicit rate (``ds``, ``gamma ds``...).
-        x0 : ndarray, shape (n, n), Pa
-            Pressure guess (warm start and first linearisation point).
-
-        Returns
-        -------
-        w : ndarray, shape (n, n), m
-        result : ContactResult
-            The contact of the face ``w`` (its pressure is ``P(w)``).
-        """
-        if self.exponent == 1.0:
-            shift = c * self.wear
-            res = self.contact(height, shift=shift, x0=x0)
-            return self._rebuild(height, c, res)
-        m = self.exponent
-        pbar = self.mean_pressure
-        p0 = np.asarray(x0, dtype=float)
-        for it in range(self.newton_maxiter):
-            # Off the face the wear coefficient is 0; 1 keeps p^(m-1) finite there.
-            floor = self.pressure_floor * pbar if m < 1.0 else 0.0
-            pl = np.where(self.face, np.maximum(p0, floor), 1.0)
-            shift = c * self.wear * m * pl ** (m - 1.0)
-            h_lin = height + c * self.wear * (1.0 - m) * pl ** m
-            res = self.contact(h_lin, shift=shift, x0=p0)
-            change = float(np.max(np.abs(res.pressure - p0))) / pbar
-            p0 = res.pressure
-            if change <= self.newton_rtol:
-                return self._rebuild(height, c, res)
-        raise StepFailure(f"power-law Newton iteration did not converge in "
-                          f"{self.newton_maxiter} iterations (last change {change:.3g} pbar)")
+    try:
+        return SCHEMES[name]
+    except KeyError:
+        raise ValueError(f"unknown scheme {name!r}; expected one of "
+                         f"{sorted(SCHEMES)}") from None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -411,11 +191,12 @@ class Scheme:
         return f"<{type(self).__name__} {self.name!r}, order {self.order}>"
 
 
-def _trial(problem, height, res, error):
+def _trial(height, res, error):
     return Trial(height=height, pressure=res.pressure, approach=float(res.approach),
                  contact_fraction=float(res.contact_fraction), error=error)
 
 
+@register_scheme
 class ExplicitEuler(Scheme):
     """Forward Euler, ``w+ = w + ds k P(w)^m``; refuses steps beyond the stability limit."""
 
@@ -433,9 +214,10 @@ class ExplicitEuler(Scheme):
         height = state.height + ds * f0
         res = problem.contact(height, x0=state.pressure)
         error = 0.5 * ds * (problem.rate(res.pressure) - f0)
-        return _trial(problem, height, res, error)
+        return _trial(height, res, error)
 
 
+@register_scheme
 class ImplicitEuler(Scheme):
     """Backward Euler: the step is the contact problem with ``K + ds diag(k)``."""
 
@@ -447,9 +229,10 @@ class ImplicitEuler(Scheme):
         f0 = problem.rate(state.pressure)
         height, res = problem.implicit(state.height, ds, state.pressure)
         error = 0.5 * ds * (problem.rate(res.pressure) - f0)
-        return _trial(problem, height, res, error)
+        return _trial(height, res, error)
 
 
+@register_scheme
 class BDF2(Scheme):
     """Variable-step BDF2 (first step implicit Euler).
 
@@ -471,7 +254,7 @@ class BDF2(Scheme):
     def step(self, problem, state, ds):
         f0 = problem.rate(state.pressure)
         if state.previous_height is None:
-            return ImplicitEuler().step(problem, state, ds)
+            return SCHEMES["implicit_euler"].step(problem, state, ds)
         omega = ds / state.previous_step
         base = ((1 + omega) ** 2 * state.height
                 - omega ** 2 * state.previous_height) / (1 + 2 * omega)
@@ -480,9 +263,10 @@ class BDF2(Scheme):
         predictor = state.height + ds * ((1 + 0.5 * omega) * f0
                                          - 0.5 * omega * state.previous_rate)
         error = (8.0 / 23.0) * (height - predictor)
-        return _trial(problem, height, res, error)
+        return _trial(height, res, error)
 
 
+@register_scheme
 class SDIRK2(Scheme):
     """Alexander's L-stable, stiffly accurate two-stage SDIRK, ``gamma = 1 - 1/sqrt 2``.
 
@@ -504,36 +288,4 @@ class SDIRK2(Scheme):
         base = state.height + (1 - g) * ds * f1
         height, res2 = problem.implicit(base, g * ds, res1.pressure)
         error = g * ds * (problem.rate(res2.pressure) - f1)
-        return _trial(problem, height, res2, error)
-
-
-SCHEMES = {}
-"""Registered integrators by name (see :func:`register_scheme`)."""
-
-
-def register_scheme(scheme):
-    """Register a :class:`Scheme` instance under ``scheme.name``; returns it."""
-    if not scheme.name:
-        raise ValueError(f"scheme {scheme!r} has no name")
-    SCHEMES[scheme.name] = scheme
-    return scheme
-
-
-def get_scheme(name):
-    """The registered scheme called ``name``.
-
-    Raises
-    ------
-    ValueError
-        If no scheme has that name.
-    """
-    try:
-        return SCHEMES[name]
-    except KeyError:
-        raise ValueError(f"unknown scheme {name!r}; expected one of "
-                         f"{sorted(SCHEMES)}") from None
-
-
-for _scheme in (ExplicitEuler(), ImplicitEuler(), BDF2(), SDIRK2()):
-    register_scheme(_scheme)
-del _scheme
+        return _trial(height, res2, error)

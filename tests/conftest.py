@@ -1,0 +1,146 @@
+"""The test gallery: named scenes and wear problems that the tests share.
+
+Tests draw their scenes from here rather than carrying inline copies:
+
+- :data:`RADIUS`, :data:`E_STAR`, :data:`FORCE`, :data:`K1` -- the paper's
+  epoxy cylinder (Fig. 6) and a matrix wear coefficient;
+- :data:`GEOMETRIES` -- named phase geometries;
+- :func:`wear_problem` -- a :class:`transient.problem.WearProblem` of a
+  named geometry;
+- :data:`SCENES` and :func:`scene_text` -- scene files (TOML) by name, with
+  keys overridden where a test needs it; the fixture ``scene_file`` writes
+  one into the test's directory.
+"""
+
+import math
+
+import pytest
+
+from steady.grid import pixel_size
+from steady.halfspace import HalfSpace
+from steady.phases import Homogeneous, Rods, Voronoi
+from transient.problem import WearProblem
+
+RADIUS = 4e-3      # m, the paper's epoxy cylinder (Fig. 6)
+E_STAR = 1.3e6     # Pa
+FORCE = 10.0       # N
+K1 = 1e-13         # 1/Pa, wear coefficient of the matrix (phase 0)
+
+#: Tilt beyond which a flat punch lifts off on one side (transient.initial_face.tilted).
+CRITICAL_TILT = FORCE / (4 * RADIUS ** 2 * E_STAR)
+
+#: Five rods of radius 0.25 a: one on the axis, four at 0.6 a on the axes
+#: (the arrangement of studies/scenes/rods_*.toml).
+RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
+
+GEOMETRIES = {
+    "homogeneous": Homogeneous(),
+    # 64 seeds, 30 % of phase 1: coarse enough for n = 32.
+    "voronoi": Voronoi(64, (0.7, 0.3), 2029),
+    # 9 seeds, fits n = 12 (dense matrix-exponential references).
+    "voronoi_small": Voronoi(9, (0.6, 0.4), 2027),
+    # 400 seeds for the fine-grid cases.
+    "voronoi_fine": Voronoi(400, (0.7, 0.3), 2029),
+    "rods": RODS,
+}
+
+
+def halfspace(n, radius=RADIUS):
+    """The half-space operator of the ``n x n`` grid over the punch."""
+    return HalfSpace(n, pixel_size(n, radius), E_STAR)
+
+
+def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, **options):
+    """Wear problem of a gallery geometry (a name, or a geometry object).
+
+    ``ratios`` are the wear coefficients in units of :data:`K1`; ``options``
+    go to the :class:`~transient.problem.WearProblem` constructor.
+    """
+    if isinstance(geometry, str):
+        geometry = GEOMETRIES[geometry]
+    k = [K1 * r for r in ratios]
+    return WearProblem(halfspace(n), geometry.labels(n), k, FORCE, RADIUS, **options)
+
+
+_MAPS = {
+    "homogeneous": '{ kind = "homogeneous" }',
+    "voronoi": ('{{ kind = "voronoi", n_seeds = {n_seeds}, fill_factors = {fill_factors}, '
+                'seed = {seed} }}'),
+}
+
+#: Named scenes: the keys of :func:`scene_text`.
+SCENES = {
+    # A two-phase Voronoi punch for the steady command line.
+    "steady": dict(n=40, coefficients=(1.0e-9, 1.0e-8), n_seeds=100,
+                   fill_factors=(0.5, 0.5), seed=6007),
+    # The same with an odd grid, for output files.
+    "steady_odd": dict(n=33, coefficients=(1.0e-9, 3.0e-9), n_seeds=64,
+                       fill_factors=(0.5, 0.5), seed=5501),
+    # Every core key present, for the scene parser's error tests.
+    "parser": dict(n=64, coefficients=(1.0e-9, 1.7e-9), exponent=1.0, n_seeds=100,
+                   fill_factors=(0.5, 0.5), seed=2024),
+    # A run-in: the gallery's "voronoi" geometry with k_1/k_0 = 10, snapshots.
+    "runin": dict(n=32, coefficients=(1.0e-13, 1.0e-12), n_seeds=64,
+                  fill_factors=(0.7, 0.3), seed=2029,
+                  transient={"tol": 1e-3, "snapshots": (0.1, 1.0)}),
+}
+
+
+def _toml(value):
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (tuple, list)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "inf" if value > 0 else ("-inf" if value < 0 else "nan")
+    return repr(value)
+
+
+def scene_text(name="runin", *, extra="", **overrides):
+    """TOML text of a gallery scene.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`SCENES`.
+    extra : str, optional
+        Text appended verbatim (further sections or keys).
+    **overrides
+        Keys of the scene to change: ``radius``, ``normal_force``,
+        ``E_star``, ``n``, ``coefficients``, ``exponent``, ``map``
+        (``"homogeneous"`` or ``"voronoi"``), ``n_seeds``, ``fill_factors``,
+        ``seed``, ``transient`` and ``initial_face`` (dicts, or None to drop).
+    """
+    spec = dict(radius=0.004, normal_force=10.0, E_star=1.3e6, exponent=None,
+                map="voronoi", transient=None, initial_face=None)
+    spec.update(SCENES[name])
+    spec.update(overrides)
+    phase_map = _MAPS[spec["map"]].format(
+        n_seeds=spec.get("n_seeds"), fill_factors=_toml(spec.get("fill_factors", ())),
+        seed=spec.get("seed"))
+    lines = ["[punch]", f"radius = {spec['radius']!r}",
+             "[load]", f"normal_force = {spec['normal_force']!r}",
+             "[counterbody]", f"E_star = {spec['E_star']!r}",
+             "[grid]", f"n = {spec['n']}",
+             "[wear]", f"coefficients = {_toml(spec['coefficients'])}"]
+    if spec["exponent"] is not None:
+        lines.append(f"exponent = {spec['exponent']!r}")
+    lines += ["[phases]", f"map = {phase_map}"]
+    for section in ("transient", "initial_face"):
+        if spec[section] is not None:
+            lines.append(f"[{section}]")
+            lines += [f"{key} = {_toml(value)}" for key, value in spec[section].items()]
+    text = "\n".join(lines) + "\n"
+    return text + (extra + "\n" if extra else "")
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    """Factory: write a gallery scene into the test's directory, return its path."""
+    def write(name="runin", *, filename="scene.toml", **overrides):
+        path = tmp_path / filename
+        path.write_text(scene_text(name, **overrides))
+        return path
+    return write

@@ -1,0 +1,185 @@
+"""Step control and stop tests of the run loop (docs/model.md, "Wear and time integration").
+
+The run loop (:class:`transient.runin` ``_Run.loop``) asks two objects what
+to do: a :class:`StepController` proposes the length of the next attempt
+(adaptive from the scheme's error estimate, or fixed) and how to go on
+after an accepted, rejected or failed one; :class:`StopTests` says when the
+run is over (steady state, distance or step limits, a stagnating jump) and
+when to jump to the steady state.  The numbers that steer them are named
+below.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "DIVERGENCE_RELIEF",
+    "EXPLICIT_SAFETY",
+    "FAILURE_FACTOR",
+    "INITIAL_STEP_FACTOR",
+    "LANDING_SLACK",
+    "MAX_JUMPS",
+    "MIN_ACCEPT_FACTOR",
+    "MIN_REJECT_FACTOR",
+    "SAFETY",
+    "StepController",
+    "StopTests",
+]
+
+#: Fraction of the step the error estimate calls optimal that is proposed.
+SAFETY = 0.9
+#: A rejected step is retried at least this fraction of its length.
+MIN_REJECT_FACTOR = 0.1
+#: The step after an accepted one is at least this fraction of it.
+MIN_ACCEPT_FACTOR = 0.2
+#: A failed attempt (solver failure, non-finite values) is retried at this fraction.
+FAILURE_FACTOR = 0.25
+#: Explicit Euler steps stay below this fraction of their stability limit.
+EXPLICIT_SAFETY = 0.9
+#: First adaptive step, ``INITIAL_STEP_FACTOR sqrt(tol) (h / a) s*``: the fast
+#: scale on which the flat punch's edge relaxes.
+INITIAL_STEP_FACTOR = 0.01
+#: A face relief (shape rms) above this many ``f*`` is a divergence.
+DIVERGENCE_RELIEF = 1e6
+#: Jumps to the steady state tried before the run stops as stagnating.
+MAX_JUMPS = 5
+#: A step is stretched by up to this fraction to land on a snapshot.
+LANDING_SLACK = 1e-9
+#: Relative slack of the distance limit (round-off of the summed steps).
+_DISTANCE_SLACK = 1e-12
+
+
+class StepController:
+    """Lengths of the steps: elementary error-per-step control, or fixed steps.
+
+    Parameters
+    ----------
+    options : transient.runin.RunOptions
+    s_star : float, m
+        Run-in distance ``s*``.
+    """
+
+    def __init__(self, options, s_star):
+        self.options = options
+        self.s_star = s_star
+        self.fixed = options.step is not None
+
+    def first_step(self, h, radius):
+        """Length of the first attempt, m (``h`` the pixel size, ``radius`` a, m)."""
+        o = self.options
+        if o.step is not None:
+            return o.step * self.s_star
+        if o.initial_step is not None:
+            return o.initial_step * self.s_star
+        return INITIAL_STEP_FACTOR * math.sqrt(o.tol) * h / radius * self.s_star
+
+    def explicit_limit(self, ds, stable_step):
+        """Clip an explicit step to ``EXPLICIT_SAFETY`` times its stability limit (m).
+
+        Raises
+        ------
+        ValueError
+            A fixed step beyond the stability limit itself.
+        """
+        limit = EXPLICIT_SAFETY * stable_step
+        if self.fixed and ds > limit / EXPLICIT_SAFETY:
+            raise ValueError(
+                f"fixed step {ds / self.s_star:.6g} s* exceeds the explicit Euler "
+                f"stability limit {limit / EXPLICIT_SAFETY / self.s_star:.6g} s*")
+        return min(ds, limit)
+
+    @staticmethod
+    def land(ds, s, target, end):
+        """Shorten (or stretch by at most ``LANDING_SLACK``) ``ds`` to land on ``target``.
+
+        ``end`` is the distance limit; every argument in m.
+        """
+        ds = min(ds, end - s)
+        if target is not None and target - s <= ds * (1 + LANDING_SLACK):
+            ds = target - s
+        return ds
+
+    def after_accept(self, ds, err, scheme):
+        """Next step after an accepted one of length ``ds`` with scaled error ``err``."""
+        if self.fixed:
+            return self.options.step * self.s_star
+        q = scheme.error_order
+        growth = min(scheme.max_growth,
+                     SAFETY * err ** (-1.0 / (q + 1)) if err > 0 else scheme.max_growth)
+        return ds * max(MIN_ACCEPT_FACTOR, growth)
+
+    @staticmethod
+    def after_reject(ds, err, scheme):
+        """Retry length after a step rejected with scaled error ``err > 1``."""
+        q = scheme.error_order
+        return ds * max(MIN_REJECT_FACTOR, SAFETY * err ** (-1.0 / (q + 1)))
+
+    @staticmethod
+    def after_failure(ds):
+        """Retry length after a failed attempt."""
+        return FAILURE_FACTOR * ds
+
+
+class StopTests:
+    """When the run ends, and when it jumps to the steady state.
+
+    The run is steady when the wear-rate spread is below ``spread_tol`` and
+    the shape changes by less than ``shape_tol`` f* per s*; it stops
+    (resumable) at ``max_distance`` or ``max_steps``.  Once the spread is
+    below ``jump_spread`` and no snapshot is pending it jumps; after
+    ``MAX_JUMPS`` jumps without reaching the steady state it stops as
+    stagnating.
+
+    Parameters
+    ----------
+    options : transient.runin.RunOptions
+    s_star : float, m
+    """
+
+    def __init__(self, options, s_star):
+        self.options = options
+        self.s_star = s_star
+        self.jumps = 0
+
+    def check(self, run):
+        """``(status, message)`` if the run at its current point is over, else None.
+
+        ``run`` has ``s`` (m), ``steps`` and ``history`` (lists, ``spread``
+        and ``shape_rate`` last recorded).
+        """
+        o, s_star = self.options, self.s_star
+        spread = run.history["spread"][-1]
+        shape_rate = run.history["shape_rate"][-1]
+        if spread < o.spread_tol and shape_rate < o.shape_tol:
+            return "steady", (f"steady state at s = {run.s:.6g} m "
+                              f"({run.s / s_star:.6g} s*): wear-rate spread "
+                              f"{spread:.3g}, shape change {shape_rate:.3g} f*/s*")
+        if run.s >= o.max_distance * s_star * (1 - _DISTANCE_SLACK):
+            return "stopped", (f"reached max_distance {o.max_distance:.6g} s* before the "
+                               f"steady state (spread {spread:.3g}); resume with a "
+                               f"larger max_distance")
+        if run.steps >= o.max_steps:
+            return "stopped", (f"reached max_steps {o.max_steps} before the steady state "
+                               f"(s = {run.s / s_star:.6g} s*, spread "
+                               f"{spread:.3g}); resume with a larger max_steps")
+        return None
+
+    def jump_due(self, run, target, fixed):
+        """Whether the next attempt is a jump (no snapshot ``target`` pending, adaptive)."""
+        return (not fixed and target is None
+                and run.history["spread"][-1] < self.options.jump_spread)
+
+    def count_jump(self, run):
+        """Count a jump; ``(status, message)`` once the jumps stagnate, else None."""
+        self.jumps += 1
+        if self.jumps > MAX_JUMPS:
+            return "stopped", (f"the wear-rate spread stagnates at "
+                               f"{run.history['spread'][-1]:.3g} above spread_tol "
+                               f"{self.options.spread_tol:.3g} after {self.jumps - 1} "
+                               f"jumps: loosen spread_tol or tighten the contact tolerance")
+        return None
+
+    def end(self):
+        """The distance limit, m."""
+        return self.options.max_distance * self.s_star

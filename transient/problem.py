@@ -1,0 +1,343 @@
+"""The discretised wear problem of a run-in: one grid, one phase map, one load.
+
+:class:`WearProblem` holds everything a time integrator needs to advance
+``dw/ds = k P(w)^m`` (docs/model.md, "Wear and time integration"): the
+half-space operator, the phase map and the wear coefficient of every pixel,
+the load, the natural scales of the run-in and the contact solves (plain,
+and shifted for implicit stages).  :meth:`WearProblem.from_scene` is the one
+way from a scene file to a problem; every caller (command line, studies,
+tests) goes through it or through the constructor, which takes a phase
+map, never a per-pixel coefficient field built by hand.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from steady.grid import pixel_size
+from steady.halfspace import HalfSpace
+from steady.phases import validate_labels
+from steady.pressures import phase_pressures
+from steady.solution import solve
+
+from .contact import solve_contact
+
+__all__ = ["StepFailure", "WearProblem"]
+
+
+class StepFailure(RuntimeError):
+    """A step could not be completed (contact solver failed, non-finite values,
+    Newton iteration did not converge); the caller retries with a smaller step.
+    """
+
+
+class WearProblem:
+    """The discretised wear system ``dw/ds = k P(w)^m`` on one grid.
+
+    Parameters
+    ----------
+    halfspace : steady.halfspace.HalfSpace
+        Elastic half-space operator of the grid (n pixels, pixel size h).
+    labels : ndarray of int, shape (n, n)
+        Phase index ``0..P-1`` of each face pixel, -1 off the face; every
+        phase present on the face.
+    wear_coefficients : array_like, shape (P,), 1/Pa
+        ``k_i`` of each phase, positive and finite (Pa^-m for an exponent
+        ``m != 1``).
+    normal_force : float, N
+        Prescribed normal force ``F_N``.
+    radius : float, m
+        Punch radius ``a`` (sets the natural scales).
+    exponent : float, optional
+        Wear exponent ``m`` (default 1, Archard).
+    contact_rtol : float, optional
+        Relative tolerance of every contact solve (default 1e-10).
+    contact_maxiter : int, optional
+        Iteration cap of every contact solve (default: the solver's).
+    newton_rtol : float, optional
+        Stop the power-law Newton iteration when the pressure changes by less
+        than this times the mean pressure (default 1e-9).  Unused for m = 1.
+    newton_maxiter : int, optional
+        Newton iteration cap (default 30).
+    pressure_floor : float, optional
+        Floor of the linearisation pressure for ``m < 1``, in units of the mean
+        pressure (default 1e-6).
+
+    Attributes
+    ----------
+    face_mask : ndarray of bool, shape (n, n)
+        Pixels of the punch face (``labels >= 0``).
+    coefficient_field : ndarray, shape (n, n), 1/Pa
+        Wear coefficient of each pixel's phase, zero off the face.
+    solves : int
+        Contact solves done so far (counter, for work accounting).
+    iterations : int
+        Contact-solver iterations done so far.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from steady import HalfSpace, Voronoi, pixel_size
+    >>> n, a = 32, 4e-3
+    >>> labels = Voronoi(64, (0.7, 0.3), seed=2029).labels(n)
+    >>> problem = WearProblem(HalfSpace(n, pixel_size(n, a), 1.3e6), labels,
+    ...                       [1e-13, 1e-12], 10.0, a)
+    >>> problem.n_phases, problem.coefficient_field[problem.face_mask].min()
+    (2, 1e-13)
+    """
+
+    def __init__(self, halfspace, labels, wear_coefficients, normal_force, radius, *,
+                 exponent=1.0, contact_rtol=1e-10, contact_maxiter=None, newton_rtol=1e-9,
+                 newton_maxiter=30, pressure_floor=1e-6):
+        n = halfspace.n
+        labels = np.asarray(labels)
+        if labels.shape != (n, n):
+            raise ValueError(f"labels must have shape {(n, n)} to match the half-space grid, "
+                             f"got {labels.shape}")
+        if not np.issubdtype(labels.dtype, np.integer):
+            raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
+        face_mask = labels >= 0
+        if not face_mask.any():
+            raise ValueError("the phase map has no face pixel")
+        k = np.atleast_1d(np.asarray(wear_coefficients, dtype=float))
+        n_phases = int(labels.max()) + 1
+        if k.ndim != 1 or k.size != n_phases:
+            raise ValueError(f"need one wear coefficient per phase ({n_phases}), got "
+                             f"{np.asarray(wear_coefficients).tolist()}")
+        if not (np.all(np.isfinite(k)) and np.all(k > 0)):
+            raise ValueError(f"wear coefficients must be positive and finite, got "
+                             f"{k.tolist()} 1/Pa")
+        self.counts = validate_labels(labels, n_phases)
+        if not (np.isfinite(normal_force) and normal_force > 0):
+            raise ValueError(f"normal_force must be positive, got {normal_force!r} N")
+        if not (np.isfinite(radius) and radius > 0):
+            raise ValueError(f"radius must be positive, got {radius!r} m")
+        if not (np.isfinite(exponent) and exponent > 0):
+            raise ValueError(f"wear exponent must be positive, got {exponent!r}")
+        self.halfspace = halfspace
+        self.n = n
+        self.labels = labels
+        self.wear_coefficients = k
+        self.face_mask = face_mask
+        self.coefficient_field = np.where(face_mask, k[np.maximum(labels, 0)], 0.0)
+        self.normal_force = float(normal_force)
+        self.radius = float(radius)
+        self.exponent = float(exponent)
+        self.contact_rtol = float(contact_rtol)
+        self.contact_maxiter = contact_maxiter
+        self.newton_rtol = float(newton_rtol)
+        self.newton_maxiter = int(newton_maxiter)
+        self.pressure_floor = float(pressure_floor)
+        self.area = float(face_mask.sum()) * halfspace.h ** 2
+        self.solves = 0
+        self.iterations = 0
+
+    @classmethod
+    def from_scene(cls, scene, *, n=None, **options):
+        """The wear problem of a scene file, the one factory every caller uses.
+
+        Parameters
+        ----------
+        scene : steady.scene.Scene
+            As read by :func:`transient.scene.load_transient_scene` (or
+            :func:`steady.scene.load_scene`); its ``[transient]``
+            ``contact_rtol`` is used when present.
+        n : int, optional
+            Grid size; default ``scene.n``.  The phase geometry is rasterised
+            at this size.
+        **options
+            Keyword arguments of the constructor (``contact_rtol``,
+            ``contact_maxiter``, ``newton_rtol``, ...), overriding the scene.
+
+        Returns
+        -------
+        WearProblem
+
+        Examples
+        --------
+        >>> from transient.scene import load_transient_scene
+        >>> scene, settings, initial = load_transient_scene(
+        ...     "studies/scenes/voronoi_transient.toml")
+        >>> problem = WearProblem.from_scene(scene, n=32)
+        >>> problem.n, problem.n_phases
+        (32, 2)
+        """
+        n = scene.n if n is None else int(n)
+        settings = scene.extra.get("transient")
+        if settings is not None:
+            options.setdefault("contact_rtol", settings.contact_rtol)
+        halfspace = HalfSpace(n, pixel_size(n, scene.radius), scene.E_star)
+        return cls(halfspace, scene.geometry.labels(n), scene.wear_coefficients,
+                   scene.normal_force, scene.radius, exponent=scene.exponent, **options)
+
+    @property
+    def n_phases(self):
+        """Number of phases ``P``."""
+        return self.wear_coefficients.size
+
+    # -- natural scales (docs/model.md, "Natural scales") -----------------
+    @property
+    def pixel_mean_pressure(self):
+        """``F_N`` over the pixel area of the face, Pa: the mean of any admissible pressure."""
+        return self.normal_force / self.area
+
+    @property
+    def depth_scale(self):
+        """``f* = pbar a / E*``, m (``pbar`` the pixel mean pressure)."""
+        return self.pixel_mean_pressure * self.radius / self.halfspace.E_star
+
+    @property
+    def run_in_distance(self):
+        """``s* = a / (k_min E*)``, m: the slow (run-in) sliding distance.
+
+        For ``m != 1`` the rate constant is ``k m pbar^(m-1)``.
+        """
+        return self.radius / (self._rate_constant(self.wear_coefficients.min())
+                              * self.halfspace.E_star)
+
+    @property
+    def fast_distance(self):
+        """``h / (k_max E*)``, m: the fastest (one-pixel) relaxation distance."""
+        return self.halfspace.h / (self._rate_constant(self.wear_coefficients.max())
+                                   * self.halfspace.E_star)
+
+    def _rate_constant(self, k):
+        m = self.exponent
+        return k * m * self.pixel_mean_pressure ** (m - 1.0)
+
+    def steady_pressure(self):
+        """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (n, n).
+
+        The limit of an implicit Euler step as ``ds -> infinity``: the warm
+        start of a jump.
+        """
+        p_phase = phase_pressures(self.counts, self.wear_coefficients, self.normal_force,
+                                  self.halfspace.h ** 2, exponent=self.exponent)
+        return np.append(p_phase, 0.0)[self.labels]
+
+    def solve_steady(self):
+        """The closed-form steady state of this problem (eq. 7, 9), for comparison.
+
+        Returns
+        -------
+        steady.solution.SteadyResult
+            Plain pixel rms slope, no error estimate.
+        """
+        return solve(self.halfspace, self.labels, self.wear_coefficients, self.normal_force,
+                     exponent=self.exponent)
+
+    # -- the right-hand side -------------------------------------------
+    def rate(self, pressure):
+        """Wear rate ``k p^m``, m/m (dimensionless), shape (n, n); zero off the face."""
+        p = np.maximum(pressure, 0.0)
+        if self.exponent == 1.0:
+            return self.coefficient_field * p
+        return self.coefficient_field * p ** self.exponent
+
+    def stable_step(self, pressure):
+        """Largest stable explicit-Euler step at ``pressure``, m.
+
+        ``2 / lambda_max`` with ``lambda_max <= max(k m p^(m-1)) / lambda_min(K)``;
+        ``lambda_min(K)`` is bounded below by the minimum of the zero-padded
+        circulant's symbol, which bounds every principal submatrix (any contact
+        set) from below.
+        """
+        lam_min = float(np.min(self.halfspace.influence_symbol))
+        m = self.exponent
+        k = self.coefficient_field[self.face_mask]
+        if m == 1.0:
+            slope = float(k.max())
+        else:
+            p = np.maximum(pressure[self.face_mask],
+                           self.pressure_floor * self.pixel_mean_pressure)
+            slope = float(np.max(k * m * p ** (m - 1.0)))
+        return 2.0 * lam_min / slope
+
+    # -- contact solves ------------------------------------------------
+    def contact(self, height, *, shift=None, x0=None):
+        """One contact solve, counted; raises :class:`StepFailure` on failure.
+
+        Parameters
+        ----------
+        height : ndarray, shape (n, n), m
+        shift : ndarray, shape (n, n), m/Pa, optional
+        x0 : ndarray, shape (n, n), Pa, optional
+            Warm start.
+
+        Returns
+        -------
+        transient.contact.ContactResult
+        """
+        if not np.all(np.isfinite(height[self.face_mask])):
+            raise StepFailure("non-finite face height")
+        res = solve_contact(self.halfspace, self.face_mask, height, self.normal_force,
+                            shift=shift, x0=x0, rtol=self.contact_rtol,
+                            maxiter=self.contact_maxiter)
+        self.solves += 1
+        self.iterations += int(res.nit)
+        if not res.success:
+            raise StepFailure(f"contact solve failed: {res.message} "
+                              f"(nit={res.nit}, residual={res.residual:.3g})")
+        if not (np.all(np.isfinite(res.pressure)) and np.isfinite(res.approach)):
+            raise StepFailure("contact solve returned non-finite pressure")
+        return res
+
+    def _rebuild(self, height, c, res):
+        """Face and approach of an implicit stage ``w = height + c k P(w)^m``.
+
+        On the contact the face is rebuilt as ``d - K p`` with ``K p`` recomputed
+        from the pressure (one FFT product) and ``d`` the mean of
+        ``height + c k p^m + K p`` there: the solver's residual, which scales
+        with the shifted operator and so with ``c``, is projected out of the
+        shape (it would reach ``rtol * ds / s*`` of ``f*`` after a jump), while
+        the rigid part keeps the exact mean of the update.
+        """
+        p = res.pressure
+        contact = self.face_mask & (p > 0)
+        w = height + c * self.rate(p)
+        if not contact.any():
+            return w, res
+        kp = self.halfspace.displacement(p)
+        d = float(np.mean((w + kp)[contact]))
+        w = np.where(contact, d - kp, w)
+        return w, dataclasses.replace(res, approach=d)
+
+    def implicit(self, height, c, x0):
+        """Solve ``w = height + c k P(w)^m`` for ``w``.
+
+        Parameters
+        ----------
+        height : ndarray, shape (n, n), m
+        c : float, m
+            Sliding distance multiplying the implicit rate (``ds``, ``gamma ds``...).
+        x0 : ndarray, shape (n, n), Pa
+            Pressure guess (warm start and first linearisation point).
+
+        Returns
+        -------
+        w : ndarray, shape (n, n), m
+        result : ContactResult
+            The contact of the face ``w`` (its pressure is ``P(w)``).
+        """
+        if self.exponent == 1.0:
+            shift = c * self.coefficient_field
+            res = self.contact(height, shift=shift, x0=x0)
+            return self._rebuild(height, c, res)
+        m = self.exponent
+        pbar = self.pixel_mean_pressure
+        p0 = np.asarray(x0, dtype=float)
+        for _ in range(self.newton_maxiter):
+            # Off the face the wear coefficient is 0; 1 keeps p^(m-1) finite there.
+            floor = self.pressure_floor * pbar if m < 1.0 else 0.0
+            pl = np.where(self.face_mask, np.maximum(p0, floor), 1.0)
+            shift = c * self.coefficient_field * m * pl ** (m - 1.0)
+            h_lin = height + c * self.coefficient_field * (1.0 - m) * pl ** m
+            res = self.contact(h_lin, shift=shift, x0=p0)
+            change = float(np.max(np.abs(res.pressure - p0))) / pbar
+            p0 = res.pressure
+            if change <= self.newton_rtol:
+                return self._rebuild(height, c, res)
+        raise StepFailure(f"power-law Newton iteration did not converge in "
+                          f"{self.newton_maxiter} iterations (last change {change:.3g} pbar)")
