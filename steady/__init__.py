@@ -18,9 +18,11 @@ pressure on each phase and the half-space displacement under it.  Modules:
 - :mod:`steady.sweep` -- resumable parameter sweeps on executors;
 - :mod:`steady.voronoi_sweep` -- the sweep over random biphasic Voronoi maps;
 - :mod:`steady.design` -- the design table and the fill factor for a target
-  rms slope (command ``runin-design``).
+  rms slope (command ``runin-design``);
+- :mod:`steady.command_line` -- what the command lines share.
 
-The command ``runin-steady`` (``python -m steady``) solves a scene file.
+The command ``runin-steady`` (``python -m steady``, :mod:`steady.__main__`)
+solves a scene file.
 """
 
 from . import reference

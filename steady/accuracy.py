@@ -63,8 +63,8 @@ class SlopeIntegrals:
         Pixel count of the face times ``h^2``.
     total : float, m^2
         ``(4 / E*^2) sum p^2 h^2``: the exact integral over the plane.
-    face : float, m^2
-        Plain pixel quadrature over the face.
+    face_sum : float, m^2
+        Plain pixel quadrature over the face (the face sum ``I``).
     exterior : float, m^2
         Pixel quadrature over the exterior plus the analytic far tail.
     rim_share : float
@@ -73,14 +73,14 @@ class SlopeIntegrals:
 
     face_area: float
     total: float
-    face: float
+    face_sum: float
     exterior: float
     rim_share: float
 
     @property
     def defect(self):
         """Quadrature defect ``T - I - X``, m^2 (zero for an exact quadrature)."""
-        return self.total - self.face - self.exterior
+        return self.total - self.face_sum - self.exterior
 
     @property
     def corrected(self):
@@ -95,7 +95,7 @@ class SlopeIntegrals:
     @property
     def rms_slope_plain(self):
         """Plain pixel rms slope over the face, dimensionless."""
-        return np.sqrt(self.face / self.face_area)
+        return np.sqrt(self.face_sum / self.face_area)
 
 
 def edge_jumps(pressure_r, face_mask):
@@ -303,7 +303,7 @@ class SlopeEnergy:
         total = 4.0 / self.E_star**2 * (flat @ flat.T) * area
         interior, rim = _edge_differences(fields, face_mask)
         return SlopeGram(face_area=float(face_mask.sum()) * area, total=total,
-                         face=gram(face_rows) * area, exterior=exterior,
+                         face_sum=gram(face_rows) * area, exterior=exterior,
                          interior_jumps=interior @ interior.T, rim_jumps=rim @ rim.T)
 
 
@@ -330,11 +330,21 @@ class SlopeGram:
 
     See :meth:`SlopeEnergy.gram`; ``interior_jumps`` and ``rim_jumps`` are
     in Pa^2 per Pa^2 (dimensionless weights).
+
+    Attributes
+    ----------
+    face_area : float, m^2
+        Pixel count of the face times ``h^2``.
+    total, face_sum, exterior : ndarray, shape (P, P)
+        Forms of the integrals of the same names of :class:`SlopeIntegrals`.
+    interior_jumps, rim_jumps : ndarray, shape (P, P)
+        Forms of the squared pressure jumps over interior and rim edges
+        (:func:`edge_jumps`).
     """
 
     face_area: float
     total: np.ndarray
-    face: np.ndarray
+    face_sum: np.ndarray
     exterior: np.ndarray
     interior_jumps: np.ndarray
     rim_jumps: np.ndarray
@@ -357,7 +367,7 @@ class SlopeGram:
         with np.errstate(invalid="ignore", divide="ignore"):
             share = np.where(jumps > 0, rim / np.where(jumps > 0, jumps, 1.0), 1.0)
         return SlopeIntegrals(face_area=self.face_area, total=form(self.total),
-                              face=form(self.face), exterior=form(self.exterior),
+                              face_sum=form(self.face_sum), exterior=form(self.exterior),
                               rim_share=share)
 
 
@@ -386,28 +396,54 @@ class SlopeEstimate:
     values: tuple
 
 
+def _accepts(geometry, n):
+    """Whether the geometry can be rasterised at grid ``n`` (its ``check_grid``)."""
+    try:
+        geometry.check_grid(n)
+    except ValueError:
+        return False
+    return True
+
+
+def _coarsest_grid(geometry):
+    """Coarsest grid the geometry accepts: a multiple of 8 where it can be, else ``min_grid()``.
+
+    A continuous geometry accepts every grid from ``min_grid()`` on; a pixel
+    map only multiples of its size, the coarsest being the size itself.
+    Returns None if the geometry accepts neither.
+    """
+    low = geometry.min_grid()
+    for m in (8 * -(-low // 8), low):
+        if _accepts(geometry, m):
+            return m
+    return None
+
+
 def grid_ladder(geometry, n):
     """Grids for a discretisation-error estimate at grid ``n``, coarse to fine.
 
     ``n/4, n/2, n`` where the geometry accepts them (``check_grid``: for
     Voronoi maps two pixels per mean seed spacing); if neither ``n/4`` nor
-    ``n/2`` is accepted, the coarsest accepted grid (a multiple of 8) below
-    ``n``; if there is none, ``n, 2n``.  Only resolved grids enter the
-    estimate (e.g. 160^2 seeds at ``n = 512``: ``320, 512``).  A pixel map
-    exists only at multiples of its size and refines instead.
+    ``n/2`` is accepted, the coarsest accepted grid below ``n`` (a multiple
+    of 8, or for a pixel map its own size); if there is none, ``n, 2n``.
+    Only resolved grids enter the estimate (e.g. 160^2 seeds at
+    ``n = 512``: ``320, 512``).  A pixel map exists only at multiples of
+    its size: at its own size it refines instead.  The geometry accepts
+    every grid of the ladder.
+
+    Examples
+    --------
+    >>> from steady.phases import ArrayMap, Rods, Voronoi
+    >>> grid_ladder(Voronoi(160**2, (0.5, 0.5), 2024), 512)
+    [320, 512]
+    >>> grid_ladder(ArrayMap(Rods(((0.0, 0.0),), (0.5,)).labels(20)), 100)
+    [20, 100]
     """
     n = geometry.check_grid(int(n))
-    grids = []
-    for d in (4, 2):
-        if n % d == 0:
-            try:
-                geometry.check_grid(n // d)
-            except ValueError:
-                continue
-            grids.append(n // d)
+    grids = [n // d for d in (4, 2) if n % d == 0 and _accepts(geometry, n // d)]
     if not grids:
-        m = 8 * -(-geometry.min_grid() // 8)
-        grids = [m] if m < n else []
+        m = _coarsest_grid(geometry)
+        grids = [m] if m is not None and m < n else []
     return grids + [n] if grids else [n, 2 * n]
 
 

@@ -167,6 +167,21 @@ class HalfSpace:
     along y (axis 1).  The displacement is ``u = K p`` with
     ``K(x) = 1/(pi E*) * integral over a pixel of 1/r``; it is positive
     into the half-space.
+
+    Examples
+    --------
+    A uniform pressure ``p`` on the face: at the centre of a loaded disk the
+    displacement is ``2 p a / E*``, here up to the staircase of the rim.
+
+    >>> import numpy as np
+    >>> from steady.grid import face_mask, pixel_size
+    >>> n, a, E_star, p = 64, 4e-3, 1.3e6, 1e4
+    >>> halfspace = HalfSpace(n, pixel_size(n, a), E_star)
+    >>> u = halfspace.displacement(np.where(face_mask(n), p, 0.0))
+    >>> u.shape
+    (64, 64)
+    >>> print(f"{u[n // 2, n // 2] / (2 * p * a / E_star):.3f}")
+    1.002
     """
 
     def __init__(self, n, h, E_star, *, workers=-1):

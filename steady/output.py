@@ -6,10 +6,9 @@ the layout name and version in the root attributes ``format`` and
 ``format_version``.  (Sweep files, which grow point by point, have their
 own mechanism: :mod:`steady.sweep`.)
 
-Steady result files (layout ``runin.steady``, version 1), root group::
+Steady result files (layout ``runin.steady``, version 1)::
 
-Attributes
-----------
+    root attributes
         format            "runin.steady"
         format_version    1
         rms_slope         rms of |grad f_inf| over the face, best  (units: rms_slope_units)
@@ -23,7 +22,7 @@ Attributes
         exponent          m of the wear law k p^m                  (exponent_units)
         normal_force N, radius m, E_star Pa, pixel_size m          (<name>_units)
         n                 pixels across the diameter
-    datasets, each with a ``units`` attribute
+    root datasets, each with a ``units`` attribute
         phase     (n, n) int8/int16   phase index, -1 off the face   units "1"
         pressure  (n, n) float64      steady pressure                units "Pa"
         face      (n, n) float64      limiting face f_inf, NaN off   units "m"

@@ -198,7 +198,8 @@ def _as_fill_factors(fill_factors):
     try:
         values = tuple(float(v) for v in fill_factors)
     except (TypeError, ValueError):
-        raise ValueError(f"fill factors must be a sequence of numbers, got {fill_factors!r}")
+        raise ValueError(f"fill factors must be a sequence of numbers, got "
+                         f"{fill_factors!r}") from None
     if len(values) < 2:
         raise ValueError(f"fill factors need at least two phases, got {list(values)}")
     bad = [v for v in values if not (np.isfinite(v) and 0.0 < v < 1.0)]
@@ -255,6 +256,7 @@ class Voronoi:
     seed: int
 
     def __post_init__(self):
+        """Check the parameters; store the integers as ints, the fill factors as floats."""
         if (isinstance(self.n_seeds, bool) or not isinstance(self.n_seeds, (int, np.integer))
                 or self.n_seeds < 1):
             raise ValueError(f"n_seeds must be a positive integer, got {self.n_seeds!r}")
@@ -340,17 +342,19 @@ class Rods:
     rod_phases: tuple | None = None
 
     def __post_init__(self):
+        """Check the rods; store centres and radii as tuples of floats, phases as ints."""
         try:
             centres = tuple((float(c[0]), float(c[1])) for c in self.centres)
             bad_len = [c for c in self.centres if len(c) != 2]
         except (TypeError, ValueError, IndexError):
-            raise ValueError(f"rod centres must be pairs of numbers, got {self.centres!r}")
+            raise ValueError(f"rod centres must be pairs of numbers, got "
+                             f"{self.centres!r}") from None
         if bad_len:
             raise ValueError(f"rod centres must be pairs of numbers, got {self.centres!r}")
         try:
             radii = tuple(float(r) for r in self.radii)
         except (TypeError, ValueError):
-            raise ValueError(f"rod radii must be numbers, got {self.radii!r}")
+            raise ValueError(f"rod radii must be numbers, got {self.radii!r}") from None
         if not centres:
             raise ValueError("at least one rod is needed")
         if len(radii) != len(centres):
@@ -370,7 +374,7 @@ class Rods:
         rod_phases = tuple(int(p) for p in rod_phases)
         if len(rod_phases) != len(centres):
             raise ValueError(f"{len(centres)} rods but {len(rod_phases)} rod phases")
-        for k, ((cx, cy), r) in enumerate(zip(centres, radii)):
+        for k, ((cx, cy), r) in enumerate(zip(centres, radii, strict=True)):
             if math.hypot(cx, cy) + r > 1.0 + 1e-12:
                 raise ValueError(f"rod {k} (centre ({cx}, {cy}), radius {r}, units of the punch "
                                  f"radius) does not lie inside the face")
@@ -408,7 +412,7 @@ class Rods:
         n = self.check_grid(n)
         x = _unit_grid(n)
         out = np.where(face_mask(n), self.matrix_phase, -1)
-        for (cx, cy), r, phase in zip(self.centres, self.radii, self.rod_phases):
+        for (cx, cy), r, phase in zip(self.centres, self.radii, self.rod_phases, strict=True):
             inside = (x[:, None] - cx) ** 2 + (x[None, :] - cy) ** 2 < r * r
             out[inside] = phase
         return out
@@ -439,6 +443,7 @@ class ArrayMap:
     source: str = "array"
 
     def __post_init__(self):
+        """Check the labels; store them read-only with the pixels off the face filled."""
         a = np.asarray(self.labels_array)
         if a.ndim != 2 or a.shape[0] != a.shape[1]:
             raise ValueError(f"phase map {self.source} must be a square 2-d array, "

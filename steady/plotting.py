@@ -60,7 +60,7 @@ def result_figure(stored):
     cb = fig.colorbar(im, ax=ax_phase, ticks=np.arange(n_phases), shrink=0.85)
     cb.set_ticklabels([f"phase {i}\nk = {k:.3g} 1/Pa\narea {100 * rho:.1f} %"
                        for i, (k, rho) in enumerate(zip(res.wear_coefficients,
-                                                        res.fill_factors))])
+                                                        res.fill_factors, strict=True))])
     ax_phase.set_title("phase map")
 
     face_um = res.face * 1e6

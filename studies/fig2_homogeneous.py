@@ -95,6 +95,18 @@ def plot(path, png):
 
 
 def main(argv=None):
+    """Command line of the study: compute, write the HDF5 file, draw the figure.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
+
+    Returns
+    -------
+    int
+        Exit status.
+    """
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv)
 
 

@@ -81,7 +81,8 @@ def plot(path, png):
     fig = study_io.figure(10.0, 6.4)
     top, bottom = fig.subfigures(2, 1, height_ratios=[1, 1.55])
     cmap = ListedColormap(["#bdbdbd", "#252525"])
-    for ax, pic, level in zip(top.subplots(1, len(d["levels"])), d["pictures"], d["levels"]):
+    axes = top.subplots(1, len(d["levels"]))
+    for ax, pic, level in zip(axes, d["pictures"], d["levels"], strict=True):
         ax.imshow(np.ma.masked_less(pic, 0).T, origin="lower", extent=(-1, 1, -1, 1),
                   cmap=cmap, interpolation="nearest")
         side = int(round(np.sqrt(level)))
@@ -120,6 +121,18 @@ def plot(path, png):
 
 
 def main(argv=None):
+    """Command line of the study: compute, write the HDF5 file, draw the figure.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
+
+    Returns
+    -------
+    int
+        Exit status.
+    """
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True)
 
 

@@ -124,7 +124,7 @@ def plot(path, png):
     ax_i.axis("off")
     top, bottom = ax_i.inset_axes([0, 0.52, 1, 0.45]), ax_i.inset_axes([0, 0.0, 1, 0.45])
     vmax = float(np.nanmax(d["inserts"]))
-    for ax, face, r in zip((top, bottom), d["inserts"], p["insert_ratios"]):
+    for ax, face, r in zip((top, bottom), d["inserts"], p["insert_ratios"], strict=False):
         im = ax.imshow(face.T, origin="lower", extent=(-1, 1, -1, 1), cmap="viridis",
                        vmin=0, vmax=vmax, interpolation="nearest")
         ax.set_title(f"$\\rho_2$ = {p['insert_fill']:g}, $k_2/k_1$ = {r:g}", fontsize=8)
@@ -137,6 +137,18 @@ def plot(path, png):
 
 
 def main(argv=None):
+    """Command line of the study: compute, write the HDF5 file, draw the figure.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
+
+    Returns
+    -------
+    int
+        Exit status.
+    """
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True)
 
 

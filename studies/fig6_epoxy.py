@@ -75,7 +75,7 @@ def plot(path, png):
     fig = study_io.figure(6.0, 3.6)
     ax = fig.subplots()
     x = d["position"] * 1e3
-    for deg, h in zip(a["params"]["angles_deg"], d["height"]):
+    for deg, h in zip(a["params"]["angles_deg"], d["height"], strict=True):
         ax.plot(x, h * 1e6, lw=1.0, label=f"solver, section at {deg:g} deg")
     ax.plot(x, d["eq10_height"] * 1e6, "k--", lw=1.0, label="eq. 10")
     ax.set_xlabel("position along the section (mm)")
@@ -90,6 +90,18 @@ def plot(path, png):
 
 
 def main(argv=None):
+    """Command line of the study: compute, write the HDF5 file, draw the figure.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
+
+    Returns
+    -------
+    int
+        Exit status.
+    """
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv)
 
 

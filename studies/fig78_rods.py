@@ -97,7 +97,8 @@ def plot(path, png):
                             cmap="viridis", interpolation="nearest")
         cb = fig.colorbar(im, ax=ax_face, shrink=0.85)
         cb.set_label(r"$f_\infty$ above the rim (µm)")
-        for (cx, cy), rr in zip(d[f"{key}/rod_centres"], d[f"{key}/rod_radii"]):
+        for (cx, cy), rr in zip(d[f"{key}/rod_centres"], d[f"{key}/rod_radii"],
+                                strict=True):
             ax_face.add_patch(Circle((cx * 1e3, cy * 1e3), rr * 1e3, fill=False, lw=0.6,
                                      color="w", ls=":"))
         for i, y in enumerate(p["chords_y_mm"]):
@@ -121,6 +122,18 @@ def plot(path, png):
 
 
 def main(argv=None):
+    """Command line of the study: compute, write the HDF5 file, draw the figure.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
+
+    Returns
+    -------
+    int
+        Exit status.
+    """
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv)
 
 

@@ -1,4 +1,4 @@
-"""Scale independence: does the rms slope depend on the grain size at converged resolution?
+"""Scale independence: whether the rms slope depends on the grain size at converged resolution.
 
 Tests the paper's main claim (Fig. 4-5: "the rms slope is not influenced by
 the characteristic linear size of inclusions") at ``rho_2 = 0.5`` for the four
@@ -181,6 +181,18 @@ def plot(path, png):
 
 
 def main(argv=None):
+    """Command line of the study: compute, write the HDF5 file, draw the figure.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
+
+    Returns
+    -------
+    int
+        Exit status.
+    """
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True)
 
 

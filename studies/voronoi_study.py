@@ -45,8 +45,10 @@ QUICK = {
 
 
 def sweep_path(params, output):
-    """The sweep file: ``params['sweep']`` if given, else ``out/voronoi_sweep_n<n>.h5``
-    (full runs) or beside ``output`` (quick runs).
+    """Path of the sweep file of a study run.
+
+    ``params['sweep']`` if given, else ``out/voronoi_sweep_n<n>.h5`` (full
+    runs) or beside ``output`` (quick runs).
     """
     if params.get("sweep"):
         return pathlib.Path(params["sweep"])

@@ -103,6 +103,27 @@ def unit_cost(hs, face):
 
 
 def run_scheme(n, scheme, tol, distances):
+    """One adaptive run of a registered integrator up to the last compared distance.
+
+    Parameters
+    ----------
+    n : int
+        Grid size.
+    scheme : str
+        A key of :data:`transient.stepping.SCHEMES`.
+    tol : float
+        Local error per step, shape rms / ``f*``.
+    distances : sequence of float
+        Compared sliding distances, units of ``s*`` (the run lands on them).
+
+    Returns
+    -------
+    dict
+        ``wall`` (s), ``solves``, ``iterations``, ``steps``, ``rejected``,
+        ``slopes`` (rms slope at ``distances``), ``face`` (height at the
+        last distance, m, NaN off the face), ``s_star`` (m) and
+        ``depth_scale`` (m).
+    """
     problem = build(n)
     # No jump: the history up to the last distance is what is measured.
     options = RunOptions(scheme=scheme, tol=tol, snapshots=distances,
@@ -175,6 +196,25 @@ def shape_error(face, ref):
 
 
 def compute(n, out, *, full_baseline, runs, distances, reference, window):
+    """Run the reference, every scheme and tolerance, the baseline and the jump; write HDF5.
+
+    Parameters
+    ----------
+    n : int
+        Grid size.
+    out : pathlib.Path
+        Directory of ``work_precision_n{n}.h5``.
+    full_baseline : bool
+        Run the explicit baseline over the whole history instead of ``window``.
+    runs : mapping of str to sequence of float
+        Scheme name to the tolerances to run.
+    distances : sequence of float
+        Compared sliding distances, units of ``s*``.
+    reference : (str, float)
+        Scheme and tolerance of the reference run.
+    window : float
+        Distance (``s*``) over which the baseline is measured otherwise.
+    """
     problem = build(n)
     unit = unit_cost(problem.halfspace, problem.face_mask)
     logger.info("n=%d: one cold contact solve %.3f s", n, unit)
@@ -308,6 +348,13 @@ def plot(path, png):
 
 
 def main(argv=None):
+    """Command line of the study (see the module docstring).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
+    """
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--n", type=int, default=N)
     parser.add_argument("--quick", action="store_true", help="smoke test (n = 40)")

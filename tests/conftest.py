@@ -8,8 +8,9 @@ Tests draw their scenes from here rather than carrying inline copies:
 - :func:`wear_problem` -- a :class:`transient.problem.WearProblem` of a
   named geometry;
 - :data:`SCENES` and :func:`scene_text` -- scene files (TOML) by name, with
-  keys overridden where a test needs it; the fixture ``scene_file`` writes
-  one into the test's directory.
+  keys overridden where a test needs it (the phase map too: homogeneous,
+  Voronoi, rods or a file); the fixture ``scene_file`` writes one into the
+  test's directory.
 """
 
 import math
@@ -63,9 +64,11 @@ def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, **options):
 
 
 _MAPS = {
-    "homogeneous": '{ kind = "homogeneous" }',
+    "homogeneous": '{{ kind = "homogeneous" }}',
     "voronoi": ('{{ kind = "voronoi", n_seeds = {n_seeds}, fill_factors = {fill_factors}, '
                 'seed = {seed} }}'),
+    "rods": '{{ kind = "rods", centres = {centres}, radii = {radii} }}',
+    "file": '{{ kind = "file", path = {path} }}',
 }
 
 #: Named scenes: the keys of :func:`scene_text`.
@@ -109,9 +112,11 @@ def scene_text(name="runin", *, extra="", **overrides):
         Text appended verbatim (further sections or keys).
     **overrides
         Keys of the scene to change: ``radius``, ``normal_force``,
-        ``E_star``, ``n``, ``coefficients``, ``exponent``, ``map``
-        (``"homogeneous"`` or ``"voronoi"``), ``n_seeds``, ``fill_factors``,
-        ``seed``, ``transient`` and ``initial_face`` (dicts, or None to drop).
+        ``E_star``, ``n``, ``coefficients``, ``exponent`` (None drops it),
+        ``map`` (``"homogeneous"``, ``"voronoi"`` with ``n_seeds``,
+        ``fill_factors`` and ``seed``, ``"rods"`` with ``centres`` and
+        ``radii`` in metres, or ``"file"`` with ``path``), ``transient`` and
+        ``initial_face`` (dicts, or None to drop).
     """
     spec = dict(radius=0.004, normal_force=10.0, E_star=1.3e6, exponent=None,
                 map="voronoi", transient=None, initial_face=None)
@@ -119,7 +124,8 @@ def scene_text(name="runin", *, extra="", **overrides):
     spec.update(overrides)
     phase_map = _MAPS[spec["map"]].format(
         n_seeds=spec.get("n_seeds"), fill_factors=_toml(spec.get("fill_factors", ())),
-        seed=spec.get("seed"))
+        seed=spec.get("seed"), centres=_toml(spec.get("centres", ())),
+        radii=_toml(spec.get("radii", ())), path=_toml(spec.get("path", "")))
     lines = ["[punch]", f"radius = {spec['radius']!r}",
              "[load]", f"normal_force = {spec['normal_force']!r}",
              "[counterbody]", f"E_star = {spec['E_star']!r}",

@@ -4,9 +4,15 @@ import numpy as np
 import pytest
 
 from steady import reference
-from steady.accuracy import SlopeEnergy, edge_jumps, estimate_rms_slope, monopole_tail
+from steady.accuracy import (
+    SlopeEnergy,
+    edge_jumps,
+    estimate_rms_slope,
+    grid_ladder,
+    monopole_tail,
+)
 from steady.grid import face_mask, pixel_size, polar
-from steady.phases import Homogeneous, Voronoi
+from steady.phases import ArrayMap, Homogeneous, Voronoi
 from steady.pressures import pressure_field
 
 G0 = 4 / np.pi  # grad_f0 for pbar = 1 Pa, E* = 1 Pa
@@ -106,12 +112,37 @@ def test_error_estimate_bounds_the_error():
 
 
 def test_error_estimate_uses_a_finer_grid_for_a_pixel_map():
-    from steady.phases import ArrayMap
-
     labels = Voronoi(100, (0.3, 0.7), 2718).labels(64)
     est = estimate_rms_slope(ArrayMap(labels), [1.0, 5.0], np.pi, 1.0, 1.0, 64)
     assert est.grids == (64, 128), f"a pixel map refines by replication, got {est.grids}"
     assert est.error == pytest.approx(abs(est.values[1] - est.values[0])), "error is the change"
+
+
+@pytest.mark.parametrize("n0, n, expected", [
+    (20, 100, [20, 100]),   # n/4 = 25 and n/2 = 50 are not multiples of 20; nor is 24
+    (20, 60, [20, 60]),
+    (20, 80, [20, 40, 80]),
+    (20, 20, [20, 40]),     # the map's own size: refine
+    (12, 36, [12, 36]),
+])
+def test_grid_ladder_of_a_pixel_map_is_admissible(n0, n, expected):
+    """A map of n0 x n0 pixels exists only at multiples of n0, and so must every grid."""
+    geometry = ArrayMap(Voronoi(36, (0.3, 0.7), 2718).labels(n0))
+    grids = grid_ladder(geometry, n)
+    assert grids == expected, f"{n0} x {n0} map at n = {n}: ladder {grids}"
+    for m in grids:
+        assert geometry.check_grid(m) == m, f"grid {m} of the ladder refused"
+
+
+def test_error_estimate_of_a_pixel_map_whose_size_is_not_a_multiple_of_8():
+    """A 20 x 20 map at n = 100: the estimate runs on the grids 20 and 100 (not 24)."""
+    geometry = ArrayMap(Voronoi(100, (0.3, 0.7), 2718).labels(20))
+    est = estimate_rms_slope(geometry, [1.0, 5.0], np.pi, 1.0, 1.0, 100)
+    assert est.grids == (20, 100), f"grids {est.grids}"
+    assert np.all(np.isfinite(est.values)) and est.rms_slope > 0, f"values {est.values}"
+    # First order from n = 20 to 100, carried to 100: a quarter of the change.
+    assert est.error == pytest.approx(abs(est.values[1] - est.values[0]) / 4), \
+        f"error {est.error} from values {est.values}"
 
 
 @pytest.mark.slow

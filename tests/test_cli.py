@@ -7,23 +7,12 @@ import sys
 import h5py
 import numpy as np
 import pytest
+from conftest import scene_text
 
 SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
 
-SCENE = """\
-[punch]
-radius = 0.004
-[load]
-normal_force = 10.0
-[counterbody]
-E_star = 1.3e6
-[grid]
-n = 40
-[wear]
-coefficients = [1.0e-9, 1.0e-8]
-[phases]
-map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 6007 }
-"""
+#: The gallery's steady scene: two phases, 100 Voronoi seeds, n = 40.
+SCENE = scene_text("steady")
 
 
 def run(*args, cwd):
@@ -66,6 +55,7 @@ def test_good_run_writes_result_and_figure(tmp_path):
     ("n = 40", "n = = 40", "malformed TOML"),
 ])
 def test_bad_scene(tmp_path, old, new, fragment):
+    assert old in SCENE, f"test setup: {old!r} not in the gallery scene"
     (tmp_path / "s.toml").write_text(SCENE.replace(old, new))
     proc = run("s.toml", "-o", "r.h5", cwd=tmp_path)
     assert_bad_input(proc, fragment)
@@ -85,7 +75,8 @@ def test_usage_names_the_command_as_typed(tmp_path):
 
 def test_run_in_scene_is_accepted_with_a_note(tmp_path):
     """The sections of the run-in are skipped with one note line; unknown ones stay errors."""
-    text = SCENE + '[transient]\ntol = 1e-4\n[initial_face]\nkind = "tilted"\nangle = 0.3\n'
+    text = scene_text("steady", transient={"tol": 1e-4},
+                      initial_face={"kind": "tilted", "angle": 0.3})
     (tmp_path / "s.toml").write_text(text)
     proc = run("s.toml", "-o", "r.h5", cwd=tmp_path)
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
@@ -93,7 +84,7 @@ def test_run_in_scene_is_accepted_with_a_note(tmp_path):
         f"stderr {proc.stderr!r}"
     with h5py.File(tmp_path / "r.h5") as f:
         assert f["scene"][()].decode() == text, "the whole scene text is stored"
-    (tmp_path / "u.toml").write_text(SCENE + "[transient_settings]\ntol = 1e-4\n")
+    (tmp_path / "u.toml").write_text(scene_text("steady", extra="[transient_settings]\ntol = 1e-4"))
     assert_bad_input(run("u.toml", "-o", "u.h5", cwd=tmp_path),
                      "unknown section [transient_settings]")
     (tmp_path / "plain.toml").write_text(SCENE)

@@ -129,8 +129,9 @@ def test_unreachable_target_names_the_range():
 
 
 def test_fine_grain_closed_form_uses_eq7_at_round_off():
-    """The closed form takes p_i / pbar from eq. 7 (steady.pressures); the direct
-    two-phase expression agrees to round-off, rows broadcast like single calls.
+    """The closed form takes p_i / pbar from eq. 7 (steady.pressures).
+
+    The direct two-phase expression agrees to round-off; rows broadcast like single calls.
     """
     rng = np.random.default_rng(6151)
     rho = rng.uniform(0.01, 0.99, 200)
@@ -140,7 +141,8 @@ def test_fine_grain_closed_form_uses_eq7_at_round_off():
                      / ((1 - rho) * ratio + rho) ** 2)
     assert np.allclose(got, direct, rtol=1e-13, atol=0), \
         f"max relative deviation {np.max(np.abs(got / direct - 1)):.2e}"
-    single = [fine_grain_rms_slope([1 - r, r], [1.0, q]) for r, q in zip(rho[:5], ratio[:5])]
+    single = [fine_grain_rms_slope([1 - r, r], [1.0, q])
+              for r, q in zip(rho[:5], ratio[:5], strict=True)]
     assert np.array_equal(got[:5], single), "rows must equal single calls bit for bit"
 
 

@@ -1,5 +1,6 @@
-"""HDF5 files: the atomic writer; result files (round trip, units, refusal to overwrite,
-validation on read).
+"""HDF5 files: the atomic writer and the steady result files.
+
+Result files: round trip, units, refusal to overwrite, validation on read.
 """
 
 import os
@@ -8,25 +9,14 @@ import stat
 import h5py
 import numpy as np
 import pytest
+from conftest import scene_text
 
 from steady.output import FORMAT, FORMAT_VERSION, atomic_h5, read_result, write_result
 from steady.scene import parse_scene
 from steady.solution import solve_scene
 
-SCENE = """\
-[punch]
-radius = 0.004
-[load]
-normal_force = 10.0
-[counterbody]
-E_star = 1.3e6
-[grid]
-n = 33
-[wear]
-coefficients = [1.0e-9, 3.0e-9]
-[phases]
-map = { kind = "voronoi", n_seeds = 64, fill_factors = [0.5, 0.5], seed = 5501 }
-"""
+#: The gallery's steady scene on an odd grid (n = 33).
+SCENE = scene_text("steady_odd")
 
 
 @pytest.fixture(scope="module")

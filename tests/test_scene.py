@@ -4,27 +4,15 @@ import pathlib
 
 import numpy as np
 import pytest
+from conftest import scene_text
 
 from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi
 from steady.scene import load_scene, parse_scene
 
 SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
 
-BASE = """\
-[punch]
-radius = 0.004
-[load]
-normal_force = 10.0
-[counterbody]
-E_star = 1.3e6
-[grid]
-n = 64
-[wear]
-coefficients = [1.0e-9, 1.7e-9]
-exponent = 1.0
-[phases]
-map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }
-"""
+#: The gallery's parser scene: every core key present, 100 Voronoi seeds, n = 64.
+BASE = scene_text("parser")
 
 
 def test_parse_base_scene(tmp_path):
@@ -38,14 +26,15 @@ def test_parse_base_scene(tmp_path):
 
 
 def test_exponent_defaults_to_one(tmp_path):
-    scene = parse_scene(BASE.replace("exponent = 1.0\n", ""), tmp_path)
+    text = scene_text("parser", exponent=None)
+    assert "exponent" not in text, f"test setup: exponent still in {text!r}"
+    scene = parse_scene(text, tmp_path)
     assert scene.exponent == 1.0, f"exponent {scene.exponent}"
 
 
 def test_rods_in_metres(tmp_path):
-    text = BASE.replace(
-        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
-        'map = { kind = "rods", centres = [[0.0, 0.0], [0.002, 0.0]], radii = [0.001, 0.0008] }')
+    text = scene_text("parser", map="rods", centres=[[0.0, 0.0], [0.002, 0.0]],
+                      radii=[0.001, 0.0008])
     scene = parse_scene(text, tmp_path)
     assert isinstance(scene.geometry, Rods), f"{scene.geometry}"
     assert np.allclose(scene.geometry.centres, [(0.0, 0.0), (0.5, 0.0)]), "centres in units of a"
@@ -56,10 +45,7 @@ def test_file_map_relative_to_scene(tmp_path):
     sub = tmp_path / "maps"
     sub.mkdir()
     np.save(sub / "m.npy", Rods(((0.0, 0.0),), (0.5,)).labels(32))
-    text = BASE.replace(
-        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
-        'map = { kind = "file", path = "maps/m.npy" }')
-    (tmp_path / "s.toml").write_text(text)
+    (tmp_path / "s.toml").write_text(scene_text("parser", map="file", path="maps/m.npy"))
     scene = load_scene(tmp_path / "s.toml")
     assert isinstance(scene.geometry, ArrayMap), f"{scene.geometry}"
     assert scene.source_path == tmp_path / "s.toml", f"{scene.source_path}"
@@ -74,23 +60,23 @@ def test_extra_sections(tmp_path):
             raise ValueError(f"steps must be positive, got {table.get('steps')!r}")
         return table["steps"]
 
-    text = BASE + "[transient]\nsteps = 5\n"
+    text = scene_text("parser", transient={"steps": 5})
     scene = parse_scene(text, tmp_path, extra_sections={"transient": parse_transient})
     assert scene.extra["transient"] == 5, f"extra {scene.extra}"
     assert seen == [tmp_path], f"callable got base_dir {seen}"
     assert scene.ignored_sections == (), f"a parsed section is not ignored: {scene}"
     with pytest.raises(ValueError, match=r"\[transient\]: steps must be positive, got 0"):
-        parse_scene(BASE + "[transient]\nsteps = 0\n", tmp_path,
+        parse_scene(scene_text("parser", transient={"steps": 0}), tmp_path,
                     extra_sections={"transient": parse_transient})
     with pytest.raises(ValueError, match=r"unknown section \[wear_history\]"):
-        parse_scene(BASE + "[wear_history]\nsteps = 5\n", tmp_path,
+        parse_scene(scene_text("parser", extra="[wear_history]\nsteps = 5"), tmp_path,
                     extra_sections={"transient": parse_transient})
 
 
 def test_run_in_sections_are_ignored_without_a_parser(tmp_path):
     """One scene file serves both commands: steady records the run-in sections it skips."""
-    text = (BASE + '[transient]\nscheme = "sdirk2"\nnot_checked_here = 1\n'
-            + '[initial_face]\nkind = "tilted"\nangle = 1e-3\n')
+    text = scene_text("parser", transient={"scheme": "sdirk2", "not_checked_here": 1},
+                      initial_face={"kind": "tilted", "angle": 1e-3})
     scene = parse_scene(text, tmp_path)
     assert scene.ignored_sections == ("initial_face", "transient"), \
         f"ignored sections {scene.ignored_sections}"
@@ -104,7 +90,7 @@ def test_run_in_sections_are_ignored_without_a_parser(tmp_path):
     assert scene.ignored_sections == ("transient",), f"{scene.ignored_sections}"
     assert scene.extra["initial_face"] == "tilted", f"{scene.extra}"
     with pytest.raises(ValueError, match=r"unknown section \[transients\]"):
-        parse_scene(BASE + "[transients]\nsteps = 5\n", tmp_path)
+        parse_scene(scene_text("parser", extra="[transients]\nsteps = 5"), tmp_path)
     with pytest.raises(ValueError, match=r"\[transient\] must be a table, got 5"):
         parse_scene("transient = 5\n" + BASE, tmp_path)
 
@@ -122,15 +108,16 @@ def test_shipped_run_in_scene_loads_for_steady():
     ("normal_force = 10.0", "normal_force = 0",
      "[load] normal_force must be a positive finite number (N), got 0"),
     ("normal_force = 10.0", "normal_force = nan", "got nan"),
-    ("E_star = 1.3e6", "E_star = true", "[counterbody] E_star must be a number (Pa), got True"),
+    ("E_star = 1300000.0", "E_star = true",
+     "[counterbody] E_star must be a number (Pa), got True"),
     ("n = 64", "n = 64.0", "[grid] n must be an integer, got 64.0"),
     ("n = 64", "n = 10",
      "[grid] n: grid too coarse for 100 Voronoi seeds: n = 10, the minimum is n = 20"),
-    ("[1.0e-9, 1.7e-9]", "[1.0e-9, -1.7e-9]",
+    ("[1e-09, 1.7e-09]", "[1e-09, -1.7e-09]",
      "[wear] coefficients must be a positive finite number (1/Pa), got -1.7e-09"),
-    ("[1.0e-9, 1.7e-9]", "[1.0e-9]",
+    ("[1e-09, 1.7e-09]", "[1e-09]",
      "[wear] coefficients has 1 values [1e-09] but the phase map has 2 phases"),
-    ("[1.0e-9, 1.7e-9]", "1.0e-9", "[wear] coefficients must be an array, got 1e-09"),
+    ("[1e-09, 1.7e-09]", "1e-09", "[wear] coefficients must be an array, got 1e-09"),
     ("exponent = 1.0", "exponent = -2.0",
      "[wear] exponent must be a positive finite number (dimensionless), got -2.0"),
     ("[0.5, 0.5]", "[0.5, 0.6]", "fill factors must sum to 1, got [0.5, 0.6]"),
@@ -156,9 +143,8 @@ def test_bad_keys(tmp_path, old, new, fragment):
 
 
 def test_bad_rods_scene(tmp_path):
-    text = BASE.replace(
-        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
-        'map = { kind = "rods", centres = [[0.0, 0.0], [0.001, 0.0]], radii = [0.001, 0.001] }')
+    text = scene_text("parser", map="rods", centres=[[0.0, 0.0], [0.001, 0.0]],
+                      radii=[0.001, 0.001])
     with pytest.raises(ValueError, match=r"\[phases\] map: rods 0 and 1 overlap"):
         parse_scene(text, tmp_path)
 
@@ -166,10 +152,7 @@ def test_bad_rods_scene(tmp_path):
 def test_missing_files(tmp_path):
     with pytest.raises(ValueError, match="scene file .*nope.toml' does not exist"):
         load_scene(tmp_path / "nope.toml")
-    text = BASE.replace(
-        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.5, 0.5], seed = 2024 }',
-        'map = { kind = "file", path = "gone.npy" }')
-    (tmp_path / "s.toml").write_text(text)
+    (tmp_path / "s.toml").write_text(scene_text("parser", map="file", path="gone.npy"))
     with pytest.raises(ValueError) as err:
         load_scene(tmp_path / "s.toml")
     assert "s.toml" in str(err.value) and "gone.npy" in str(err.value), f"{err.value!r}"

@@ -110,6 +110,18 @@ def test_bad_command_line(tmp_path):
         "expected proc.returncode == 2 and proc.stderr.startswith('error: ')"
 
 
+def test_usage_names_the_command_as_typed(tmp_path, monkeypatch):
+    """``runin-transient --help`` says runin-transient, ``python -m transient`` says that."""
+    from transient.__main__ import build_parser
+
+    monkeypatch.setattr(sys, "argv", ["/usr/local/bin/runin-transient", "--help"])
+    usage = build_parser().format_usage()
+    assert usage.startswith("usage: runin-transient "), f"console script usage {usage!r}"
+    proc = cli("--help", cwd=tmp_path)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
+    assert proc.stdout.startswith("usage: python -m transient "), f"usage {proc.stdout[:80]!r}"
+
+
 def test_stopped_run_exits_1_and_resumes(tmp_path, write_scene):
     scene = write_scene()
     out = tmp_path / "run.h5"

@@ -22,6 +22,9 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
   sections;
 - :mod:`transient.plotting` -- figures of run files (imported on demand: it
   loads matplotlib).
+
+The command ``runin-transient`` (``python -m transient``,
+:mod:`transient.__main__`) runs the run-in of a scene file.
 """
 
 from .comparison import SteadyComparison, compare_with_steady

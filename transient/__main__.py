@@ -1,11 +1,11 @@
 """Command line: run-in of the punch described by a scene file.
 
-Usage::
+Usage (``runin-transient`` once installed, or ``python -m transient``)::
 
-    python -m transient SCENE.toml -o RUN.h5 [--resume] [--force] [--plot RUN.png]
-                        [--scheme NAME] [--tol T] [--spread-tol T] [--shape-tol T]
-                        [--jump-spread T] [--max-distance S] [--max-steps N]
-                        [--checkpoint-interval SEC] [-v]
+    runin-transient SCENE.toml -o RUN.h5 [--resume] [--force] [--plot RUN.png]
+                    [--scheme NAME] [--tol T] [--spread-tol T] [--shape-tol T]
+                    [--jump-spread T] [--max-distance S] [--max-steps N]
+                    [--checkpoint-interval SEC] [-v]
 
 Starts from the scene's initial face (``[initial_face]``, flat by default),
 wears it until the wear rates equalise (``[transient]`` options, overridden
@@ -32,6 +32,8 @@ import sys
 
 import numpy as np
 
+from steady.command_line import program_name
+
 __all__ = ["build_parser", "main"]
 
 logger = logging.getLogger(__name__)
@@ -55,8 +57,8 @@ def _positive(text):
 
 
 def build_parser():
-    """The argument parser of ``python -m transient``."""
-    p = _Parser(prog="python -m transient",
+    """The argument parser of ``runin-transient`` (``python -m transient``)."""
+    p = _Parser(prog=program_name("python -m transient"),
                 description="Run-in wear of a multi-phase punch on an elastic half-space, "
                             "from its initial face to the steady state.")
     p.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
@@ -208,7 +210,19 @@ def run(args):
 
 
 def main(argv=None):
-    """Entry point of ``python -m transient``; returns the exit status."""
+    """Entry point of ``runin-transient`` and ``python -m transient``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0 steady state reached, 1 run stopped or failed
+        (resumable), 2 bad input, 130 interrupted.
+    """
     args = build_parser().parse_args(argv)
     level = (logging.WARNING, logging.INFO, logging.DEBUG)[min(args.verbose, 2)]
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")

@@ -51,7 +51,7 @@ class SteadyComparison:
     def summary(self):
         """One line per figure, for the terminal."""
         pp = ", ".join(f"{a:.6g}/{b:.6g}" for a, b in
-                       zip(self.phase_pressures, self.steady_phase_pressures))
+                       zip(self.phase_pressures, self.steady_phase_pressures, strict=True))
         return (f"face shape error (max, / steady relief): {self.face_error:.3e}\n"
                 f"face shape error (rms, / steady relief): {self.face_rms_error:.3e}\n"
                 f"rms slope: {self.rms_slope:.6g} vs steady {self.steady_rms_slope:.6g} "

@@ -117,7 +117,7 @@ class _Operator:
         """``A`` applied to a pressure that is ``values`` on pixels ``(ii, jj)``, else 0."""
         q, ar = self.halfspace.influence_quadrant, self._arange
         u = np.zeros((self.halfspace.n, self.halfspace.n))
-        for i, j, v in zip(ii, jj, values):
+        for i, j, v in zip(ii, jj, values, strict=True):
             u += v * q[np.abs(ar - i)][:, np.abs(ar - j)]
         if self.shift is not None:
             u[ii, jj] += self.shift[ii, jj] * values
@@ -158,7 +158,7 @@ def _check_field(name, value, shape):
 
 def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=None,
                   rtol=1e-8, atol=0.0, maxiter=None, preconditioner="auto", callback=None):
-    """Contact pressure and rigid approach of the face under a normal force.
+    r"""Contact pressure and rigid approach of the face under a normal force.
 
     Solves the complementarity problem of the module docstring by a
     preconditioned constrained conjugate gradient (Polonsky & Keer 1999).
@@ -220,7 +220,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     ``I = {p > 0}`` and the gap ``g = u + h - d``, the residual is the rms,
     over the face pixels, of the violation of the contact conditions::
 
-        residual = sqrt( (sum_I g^2 + sum_{face \\ I} min(g, 0)^2) / N_face )
+        residual = sqrt( (sum_I g^2 + sum_{face \ I} min(g, 0)^2) / N_face )
 
     (gap left open under pressure, or interpenetration where there is
     none), in metres.  The iteration stops when
@@ -233,6 +233,23 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     residual is updated with each step; when its accumulated round-off
     could reach a thousandth of the tolerance, it is recomputed by FFT and
     the rule checked again.
+
+    Examples
+    --------
+    The flat punch: in full contact, with the rigid approach
+    ``F / (2 a E*)`` of the continuum punch up to the staircase of the rim.
+
+    >>> import numpy as np
+    >>> from steady import HalfSpace, face_mask, pixel_size, reference
+    >>> n, a, E_star, force = 64, 4e-3, 1.3e6, 10.0
+    >>> halfspace = HalfSpace(n, pixel_size(n, a), E_star)
+    >>> res = solve_contact(halfspace, face_mask(n), np.zeros((n, n)), force)
+    >>> res.success, res.contact_fraction
+    (True, 1.0)
+    >>> print(f"load {res.pressure.sum() * halfspace.h**2:.9f} N")
+    load 10.000000000 N
+    >>> print(f"{res.approach / reference.flat_punch_approach(force, a, E_star):.3f}")
+    1.002
     """
     n = int(halfspace.n)
     shape = (n, n)

@@ -28,8 +28,10 @@ __all__ = ["StepFailure", "WearProblem"]
 
 
 class StepFailure(RuntimeError):
-    """A step could not be completed (contact solver failed, non-finite values,
-    Newton iteration did not converge); the caller retries with a smaller step.
+    """A step could not be completed; the caller retries with a smaller step.
+
+    Raised when the contact solver fails, values turn non-finite or the
+    power-law Newton iteration does not converge.
     """
 
 
@@ -84,7 +86,7 @@ class WearProblem:
     >>> labels = Voronoi(64, (0.7, 0.3), seed=2029).labels(n)
     >>> problem = WearProblem(HalfSpace(n, pixel_size(n, a), 1.3e6), labels,
     ...                       [1e-13, 1e-12], 10.0, a)
-    >>> problem.n_phases, problem.coefficient_field[problem.face_mask].min()
+    >>> problem.n_phases, float(problem.coefficient_field[problem.face_mask].min())
     (2, 1e-13)
     """
 
@@ -160,9 +162,9 @@ class WearProblem:
         >>> from transient.scene import load_transient_scene
         >>> scene, settings, initial = load_transient_scene(
         ...     "studies/scenes/voronoi_transient.toml")
-        >>> problem = WearProblem.from_scene(scene, n=32)
+        >>> problem = WearProblem.from_scene(scene, n=40)
         >>> problem.n, problem.n_phases
-        (32, 2)
+        (40, 2)
         """
         n = scene.n if n is None else int(n)
         settings = scene.extra.get("transient")

@@ -143,6 +143,7 @@ class RunOptions:
     checkpoint_interval: float = 10.0
 
     def __post_init__(self):
+        """Check every option; store the snapshots sorted and without repeats."""
         get_scheme(self.scheme)
         for name in ("tol", "spread_tol", "shape_tol", "jump_step", "max_distance"):
             value = getattr(self, name)
@@ -539,6 +540,27 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     ValueError
         Bad options or inputs, or a fixed explicit step beyond the stability
         limit.
+
+    Examples
+    --------
+    A biphasic Voronoi punch worn from flat to the steady state, with a
+    loose step tolerance; the final face is the closed-form one (eq. 9).
+
+    >>> from transient import RunOptions, WearProblem, compare_with_steady, run_in
+    >>> from transient.scene import load_transient_scene
+    >>> scene, settings, initial = load_transient_scene(
+    ...     "studies/scenes/voronoi_transient.toml")
+    >>> problem = WearProblem.from_scene(scene, n=40)
+    >>> result = run_in(problem, initial.height(problem.n, scene.radius),
+    ...                 RunOptions(tol=1e-2))
+    >>> result.status
+    'steady'
+    >>> slope = result.history["normalised_rms_slope"]
+    >>> print(f"rms slope {slope[0]:.3f} -> {slope[-1]:.3f} grad_f0")
+    rms slope 0.593 -> 1.092 grad_f0
+    >>> comparison = compare_with_steady(result, problem.solve_steady(), problem)
+    >>> bool(comparison.face_error < 1e-6)
+    True
     """
     options = RunOptions() if options is None else options
     run = _Run(problem, options)

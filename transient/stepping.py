@@ -184,10 +184,32 @@ class Scheme:
     explicit = False
 
     def step(self, problem, state, ds):
-        """Attempt one step of length ``ds`` (m) from ``state``; return a :class:`Trial`."""
+        """Attempt one step of length ``ds`` from ``state``.
+
+        Parameters
+        ----------
+        problem : transient.problem.WearProblem
+            The discretised wear system.
+        state : StepState
+            The accepted point to step from.
+        ds : float, m
+            Sliding distance of the step, positive.
+
+        Returns
+        -------
+        Trial
+            The new face, its contact and the local error estimate.
+
+        Raises
+        ------
+        transient.problem.StepFailure
+            A contact solve failed or a value turned non-finite; the caller
+            retries with a smaller step.
+        """
         raise NotImplementedError
 
     def __repr__(self):
+        """``<ClassName 'name', order k>``."""
         return f"<{type(self).__name__} {self.name!r}, order {self.order}>"
 
 
@@ -206,6 +228,12 @@ class ExplicitEuler(Scheme):
     explicit = True
 
     def step(self, problem, state, ds):
+        """One forward Euler step (see :meth:`Scheme.step`).
+
+        The error estimate is ``ds/2`` times the change of the rate over the
+        step.  A step beyond :meth:`~transient.problem.WearProblem.stable_step`
+        raises ``ValueError``.
+        """
         limit = problem.stable_step(state.pressure)
         if ds > limit * (1.0 + 1e-12):
             raise ValueError(f"explicit Euler step {ds!r} m exceeds its stability limit "
@@ -226,6 +254,10 @@ class ImplicitEuler(Scheme):
     error_order = 1
 
     def step(self, problem, state, ds):
+        """One backward Euler step, a shifted contact solve (see :meth:`Scheme.step`).
+
+        The error estimate is ``ds/2`` times the change of the rate over the step.
+        """
         f0 = problem.rate(state.pressure)
         height, res = problem.implicit(state.height, ds, state.pressure)
         error = 0.5 * ds * (problem.rate(res.pressure) - f0)
@@ -252,6 +284,7 @@ class BDF2(Scheme):
     max_growth = 2.4
 
     def step(self, problem, state, ds):
+        """One BDF2 step, or implicit Euler without a previous point (see :meth:`Scheme.step`)."""
         f0 = problem.rate(state.pressure)
         if state.previous_height is None:
             return SCHEMES["implicit_euler"].step(problem, state, ds)
@@ -282,6 +315,7 @@ class SDIRK2(Scheme):
     gamma = 1.0 - 1.0 / math.sqrt(2.0)
 
     def step(self, problem, state, ds):
+        """One SDIRK2 step, two shifted contact solves (see :meth:`Scheme.step`)."""
         g = self.gamma
         _, res1 = problem.implicit(state.height, g * ds, state.pressure)
         f1 = problem.rate(res1.pressure)

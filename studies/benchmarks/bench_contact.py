@@ -26,8 +26,8 @@ Run (about 40 min on 2 shared cores), in a separate environment with the peers::
     /work/peers-venv/bin/pip install -e . -r studies/benchmarks/requirements-peers.txt
     /work/peers-venv/bin/python studies/benchmarks/bench_contact.py --out bench_contact.h5
 
-``--sizes 32 --pc-sizes 32 --repeat 1 --skip-peers`` makes a smoke run.  A peer that cannot be imported
-is skipped and the reason recorded.  Writes an HDF5 file (one group per
+``--sizes 32 --pc-sizes 32 --repeat 1 --skip-peers`` makes a smoke run.  A
+peer that cannot be imported is skipped and the reason recorded.  Writes an HDF5 file (one group per
 table) and prints the tables in Markdown.
 """
 
@@ -76,11 +76,21 @@ class CountingHalfSpace(HalfSpace):
     pairs = 0
 
     def forward(self, field_r):
+        """Spectrum of a grid field, counted (see :meth:`steady.halfspace.HalfSpace.forward`)."""
         self.pairs += 1
         return super().forward(field_r)
 
 
 def case_setup(case, n):
+    """Face mask, height (m), force (N) and analytic approach (m) of a test case.
+
+    Parameters
+    ----------
+    case : {"flat", "crowned"}
+        Flat punch, or the paraboloid face whose Hertz contact radius is ``0.6 a``.
+    n : int
+        Grid size.
+    """
     face = face_mask(n)
     r, _ = polar(n, RADIUS)
     if case == "flat":
@@ -97,6 +107,7 @@ def approach_of(hs, face, height, pressure):
 
 
 def best_time(run, repeat):
+    """Best wall time (s) of ``repeat`` calls of ``run()``, and the last call's value."""
     best, out = np.inf, None
     for _ in range(repeat):
         t0 = time.perf_counter()
@@ -106,6 +117,7 @@ def best_time(run, repeat):
 
 
 def fft_unit(hs, repeat=7):
+    """Best wall time (s) of one padded FFT pair, ``hs.displacement``, on a random field."""
     p = np.random.default_rng(8191).random((hs.n, hs.n))
     return best_time(lambda: hs.displacement(p), repeat)[0]
 
@@ -113,6 +125,21 @@ def fft_unit(hs, repeat=7):
 # -- the three solvers ------------------------------------------------------------------
 
 def run_ours(hs, face, height, force, tol, preconditioner="auto", shift=None):
+    """Solve with :func:`transient.contact.solve_contact`; ``(pressure, nit, FFT pairs)``.
+
+    Parameters
+    ----------
+    hs : CountingHalfSpace
+    face : ndarray of bool, shape (n, n)
+    height : ndarray, shape (n, n), m
+    force : float, N
+    tol : float
+        ``rtol`` of the solver.
+    preconditioner : str, optional
+        As in :func:`~transient.contact.solve_contact` (default ``"auto"``).
+    shift : ndarray, shape (n, n), m/Pa, optional
+        Diagonal shift of the operator.
+    """
     hs.pairs = 0
     res = solve_contact(hs, face, height, force, rtol=tol, shift=shift,
                         preconditioner=preconditioner, maxiter=20 * hs.n)
@@ -122,6 +149,10 @@ def run_ours(hs, face, height, force, tol, preconditioner="auto", shift=None):
 
 
 def make_cm(n):
+    """ContactMechanics' Polonsky-Keer solver on the ``n x n`` grid, as ``run(...)``.
+
+    Raises ``ImportError`` when ContactMechanics is not installed.
+    """
     from ContactMechanics import FreeFFTElasticHalfSpace
     from ContactMechanics.Optimization.ConstrainedConjugateGradients import (
         constrained_conjugate_gradients,
@@ -145,6 +176,10 @@ def make_cm(n):
 
 
 def make_tamaas(n):
+    """Tamaas' Polonsky-Keer solver on the ``n x n`` grid, as ``run(...)``.
+
+    Raises ``ImportError`` when Tamaas is not installed.
+    """
     import tamaas as tm
 
     length = 2 * RADIUS
@@ -194,6 +229,7 @@ def _captured_output():
 
 
 def peers():
+    """The peers that import: ``(found, missing)``, name to factory and name to reason."""
     found, missing = {}, {}
     for name, factory in (("ContactMechanics", make_cm), ("Tamaas", make_tamaas)):
         try:
@@ -245,7 +281,7 @@ def at_equal_accuracy(run, ladder, approach, d_ref, repeat):
         d = approach(pressure)
         if abs(d / d_ref - 1) <= ACCURACY:
             if repeat > 1:
-                more, _ = best_time(lambda: run(tol), repeat - 1)
+                more, _ = best_time(lambda tol=tol: run(tol), repeat - 1)
                 elapsed = min(elapsed, more)
             return dict(tol=tol, time=elapsed, nit=nit, pairs=pairs, approach=d)
     return dict(tol=np.nan, time=np.nan, nit=-1, pairs=None, approach=d)
@@ -254,6 +290,21 @@ def at_equal_accuracy(run, ladder, approach, d_ref, repeat):
 # -- tables -------------------------------------------------------------------------------
 
 def peer_table(sizes, repeat, found):
+    """Rows of table 1: every solver at equal accuracy on the flat and crowned faces.
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        Grid sizes.
+    repeat : int
+        Timed runs at the chosen tolerance; the best is kept.
+    found : mapping of str to callable
+        The peers' factories (:func:`peers`).
+
+    Returns
+    -------
+    list of dict
+    """
     rows = []
     for case in ("flat", "crowned"):
         for n in sizes:
@@ -264,18 +315,21 @@ def peer_table(sizes, repeat, found):
             d_ref = approach_of(hs, face, height, ref_p)
             row = dict(case=case, n=n, fft=unit, d_error=d_ref / d_exact - 1)
 
-            def approach(pressure):
+            def approach(pressure, hs=hs, face=face, height=height):
                 return approach_of(hs, face, height, pressure)
 
-            row["runin"] = at_equal_accuracy(
-                lambda tol: run_ours(hs, face, height, force, tol), OUR_RTOL, approach,
-                d_ref, repeat)
+            def ours(tol, hs=hs, face=face, height=height, force=force):
+                return run_ours(hs, face, height, force, tol)
+
+            row["runin"] = at_equal_accuracy(ours, OUR_RTOL, approach, d_ref, repeat)
             for name, factory in found.items():
                 solver = factory(n)
                 ladder = CM_PENTOL if name == "ContactMechanics" else TAMAAS_TOL
-                row[name] = at_equal_accuracy(
-                    lambda tol: solver(hs, face, height, force, tol, d_ref), ladder, approach,
-                    d_ref, repeat)
+                def peer(tol, solver=solver, hs=hs, face=face, height=height, force=force,
+                         d_ref=d_ref):
+                    return solver(hs, face, height, force, tol, d_ref)
+
+                row[name] = at_equal_accuracy(peer, ladder, approach, d_ref, repeat)
             rows.append(row)
             logger.info("%s n=%d: %s", case, n,
                         {k: (v["time"], v["nit"]) for k, v in row.items()
@@ -284,6 +338,19 @@ def peer_table(sizes, repeat, found):
 
 
 def preconditioner_table(sizes, repeat):
+    """Rows of table 2: the preconditioners at equal accuracy, without and with a shift.
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        Grid sizes.
+    repeat : int
+        Timed runs at the chosen tolerance; the best is kept.
+
+    Returns
+    -------
+    list of dict
+    """
     rows = []
     names = ["none", "jacobi", "fourier-padded", "fourier", "amg", "auto"]
     for n in sizes:
@@ -298,14 +365,15 @@ def preconditioner_table(sizes, repeat):
                 ratio = np.where(phase, 1.0, 1e-2) if "two phases" in label else 1.0
                 shift = hs.self_influence * magnitude * ratio * np.ones((n, n))
 
-            def approach(pressure, shift=shift, face=face, height=height):
+            def approach(pressure, hs=hs, shift=shift, face=face, height=height):
                 u = hs.displacement(pressure) + (0 if shift is None else shift * pressure)
                 return float(np.mean((u + height)[(pressure > 0) & face]))
 
             d_ref = approach(run_ours(hs, face, height, force, 1e-12, shift=shift)[0])
             row = dict(scene=label, n=n, fft=unit)
             for name in names:
-                def run(tol, name=name, shift=shift, face=face, height=height, force=force):
+                def run(tol, name=name, hs=hs, shift=shift, face=face, height=height,
+                        force=force):
                     return run_ours(hs, face, height, force, tol, preconditioner=name,
                                     shift=shift)
                 if name == "amg" and importlib.util.find_spec("pyamg") is None:
@@ -321,6 +389,7 @@ def preconditioner_table(sizes, repeat):
 
 
 def markdown_peers(rows, found):
+    """Table 1 in Markdown, from the rows of :func:`peer_table`."""
     names = ["runin"] + list(found)
     head = ("| case | n | depth error vs analytic | FFT pair (ms) | "
             + " | ".join(f"{k}: time (s), it, tol, t/it (FFT pairs)" for k in names)
@@ -341,6 +410,7 @@ def markdown_peers(rows, found):
 
 
 def markdown_preconditioners(rows):
+    """Table 2 in Markdown, from the rows of :func:`preconditioner_table`."""
     names = ["none", "jacobi", "fourier-padded", "fourier", "amg", "auto"]
     head = ("| scene | n | "
             + " | ".join(f"{k}: time (s), it, FFT pairs, rtol" for k in names) + " |")
@@ -356,6 +426,7 @@ def markdown_preconditioners(rows):
 
 
 def write_h5(path, peer_rows, pc_rows, meta):
+    """Write both tables (a group per row) and the run's metadata to HDF5."""
     with atomic_h5(path, format="runin.bench_contact", version=1, force=True) as f:
         f.attrs["time_units"] = "s"
         for k, v in meta.items():
@@ -374,6 +445,18 @@ def write_h5(path, peer_rows, pc_rows, meta):
 
 
 def main(argv=None):
+    """Command line of the benchmark (see the module docstring).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    peer_rows, pc_rows : list of dict
+        The rows of both tables.
+    """
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
     parser.add_argument("--pc-sizes", type=int, nargs="+", default=list(PRECONDITIONER_SIZES))

@@ -73,6 +73,15 @@ def speed_one(n, repeats):
 
 
 def speed(grids, repeats):
+    """Print the speed table, one fresh process per grid (:func:`speed_one`).
+
+    Parameters
+    ----------
+    grids : sequence of int
+        Grid sizes.
+    repeats : int
+        Timings per figure; the best is kept.
+    """
     rows = []
     for n in grids:
         out = subprocess.run([sys.executable, __file__, "--speed-one", str(n), "--repeats",
@@ -104,6 +113,17 @@ def _steady_homogeneous(n):
 
 
 def accuracy(grids, reference_grid, seeds):
+    """Print the accuracy tables: eq. 10 cylinder, then Voronoi maps against a fine grid.
+
+    Parameters
+    ----------
+    grids : sequence of int
+        Grid sizes of the tables.
+    reference_grid : int
+        Grid of the Voronoi reference (corrected estimate).
+    seeds : sequence of int
+        Voronoi seed counts, one table each.
+    """
     from steady import reference
     from steady.accuracy import estimate_rms_slope
     from steady.phases import Homogeneous, Voronoi
@@ -149,6 +169,7 @@ def accuracy(grids, reference_grid, seeds):
 
 
 def main():
+    """Command line of the benchmark (see the module docstring)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small grids only")
     parser.add_argument("--speed-one", type=int, help=argparse.SUPPRESS)
