@@ -92,18 +92,7 @@ def plot(path, png):
 
 
 def main(argv=None):
-    """Command line of the study: compute, write the HDF5 file, draw the figure.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default: ``sys.argv[1:]``); ``--help`` lists them.
-
-    Returns
-    -------
-    int
-        Exit status.
-    """
+    """Run the study from the command line (``--help`` lists the options); exit status."""
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv)
 
 
