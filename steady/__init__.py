@@ -19,6 +19,9 @@ pressure on each phase and the half-space displacement under it.  Modules:
 - :mod:`steady.voronoi_sweep` -- the sweep over random biphasic Voronoi maps;
 - :mod:`steady.design` -- the design table and the fill factor for a target
   rms slope (command ``runin-design``);
+- :mod:`steady.fit` -- wear ratios from a measured worn face (command
+  ``runin-fit``); :mod:`steady.fit_files` -- its measured maps, HDF5 files
+  and figure;
 - :mod:`steady.command_line` -- what the command lines share.
 
 The command ``runin-steady`` (``python -m steady``, :mod:`steady.__main__`)
@@ -28,6 +31,7 @@ solves a scene file.
 from . import reference
 from .accuracy import SlopeEnergy, SlopeEstimate, estimate_rms_slope
 from .basis import PhaseBasis, SweepSlopes
+from .fit_files import MeasuredFace, read_fit, read_measured, write_fit
 from .grid import face_mask, pixel_centres, pixel_size, polar
 from .halfspace import HalfSpace
 from .output import StoredResult, atomic_h5, read_result, write_result
@@ -47,8 +51,11 @@ from .solution import SteadyResult, solve, solve_scene
 
 __all__ = [
     "ArrayMap",
+    "FaceModel",
+    "FitResult",
     "HalfSpace",
     "Homogeneous",
+    "MeasuredFace",
     "PhaseBasis",
     "Rods",
     "Scene",
@@ -63,6 +70,8 @@ __all__ = [
     "differential_profile",
     "estimate_rms_slope",
     "face_mask",
+    "fit_face",
+    "fit_scene",
     "load_phase_map",
     "load_scene",
     "parse_scene",
@@ -71,6 +80,8 @@ __all__ = [
     "pixel_size",
     "polar",
     "pressure_field",
+    "read_fit",
+    "read_measured",
     "read_result",
     "realised_fill_factors",
     "reference",
@@ -78,5 +89,20 @@ __all__ = [
     "solve",
     "solve_scene",
     "validate_labels",
+    "write_fit",
     "write_result",
 ]
+
+#: Names of :mod:`steady.fit`, imported on first use rather than here:
+#: ``python -m steady.fit`` runs that module as a script, which must not find
+#: it imported already (runpy warns, and the module would run twice).
+_FIT_NAMES = ("FaceModel", "FitResult", "fit_face", "fit_scene")
+
+
+def __getattr__(name):
+    """The names of :mod:`steady.fit`, on first use."""
+    if name in _FIT_NAMES:
+        from . import fit
+
+        return getattr(fit, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

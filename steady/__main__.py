@@ -2,46 +2,62 @@
 
 Usage (``runin-steady`` once installed, or ``python -m steady``)::
 
-    runin-steady SCENE.toml -o OUT.h5 [--plot OUT.png] [--force] [--no-slope-error] [-v]
+    runin-steady SCENE.toml -o OUT.h5 [--plot OUT.png] [--force] [--no-slope-error]
+                 [--memory-limit GIB] [-v]
 
 Solves the steady state (eq. 7, 9), writes the HDF5 result
 (:mod:`steady.output`), optionally draws the figure from that file, and
 prints a short summary.  The run-in sections of a scene (``[transient]``,
-``[initial_face]``) are ignored, with a note on stderr.  Bad input gives
-``error: ...`` on stderr and exit status 2.
+``[initial_face]``) are ignored, with a note on stderr.  Everything that can
+be checked is checked before the solve: the scene, the output paths (a
+directory, an existing file without ``--force``, an unwritable place) and
+the memory the grid needs (:func:`steady.command_line.steady_memory`).
+A failure prints one line ``error: ...`` on stderr; exit status 0, 1 for an
+operating-system error, 2 for bad input, 130 when interrupted
+(:mod:`steady.command_line`).
 """
 
 from __future__ import annotations
 
-import argparse
-import logging
 import math
 import pathlib
 import sys
 
-from .command_line import program_name
+from .command_line import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    ArgumentParser,
+    CommandError,
+    add_memory_limit,
+    check_distinct,
+    check_memory,
+    configure_logging,
+    describe_os_error,
+    prepare_output,
+    program_name,
+    run_command,
+    steady_memory,
+)
 from .output import write_result
 from .scene import load_scene
 from .solution import solve_scene
 
 __all__ = ["build_parser", "main", "summary_lines"]
 
-
-class _Parser(argparse.ArgumentParser):
-    """Argument errors as ``error: ...`` on stderr, exit status 2."""
-
-    def error(self, message):
-        self.exit(2, f"error: {message}\n{self.format_usage()}")
+_EPILOG = ("exit status: 0 done, 1 operating-system error (the message says what is saved), "
+           "2 bad input (nothing written), 130 interrupted")
 
 
 def build_parser():
     """The argument parser of ``runin-steady`` (``python -m steady``)."""
-    parser = _Parser(
+    parser = ArgumentParser(
         prog=program_name("python -m steady"),
-        description="Limiting worn face of a multi-phase punch on an elastic half-space.")
+        description="Limiting worn face of a multi-phase punch on an elastic half-space.",
+        epilog=_EPILOG)
     parser.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
     parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
-                        help="HDF5 result file to write")
+                        help="HDF5 result file to write (missing directories are created)")
     parser.add_argument("--plot", type=pathlib.Path, metavar="PNG",
                         help="also draw the phase map and the face into this PNG file")
     parser.add_argument("--force", action="store_true",
@@ -49,6 +65,7 @@ def build_parser():
     parser.add_argument("--no-slope-error", dest="slope_error", action="store_false",
                         help="report the plain pixel rms slope only (skips the corrected "
                              "estimate and its error bar, which cost a few more solves)")
+    add_memory_limit(parser)
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log progress (-v) or details (-vv) to stderr")
     return parser
@@ -74,28 +91,39 @@ def summary_lines(result):
 
 def run(args):
     """Do the work for parsed arguments; return the exit status."""
-    outputs = [args.output] + ([args.plot] if args.plot else [])
-    # Fail before the solve, not after it.
-    for path in outputs:
-        if path.exists() and not args.force:
-            raise ValueError(f"output {str(path)!r} exists (use --force to overwrite)")
-    if args.plot and args.plot.resolve() == args.output.resolve():
-        raise ValueError(f"--plot and -o name the same file {str(args.output)!r}")
+    # Everything that can fail is checked before the solve, not after it.
+    check_distinct([("the scene", args.scene), ("-o", args.output), ("--plot", args.plot)])
     scene = load_scene(args.scene)
+    prepare_output(args.output, force=args.force)
+    if args.plot is not None:
+        prepare_output(args.plot, force=args.force, what="--plot")
     if scene.ignored_sections:
         print("note: ignoring run-in sections "
               + ", ".join(f"[{name}]" for name in scene.ignored_sections), file=sys.stderr)
-    result = solve_scene(scene, slope_error=args.slope_error)
-    lines = summary_lines(result)
-    write_result(args.output, result, scene, force=args.force)
-    lines.append(f"result           {args.output}")
-    if args.plot:
-        from .plotting import plot_file  # deferred: matplotlib is slow to import
+    check_memory(steady_memory(scene.n, slope_error=args.slope_error),
+                 f"a steady solve at n = {scene.n}", args.memory_limit)
+    scene.phase_labels()  # names a phase without a face pixel before the solve
+    saved = None
+    try:
+        result = solve_scene(scene, slope_error=args.slope_error)
+        lines = summary_lines(result)
+        write_result(args.output, result, scene, force=args.force)
+        saved = args.output
+        lines.append(f"result           {args.output}")
+        if args.plot:
+            from .plotting import plot_file  # deferred: matplotlib is slow to import
 
-        plot_file(args.output, args.plot, force=args.force)
-        lines.append(f"figure           {args.plot}")
+            try:
+                plot_file(args.output, args.plot, force=args.force)
+            except OSError as err:
+                raise CommandError(f"cannot draw the figure: {describe_os_error(err)}; the "
+                                   f"result is saved in {str(saved)!r}", EXIT_FAILED) from None
+            lines.append(f"figure           {args.plot}")
+    except KeyboardInterrupt:
+        where = "nothing was written" if saved is None else f"the result is in {str(saved)!r}"
+        raise CommandError(f"interrupted; {where}", EXIT_INTERRUPTED) from None
     print("\n".join(lines))
-    return 0
+    return EXIT_OK
 
 
 def main(argv=None):
@@ -109,19 +137,12 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0, 2 for bad input, 1 for an operating-system error.
+        Exit status: 0, 1 for an operating-system error, 2 for bad input,
+        130 when interrupted.
     """
     args = build_parser().parse_args(argv)
-    level = logging.WARNING - 10 * min(args.verbose, 2)
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
-    try:
-        return run(args)
-    except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    except OSError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 1
+    configure_logging(args.verbose)
+    return run_command(run, args, verbose=args.verbose)
 
 
 if __name__ == "__main__":

@@ -32,7 +32,9 @@ The error estimate compares the corrected values on the same phase geometry
 rasterised at ``n``, ``n/2`` and ``n/4``
 (``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)``, which bounds the error of a
 method of order one or higher); see ``docs/benchmarks.md`` for its
-validation against fine-grid references.
+validation against fine-grid references.  A phase map known only on its
+grid (no geometry to rasterise again) is resampled instead
+(:func:`resample_labels`, :func:`estimate_map_rms_slope`).
 """
 
 from __future__ import annotations
@@ -43,12 +45,15 @@ import logging
 import numpy as np
 import scipy.fft
 
+from .grid import face_mask as grid_face_mask
 from .grid import pixel_size
 from .halfspace import pixel_integral_gradient
+from .phases import MIN_GRID, extend_off_face
 from .pressures import pressure_field
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
-           "estimate_rms_slope", "grid_ladder", "ladder_error", "monopole_tail"]
+           "estimate_map_rms_slope", "estimate_rms_slope", "grid_ladder", "ladder_error",
+           "MIN_CHORD_PIXELS", "mean_chord", "monopole_tail", "resample_labels"]
 
 logger = logging.getLogger(__name__)
 
@@ -244,8 +249,44 @@ class SlopeEnergy:
         Returns
         -------
         SlopeIntegrals
+            The same as ``gram([pressure_r], face_mask).integrals([1.0])``,
+            computed without the Gram matrices (the run-in calls this at
+            every step).
         """
-        return self.gram([pressure_r], face_mask).integrals([1.0])
+        n, h, m, c = self.n, self.h, self.margin, self.c
+        field = np.where(face_mask, pressure_r, 0.0)
+        area = h * h
+        on_face = np.zeros((self.fine, self.fine), dtype=bool)
+        on_face[m:m + n, m:m + n] = face_mask
+        gx, gy = self._fine(field)
+        square = gx * gx
+        square += gy * gy
+        face_sum = float(np.sum(square, where=on_face)) * area
+        exterior = float(np.sum(square)) * area - face_sum
+        boxed = np.zeros((self.fine, self.fine))
+        boxed[m:m + n, m:m + n] = field
+        coarse = boxed.reshape(self.fine // c, c, self.fine // c, c).mean(axis=(1, 3))
+        gx, gy = self._coarse(coarse)
+        square = gx * gx
+        square += gy * gy
+        inner = self._coarse_inner
+        exterior += (float(np.sum(square)) - float(np.sum(square[inner, inner]))) * (c * h) ** 2
+        force = float(np.sum(field)) * area
+        exterior += self._unit_tail() * force * force
+        interior, rim = edge_jumps(field, face_mask)
+        jumps = interior + rim
+        return SlopeIntegrals(face_area=float(face_mask.sum()) * area,
+                              total=4.0 / self.E_star**2 * float(np.sum(field * field)) * area,
+                              face_sum=face_sum, exterior=exterior,
+                              rim_share=rim / jumps if jumps > 0 else 1.0)
+
+    def _unit_tail(self):
+        """Far tail of a unit force outside the coarse box (:func:`monopole_tail`), m^2/N^2."""
+        n, h, m, c = self.n, self.h, self.margin, self.c
+        lo = (-n / 2 - m - self._coarse_extra * c) * h
+        hi = lo + (self.fine + 2 * self._coarse_extra * c) * h
+        mid = (lo + hi) / 2
+        return monopole_tail(1.0, (mid, mid), (lo, hi, lo, hi), self.E_star)
 
     def gram(self, fields, face_mask):
         """Quadratic forms of the slope integrals over a set of pressure fields.
@@ -291,12 +332,9 @@ class SlopeEnergy:
             return a @ a.T
 
         forces = fields.reshape(len(fields), -1).sum(axis=1) * area
-        lo = (-n / 2 - m - self._coarse_extra * c) * h
-        hi = lo + (self.fine + 2 * self._coarse_extra * c) * h
-        mid = (lo + hi) / 2
         # About the box centre the monopole-dipole cross term integrates to
         # zero; what is left, dipole^2 / L^2, is below 1e-6 of the total.
-        tail = monopole_tail(1.0, (mid, mid), (lo, hi, lo, hi), self.E_star)
+        tail = self._unit_tail()
         exterior = (gram(ext_rows) * area + gram(coarse_rows) * (c * h) ** 2
                     + tail * np.outer(forces, forces))
         flat = fields.reshape(len(fields), -1)
@@ -516,4 +554,134 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
         logger.debug("n=%d rms slope corrected %.8g plain %.8g", m, values[-1], plain)
     return SlopeEstimate(rms_slope=values[-1], error=float(ladder_error(grids, values)),
                          rms_slope_plain=plain,
+                         grids=tuple(grids), values=tuple(values))
+
+
+def resample_labels(labels, m):
+    """A phase map on the ``m x m`` grid, read off a map given on another grid.
+
+    Each pixel of the new grid takes the label of the pixel of ``labels``
+    that contains its centre (for ``m = n/2`` the centre is a corner of four
+    pixels: the one above and to the right of it); new face pixels whose
+    centre falls off the old face take the nearest old face pixel's label.
+    This is the rasterisation at ``m`` of the map that ``labels`` stands for,
+    up to half a pixel of ``labels``: the ladder of a map with no geometry
+    behind it.
+
+    Parameters
+    ----------
+    labels : ndarray of int, shape (n, n)
+        Phase index on the face, -1 off it.
+    m : int
+        New grid size, ``>= 2``.
+
+    Returns
+    -------
+    ndarray of int, shape (m, m)
+        -1 off the face of the ``m`` grid.
+
+    Examples
+    --------
+    >>> from steady.phases import Voronoi
+    >>> labels = Voronoi(64, (0.5, 0.5), 2024).labels(64)
+    >>> resample_labels(labels, 32).shape
+    (32, 32)
+    """
+    labels = np.asarray(labels)
+    n = labels.shape[0]
+    m = int(m)
+    if m < 2:
+        raise ValueError(f"grid size m must be at least 2, got {m}")
+    index = np.minimum(np.floor((np.arange(m) + 0.5) * n / m).astype(int), n - 1)
+    picked = extend_off_face(labels)[np.ix_(index, index)]
+    return np.where(grid_face_mask(m), picked, -1)
+
+
+#: Mean phase chord, in pixels, below which a resampled map is too coarse to
+#: enter the ladder of :func:`estimate_map_rms_slope`.
+MIN_CHORD_PIXELS = 4.0
+
+
+def mean_chord(labels):
+    """Mean chord of the phase regions of a map, in pixels (infinite for one phase).
+
+    Cauchy's formula for an isotropic map: ``pi A / (2 L)``, with ``A`` the
+    face area and ``L`` the length of the boundaries between phases, the
+    staircase's edge count times ``pi / 4`` (its mean excess over the true
+    length).  For a 30 % Voronoi map it is about twice the seed spacing.
+
+    Parameters
+    ----------
+    labels : ndarray of int, shape (n, n)
+
+    Returns
+    -------
+    float
+    """
+    labels = np.asarray(labels)
+    face = labels >= 0
+    edges = (np.sum((labels[1:] != labels[:-1]) & face[1:] & face[:-1])
+             + np.sum((labels[:, 1:] != labels[:, :-1]) & face[:, 1:] & face[:, :-1]))
+    return 2.0 * float(face.sum()) / edges if edges else float("inf")
+
+
+def estimate_map_rms_slope(labels, wear_coefficients, normal_force, radius, E_star, *,
+                           exponent=1.0, energy=None):
+    """Corrected rms slope of the limiting face of a pixel map, with an error estimate.
+
+    As :func:`estimate_rms_slope`, for a map that exists only on its grid:
+    the ladder is the map itself and the map resampled
+    (:func:`resample_labels`) at ``n // 4`` and ``n // 2``.  A coarse grid
+    enters when the map's mean phase chord (:func:`mean_chord`) spans at
+    least :data:`MIN_CHORD_PIXELS` of its pixels (for Voronoi maps about the
+    steady module's two pixels per seed spacing) and every phase survives
+    the resampling; when neither does, the coarsest such grid below ``n``
+    (a multiple of 8) serves, or if there is none ``n // 2``, which then
+    over-estimates the error.  Measured against 1024^2 references of
+    continuous geometries (docs/benchmarks.md, "Run-in history"), the
+    estimate is of the size of the error or larger.
+
+    Parameters
+    ----------
+    labels : ndarray of int, shape (n, n)
+        Phase index ``0..P-1`` on the face, -1 off it.
+    wear_coefficients : array_like, shape (P,), 1/Pa
+    normal_force : float, N
+    radius : float, m
+    E_star : float, Pa
+    exponent : float, optional
+        Pressure exponent ``m`` of the wear law (default 1).
+    energy : SlopeEnergy, optional
+        The estimator of grid ``n``, if the caller has one.
+
+    Returns
+    -------
+    SlopeEstimate
+        Value on ``n``; ``error`` is :func:`ladder_error` of the ladder, NaN
+        if no coarser grid is usable.
+    """
+    labels = np.asarray(labels)
+    n = labels.shape[0]
+    low = max(MIN_GRID, int(np.ceil(MIN_CHORD_PIXELS * n / mean_chord(labels))))
+    coarse = [m for m in (n // 4, n // 2) if m >= low]
+    if not coarse:
+        m = 8 * -(-low // 8)
+        # A map too fine-grained for any admitted grid: n // 2 over-estimates.
+        coarse = [m] if m < n else ([n // 2] if n // 2 >= MIN_GRID else [])
+    grids, values, plain = [], [], None
+    for m in coarse + [n]:
+        lab = labels if m == n else resample_labels(labels, m)
+        h = pixel_size(m, radius)
+        try:
+            pressure, _, _ = pressure_field(lab, wear_coefficients, normal_force, h * h,
+                                            exponent=exponent)
+        except ValueError:
+            continue  # a phase vanished on the coarse grid
+        estimator = energy if (m == n and energy is not None) else SlopeEnergy(m, h, E_star)
+        integrals = estimator(pressure, lab >= 0)
+        grids.append(m)
+        values.append(float(integrals.rms_slope))
+        plain = float(integrals.rms_slope_plain)
+    error = float(ladder_error(grids, values)) if len(grids) > 1 else float("nan")
+    return SlopeEstimate(rms_slope=values[-1], error=error, rms_slope_plain=plain,
                          grids=tuple(grids), values=tuple(values))

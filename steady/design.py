@@ -26,7 +26,6 @@ Command line (``runin-design``, or ``python -m steady.design``)::
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import importlib.resources
 import math
@@ -37,7 +36,7 @@ import h5py
 import numpy as np
 from scipy import interpolate, optimize
 
-from .command_line import program_name
+from .command_line import ArgumentParser, one_line, program_name, run_command, shorten
 from .output import atomic_h5
 from .reference import fine_grain_rms_slope
 
@@ -199,20 +198,35 @@ class DesignTable:
 
     @classmethod
     def _read(cls, path):
-        if not path.is_file():
+        if not path.exists():
             raise ValueError(f"design table {str(path)!r} does not exist; build it with "
                              f"'python studies/design_table.py'")
-        with h5py.File(path, "r") as f:
-            if f.attrs.get("format") != TABLE_FORMAT:
-                raise ValueError(f"{str(path)!r} is not a design table "
-                                 f"(format {f.attrs.get('format')!r})")
-            version = int(f.attrs["format_version"])
-            if version != TABLE_VERSION:
-                raise ValueError(f"design table {str(path)!r} has version {version}, "
-                                 f"expected {TABLE_VERSION}")
-            attrs = {k: v for k, v in f.attrs.items() if k not in ("format", "format_version")}
-            return cls(f["fill_factors"][()], f["ratios"][()], f["mean"][()],
-                       f["scatter"][()], f["error"][()], attrs)
+        if not path.is_file():
+            kind = "a directory" if path.is_dir() else "not a regular file"
+            raise ValueError(f"design table {str(path)!r} is {kind}")
+        try:
+            if not h5py.is_hdf5(path):
+                raise ValueError(f"design table {str(path)!r} is not an HDF5 file")
+            with h5py.File(path, "r") as f:
+                if f.attrs.get("format") != TABLE_FORMAT:
+                    raise ValueError(f"{str(path)!r} is not a design table "
+                                     f"(format {shorten(f.attrs.get('format'))})")
+                version = int(f.attrs["format_version"])
+                if version != TABLE_VERSION:
+                    raise ValueError(f"design table {str(path)!r} has version {version}, "
+                                     f"expected {TABLE_VERSION}")
+                attrs = {k: v for k, v in f.attrs.items()
+                         if k not in ("format", "format_version")}
+                arrays = [f[name][()] for name in ("fill_factors", "ratios", "mean",
+                                                   "scatter", "error")]
+        except (OSError, KeyError, TypeError, RuntimeError) as err:
+            raise ValueError(f"design table {str(path)!r} is damaged or incomplete: "
+                             f"{str(err)[:200]}") from None
+        try:
+            return cls(*arrays, attrs)
+        except (ValueError, TypeError, IndexError) as err:
+            raise ValueError(f"design table {str(path)!r} is inconsistent: "
+                             f"{one_line(err, 200)}") from None
 
     def _check_ratio(self, ratio):
         lo, hi = self.ratios[0], self.ratios[-1]
@@ -364,13 +378,15 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0, or 2 for bad input (``error: ...`` on stderr).
+        Exit status: 0; 2 for bad input or an unreadable table (one line
+        ``error: ...`` on stderr); 130 when interrupted.
     """
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
         prog=program_name("python -m steady.design"),
         description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
                     "rho_2 of phase 2 that gives a target rms slope, or the rms slope of a "
-                    "fill factor.  Phase 2 is the hard phase when the wear ratio is below 1.")
+                    "fill factor.  Phase 2 is the hard phase when the wear ratio is below 1.",
+        epilog="exit status: 0 done, 2 bad input or an unreadable table, 130 interrupted")
     parser.add_argument("--pbar-over-estar", type=float, required=True,
                         help="mean pressure over the effective modulus, pbar/E*")
     parser.add_argument("--wear-ratio", type=float, required=True,
@@ -380,37 +396,37 @@ def main(argv=None):
     what.add_argument("--fill-factor", type=float, help="fill factor rho_2 of phase 2")
     parser.add_argument("--table", default=None,
                         help=f"design table (default {DEFAULT_TABLE})")
-    args = parser.parse_args(argv)
-    try:
-        table = DesignTable.read(args.table)
-        g0 = _reference(args.pbar_over_estar)
-        source = (f"table: {table.attrs.get('n_seeds', '?')} Voronoi seeds, "
-                  f"{table.attrs.get('realisations', '?')} realisations, "
-                  f"n = {table.attrs.get('n', '?')}")
-        if args.target_slope is not None:
-            res = table.fill_factor_for(args.pbar_over_estar, args.wear_ratio,
-                                        args.target_slope)
-            lo, hi = res.fill_factor_range
-            print(f"fill factor rho_2 = {res.fill_factor:.4g} "
-                  f"(realisation scatter: {lo:.4g}..{hi:.4g})")
-            if len(res.solutions) > 1:
-                print("other fill factors reaching the target: "
-                      + ", ".join(f"{r:.4g}" for r in res.solutions[:-1]))
-            print(f"target {args.target_slope:.4g} = {res.normalised_target:.4g} grad_f0, "
-                  f"grad_f0 = 4 pbar/(pi E*) = {g0:.4g}; reachable "
-                  f"{res.reachable[0]:.4g}..{res.reachable[1]:.4g}")
-        else:
-            value, sd = table.rms_slope(args.pbar_over_estar, args.wear_ratio,
-                                        args.fill_factor)
-            fine = fine_grain_rms_slope([1 - args.fill_factor, args.fill_factor],
-                                        [1.0, args.wear_ratio])
-            print(f"rms slope = {value:.4g} +- {sd:.2g} (realisation scatter); "
-                  f"{value / g0:.4g} grad_f0, grad_f0 = {g0:.4g}")
-            print(f"fine-grain closed form: {g0 * fine:.4g} ({fine:.4g} grad_f0)")
-        print(source)
-    except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+    return run_command(_answer, parser.parse_args(argv))
+
+
+def _answer(args):
+    """Print the answer of the design rule for parsed arguments; return the exit status."""
+    table = DesignTable.read(args.table)
+    g0 = _reference(args.pbar_over_estar)
+    source = (f"table: {table.attrs.get('n_seeds', '?')} Voronoi seeds, "
+              f"{table.attrs.get('realisations', '?')} realisations, "
+              f"n = {table.attrs.get('n', '?')}")
+    if args.target_slope is not None:
+        res = table.fill_factor_for(args.pbar_over_estar, args.wear_ratio, args.target_slope)
+        lo, hi = res.fill_factor_range
+        print(f"fill factor rho_2 = {res.fill_factor:.4g} "
+              f"(realisation scatter: {lo:.4g}..{hi:.4g})")
+        if len(res.solutions) > 1:
+            print("other fill factors reaching the target: "
+                  + ", ".join(f"{r:.4g}" for r in res.solutions[:-1]))
+        print(f"target {args.target_slope:.4g} = {res.normalised_target:.4g} grad_f0, "
+              f"grad_f0 = 4 pbar/(pi E*) = {g0:.4g}; reachable "
+              f"{res.reachable[0]:.4g}..{res.reachable[1]:.4g}")
+    else:
+        if not np.isfinite(args.fill_factor):
+            raise ValueError(f"fill factor must be finite, got {args.fill_factor!r}")
+        value, sd = table.rms_slope(args.pbar_over_estar, args.wear_ratio, args.fill_factor)
+        fine = fine_grain_rms_slope([1 - args.fill_factor, args.fill_factor],
+                                    [1.0, args.wear_ratio])
+        print(f"rms slope = {value:.4g} +- {sd:.2g} (realisation scatter); "
+              f"{value / g0:.4g} grad_f0, grad_f0 = {g0:.4g}")
+        print(f"fine-grain closed form: {g0 * fine:.4g} ({fine:.4g} grad_f0)")
+    print(source)
     return 0
 
 

@@ -16,6 +16,8 @@ Steady result files (layout ``runin.steady``, version 1)::
         rms_slope_error   its estimated discretisation error, NaN if not estimated
         rms_slope_plain   plain pixel rms of the slope dataset
         rms_slope_ref     grad_f0 = 4 pbar / (pi E*), eq. 12       (rms_slope_ref_units)
+        rms_height        rms of the face about its least-squares  (rms_height_units, m)
+                          plane; optional when read (NaN if absent)
         fill_factors      realised area fraction of each phase     (fill_factors_units)
         phase_pressures   steady pressure on each phase, Pa        (phase_pressures_units)
         wear_coefficients k_i, 1/Pa                                (wear_coefficients_units)
@@ -68,6 +70,9 @@ _ATTRIBUTES = {
     "pixel_size": "m",
     "n": "1",
 }
+# Attributes written by this version and read when present (files written
+# before they existed still read, with NaN).
+_OPTIONAL_ATTRIBUTES = {"rms_height": "m"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -95,8 +100,53 @@ def _umask():
     return mask
 
 
+def _write_error(err, tmp, path):
+    """An :class:`OSError` of writing ``path`` that names ``path``, not the temporary file."""
+    import errno as errno_codes
+    import re
+
+    # The first error in the chain with an errno says why (e.g. a failed
+    # close reports "file write failed" after the write that hit ENOSPC).
+    code, cause, seen = None, err, set()
+    while cause is not None and id(cause) not in seen and code is None:
+        seen.add(id(cause))
+        if isinstance(cause, OSError):
+            code = cause.errno
+            if code is None:
+                # h5py's messages carry the C library's errno inside the text.
+                found = re.search(r"errno = (\d+)", str(cause))
+                code = int(found.group(1)) if found else None
+        cause = cause.__context__
+    if code is not None and code in errno_codes.errorcode:
+        reason = os.strerror(code)
+    else:
+        reason = err.strerror or str(err)
+        if tmp is not None:
+            reason = reason.replace(str(tmp), str(path))
+    return OSError(code, f"cannot write {str(path)!r}: {reason}")
+
+
+def _keep_backup(path, backup):
+    """Make ``backup`` a copy of ``path`` (a hard link where possible), atomically."""
+    fd, tmp = tempfile.mkstemp(dir=backup.parent, prefix=f".{backup.name}.", suffix=".tmp")
+    os.close(fd)
+    tmp = pathlib.Path(tmp)
+    try:
+        tmp.unlink()
+        try:
+            os.link(path, tmp)
+        except OSError:
+            import shutil  # a file system without hard links: copy
+
+            shutil.copy2(path, tmp)
+        os.replace(tmp, backup)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 @contextlib.contextmanager
-def atomic_h5(path, *, format, version, force=False):
+def atomic_h5(path, *, format, version, force=False, backup=None):
     """Write an HDF5 file atomically: a temporary file, then :func:`os.replace`.
 
     Every HDF5 file of the project that is written whole goes through this
@@ -113,6 +163,10 @@ def atomic_h5(path, *, format, version, force=False):
         Layout version, stored in the root attribute ``format_version``.
     force : bool, optional
         Replace an existing file (default False).
+    backup : str or path-like, optional
+        Keep the file that ``path`` held before as ``backup`` (replacing
+        it), a hard link where the file system allows, else a copy.
+        Default: the replaced file is dropped.
 
     Yields
     ------
@@ -127,13 +181,21 @@ def atomic_h5(path, *, format, version, force=False):
     ------
     ValueError
         ``path`` is a directory, or exists and ``force`` is False.
+    OSError
+        The file cannot be written; the message names ``path`` (not the
+        temporary file) and the reason.
 
     Notes
     -----
-    The temporary file ``.<name>.<random>.tmp`` sits in the directory of
-    ``path`` (a rename across file systems is not atomic).  The new file
-    gets the permissions of a file created normally (``0o666`` less the
-    umask), not the ``0o600`` of :func:`tempfile.mkstemp`.
+    The file is built in memory (HDF5's ``core`` driver) and written to
+    the temporary file ``.<name>.<random>.tmp`` in the directory of
+    ``path`` (a rename across file systems is not atomic) with ordinary
+    writes, so that an operating-system error is an :class:`OSError` and
+    never a truncated file.  The temporary name is unique, so concurrent
+    writers do not collide (the last rename wins).
+    The new file gets the permissions of a file created normally
+    (``0o666`` less the umask), not the ``0o600`` of
+    :func:`tempfile.mkstemp`.
 
     Examples
     --------
@@ -149,26 +211,50 @@ def atomic_h5(path, *, format, version, force=False):
         raise ValueError(f"output {str(path)!r} is a directory")
     if path.exists() and not force:
         raise ValueError(f"output {str(path)!r} exists (use force to overwrite)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    tmp = pathlib.Path(tmp)
-    os.close(fd)
     try:
-        os.chmod(tmp, 0o666 & ~_umask())
-        with h5py.File(tmp, "w") as f:
-            f.attrs["format"] = format
-            f.attrs["format_version"] = version
-            yield f
-            f.flush()
-        fd = os.open(tmp, os.O_RDONLY)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as err:
+        raise _write_error(err, None, path) from None
+    tmp = pathlib.Path(tmp)
+    in_caller = False
+    try:
+        with open(fd, "wb") as out:
+            os.chmod(tmp, 0o666 & ~_umask())
+            # HDF5 builds the file in memory; its bytes then go to disk through
+            # plain system calls, which report a refused write (a full disk, a
+            # quota, a size limit) as an OSError.  Writing to disk itself, HDF5
+            # reports such errors only in destructors, leaves a truncated file
+            # behind and can crash in its next flush.
+            with h5py.File(tmp.name, "w", driver="core", backing_store=False) as f:
+                f.attrs["format"] = format
+                f.attrs["format_version"] = version
+                in_caller = True
+                yield f
+                in_caller = False
+                f.flush()
+                image = f.id.get_file_image()
+            out.write(image)
+            del image
+            out.flush()
+            os.fsync(out.fileno())
+        if backup is not None and path.is_file():
+            _keep_backup(path, pathlib.Path(backup))
+        os.replace(tmp, path)
+    except BaseException as err:
+        tmp.unlink(missing_ok=True)
+        # The caller's own OSErrors pass unchanged; those of this file name it.
+        if isinstance(err, OSError) and (not in_caller or tmp.name in str(err)):
+            raise _write_error(err, tmp, path) from None
+        raise
+    try:  # make the rename itself durable; not every file system allows it
+        fd = os.open(path.parent, os.O_RDONLY)
         try:
             os.fsync(fd)
         finally:
             os.close(fd)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    except OSError:
+        pass
 
 
 def write_result(path, result, scene=None, *, force=False):
@@ -216,8 +302,9 @@ def _write(f, result, scene):
         "E_star": result.E_star,
         "pixel_size": result.pixel_size,
         "n": result.n,
+        "rms_height": result.rms_height,
     }
-    for name, unit in _ATTRIBUTES.items():
+    for name, unit in {**_ATTRIBUTES, **_OPTIONAL_ATTRIBUTES}.items():
         f.attrs[name] = values[name]
         f.attrs[f"{name}_units"] = unit
     dtype = np.int8 if result.n_phases < 127 else np.int16
@@ -308,5 +395,6 @@ def _read(f, path):
         E_star=float(a["E_star"]),
         rms_slope_plain=float(a["rms_slope_plain"]),
         rms_slope_error=float(a["rms_slope_error"]),
+        rms_height=float(f.attrs.get("rms_height", np.nan)),
     )
     return result, scene_text

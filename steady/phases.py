@@ -35,11 +35,13 @@ import functools
 import logging
 import math
 import pathlib
+import stat
 
 import numpy as np
 from scipy import ndimage, spatial
 
 from . import grid
+from .command_line import format_bytes
 from .grid import face_mask, pixel_centres
 
 __all__ = [
@@ -50,6 +52,8 @@ __all__ = [
     "Voronoi",
     "extend_off_face",
     "load_phase_map",
+    "npy_header",
+    "read_npy",
     "realised_fill_factors",
     "validate_labels",
 ]
@@ -115,11 +119,16 @@ def validate_labels(labels, n_phases, *, face_mask=None):
                          f"(labels 0..{n_phases - 1})")
     if np.any(labels[~mask] != -1):
         raise ValueError("pixels off the face must carry the label -1")
+    if n_phases > face_labels.size:
+        # Counting would allocate one entry per label: refuse before.
+        raise ValueError(f"{n_phases} phases (labels 0..{n_phases - 1}) cannot all have a pixel "
+                         f"on a face of {face_labels.size} pixels")
     counts = np.bincount(face_labels, minlength=n_phases)
     empty = np.flatnonzero(counts == 0)
     if empty.size:
-        raise ValueError(f"phase {int(empty[0])} has no pixel on the face "
-                         f"(pixel counts per phase: {counts.tolist()})")
+        shown = (f"pixel counts per phase: {counts.tolist()}" if n_phases <= 16
+                 else f"{empty.size} of the {n_phases} phases have none")
+        raise ValueError(f"phase {int(empty[0])} has no pixel on the face ({shown})")
     return counts
 
 
@@ -498,7 +507,144 @@ class ArrayMap:
         return np.where(face_mask(n), fine, -1)
 
 
-def load_phase_map(path, *, max_phases=16):
+def _input_file(path, what):
+    """Size in bytes of an input file; ``ValueError`` unless it is a readable regular file."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise ValueError(f"{what} {str(path)!r} does not exist") from None
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ValueError(f"{what} {str(path)!r} is a directory, not a file")
+    if not stat.S_ISREG(st.st_mode):
+        raise ValueError(f"{what} {str(path)!r} is not a regular file (a device or a pipe?)")
+    if st.st_size == 0:
+        raise ValueError(f"{what} {str(path)!r} is empty (0 bytes)")
+    return st.st_size
+
+
+def npy_header(path, *, what="file", shape=None, max_side=None):
+    """Shape and dtype of a ``.npy`` file, read from its header without loading the data.
+
+    Parameters
+    ----------
+    path : str or path-like
+    what : str, optional
+        How messages name the file (e.g. ``"phase map"``).
+    shape : tuple of int, optional
+        Refuse any other shape.
+    max_side : int, optional
+        Refuse anything but a square 2-d array of at most
+        ``max_side x max_side`` values.
+
+    Returns
+    -------
+    shape : tuple of int
+    dtype : numpy.dtype
+
+    Raises
+    ------
+    ValueError
+        Missing file, a directory or device, an empty file, no ``.npy``
+        header, a damaged header, an array of Python objects, a shape
+        refused by ``shape`` or ``max_side``, or fewer data bytes than the
+        header announces (a truncated file, or a header that claims a huge
+        array).
+    """
+    import numpy.lib.format as npy_format
+
+    path = pathlib.Path(path)
+    size = _input_file(path, what)
+    try:
+        with open(path, "rb") as f:
+            if f.read(6) != npy_format.MAGIC_PREFIX:
+                magic = False
+            else:
+                magic = True
+                f.seek(0)
+                version = npy_format.read_magic(f)
+                read = (npy_format.read_array_header_1_0 if version == (1, 0)
+                        else npy_format.read_array_header_2_0)
+                found, _, dtype = read(f)
+                offset = f.tell()
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
+    except Exception as err:  # noqa: BLE001 -- numpy parses the header with Python's tokenizer
+        raise ValueError(f"{what} {str(path)!r} has a damaged .npy header: "
+                         f"{str(err)[:200]}") from None
+    if not magic:
+        raise ValueError(f"{what} {str(path)!r} is not a .npy file (no NumPy header)")
+    found = tuple(found)
+    if dtype.hasobject:
+        raise ValueError(f"{what} {str(path)!r} holds Python objects, not numbers")
+    if shape is not None and found != tuple(shape):
+        raise ValueError(f"{what} {str(path)!r} holds an array of shape {found}; "
+                         f"{tuple(shape)} is needed")
+    if max_side is not None:
+        if len(found) != 2 or found[0] != found[1]:
+            raise ValueError(f"{what} {str(path)!r} must be a square 2-d array, got shape "
+                             f"{found}")
+        if found[0] > max_side:
+            raise ValueError(f"{what} {str(path)!r} has {found[0]} x {found[1]} pixels, more "
+                             f"than the grid's n = {max_side} (n must be a multiple of the "
+                             f"map's size)")
+    needed = math.prod(found) * dtype.itemsize
+    if size - offset < needed:
+        dims = " x ".join(str(d) for d in found) or "scalar"
+        raise ValueError(f"{what} {str(path)!r} is truncated: its header announces {dims} "
+                         f"values of {dtype} ({format_bytes(needed)}), the file holds "
+                         f"{size - offset} bytes of data")
+    return found, dtype
+
+
+def read_npy(path, *, what="file", max_side=None, shape=None):
+    """Read a square 2-d array from a ``.npy`` file, checking the file before loading it.
+
+    Parameters
+    ----------
+    path : str or path-like
+    what : str, optional
+        How messages name the file (e.g. ``"phase map"``).
+    max_side : int, optional
+        Refuse arrays larger than ``max_side x max_side`` (before loading).
+    shape : tuple of int, optional
+        Refuse any other shape (before loading).
+
+    Returns
+    -------
+    ndarray, shape (m, m)
+
+    Raises
+    ------
+    ValueError
+        As :func:`npy_header`, or not square 2-d.  Never ``EOFError`` or
+        ``MemoryError``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "empty.npy"
+    >>> _ = path.write_bytes(b"")
+    >>> try:
+    ...     read_npy(path, what="phase map")
+    ... except ValueError as err:
+    ...     print(str(err).replace(str(path), "empty.npy"))
+    phase map 'empty.npy' is empty (0 bytes)
+    """
+    path = pathlib.Path(path)
+    found, dtype = npy_header(path, what=what, shape=shape,
+                              max_side=math.inf if max_side is None else max_side)
+    try:
+        return np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+    except MemoryError:
+        raise ValueError(f"{what} {str(path)!r} ({found[0]} x {found[1]} values of {dtype}) "
+                         f"does not fit in memory") from None
+
+
+def load_phase_map(path, *, max_phases=16, max_size=None):
     """Read a phase map from a ``.npy`` or ``.png`` file.
 
     Parameters
@@ -513,6 +659,10 @@ def load_phase_map(path, *, max_phases=16):
         Refuse images with more distinct levels on the face than this
         (default 16); an anti-aliased image would otherwise give hundreds
         of phases.
+    max_size : int, optional
+        Refuse maps of more than ``max_size x max_size`` pixels, before
+        reading their data (a scene passes its grid size ``n``: the map's
+        size must divide it).
 
     Returns
     -------
@@ -521,30 +671,53 @@ def load_phase_map(path, *, max_phases=16):
     Raises
     ------
     ValueError
-        Missing or unreadable file, unsupported suffix, bad contents.
+        Missing file, a directory or device, an empty, truncated or
+        unreadable file, an unsupported suffix, a map larger than
+        ``max_size``, bad contents.
     """
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise ValueError(f"phase map file {str(path)!r} does not exist")
+    what = "phase map"
     suffix = path.suffix.lower()
+    if suffix not in (".npy", ".png"):
+        _input_file(path, what)
+        raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
     if suffix == ".npy":
-        try:
-            a = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as err:
-            raise ValueError(f"cannot read phase map {str(path)!r}: {err}") from None
-        return ArrayMap(a, source=repr(str(path)))
-    if suffix == ".png":
-        return ArrayMap(_png_labels(path, max_phases), source=repr(str(path)))
-    raise ValueError(f"phase map {str(path)!r} must be a .npy or .png file")
+        a = read_npy(path, what=what, max_side=max_size)
+    else:
+        a = _png_labels(path, max_phases, max_size)
+    return ArrayMap(a, source=repr(str(path)))
 
 
-def _png_labels(path, max_phases):
+def _png_size(path):
+    """Width and height from a PNG's header, or None if it has no PNG signature."""
+    with open(path, "rb") as f:
+        head = f.read(24)
+    if len(head) < 24 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        return None
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+def _png_labels(path, max_phases, max_size=None):
     import matplotlib.image  # deferred: only PNG maps need it
 
+    what = "phase map"
+    _input_file(path, what)
+    try:
+        size = _png_size(path)
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
+    if size is None:
+        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
+    if size[0] != size[1]:
+        raise ValueError(f"{what} {str(path)!r} must be square, got {size[0]} x {size[1]} "
+                         f"pixels")
+    if max_size is not None and size[0] > max_size:
+        raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more than "
+                         f"the grid's n = {max_size} (n must be a multiple of the map's size)")
     try:
         img = matplotlib.image.imread(path)
-    except (OSError, ValueError, SyntaxError) as err:
-        raise ValueError(f"cannot read phase map {str(path)!r}: {err}") from None
+    except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
+        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
     if img.ndim == 3:
         img = img[..., :3]  # drop alpha
     if img.shape[0] != img.shape[1]:

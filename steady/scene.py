@@ -40,16 +40,25 @@ from __future__ import annotations
 import dataclasses
 import math
 import pathlib
+import stat
 import types
+
+import numpy as np
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from .phases import Homogeneous, Rods, Voronoi, load_phase_map
+from .command_line import one_line, shorten
+from .phases import Homogeneous, Rods, Voronoi, load_phase_map, validate_labels
 
-__all__ = ["CORE_SECTIONS", "RUN_IN_SECTIONS", "Scene", "load_scene", "parse_scene"]
+__all__ = ["CORE_SECTIONS", "MAX_SCENE_BYTES", "RUN_IN_SECTIONS", "Scene", "load_scene",
+           "parse_scene"]
+
+#: Largest scene file read, bytes: a scene is a few lines; large data belong in
+#: ``.npy`` files (a 40 MB list would take Python's TOML parser half a minute).
+MAX_SCENE_BYTES = 2 ** 20
 
 #: Sections every scene file has, with their keys (required, optional).
 CORE_SECTIONS = {
@@ -123,50 +132,91 @@ class Scene:
         """Number of phases of the geometry."""
         return self.geometry.n_phases
 
+    def phase_labels(self, n=None):
+        """The phase map on the ``n x n`` grid, every phase checked to have a face pixel.
+
+        Parameters
+        ----------
+        n : int, optional
+            Grid size (default ``self.n``).
+
+        Returns
+        -------
+        ndarray, shape (n, n), int
+            Phase index on the face, -1 off it.
+
+        Raises
+        ------
+        ValueError
+            A phase has no pixel on the face at this grid (a Voronoi phase
+            whose seeds all lie off the face or whose cells fall between
+            pixel centres); the message names the phase, the seeds and ``n``.
+        """
+        n = self.n if n is None else int(n)
+        labels = self.geometry.labels(n)
+        counts = np.bincount(labels[labels >= 0], minlength=self.n_phases)
+        empty = np.flatnonzero(counts[:self.n_phases] == 0)
+        if empty.size:
+            phase = int(empty[0])
+            where = "" if self.source_path is None else f"{self.source_path}: "
+            if isinstance(self.geometry, Voronoi):
+                g = self.geometry
+                raise ValueError(
+                    f"{where}[phases] map: phase {phase} has no pixel on the face with these "
+                    f"{g.n_seeds} seeds (seed = {g.seed}) at n = {n}: its seeds lie off the "
+                    f"face or their cells fall between pixel centres; use more seeds, another "
+                    f"seed or a finer grid")
+            raise ValueError(f"{where}[phases] map: phase {phase} has no pixel on the face at "
+                             f"n = {n}")
+        validate_labels(labels, self.n_phases)
+        return labels
+
 
 def _number(value, key, unit, *, positive=True):
     """A finite float (``int`` accepted, ``bool`` not)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{key} must be a number ({unit}), got {value!r}")
+        raise ValueError(f"{key} must be a number ({unit}), got {shorten(value)}")
     v = float(value)
     if not math.isfinite(v) or (positive and v <= 0):
-        raise ValueError(f"{key} must be a positive finite number ({unit}), got {value!r}")
+        raise ValueError(f"{key} must be a positive finite number ({unit}), got "
+                         f"{shorten(value)}")
     return v
 
 
 def _integer(value, key, *, minimum):
     if isinstance(value, bool) or not isinstance(value, int):
-        raise ValueError(f"{key} must be an integer, got {value!r}")
+        raise ValueError(f"{key} must be an integer, got {shorten(value)}")
     if value < minimum:
-        raise ValueError(f"{key} must be at least {minimum}, got {value!r}")
+        raise ValueError(f"{key} must be at least {minimum}, got {shorten(value)}")
     return value
 
 
 def _list(value, key):
     if not isinstance(value, list):
-        raise ValueError(f"{key} must be an array, got {value!r}")
+        raise ValueError(f"{key} must be an array, got {shorten(value)}")
     return value
 
 
 def _check_keys(table, where, required, optional):
     if not isinstance(table, dict):
-        raise ValueError(f"{where} must be a table, got {table!r}")
+        raise ValueError(f"{where} must be a table, got {shorten(table)}")
     unknown = sorted(set(table) - required - optional)
     if unknown:
         allowed = ", ".join(sorted(required | optional)) or "none"
-        raise ValueError(f"unknown key {unknown[0]!r} in {where} (allowed: {allowed})")
+        raise ValueError(f"unknown key {shorten(unknown[0])} in {where} (allowed: {allowed})")
     missing = sorted(required - set(table))
     if missing:
         raise ValueError(f"missing key {missing[0]!r} in {where}")
 
 
-def _geometry(spec, radius, base_dir):
+def _geometry(spec, radius, base_dir, n):
     where = "[phases] map"
     if not isinstance(spec, dict):
-        raise ValueError(f"{where} must be an inline table with a 'kind', got {spec!r}")
+        raise ValueError(f"{where} must be an inline table with a 'kind', got {shorten(spec)}")
     kind = spec.get("kind")
     if kind not in _MAP_KEYS:
-        raise ValueError(f"{where} kind must be one of {sorted(_MAP_KEYS)}, got {kind!r}")
+        raise ValueError(f"{where} kind must be one of {sorted(_MAP_KEYS)}, got "
+                         f"{shorten(kind)}")
     required, optional = _MAP_KEYS[kind]
     _check_keys(spec, f"{where} (kind {kind!r})", required | {"kind"}, optional)
     if kind == "homogeneous":
@@ -179,12 +229,12 @@ def _geometry(spec, radius, base_dir):
         try:
             return Voronoi(n_seeds, tuple(fill), seed)
         except ValueError as err:
-            raise ValueError(f"{where}: {err}") from None
+            raise ValueError(f"{where}: {one_line(err, 300)}") from None
     if kind == "rods":
         centres = []
         for c in _list(spec["centres"], f"{where} centres"):
             if not isinstance(c, list) or len(c) != 2:
-                raise ValueError(f"{where} centres must be [x, y] pairs in m, got {c!r}")
+                raise ValueError(f"{where} centres must be [x, y] pairs in m, got {shorten(c)}")
             centres.append(tuple(_number(v, f"{where} centres", "m", positive=False) / radius
                                  for v in c))
         radii = [_number(v, f"{where} radii", "m") / radius
@@ -198,12 +248,13 @@ def _geometry(spec, radius, base_dir):
         try:
             return Rods(tuple(centres), tuple(radii), matrix_phase, rod_phases)
         except ValueError as err:
-            raise ValueError(f"{where}: {err}") from None
+            raise ValueError(f"{where}: {one_line(err, 300)}") from None
     # kind == "file"
     path = spec["path"]
     if not isinstance(path, str) or not path:
-        raise ValueError(f"{where} path must be a non-empty string, got {path!r}")
-    return load_phase_map(pathlib.Path(base_dir) / path)
+        raise ValueError(f"{where} path must be a non-empty string, got {shorten(path)}")
+    # The map's size must divide n: a larger one is refused before its data are read.
+    return load_phase_map(pathlib.Path(base_dir) / path, max_size=n)
 
 
 def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
@@ -241,7 +292,9 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"malformed TOML: {err}") from None
+        raise ValueError(f"malformed TOML: {one_line(err, 200)}") from None
+    except RecursionError:
+        raise ValueError("malformed TOML: arrays or tables nested too deeply") from None
     base_dir = pathlib.Path(base_dir)
     ignored = tuple(sorted(name for name in RUN_IN_SECTIONS
                            if name in doc and name not in extra_sections))
@@ -249,10 +302,10 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     if unknown:
         allowed = ", ".join(sorted(set(CORE_SECTIONS) | set(extra_sections)
                                    | set(RUN_IN_SECTIONS)))
-        raise ValueError(f"unknown section [{unknown[0]}] (allowed: {allowed})")
+        raise ValueError(f"unknown section [{shorten(unknown[0])[1:-1]}] (allowed: {allowed})")
     for name in ignored:
         if not isinstance(doc[name], dict):
-            raise ValueError(f"[{name}] must be a table, got {doc[name]!r}")
+            raise ValueError(f"[{name}] must be a table, got {shorten(doc[name])}")
     for name, (required, optional) in CORE_SECTIONS.items():
         if name not in doc:
             raise ValueError(f"missing section [{name}]")
@@ -262,13 +315,14 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     normal_force = _number(doc["load"]["normal_force"], "[load] normal_force", "N")
     E_star = _number(doc["counterbody"]["E_star"], "[counterbody] E_star", "Pa")
     n = _integer(doc["grid"]["n"], "[grid] n", minimum=2)
-    k = tuple(_number(v, "[wear] coefficients", "1/Pa")
-              for v in _list(doc["wear"]["coefficients"], "[wear] coefficients"))
     exponent = _number(doc["wear"].get("exponent", 1.0), "[wear] exponent", "dimensionless")
-    geometry = _geometry(doc["phases"]["map"], radius, base_dir)
-    if len(k) != geometry.n_phases:
-        raise ValueError(f"[wear] coefficients has {len(k)} values {list(k)} but the phase "
-                         f"map has {geometry.n_phases} phases")
+    geometry = _geometry(doc["phases"]["map"], radius, base_dir, n)
+    coefficients = _list(doc["wear"]["coefficients"], "[wear] coefficients")
+    if len(coefficients) != geometry.n_phases:  # counted before any value is looked at
+        raise ValueError(f"[wear] coefficients has {len(coefficients)} values "
+                         f"{shorten(coefficients)} but the phase map has {geometry.n_phases} "
+                         f"phases")
+    k = tuple(_number(v, "[wear] coefficients", "1/Pa") for v in coefficients)
     try:
         geometry.check_grid(n)
     except ValueError as err:
@@ -305,16 +359,32 @@ def load_scene(path, *, extra_sections=None):
     Raises
     ------
     ValueError
-        Missing or unreadable file, or any error of :func:`parse_scene`;
-        the message starts with the path.
+        Missing or unreadable file, a directory or device, a file larger
+        than :data:`MAX_SCENE_BYTES`, not UTF-8, or any error of
+        :func:`parse_scene`; the message starts with the path.
     """
     path = pathlib.Path(path)
+    what = f"scene file {str(path)!r}"
     try:
-        text = path.read_text(encoding="utf-8")
+        mode = path.stat().st_mode
+        if stat.S_ISDIR(mode):
+            raise ValueError(f"{what} is a directory, not a file")
+        if not stat.S_ISREG(mode):
+            raise ValueError(f"{what} is not a regular file (a device or a pipe?)")
+        with open(path, "rb") as f:
+            data = f.read(MAX_SCENE_BYTES + 1)
     except FileNotFoundError:
-        raise ValueError(f"scene file {str(path)!r} does not exist") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ValueError(f"cannot read scene file {str(path)!r}: {err}") from None
+        raise ValueError(f"{what} does not exist") from None
+    except OSError as err:
+        raise ValueError(f"cannot read {what}: {err.strerror or err}") from None
+    if len(data) > MAX_SCENE_BYTES:
+        raise ValueError(f"{what} is larger than {MAX_SCENE_BYTES // 2 ** 20} MiB, the most a "
+                         f"scene may have (large data belong in .npy files, e.g. a phase map)")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{what} is not UTF-8 text: byte {err.start} is "
+                         f"{data[err.start:err.start + 1]!r}") from None
     try:
         return parse_scene(text, path.parent, extra_sections=extra_sections, source_path=path)
     except ValueError as err:

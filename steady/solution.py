@@ -33,6 +33,7 @@ from .accuracy import estimate_rms_slope
 from .grid import face_mask, pixel_size
 from .halfspace import HalfSpace
 from .pressures import pressure_field
+from .relief import rms_height
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
 
@@ -78,6 +79,10 @@ class SteadyResult:
     rms_slope_error : float, dimensionless
         Estimated discretisation error of ``rms_slope``; NaN when not
         estimated (:func:`solve` alone does not).
+    rms_height : float, m
+        Rms of ``face`` over the face pixels about its least-squares plane
+        (:func:`steady.relief.rms_height`; the asymptote of the run-in's
+        ``rms_height``); NaN when not computed.
     """
 
     labels: np.ndarray
@@ -95,6 +100,7 @@ class SteadyResult:
     E_star: float
     rms_slope_plain: float = math.nan
     rms_slope_error: float = math.nan
+    rms_height: float = math.nan
 
     @property
     def n(self):
@@ -120,6 +126,11 @@ class SteadyResult:
     def normalised_rms_slope(self):
         """``rms_slope / grad_f0`` (eq. 15), dimensionless."""
         return self.rms_slope / self.reference_slope
+
+    @property
+    def normalised_rms_height(self):
+        """``rms_height / (grad_f0 a)``, dimensionless (0.15499 for eq. 10)."""
+        return self.rms_height / (self.reference_slope * self.radius)
 
     @property
     def normalised_face(self):
@@ -228,6 +239,7 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
     slope2 = gx * gx
     slope2 += gy * gy
     rms = math.sqrt(np.sum(slope2, where=on_face) / counts.sum())
+    height = rms_height(face, on_face, h)
     off = ~on_face
     face[off] = np.nan
     slope = np.sqrt(slope2, out=slope2)
@@ -254,6 +266,7 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
         radius=radius,
         E_star=halfspace.E_star,
         rms_slope_plain=rms,
+        rms_height=height,
     )
 
 

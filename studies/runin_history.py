@@ -1,4 +1,4 @@
-"""Run-in: rms slope against sliding distance, from a flat face to the steady state.
+"""Run-in: the friction proxy against sliding distance, from a flat face to the steady state.
 
 Follows the run-in (:mod:`transient`: implicit SDIRK2 steps with error
 control, from a flat initial face, until the wear rates equalise) of
@@ -7,15 +7,18 @@ control, from a flat initial face, until the wear rates equalise) of
   ``rho_2 = 0.3``, ``k_2 / k_1 = 0.1`` and ``10`` (seed 1000);
 - the two rods scenes of Fig. 7-8 (``studies/scenes/rods_*.toml``),
 
-and plots the normalised rms slope ``rms / grad_f0`` against the sliding
-distance in units of ``s* = a / (k_min E*)``, with the steady value of the same
-grid (eq. 9, plain pixel rms slope, as the transient measures it) as the
-asymptote.  The cases run in parallel as a resumable sweep
+and plots the history's rms slope (the continuum estimate of
+:mod:`transient.history`, normalised by ``grad_f0``) against the sliding
+distance in units of ``s* = a / (k_min E*)``, with its error band (the
+larger of the per-step error bar and the companion run's on ``n/2``,
+:mod:`transient.spatial_error`), the plain pixel value faintly, and the
+steady module's corrected rms slope with its error bar as the asymptote;
+beside it the rms height.  The cases run in parallel as a resumable sweep
 (:mod:`steady.sweep`).
 
 Run::
 
-    python studies/runin_history.py            # n = 128: 25 s on 2 cores
+    python studies/runin_history.py            # n = 128: about 45 s on 2 cores
     python studies/runin_history.py --quick    # a few seconds
     python studies/runin_history.py --plot-only
 
@@ -30,10 +33,8 @@ import sys
 import numpy as np
 import study_io
 
-from steady.grid import pixel_size
-from steady.halfspace import HalfSpace
 from steady.phases import Voronoi
-from steady.scene import load_scene
+from steady.scene import Scene, load_scene
 from steady.sweep import run_sweep
 
 NAME = "runin_history"
@@ -48,50 +49,56 @@ PARAMS = {"n": 128, "n_seeds": 1600, "fill": 0.3, "seed": 1000, "tol": 1e-5,
 QUICK = {"n": 32, "n_seeds": 100, "fill": 0.3, "seed": 1000, "tol": 1e-3,
          "cases": ["voronoi_k10", "rods_brass_in_steel"]}
 
-_UNITS = {"distance": "s*", "normalised_rms_slope": "grad_f0", "spread": "1",
-          "steady_plain": "grad_f0", "steady_corrected": "grad_f0", "face_error": "1",
-          "rms_slope_error": "1", "steps": "1", "solves": "1", "wall_time": "s"}
+_UNITS = {"distance": "s*", "normalised_rms_slope": "grad_f0", "rms_slope_error": "grad_f0",
+          "spatial_error": "grad_f0", "rms_slope_plain": "grad_f0", "normalised_rms_height":
+          "grad_f0 a", "spread": "1", "steady": "grad_f0", "steady_error": "grad_f0",
+          "steady_rms_height": "grad_f0 a", "face_error": "1", "agrees": "1",
+          "companion_grid": "1", "steps": "1", "solves": "1", "wall_time": "s",
+          "companion_wall_time": "s"}
 
 
-def _problem(case, n, n_seeds, fill, seed):
-    """The wear problem of a case on the ``n x n`` grid."""
-    from transient.problem import WearProblem
-
+def _scene(case, n, n_seeds, fill, seed):
+    """The scene of a case on the ``n x n`` grid."""
     spec = CASES[case]
     if spec["kind"] == "voronoi":
-        labels = Voronoi(n_seeds, (1 - fill, fill), seed).labels(n)
         # pbar = 1 Pa, a = 1 m, E* = 1 Pa: the normalised history.
-        return WearProblem(HalfSpace(n, pixel_size(n, 1.0), 1.0), labels,
-                           [1.0, spec["ratio"]], np.pi, 1.0)
-    scene = load_scene(study_io.ROOT / "studies" / "scenes" / spec["scene"])
-    return WearProblem.from_scene(scene, n=n)
+        return Scene(radius=1.0, normal_force=np.pi, E_star=1.0, n=n,
+                     wear_coefficients=(1.0, spec["ratio"]), exponent=1.0,
+                     geometry=Voronoi(n_seeds, (1 - fill, fill), seed))
+    return load_scene(study_io.ROOT / "studies" / "scenes" / spec["scene"])
 
 
 def run_case(point, *, n, n_seeds, fill, seed, tol):
-    """One run-in from a flat face (sweep task)."""
-    from steady.basis import PhaseBasis
+    """One run-in from a flat face, its companion on n/2 and the steady state (sweep task)."""
+    from steady.solution import solve_scene
     from transient.comparison import compare_with_steady
     from transient.initial_face import flat
+    from transient.problem import WearProblem
     from transient.runin import RunOptions, run_in
+    from transient.spatial_error import spatial_error
 
-    problem = _problem(point["case"], n, n_seeds, fill, seed)
-    result = run_in(problem, flat(n, problem.radius), RunOptions(tol=tol))
+    scene = _scene(point["case"], n, n_seeds, fill, seed)
+    problem = WearProblem.from_scene(scene, n=n)
+    options = RunOptions(tol=tol)
+    result = run_in(problem, flat(n, scene.radius), options)
     if not result.success:
         raise RuntimeError(f"run-in of {point['case']} ended {result.status}: "
                            f"{result.message}")
-    steady = problem.solve_steady()
+    companion = spatial_error(scene, flat, options, result)
+    steady = solve_scene(scene, n=n)
     comparison = compare_with_steady(result, steady, problem)
-    corrected = PhaseBasis(problem.labels, problem.radius, problem.halfspace.E_star,
-                           faces=False).rms_slopes([problem.wear_coefficients],
-                                                   problem.normal_force)
     h = result.history
+    g0 = result.reference_slope
     return {"distance": h["distance"] / result.run_in_distance,
-            "normalised_rms_slope": h["normalised_rms_slope"], "spread": h["spread"],
-            "steady_plain": steady.rms_slope_plain / steady.reference_slope,
-            "steady_corrected": corrected.normalised[0],
-            "face_error": comparison.face_error,
-            "rms_slope_error": comparison.rms_slope_error,
-            "steps": result.steps, "solves": result.solves, "wall_time": result.wall_time}
+            "normalised_rms_slope": h["normalised_rms_slope"],
+            "rms_slope_error": h["rms_slope_error"] / g0, "spatial_error": companion.error / g0,
+            "rms_slope_plain": h["rms_slope_plain"] / g0,
+            "normalised_rms_height": h["normalised_rms_height"], "spread": h["spread"],
+            "steady": steady.normalised_rms_slope, "steady_error": steady.rms_slope_error / g0,
+            "steady_rms_height": steady.normalised_rms_height,
+            "face_error": comparison.face_error, "agrees": float(comparison.rms_slope_agrees),
+            "companion_grid": companion.grid, "steps": result.steps, "solves": result.solves,
+            "wall_time": result.wall_time, "companion_wall_time": companion.run.wall_time}
 
 
 def compute(path, params, *, workers=None, scheduler=None, progress=False):
@@ -108,10 +115,11 @@ def compute(path, params, *, workers=None, scheduler=None, progress=False):
     datasets, attrs = {}, {"n": (params["n"], "1")}
     for c in params["cases"]:
         v = by_case[c]
-        for key in ("distance", "normalised_rms_slope", "spread"):
+        for key in ("distance", "normalised_rms_slope", "rms_slope_error", "spatial_error",
+                    "rms_slope_plain", "normalised_rms_height", "spread"):
             datasets[f"{c}/{key}"] = (v[key], _UNITS[key])
-        for key in ("steady_plain", "steady_corrected", "face_error", "rms_slope_error",
-                    "steps", "solves", "wall_time"):
+        for key in ("steady", "steady_error", "steady_rms_height", "face_error", "agrees",
+                    "companion_grid", "steps", "solves", "wall_time", "companion_wall_time"):
             attrs[f"{c}_{key}"] = (v[key].item(), _UNITS[key])
     return study_io.write_study(path, NAME, params, datasets, attrs)
 
@@ -123,26 +131,36 @@ TITLES = {"voronoi_k0.1": "Voronoi, $\\rho_2$ = 0.3, $k_2/k_1$ = 0.1",
 
 
 def plot(path, png):
-    """Histories with their steady asymptotes, from the HDF5 file."""
+    """Histories with their error bands and steady asymptotes, from the HDF5 file."""
+    from transient.plotting import draw_rms_slope_history
+
     d, a = study_io.read_study(path, NAME)
-    fig = study_io.figure(7.5, 4.3)
-    ax = fig.subplots()
+    fig = study_io.figure(12.5, 4.6)
+    ax_slope, ax_height = fig.subplots(1, 2, width_ratios=(1.6, 1))
     for j, c in enumerate(a["params"]["cases"]):
-        s, y = d[f"{c}/distance"], d[f"{c}/normalised_rms_slope"]
-        pos = s > 0
-        ax.semilogx(s[pos], y[pos], ".-", ms=2, lw=0.8, color=f"C{j}",
-                    label=f"{TITLES[c]}: {int(a[f'{c}_steps'])} steps, face error "
-                          f"{a[f'{c}_face_error']:.0e}")
-        ax.axhline(a[f"{c}_steady_plain"], color=f"C{j}", ls="--", lw=0.8)
-        ax.axhline(a[f"{c}_steady_corrected"], color=f"C{j}", ls=":", lw=0.8)
-    # The last step of each run is a jump of ~1e8 s* to the steady state.
-    ax.set_xlim(right=100.0)
-    ax.set_xlabel(r"sliding distance / $s^* = a / (k_{min} E^*)$")
-    ax.set_ylabel(r"rms slope / $\nabla f^0_\infty$ (pixel rms)")
-    ax.set_title(f"run-in from a flat face, n = {a['n']}; dashed: steady face (eq. 9), same "
-                 "pixel rms;\ndotted: steady face, energy-corrected rms (the converged value)",
-                 fontsize=9)
-    ax.legend(fontsize=7, loc="upper left")
+        history = {"distance": d[f"{c}/distance"], "rms_slope": d[f"{c}/normalised_rms_slope"],
+                   "rms_slope_error": d[f"{c}/rms_slope_error"],
+                   "rms_slope_spatial_error": d[f"{c}/spatial_error"],
+                   "rms_slope_plain": d[f"{c}/rms_slope_plain"]}
+        draw_rms_slope_history(ax_slope, history, 1.0, 1.0, color=f"C{j}",
+                               label=f"{TITLES[c]} (steady {a[f'{c}_steady']:.3f} $\\pm$ "
+                                     f"{a[f'{c}_steady_error']:.3f})",
+                               plain_label="plain pixel value" if j == 0 else "_nolegend_")
+        value, error = a[f"{c}_steady"], a[f"{c}_steady_error"]
+        ax_slope.axhspan(value - error, value + error, color=f"C{j}", alpha=0.12, lw=0)
+        ax_slope.axhline(value, color=f"C{j}", ls="--", lw=0.8)
+        s, y = d[f"{c}/distance"], d[f"{c}/normalised_rms_height"]
+        pos = (s > 0) & (s < 1e6)
+        ax_height.semilogx(s[pos], y[pos], "-", color=f"C{j}", lw=1.2)
+        ax_height.axhline(a[f"{c}_steady_rms_height"], color=f"C{j}", ls="--", lw=0.8)
+    ax_slope.set_ylabel(r"rms slope / $\nabla f^0_\infty$")
+    ax_slope.set_title(f"run-in from a flat face, n = {a['n']}: continuum estimate with its "
+                       "error band, plain pixel value faint,\nsteady face (corrected, with its "
+                       "error bar) dashed; the open circle is the flat face at s = 0", fontsize=9)
+    ax_slope.legend(fontsize=7, loc="lower right")
+    ax_height.set_xlabel(r"sliding distance / $s^* = a / (k_{min} E^*)$")
+    ax_height.set_ylabel(r"rms height / $(\nabla f^0_\infty a)$, best plane removed")
+    ax_height.set_title("rms height; dashed: steady face", fontsize=9)
     study_io.save_figure(fig, png)
 
 

@@ -23,16 +23,32 @@ What it reproduces
     step (stored with ``extrapolated = True``).  ``--full-baseline`` runs it
     to the end instead (use at n <= 64), which also checks the extrapolation.
 
+The spatial axis (``--spatial``)
+    The same scene's history error against a *grid-converged* reference
+    rather than a same-grid one, for the grid ``n`` and the tolerance
+    ``tol`` together: every implicit integrator of the registry
+    (:data:`transient.stepping.SCHEMES`) at ``tol = 1e-2, 1e-3, 1e-4`` on
+    n = 64, 128, 256.  The reference is ``sdirk2`` at ``tol = 1e-5`` on
+    n = 128, 256, 512, extrapolated at each distance with the observed
+    order (``studies/runin_convergence.py``'s rule), or the n = 512 value
+    where the differences do not shrink; its uncertainty (the size of the
+    extrapolation, or ``|S_512 - S_256|``) is stored beside it.  Also the
+    run's own error bars: the per-step ``rms_slope_error`` and the companion
+    run on ``n/2`` (:mod:`transient.spatial_error`) for ``sdirk2``.
+
 How to run
     python studies/work_precision.py                    # n = 256, ~10 min on 2 cores
     python studies/work_precision.py --n 64 --full-baseline   # ~11 min (10 the baseline)
-    python studies/work_precision.py --quick --out DIR  # smoke test, n = 40, ~10 s
-    python studies/work_precision.py --plot-only [--n N] [--out DIR]   # redraw from the HDF5
+    python studies/work_precision.py --spatial          # ~40 min (n = 512 reference)
+    python studies/work_precision.py --quick --out DIR  # smoke test, n = 40, ~20 s
+    python studies/work_precision.py --plot-only [--n N | --spatial] [--out DIR]
 
-Writes ``DIR/work_precision_n{n}.h5`` and then draws ``DIR/work_precision_n{n}.png``
-from that file.  Default DIR: ``out/`` at the repository root (the figures in
+Writes ``DIR/work_precision_n{n}.h5`` (``DIR/work_precision_spatial.h5``) and
+then draws ``DIR/work_precision_n{n}.png`` (``..._spatial.png``) from that
+file.  Default DIR: ``out/`` at the repository root (the figures in
 docs/figures are copies).  This script keeps its own command line rather than
-``study_io.run_study`` because it takes ``--n`` and ``--full-baseline``.
+``study_io.run_study`` because it takes ``--n``, ``--full-baseline`` and
+``--spatial``.
 """
 
 from __future__ import annotations
@@ -49,15 +65,17 @@ import time
 
 import numpy as np
 
-from steady.grid import pixel_size
-from steady.halfspace import HalfSpace
 from steady.output import atomic_h5
 from steady.phases import Voronoi
+from steady.scene import Scene
 from transient.comparison import compare_with_steady
 from transient.contact import solve_contact
-from transient.diagnostics import face_rms_slope
+from transient.history import HistoryEstimator
+from transient.initial_face import flat
 from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
+from transient.spatial_error import spatial_error
+from transient.stepping import SCHEMES
 
 # -- parameters ----------------------------------------------------------------
 RADIUS = 4e-3            # m, the paper's epoxy cylinder (Fig. 6)
@@ -73,23 +91,36 @@ CONTACT_RTOL = 1e-10     # every contact solve, baseline included
 # Sliding distances (units of s* = a / (k_1 E*)) where the history is compared;
 # multiples of 1e-4 so that the baseline's fixed steps land on them.
 DISTANCES = (1e-4, 1e-3, 1e-2, 0.1, 0.3, 1.0, 3.0)
-RUNS = {                 # scheme: tolerances (tol: local error / f*)
-    "implicit_euler": (1e-2, 1e-3, 1e-4),
-    "bdf2": (1e-2, 1e-3, 1e-4, 1e-5),
-    "sdirk2": (1e-2, 1e-3, 1e-4, 1e-5),
-}
+# Every implicit integrator of the registry, at these tolerances (local error / f*);
+# first-order schemes stop at 1e-4 (their history error only falls like tol^(1/2)).
+TOLERANCES = (1e-2, 1e-3, 1e-4, 1e-5)
+RUNS = {name: TOLERANCES if scheme.order > 1 else TOLERANCES[:-1]
+        for name, scheme in sorted(SCHEMES.items()) if not scheme.explicit}
 REFERENCE = ("sdirk2", 1e-6)
+# The spatial axis: grids and tolerances of the runs, and the reference.
+SPATIAL_GRIDS = (64, 128, 256)
+SPATIAL_TOLERANCES = (1e-2, 1e-3, 1e-4)
+SPATIAL_REFERENCE = ("sdirk2", 1e-5, (128, 256, 512))
+# Distances where the reference's own uncertainty is below this (relative) enter
+# the error of a run; elsewhere the reference is not grid-converged itself.
+RESOLVED = 2e-3
+SPATIAL_VERSION = 1
 BASELINE_WINDOW = 1e-3   # s*, baseline measured over [0, window] unless --full-baseline
 FORMAT_VERSION = 1
 
 logger = logging.getLogger("work_precision")
 
 
+def scene(n=N):
+    """The study's scene (a Voronoi punch on the epoxy cylinder's load)."""
+    return Scene(radius=RADIUS, normal_force=FORCE, E_star=E_STAR, n=n,
+                 wear_coefficients=(K1, K1 * RATIO), exponent=1.0,
+                 geometry=Voronoi(SEEDS, FILL, SEED))
+
+
 def build(n, *, contact_rtol=CONTACT_RTOL):
     """The study's wear problem on the ``n x n`` grid."""
-    hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR)
-    labels = Voronoi(SEEDS, FILL, SEED).labels(n)
-    return WearProblem(hs, labels, [K1, K1 * RATIO], FORCE, RADIUS, contact_rtol=contact_rtol)
+    return WearProblem.from_scene(scene(n), n=n, contact_rtol=contact_rtol)
 
 
 def unit_cost(hs, face):
@@ -102,7 +133,7 @@ def unit_cost(hs, face):
     return float(np.median(times))
 
 
-def run_scheme(n, scheme, tol, distances):
+def run_scheme(n, scheme, tol, distances, *, companion=False):
     """One adaptive run of a registered integrator up to the last compared distance.
 
     Parameters
@@ -115,14 +146,18 @@ def run_scheme(n, scheme, tol, distances):
         Local error per step, shape rms / ``f*``.
     distances : sequence of float
         Compared sliding distances, units of ``s*`` (the run lands on them).
+    companion : bool, optional
+        Also run the companion on a coarser grid (:mod:`transient.spatial_error`).
 
     Returns
     -------
     dict
         ``wall`` (s), ``solves``, ``iterations``, ``steps``, ``rejected``,
-        ``slopes`` (rms slope at ``distances``), ``face`` (height at the
-        last distance, m, NaN off the face), ``s_star`` (m) and
-        ``depth_scale`` (m).
+        ``slopes`` (rms slope at ``distances``), ``errors`` (its per-step
+        error bar there), ``face`` (height at the last distance, m, NaN off
+        the face), ``s_star`` (m) and ``depth_scale`` (m); with
+        ``companion``, ``spatial`` (the companion's error bar at
+        ``distances``), ``companion_wall`` (s) and ``companion_grid``.
     """
     problem = build(n)
     # No jump: the history up to the last distance is what is measured.
@@ -133,15 +168,26 @@ def run_scheme(n, scheme, tol, distances):
     result = run_in(problem, np.zeros((n, n)), options)
     wall = time.perf_counter() - t
     s = result.history["distance"]
-    slopes = []
+    at = []
     for d in distances:
         i = int(np.argmin(np.abs(s - d * result.run_in_distance)))
         assert abs(s[i] / (d * result.run_in_distance) - 1) < 1e-9, (s[i], d)
-        slopes.append(result.history["rms_slope"][i])
+        at.append(i)
     face_end = result.snapshot_height[-1]
-    return dict(wall=wall, solves=result.solves, iterations=result.iterations,
-                steps=result.steps, rejected=result.rejected, slopes=np.array(slopes),
-                face=face_end, s_star=result.run_in_distance, depth_scale=result.depth_scale)
+    out = dict(wall=wall, solves=result.solves, iterations=result.iterations,
+               steps=result.steps, rejected=result.rejected,
+               slopes=result.history["rms_slope"][at], errors=result.history["rms_slope_error"][at],
+               face=face_end, s_star=result.run_in_distance, depth_scale=result.depth_scale)
+    if companion:
+        t = time.perf_counter()
+        try:
+            extra = spatial_error(scene(n), flat, options, result, contact_rtol=CONTACT_RTOL)
+        except ValueError as err:  # no admissible coarser grid
+            logger.info("no companion run at n = %d: %s", n, err)
+            return out
+        out.update(spatial=extra.error[at], companion_wall=time.perf_counter() - t,
+                   companion_grid=extra.grid)
+    return out
 
 
 def run_baseline(n, distances, end):
@@ -154,6 +200,7 @@ def run_baseline(n, distances, end):
     per = math.ceil(1e-4 / limit)          # steps per 1e-4 s*, so steps land on distances
     ds = 1e-4 / per * s_star
     w = np.zeros((n, n))
+    estimator = HistoryEstimator(problem, w)
     slopes = np.full(len(distances), np.nan)
     targets = [round(d / 1e-4) * per for d in distances]
     steps_end = round(end / 1e-4) * per
@@ -164,7 +211,8 @@ def run_baseline(n, distances, end):
         res = solve_contact(hs, face, w, FORCE, x0=p, rtol=CONTACT_RTOL)
         p = res.pressure
         if step in targets:
-            slopes[targets.index(step)] = face_rms_slope(hs, face, w, p, res.approach)
+            slopes[targets.index(step)] = estimator.figures(step * ds, w, p,
+                                                            res.approach)["rms_slope"]
     wall = time.perf_counter() - t
     steps_full = round(distances[-1] / 1e-4) * per
     return dict(ds=ds / s_star, limit=limit, steps=steps_end, wall=wall,
@@ -347,6 +395,174 @@ def plot(path, png):
     fig.savefig(png, dpi=110)
 
 
+def spatial_reference(reference, distances):
+    """The grid-converged reference history: ``reference = (scheme, tol, grids)``.
+
+    Returns
+    -------
+    dict
+        ``slopes`` (extrapolated rms slope at ``distances``, or the finest
+        grid's value where the differences do not shrink), ``uncertainty``
+        (the size of the extrapolation, or the last difference), ``order``
+        (observed, NaN where none), ``values`` (each grid's, shape
+        (grids, distances)), ``wall`` (s, each grid's).
+    """
+    from runin_convergence import extrapolate
+
+    scheme, tol, grids = reference
+    runs = [run_scheme(g, scheme, tol, distances) for g in grids]
+    values = np.array([r["slopes"] for r in runs])
+    slopes, uncertainty, order = [], [], []
+    for j in range(len(distances)):
+        p, extrapolated = extrapolate(grids, values[:, j])
+        if not np.isfinite(extrapolated):
+            extrapolated = values[-1, j]
+            uncertainty.append(abs(values[-1, j] - values[-2, j]))
+        else:
+            uncertainty.append(abs(extrapolated - values[-1, j]))
+        slopes.append(extrapolated)
+        order.append(p)
+    return dict(slopes=np.array(slopes), uncertainty=np.array(uncertainty),
+                order=np.array(order), values=values, wall=np.array([r["wall"] for r in runs]))
+
+
+def compute_spatial(out, *, grids, tolerances, schemes, reference, distances):
+    """History error against the grid-converged reference for every (n, tol); write HDF5.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        Directory of ``work_precision_spatial.h5``.
+    grids : sequence of int
+        Grids of the runs.
+    tolerances : sequence of float
+        Tolerances of the runs.
+    schemes : sequence of str
+        Registered implicit integrators.
+    reference : (str, float, tuple of int)
+        Scheme, tolerance and grids of the reference (:func:`spatial_reference`).
+    distances : sequence of float
+        Compared sliding distances, units of ``s*``.
+    """
+    logger.info("spatial reference %s tol %g on %s ...", *reference)
+    ref = spatial_reference(reference, distances)
+    logger.info("reference: %s (uncertainty %s, orders %s)", ref["slopes"], ref["uncertainty"],
+                ref["order"])
+    path = out / "work_precision_spatial.h5"
+    with atomic_h5(path, format="runin.work_precision_spatial", version=SPATIAL_VERSION,
+                   force=True) as f:
+        f.attrs.update(dict(
+            ratio=RATIO, fill_factors=FILL, seeds=SEEDS, seed=SEED, radius=RADIUS,
+            normal_force=FORCE, E_star=E_STAR, k1=K1, contact_rtol=CONTACT_RTOL,
+            machine=f"{_cpu()}, {os.cpu_count()} cores, {platform.platform()}",
+            python=sys.version.split()[0], numpy=np.__version__,
+            date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            command=" ".join(["python"] + sys.argv)))
+        f.create_dataset("distances", data=np.array(distances)).attrs["units"] = \
+            "s* = a / (k_1 E*)"
+        g = f.create_group("reference")
+        g.attrs.update(scheme=reference[0], tol=reference[1], grids=np.array(reference[2]))
+        for key, unit in (("slopes", "1"), ("uncertainty", "1"), ("order", "1"),
+                          ("values", "1"), ("wall", "s")):
+            g.create_dataset(key, data=ref[key]).attrs["units"] = unit
+        runs_g = f.create_group("runs")
+        for n in grids:
+            for scheme in schemes:
+                for tol in tolerances:
+                    companion = scheme == "sdirk2"
+                    r = run_scheme(n, scheme, tol, distances, companion=companion)
+                    rel = np.abs(r["slopes"] / ref["slopes"] - 1)
+                    resolved = ref["uncertainty"] <= RESOLVED * ref["slopes"]
+                    err = float(np.max(rel[resolved])) if resolved.any() else np.nan
+                    logger.info("n=%d %s tol %g: %d steps, %.1f s, error %.2e against the "
+                                "grid-converged reference (%.2e with the unresolved distances)",
+                                n, scheme, tol, r["steps"], r["wall"], err, float(np.max(rel)))
+                    rg = runs_g.create_group(f"n{n}_{scheme}_tol{tol:g}")
+                    rg.attrs.update(n=n, scheme=scheme, tol=tol, wall=r["wall"],
+                                    solves=r["solves"], steps=r["steps"], error=err,
+                                    error_all=float(np.max(rel)))
+                    rg.create_dataset("slopes", data=r["slopes"]).attrs["units"] = "1"
+                    rg.create_dataset("relative_error", data=rel).attrs["units"] = "1"
+                    rg.create_dataset("error_bar", data=r["errors"]).attrs["units"] = "1"
+                    if "spatial" in r:
+                        rg.attrs.update(companion_wall=r["companion_wall"],
+                                        companion_grid=r["companion_grid"])
+                        rg.create_dataset("spatial_error_bar", data=r["spatial"]).attrs[
+                            "units"] = "1"
+    return path
+
+
+def plot_spatial(path, png):
+    """Draw the spatial work-precision figure from the HDF5 file of :func:`compute_spatial`."""
+    import h5py
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with h5py.File(path) as f:
+        distances = f["distances"][()]
+        ref = f["reference/slopes"][()]
+        ref_unc = f["reference/uncertainty"][()]
+        ref_name = (f"{f['reference'].attrs['scheme']}, tol {f['reference'].attrs['tol']:g}, "
+                    f"n = {', '.join(str(g) for g in f['reference'].attrs['grids'])}")
+        runs = [dict(g.attrs, **{k: g[k][()] for k in g}) for g in f["runs"].values()]
+    resolved = ref_unc <= RESOLVED * ref
+    for r in runs:
+        r["error"] = float(np.max(r["relative_error"][resolved])) if resolved.any() else np.nan
+    fig = Figure(figsize=(15, 5))
+    FigureCanvasAgg(fig)
+    ax = fig.subplots(1, 3)
+    grids = sorted({int(r["n"]) for r in runs})
+    markers = ("o", "s", "^", "D", "v", "P")
+    schemes = sorted({r["scheme"] for r in runs})
+    for i, n in enumerate(grids):
+        for j, scheme in enumerate(schemes):
+            rs = sorted((r for r in runs if r["n"] == n and r["scheme"] == scheme),
+                        key=lambda r: r["tol"])
+            ax[0].loglog([r["wall"] for r in rs], [r["error"] for r in rs],
+                         markers[j % len(markers)] + "-", color=f"C{i}", ms=5, lw=0.8,
+                         label=f"n = {n}, {scheme}")
+            for r in rs:
+                ax[0].annotate(f"{r['tol']:g}", (r["wall"], r["error"]), fontsize=6,
+                               xytext=(3, 2), textcoords="offset points")
+    for level in (1e-2, 1e-3):
+        ax[0].axhline(level, color="grey", lw=0.8)
+    if resolved.any():
+        ax[0].axhline(float(np.max((ref_unc / ref)[resolved])), color="k", ls=":", lw=0.8,
+                      label="reference uncertainty")
+    shown = ", ".join(f"{d:g}" for d in distances[resolved])
+    ax[0].set_xlabel("wall time (s), this machine")
+    ax[0].set_ylabel(f"max relative error at s/s* = {shown}")
+    ax[0].set_title("history error against the grid-converged reference, for (n, tol)\n"
+                    "(at the distances where the reference is converged to 0.2 %)", fontsize=10)
+    ax[0].legend(fontsize=6, ncol=2)
+    for i, n in enumerate(grids):
+        r = next((r for r in runs if r["n"] == n and r["scheme"] == "sdirk2"
+                  and r["tol"] == min(x["tol"] for x in runs)), None)
+        if r is None:
+            continue
+        ax[1].loglog(distances, r["relative_error"], "o-", color=f"C{i}", ms=4,
+                     label=f"n = {n}: actual error")
+        ax[1].loglog(distances, r["error_bar"] / r["slopes"], "--", color=f"C{i}", lw=0.9,
+                     label="per-step error bar")
+        if "spatial_error_bar" in r:
+            ax[1].loglog(distances, r["spatial_error_bar"] / r["slopes"], ":", color=f"C{i}",
+                         lw=1.2, label=f"companion on n = {int(r['companion_grid'])}")
+    ax[1].loglog(distances, ref_unc / ref, "k-", lw=0.8, label="reference uncertainty")
+    ax[1].set_xlabel("sliding distance / s*")
+    ax[1].set_ylabel("relative error of the rms slope")
+    ax[1].set_title(f"sdirk2 at tol {min(x['tol'] for x in runs):g}: error and error bars",
+                    fontsize=10)
+    ax[1].legend(fontsize=6, ncol=2)
+    ax[2].errorbar(distances, ref, yerr=ref_unc, fmt="k.-", label=f"reference ({ref_name})")
+    ax[2].set_xscale("log")
+    ax[2].set_xlabel("sliding distance / s*")
+    ax[2].set_ylabel("rms slope")
+    ax[2].legend(fontsize=7)
+    ax[2].set_title("grid-converged reference history", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(png, dpi=100)
+
+
 def main(argv=None):
     """Command line of the study (see the module docstring).
 
@@ -357,23 +573,41 @@ def main(argv=None):
     """
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--n", type=int, default=N)
-    parser.add_argument("--quick", action="store_true", help="smoke test (n = 40)")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke test (n = 40; with --spatial, n = 40 against 40, 80, 160)")
     parser.add_argument("--full-baseline", action="store_true",
                         help="run the explicit baseline over the whole history")
+    parser.add_argument("--spatial", action="store_true",
+                        help="the spatial axis: (n, tol) against a grid-converged reference")
     parser.add_argument("--plot-only", action="store_true")
     parser.add_argument("--out", type=pathlib.Path,
                         default=pathlib.Path(__file__).resolve().parent.parent / "out",
                         help="directory of the HDF5 file and the figure (default: out/)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-    n = 40 if args.quick else args.n
     args.out.mkdir(parents=True, exist_ok=True)
+    implicit = sorted(RUNS)
+    if args.spatial:
+        path = args.out / "work_precision_spatial.h5"
+        if not args.plot_only:
+            if args.quick:
+                compute_spatial(args.out, grids=(40,), tolerances=(1e-2,), schemes=implicit,
+                                reference=("sdirk2", 1e-2, (40, 80, 160)),
+                                distances=(1e-3, 1e-2))
+            else:
+                compute_spatial(args.out, grids=SPATIAL_GRIDS, tolerances=SPATIAL_TOLERANCES,
+                                schemes=implicit, reference=SPATIAL_REFERENCE,
+                                distances=DISTANCES)
+        png = path.with_suffix(".png")
+        plot_spatial(path, png)
+        print(f"wrote {path} and {png}")
+        return
+    n = 40 if args.quick else args.n
     path = args.out / f"work_precision_n{n}.h5"
     if not args.plot_only:
         if args.quick:
-            runs = {"implicit_euler": (1e-2,), "bdf2": (1e-2,), "sdirk2": (1e-2,)}
-            compute(n, args.out, full_baseline=True, runs=runs, distances=(1e-4, 1e-3, 1e-2),
-                    reference=("sdirk2", 1e-4), window=1e-2)
+            compute(n, args.out, full_baseline=True, runs={name: (1e-2,) for name in implicit},
+                    distances=(1e-4, 1e-3, 1e-2), reference=("sdirk2", 1e-4), window=1e-2)
         else:
             compute(n, args.out, full_baseline=args.full_baseline, runs=RUNS,
                     distances=DISTANCES, reference=REFERENCE, window=BASELINE_WINDOW)

@@ -225,6 +225,40 @@ def test_warm_start_from_the_solution_converges_at_once():
     assert warm.success and warm.nit <= 1, f"warm start took {warm.nit} iterations"
 
 
+@pytest.mark.parametrize("n", [40, 41])
+def test_known_displacement_of_the_warm_start_saves_a_product(n, monkeypatch):
+    hs, face = setup(n)
+    rng = np.random.default_rng(4409)
+    shift = hs.self_influence * np.where(rng.random((n, n)) < 0.3, 2.0, 0.2)
+    height = initial_face.crowned(n, RADIUS, 0.2)
+    cold = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11)
+    # A warm start near the solution, non-negative, zero off the face.
+    x0 = np.where(face, cold.pressure * (1 + 0.01 * rng.random((n, n))), 0.0)
+    products = []
+    real = hs.displacement
+    monkeypatch.setattr(hs, "displacement", lambda p: products.append(1) or real(p))
+    plain = solve_contact(hs, face, height, FORCE, shift=shift, x0=x0, rtol=1e-11)
+    calls = len(products)
+    known = solve_contact(hs, face, height, FORCE, shift=shift, x0=x0,
+                          x0_displacement=real(x0), rtol=1e-11)
+    assert len(products) - calls == calls - 1, \
+        f"{len(products) - calls} products with K x0 given, {calls} without"
+    for res in (plain, known):
+        assert res.success, res.message
+        diff = np.abs(res.pressure - cold.pressure).max() / cold.pressure.max()
+        assert diff < 1e-8, f"warm start differs by {diff:.2e} of the peak pressure"
+        assert np.allclose(res.displacement, real(res.pressure) + shift * res.pressure, rtol=0,
+                           atol=1e-12 * np.abs(res.displacement).max()), \
+            "displacement must be (K + diag shift) p on the whole grid"
+    # A warm start the solver has to change (negative values) ignores it.
+    bad = np.where(face, x0 - 0.5 * x0.mean(), 0.0)
+    res = solve_contact(hs, face, height, FORCE, shift=shift, x0=bad,
+                        x0_displacement=real(bad), rtol=1e-11)
+    diff = np.abs(res.pressure - cold.pressure).max() / cold.pressure.max()
+    assert res.success and diff < 1e-8, \
+        f"a clipped warm start must not use the displacement of the unclipped one ({diff:.2e})"
+
+
 # -- diagonal shift against a dense direct solve ------------------------------
 
 def dense_lcp(hs, face, height, force, shift):

@@ -216,3 +216,57 @@ def test_error_at_the_coarsest_accepted_grid():
     s40, s80 = out["rms_slope"][:, 0]
     assert out["error"][0] == pytest.approx(2 * abs(s80 - s40), rel=1e-12), \
         "first-order error of S_n from S_n and S_2n"
+
+
+def _incomplete_table(path):
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = TABLE_FORMAT
+        f.attrs["format_version"] = 1
+    return path
+
+
+@pytest.mark.parametrize("make, fragment", [
+    (lambda d: d / "missing.h5", "does not exist"),
+    (lambda d: d, "is a directory"),
+    (lambda d: pathlib.Path("/dev/null"), "is not a regular file"),
+    (lambda d: (d / "text.h5", (d / "text.h5").write_text("not a table"))[0],
+     "is not an HDF5 file"),
+    (lambda d: _incomplete_table(d / "incomplete.h5"), "is damaged or incomplete"),
+    (lambda d: (d / "cut.h5", (d / "cut.h5").write_bytes(
+        synthetic_table().write(d / "full.h5").read_bytes()[:3000]))[0],
+     "is damaged or incomplete"),
+])
+def test_command_line_bad_table(tmp_path, capsys, make, fragment):
+    """Every unreadable table is one line on stderr and exit 2, never a traceback."""
+    table = make(tmp_path)
+    status = main(["--table", str(table), "--pbar-over-estar", "0.08", "--wear-ratio", "1e-3",
+                   "--target-slope", "0.5"])
+    err = capsys.readouterr().err
+    assert status == 2, f"exit {status}, stderr {err!r}"
+    assert len(err.splitlines()) == 1 and err.startswith("error: "), f"stderr {err!r}"
+    assert fragment in err and str(table) in err, f"stderr {err!r} lacks {fragment!r}"
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["--pbar-over-estar", "abc"], "argument --pbar-over-estar: invalid float value: 'abc'"),
+    (["--pbar-over-estar", "nan"], "pbar/E* must be positive, got nan"),
+    (["--wear-ratio", "inf"], "wear ratio inf is outside the table's range"),
+    (["--fill-factor", "nan"], "fill factor must be finite, got nan"),
+    (["--target-slope", "1", "--fill-factor", "0.1"], "not allowed with argument"),
+])
+def test_command_line_bad_arguments(tmp_path, capsys, args, fragment):
+    path = synthetic_table().write(tmp_path / "table.h5")
+    base = {"--pbar-over-estar": "0.08", "--wear-ratio": "1e-3"}
+    for flag, value in zip(args[::2], args[1::2], strict=True):
+        base[flag] = value
+    if "--target-slope" not in base and "--fill-factor" not in base:
+        base["--target-slope"] = "0.5"
+    argv = ["--table", str(path)] + [x for kv in base.items() for x in kv]
+    try:
+        status = main(argv)
+    except SystemExit as done:  # argument errors exit from the parser
+        status = done.code
+    err = capsys.readouterr().err
+    assert status == 2, f"exit {status}, stderr {err!r}"
+    assert len(err.splitlines()) == 1 and err.startswith("error: "), f"stderr {err!r}"
+    assert fragment in err, f"stderr {err!r} lacks {fragment!r}"

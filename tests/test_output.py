@@ -145,3 +145,16 @@ def test_atomic_h5_permissions_honour_the_umask(tmp_path, umask):
     plain = stat.S_IMODE((tmp_path / "plain").stat().st_mode)
     assert mode == 0o666 & ~umask == plain, \
         f"umask {umask:o}: mode {mode:o}, a plain file gets {plain:o}"
+
+
+def test_rms_height_round_trips_and_is_optional_on_read(tmp_path, solved):
+    """The steady face's rms height (m) is stored with its unit; older files read as NaN."""
+    scene, res = solved
+    assert np.isfinite(res.rms_height) and res.rms_height > 0, f"rms height {res.rms_height}"
+    path = write_result(tmp_path / "r.h5", res, scene)
+    back = read_result(path).result
+    assert back.rms_height == res.rms_height, "rms height round trip"
+    with h5py.File(path, "r+") as f:
+        assert f.attrs["rms_height_units"] == "m", "unit of the rms height"
+        del f.attrs["rms_height"]
+    assert np.isnan(read_result(path).result.rms_height), "a file without it reads NaN"

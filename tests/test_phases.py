@@ -12,6 +12,7 @@ from steady.phases import (
     Rods,
     Voronoi,
     load_phase_map,
+    read_npy,
     realised_fill_factors,
     validate_labels,
 )
@@ -196,5 +197,78 @@ def test_load_errors(tmp_path):
     with pytest.raises(ValueError, match="must hold integers, got dtype float64"):
         load_phase_map(tmp_path / "f.npy")
     (tmp_path / "bad.npy").write_bytes(b"not numpy")
-    with pytest.raises(ValueError, match="cannot read phase map"):
+    with pytest.raises(ValueError, match="is not a .npy file"):
         load_phase_map(tmp_path / "bad.npy")
+
+
+def _npy_header_only(path, shape, descr="<i8"):
+    """A .npy file whose header announces ``shape`` but which holds no data."""
+    import numpy.lib.format as npy_format
+
+    with open(path, "wb") as f:
+        npy_format.write_array_header_1_0(f, {"descr": descr, "fortran_order": False,
+                                             "shape": shape})
+
+
+@pytest.mark.parametrize("make, fragment", [
+    (lambda p: p.mkdir(), "is a directory, not a file"),
+    (lambda p: p.write_bytes(b""), "is empty (0 bytes)"),
+    (lambda p: _npy_header_only(p, (16, 16)),
+     "is truncated: its header announces 16 x 16 values of int64 (2048 bytes), the file holds "
+     "0 bytes of data"),
+    (lambda p: _npy_header_only(p, (100000, 100000)), "more than the grid's n = 32"),
+    (lambda p: p.write_bytes(b"\x93NUMPY\x01\x00\x10\x00{'descr': 'garbage"),
+     "has a damaged .npy header"),
+    (lambda p: np.save(p, np.array([None, 1], dtype=object)), "holds Python objects"),
+    (lambda p: np.save(p, np.zeros((4, 4, 4), dtype=int)), "must be a square 2-d array"),
+    (lambda p: np.save(p, np.zeros((64, 64), dtype=int)), "more than the grid's n = 32"),
+])
+def test_hostile_npy_maps_are_refused_before_loading(tmp_path, make, fragment):
+    """Every damaged or oversized .npy map is a one-line ValueError, never EOFError/MemoryError."""
+    path = tmp_path / "map.npy"
+    make(path)
+    with pytest.raises(ValueError) as info:
+        load_phase_map(path, max_size=32)
+    assert fragment in str(info.value), f"message {str(info.value)!r} lacks {fragment!r}"
+    assert len(str(info.value)) < 300, f"message of {len(str(info.value))} characters"
+
+
+def test_header_claiming_a_huge_array_is_not_loaded(tmp_path):
+    _npy_header_only(tmp_path / "huge.npy", (100000, 100000))
+    with pytest.raises(ValueError, match=r"header announces 100000 x 100000 values of int64 "
+                                         r"\(74.5 GiB\), the file holds 0 bytes"):
+        read_npy(tmp_path / "huge.npy", what="phase map")
+
+
+def test_devices_are_not_phase_maps():
+    with pytest.raises(ValueError, match="is not a regular file"):
+        load_phase_map("/dev/null")
+
+
+def test_hostile_png_maps(tmp_path):
+    import matplotlib.image
+
+    wide = tmp_path / "wide.png"
+    matplotlib.image.imsave(wide, np.zeros((8, 16)), cmap="gray")
+    with pytest.raises(ValueError, match="must be square, got 16 x 8 pixels"):
+        load_phase_map(wide)
+    big = tmp_path / "big.png"
+    matplotlib.image.imsave(big, np.zeros((64, 64)), cmap="gray")
+    with pytest.raises(ValueError, match="64 x 64 pixels, more than the grid's n = 32"):
+        load_phase_map(big, max_size=32)
+    fake = tmp_path / "fake.png"
+    fake.write_bytes(b"GIF89a" + bytes(100))
+    with pytest.raises(ValueError, match="is not a PNG image"):
+        load_phase_map(fake)
+    damaged = tmp_path / "damaged.png"
+    damaged.write_bytes(big.read_bytes()[:60])
+    with pytest.raises(ValueError, match="cannot read phase map"):
+        load_phase_map(damaged)
+
+
+def test_huge_label_is_refused_before_counting():
+    """A label of 10**12 on the face would make bincount allocate terabytes."""
+    labels = np.where(face_mask(8), 0, -1)
+    labels[4, 4] = 10 ** 12
+    with pytest.raises(ValueError, match="cannot all have a pixel on a face of 52 pixels"):
+        ArrayMap(labels)

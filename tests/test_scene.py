@@ -174,3 +174,69 @@ def test_shipped_scenes_load(name, geometry_type, n_phases):
     assert scene.n_phases == n_phases, f"{name}: {scene.n_phases} phases"
     labels = scene.geometry.labels(scene.n)
     assert labels.shape == (scene.n, scene.n), f"{name}: shape {labels.shape}"
+
+
+def test_scene_files_that_are_not_scenes(tmp_path):
+    """A directory, a device, a huge or binary file: one clear error each, nothing parsed."""
+    with pytest.raises(ValueError, match="is a directory, not a file"):
+        load_scene(tmp_path)
+    with pytest.raises(ValueError, match="is not a regular file"):
+        load_scene("/dev/zero")  # would never end if read
+    big = tmp_path / "big.toml"
+    big.write_text(BASE.replace("[1e-09, 1.7e-09]", "[" + "1e-9, " * 200_000 + "1e-9]"))
+    with pytest.raises(ValueError, match="is larger than 1 MiB, the most a scene may have"):
+        load_scene(big)
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"[punch]\nradius = \xff\n")
+    with pytest.raises(ValueError, match=r"is not UTF-8 text: byte 17 is b'\\xff'"):
+        load_scene(binary)
+
+
+def test_hostile_values_give_short_messages(tmp_path):
+    """Deep nesting, long lists and long strings: the message shows a shortened value."""
+    deep = BASE.replace("[1e-09, 1.7e-09]", "[" * 100_000 + "]" * 100_000)
+    with pytest.raises(ValueError, match="malformed TOML: arrays or tables nested too deeply"):
+        parse_scene(deep, tmp_path)
+    long_list = BASE.replace("[1e-09, 1.7e-09]", "[" + "1e-9, " * 100_000 + "1e-9]")
+    with pytest.raises(ValueError) as err:
+        parse_scene(long_list, tmp_path)
+    message = str(err.value)
+    assert message.startswith("[wear] coefficients has 100001 values [1e-09, 1e-09"), message[:99]
+    assert "(100001 items," in message and len(message) < 300, \
+        f"message of {len(message)} characters: {message[:300]!r}"
+    long_string = BASE.replace("exponent = 1.0", 'exponent = "' + "x" * 900_000 + '"')
+    with pytest.raises(ValueError) as err:
+        parse_scene(long_string, tmp_path)
+    message = str(err.value)
+    assert "(900000 characters)" in message and len(message) < 300, \
+        f"message of {len(message)} characters"
+    long_key = BASE.replace("[grid]", "[" + "g" * 100_000 + "]")
+    with pytest.raises(ValueError) as err:
+        parse_scene(long_key, tmp_path)
+    assert "unknown section [ggg" in str(err.value) and len(str(err.value)) < 400, \
+        f"message of {len(str(err.value))} characters"
+
+
+def test_file_map_larger_than_the_grid_is_refused_before_loading(tmp_path):
+    import numpy.lib.format as npy_format
+
+    with open(tmp_path / "huge.npy", "wb") as f:  # a header that claims 80 GB, no data
+        npy_format.write_array_header_1_0(f, {"descr": "<i8", "fortran_order": False,
+                                             "shape": (100000, 100000)})
+    text = scene_text("parser", map="file", path="huge.npy")
+    with pytest.raises(ValueError, match=r"'.*huge.npy' has 100000 x 100000 pixels, more than "
+                                         r"the grid's n = 64"):
+        parse_scene(text, tmp_path)
+
+
+def test_phase_labels_name_a_phase_without_face_pixel(tmp_path):
+    """Two seeds (seed 2306) whose phase-1 seed lies off the face of an 8 x 8 grid."""
+    text = scene_text("parser", n=8, n_seeds=2, fill_factors=(0.5, 0.5), seed=2306)
+    scene = parse_scene(text, tmp_path, source_path=tmp_path / "s.toml")
+    with pytest.raises(ValueError) as err:
+        scene.phase_labels()
+    assert str(err.value).startswith(f"{tmp_path / 's.toml'}: [phases] map: phase 1 has no "
+                                     f"pixel on the face with these 2 seeds (seed = 2306) at "
+                                     f"n = 8"), f"{err.value}"
+    ok = parse_scene(BASE, tmp_path)
+    assert np.array_equal(ok.phase_labels(), ok.geometry.labels(64)), "labels of a good map"

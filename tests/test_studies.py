@@ -17,7 +17,7 @@ STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
 SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
-            "design_table", "runin_history"]
+            "design_table", "runin_history", "runin_convergence"]
 
 
 @pytest.fixture(scope="module")
@@ -135,6 +135,45 @@ def test_runin_reaches_the_steady_face(runs):
     a = attrs_of(runs["runin_history"][1])
     for case in ("voronoi_k10", "rods_brass_in_steel"):
         assert a[f"{case}_face_error"] < 1e-4, f"{case}: face error {a[f'{case}_face_error']}"
+        assert a[f"{case}_agrees"] == 1.0, f"{case}: last rms slope outside the error bars"
+    with h5py.File(runs["runin_history"][1], "r") as f:
+        slope = f["voronoi_k10/normalised_rms_slope"][()]
+        spatial = f["voronoi_k10/spatial_error"][()]
+    assert slope[0] == 0.0, f"the flat face starts at {slope[0]}"
+    assert spatial.shape == slope.shape and spatial[0] == 0.0, "companion error per step"
+
+
+def test_runin_convergence_quick(runs):
+    """On n = 40, 64, 80 the homogeneous history is within its error bars of the reference."""
+    with h5py.File(runs["runin_convergence"][1], "r") as f:
+        ref = f["reference/rms_slope"][()]
+        value = f["homogeneous/rms_slope"][()]
+        error = f["homogeneous/rms_slope_error"][()]
+    assert np.all(np.abs(value - ref) <= error), \
+        f"homogeneous history off the reference: {value - ref} (error bars {error})"
+
+
+def test_work_precision_spatial_quick(tmp_path):
+    """The spatial axis: every implicit scheme of the registry against the reference."""
+    import subprocess
+
+    from transient.stepping import SCHEMES
+
+    proc = subprocess.run([sys.executable, str(STUDIES / "work_precision.py"), "--quick",
+                           "--spatial", "--out", str(tmp_path)], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    h5 = tmp_path / "work_precision_spatial.h5"
+    assert (tmp_path / "work_precision_spatial.png").stat().st_size > 10e3, "no figure"
+    with h5py.File(h5, "r") as f:
+        assert f.attrs["format"] == "runin.work_precision_spatial", f.attrs["format"]
+        names = {g.attrs["scheme"] for g in f["runs"].values()}
+        # The quick reference (n = 40, 80, 160) converges at no distance: the error
+        # over the resolved distances is NaN, the one over all of them is not.
+        errors = [g.attrs["error_all"] for g in f["runs"].values()]
+    implicit = {name for name, scheme in SCHEMES.items() if not scheme.explicit}
+    assert names == implicit, f"schemes run {names}, registry {implicit}"
+    assert all(np.isfinite(errors)), f"errors {errors}"
 
 
 def test_scale_independence_quick(runs):
@@ -143,3 +182,31 @@ def test_scale_independence_quick(runs):
         sem = f["residual_sem"][()]
     assert np.all(np.abs(resid) < 0.15), f"residual against the closed form {resid}"
     assert np.all(sem > 0), "scatter of the realisations"
+
+
+def test_fit_rods_tells_the_ratio_from_its_inverse(tmp_path):
+    """Quick run of the inverse fit on the rods: 1.7 and 1/1.7 recovered and told apart.
+
+    At 1 % noise every case's 95 % interval holds its own k_steel/k_brass and
+    excludes the inverse; the figure is redrawn from the HDF5 file alone.
+    """
+    sys.path.insert(0, str(STUDIES))
+    try:
+        module = importlib.import_module("fit_rods")
+    finally:
+        sys.path.remove(str(STUDIES))
+    h5, png = tmp_path / "fit_rods.h5", tmp_path / "fit_rods.png"
+    assert module.main(["--quick", "-o", str(h5), "--png", str(png)]) == 0, "quick run failed"
+    assert png.stat().st_size < 300e3, f"PNG of {png.stat().st_size} bytes"
+    with h5py.File(h5, "r") as f:
+        assert f.attrs["format"] == "runin.study.fit_rods" and f.attrs["format_version"] == 1
+        assert all("units" in ds.attrs for ds in f["steel_in_brass/1.7"].values()), "units"
+        levels = list(f["levels"][()])
+        first = levels.index(0.01)
+        for key in ("steel_in_brass", "brass_in_steel"):
+            for label in ("1.7", "1_over_1.7"):
+                g = f[f"{key}/{label}"]
+                assert g["covers_truth"][first] and g["excludes_other"][first], \
+                    f"{key}, true {label}: interval [{g['lower'][first]}, {g['upper'][first]}]"
+    again = tmp_path / "again.png"
+    assert module.main(["--plot-only", "-o", str(h5), "--png", str(again)]) == 0, "--plot-only"

@@ -178,12 +178,18 @@ def test_sigkill_at_any_moment_then_resume_is_bitwise_identical(tmp_path, write_
         os.kill(child.pid, signal.SIGKILL)
         child.wait()
         kills += 1
-        saved, _, _ = read_run(out)            # never left unreadable
+        saved, _, _ = read_run(out)            # never left unreadable, checksums verified
         assert saved.status == "running", "a killed run's file must hold a running checkpoint"
         assert 0 < saved.steps < ref.steps, "checkpoint not taken mid-run"
+        assert (tmp_path / "killed.h5.lock").read_text() == f"{child.pid}\n", \
+            "a killed run leaves its lock file, holding its pid"
 
     proc = cli(scene, "-o", out, "--resume", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.startswith(f"note: took over the lock of {str(out)!r} left by process "), \
+        f"stderr {proc.stderr!r}"
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".killed")) == [], \
+        "temporary files of the killed writers must be gone"
     final, _, _ = read_run(out)
     assert kills == 2, "the run was not killed twice"
     assert final.steps == ref.steps and final.status == "steady", \

@@ -2,74 +2,132 @@
 
 Usage (``runin-transient`` once installed, or ``python -m transient``)::
 
-    runin-transient SCENE.toml -o RUN.h5 [--resume] [--force] [--plot RUN.png]
+    runin-transient SCENE.toml -o RUN.h5 [--resume | --force] [--plot RUN.png]
                     [--scheme NAME] [--tol T] [--spread-tol T] [--shape-tol T]
                     [--jump-spread T] [--max-distance S] [--max-steps N]
-                    [--checkpoint-interval SEC] [-v]
+                    [--checkpoint-interval SEC] [--memory-limit GIB] [-v]
 
 Starts from the scene's initial face (``[initial_face]``, flat by default),
 wears it until the wear rates equalise (``[transient]`` options, overridden
 by the flags), compares the final face with the closed-form steady face
-(eq. 9), prints the agreement and stores everything in ``RUN.h5``.  The file
-is checkpointed atomically while the run goes on; ``--resume`` continues a
-killed, stopped or failed run, ``--force`` starts over.  A progress bar is
-drawn when stderr is a terminal.
+(eq. 9), prints the agreement and stores everything in ``RUN.h5``.  A
+progress bar is drawn when stderr is a terminal.
 
-Exit status: 0 steady state reached; 1 run stopped or failed (resumable);
-2 bad input (``error: ...`` on stderr).
+Before the run starts everything that can be checked is: the scene, the
+output paths (missing directories are created; a directory, a device, an
+unwritable place or ``--plot`` naming the run file are refused), the
+memory the grid and the snapshots need (:func:`run_in_memory`) and the
+run file's lock: one writer at a time (:class:`transient.output.RunLock`),
+a second one is refused at once.
+
+The run file is checkpointed atomically right after the first step and
+then every ``checkpoint_interval`` seconds; the file it replaces is kept as
+``RUN.h5.prev``.  Every checkpoint carries checksums, verified by
+``--resume``; a damaged file is refused, naming the previous checkpoint if
+it is intact.  ``--resume`` continues a killed, stopped or failed run with
+the scene's (and the flags') current settings: the inputs that define the
+problem (grid, load, phases, wear law, initial face) must be unchanged,
+the run settings (scheme, tolerances, limits, snapshots) may change, since
+the stored state (face, pressure, previous face and rate, next step) is
+what every scheme continues from.  Each part of the run is recorded with
+its settings in the root attribute ``settings_history`` (JSON, one entry
+per part: steps, distances, status, settings); snapshots requested at
+distances the run had already passed are listed in ``snapshots_missing``
+and on stderr.  ``--force`` starts over.
+
+Exit status: 0 steady state reached; 1 run stopped or failed (resumable),
+or an operating-system error (the message names the last checkpoint);
+2 bad input (``error: ...`` on stderr, nothing written), including a run
+whose first contact solve fails and a run file another run is writing or
+that is damaged; 130 interrupted (the message says whether a checkpoint can
+be continued).
+
+A flag that overrides a :class:`transient.runin.RunOptions` field is added
+to :func:`build_parser` and to :data:`_OPTION_FLAGS`.  One that adds a
+computation after the run reads what it needs from the ``_Job`` (scene,
+settings, initial face, problem, options) in ``_run``, stores its figures
+through the ``extra_attrs`` of ``_RunFile.write`` and prints them in
+``_report``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
+import json
 import logging
 import math
-import os
 import pathlib
 import shutil
+import signal
 import sys
+import threading
 
 import numpy as np
 
-from steady.command_line import program_name
+from steady.command_line import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    ArgumentParser,
+    CommandError,
+    add_memory_limit,
+    check_distinct,
+    check_memory,
+    configure_logging,
+    describe_os_error,
+    halfspace_memory,
+    prepare_output,
+    program_name,
+    run_command,
+    shorten,
+    slope_estimator_memory,
+)
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "main", "run_in_memory"]
 
 logger = logging.getLogger(__name__)
 
+#: Flags that override a field of :class:`transient.runin.RunOptions` (same names).
+_OPTION_FLAGS = ("scheme", "tol", "spread_tol", "shape_tol", "jump_spread", "max_distance",
+                 "max_steps", "checkpoint_interval")
 
-class _Parser(argparse.ArgumentParser):
-    """Argument errors as ``error: ...`` on stderr, exit status 2."""
-
-    def error(self, message):
-        self.exit(2, f"error: {message}\n{self.format_usage()}")
+_EPILOG = ("exit status: 0 steady state reached, 1 run stopped or failed (resume it) or an "
+           "operating-system error, 2 bad input (nothing written), 130 interrupted")
 
 
 def _positive(text):
     try:
         v = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected a positive number, got "
+                                         f"{shorten(text)}") from None
     if not (v > 0 and not math.isnan(v)):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {shorten(text)}")
     return v
 
 
 def build_parser():
     """The argument parser of ``runin-transient`` (``python -m transient``)."""
-    p = _Parser(prog=program_name("python -m transient"),
-                description="Run-in wear of a multi-phase punch on an elastic half-space, "
-                            "from its initial face to the steady state.")
+    p = ArgumentParser(prog=program_name("python -m transient"),
+                       description="Run-in wear of a multi-phase punch on an elastic "
+                                   "half-space, from its initial face to the steady state.",
+                       epilog=_EPILOG)
     p.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
     p.add_argument("-o", "--output", type=pathlib.Path, required=True,
-                   help="HDF5 run file (checkpointed while running)")
-    p.add_argument("--resume", action="store_true",
-                   help="continue the run stored in the output file (starts afresh if it "
-                        "does not exist)")
-    p.add_argument("--force", action="store_true", help="overwrite existing output files")
+                   help="HDF5 run file (checkpointed while running; missing directories "
+                        "are created)")
+    start = p.add_mutually_exclusive_group()
+    start.add_argument("--resume", action="store_true",
+                       help="continue the run stored in the output file (starts afresh if "
+                            "it does not exist)")
+    start.add_argument("--force", action="store_true",
+                       help="start over, overwriting existing output files")
     p.add_argument("--plot", type=pathlib.Path, metavar="PNG",
-                   help="draw the history and the final face into this PNG (from RUN.h5)")
+                   help="draw the history and the final face into this PNG (from RUN.h5; an "
+                        "existing figure is replaced with --resume or --force)")
     from .stepping import SCHEMES
 
     p.add_argument("--scheme", choices=sorted(SCHEMES),
@@ -85,19 +143,91 @@ def build_parser():
     p.add_argument("--max-distance", type=_positive, help="stop beyond this distance (s*)")
     p.add_argument("--max-steps", type=int, help="stop after this many steps")
     p.add_argument("--checkpoint-interval", type=float, metavar="SEC",
-                   help="wall-clock seconds between checkpoints (0: every step)")
+                   help="wall-clock seconds between checkpoints (0: every step; the first "
+                        "one follows the first step)")
+    add_memory_limit(p)
     p.add_argument("-v", "--verbose", action="count", default=0,
                    help="log progress (-v) or details (-vv) to stderr")
     return p
 
 
+def run_in_memory(n, snapshots=0):
+    """Estimated peak memory of a run-in at grid ``n``, bytes.
+
+    Counted from the arrays the run allocates, in bytes per pixel of the
+    ``n x n`` grid (8 per float):
+
+    - the half-space operator with its gradient spectra
+      (:func:`steady.command_line.halfspace_memory`, 128) and the aliased
+      symbol of the Fourier preconditioner (4);
+    - the problem's fields: labels, face mask, wear coefficient (17);
+    - the run state: face, initial face, pressure, previous face and rate
+      (40);
+    - the history's slope estimator (:class:`transient.history.HistoryEstimator`:
+      :class:`steady.accuracy.SlopeEnergy`), kept (about 100,
+      :func:`steady.command_line.slope_estimator_memory`);
+    - the larger of one step and one history record: SDIRK2's step, the
+      largest, has two stages, each a contact solve (pressure, gap,
+      preconditioned residual, direction, its product, displacement, shift
+      and warm start: 64), the stages' faces and error (32), the transforms
+      of one half-space product (112), the preconditioner's (16) and the
+      gradient of the record (64): 288; a record applies the slope
+      estimator (about 150);
+    - each snapshot: face and pressure kept (16), their copies in every
+      checkpoint (16), and the checkpoint's file image, built in memory and
+      copied to disk (:func:`steady.output.atomic_h5`, 32): 64.
+
+    The sum is multiplied by 1.25 (allocator overhead, short-lived copies
+    not listed) and 16 MiB are added for what does not grow with ``n``.
+    The closing steady solve of the comparison needs less than one step.
+    Measured against the peak resident memory of a run (from
+    ``resource.getrusage``) at ``n = 256`` and 512 with 0 to 30 snapshots,
+    the estimate is an upper bound by a factor of 1.2 to 1.5
+    (``tests/test_memory.py``).
+
+    Parameters
+    ----------
+    n : int
+        Pixels across the grid.
+    snapshots : int, optional
+        Snapshots the run stores (default 0).
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from steady.command_line import format_bytes
+    >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
+    256 MiB 95.7 GiB
+    """
+    n = int(n)
+    pixels = n * n
+    kept, applied = slope_estimator_memory(n)
+    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40) * pixels + kept
+            + max(288 * pixels, applied) + 64 * pixels * int(snapshots))
+    return int(1.25 * peak) + 16 * 2 ** 20
+
+
+def _run_in_text(n, snapshots):
+    """The run-in, as a memory refusal names it."""
+    return f"a run-in at n = {n}" + (f" with {snapshots} snapshots" if snapshots else "")
+
+
 def _options(settings, args):
-    overrides = {"scheme": args.scheme, "tol": args.tol, "spread_tol": args.spread_tol,
-                 "shape_tol": args.shape_tol, "max_distance": args.max_distance,
-                 "max_steps": args.max_steps, "checkpoint_interval": args.checkpoint_interval,
-                 "jump_spread": args.jump_spread}
-    overrides = {k: v for k, v in overrides.items() if v is not None}
+    """The run options: the scene's ``[transient]``, overridden by the flags."""
+    overrides = {name: getattr(args, name) for name in _OPTION_FLAGS
+                 if getattr(args, name) is not None}
     return dataclasses.replace(settings.options, **overrides)
+
+
+def _settings(options, contact_rtol):
+    """The run settings of a part of the run, as recorded in ``settings_history``."""
+    values = dataclasses.asdict(options)
+    values["snapshots"] = list(values["snapshots"])
+    values["contact_rtol"] = contact_rtol
+    return values
 
 
 def _inputs(scene, problem):
@@ -110,19 +240,159 @@ def _inputs(scene, problem):
 
 
 def _check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0):
+    """Refuse to resume a run of another problem (grid, load, phases, wear law, initial face)."""
     for key in ("n", "radius", "normal_force", "E_star", "exponent"):
         if stored_attrs.get(key) != attrs[key]:
-            raise ValueError(f"{str(path)!r} was run with {key} = {stored_attrs.get(key)!r}, "
-                             f"the scene has {attrs[key]!r}; use --force to start over")
+            raise ValueError(f"{str(path)!r} was run with {key} = "
+                             f"{shorten(stored_attrs.get(key))}, the scene has {attrs[key]!r}; "
+                             f"use --force to start over")
     if not np.array_equal(np.asarray(stored_attrs.get("wear_coefficients")),
                           attrs["wear_coefficients"]):
         raise ValueError(f"{str(path)!r} was run with other wear coefficients "
-                         f"({stored_attrs.get('wear_coefficients')!r}); use --force")
+                         f"({shorten(stored_attrs.get('wear_coefficients'))}); use --force")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
     face_mask = arrays["phase"] >= 0
     if not np.array_equal(stored.initial_height[face_mask], h0[face_mask]):
         raise ValueError(f"{str(path)!r} was run from another initial face; use --force")
+
+
+def _at(steps, distance_s_star):
+    return f"step {steps}, s = {distance_s_star:.6g} s*"
+
+
+@contextlib.contextmanager
+def _interrupt_held():
+    """Hold Ctrl-C (SIGINT) back until the block is done; it arrives right after."""
+    if (not hasattr(signal, "pthread_sigmask")
+            or threading.current_thread() is not threading.main_thread()):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+class _RunFile:
+    """The run file being written: checkpoints, backup, settings history, what is saved.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    attrs, arrays : dict
+        The inputs stored with every checkpoint (:func:`_inputs`).
+    settings : dict
+        The settings of this part of the run (:func:`_settings`).
+    requested : transient.runin.RunOptions
+        The options as asked for (stored in the attribute ``options``).
+    """
+
+    def __init__(self, path, attrs, arrays, settings, requested):
+        self.path = path
+        self.attrs = dict(attrs)
+        self.arrays = arrays
+        self.requested = requested
+        self.history = []
+        self.missing = []
+        self.settings = settings
+        # Whether ``path`` holds a checkpoint of this run (then it becomes the backup).
+        self.ours = False
+        self.saved = None  # (steps, distance in s*) of the checkpoint on disk
+
+    def start(self):
+        """A new run: one part, from step 0."""
+        self.history = [self._part(0, 0.0, [])]
+
+    def resume(self, stored, stored_attrs):
+        """Continue ``stored`` (a verified :class:`RunResult` read from :attr:`path`).
+
+        Returns
+        -------
+        notes : list of str
+            Changed settings and missing snapshots, for stderr.
+        snapshots : tuple of float
+            Snapshot distances (s*) for the run: the stored ones, then the
+            requested ones still ahead.
+        """
+        s_star = stored.run_in_distance
+        here = stored.distance / s_star
+        self.ours = True
+        self.saved = (stored.steps, here)
+        try:
+            self.history = json.loads(stored_attrs.get("settings_history", "[]"))
+        except (TypeError, ValueError):
+            self.history = []
+        missing = stored_attrs.get("snapshots_missing")
+        self.missing = [] if missing is None else [float(v) for v in np.atleast_1d(missing)]
+        notes = []
+        if not self.history:
+            self.history = [{"from_step": 0, "to_step": stored.steps, "from_distance": 0.0,
+                             "to_distance": stored.distance, "status": stored.status,
+                             "settings": None, "snapshots_missing": []}]
+            notes.append(f"{str(self.path)!r} does not record the settings of its first "
+                         f"{stored.steps} steps")
+        previous = self.history[-1].get("settings")
+        if previous is not None:
+            changes = [f"{key} {shorten(previous.get(key), 40)} -> {shorten(value, 40)}"
+                       for key, value in self.settings.items() if previous.get(key) != value]
+            if changes:
+                notes.append(f"resuming {str(self.path)!r} at {_at(stored.steps, here)} with "
+                             f"changed settings: {'; '.join(changes)} (each part of the run is "
+                             f"recorded with its settings in the attribute settings_history)")
+        # Requested snapshots behind the run: stored already, or missing for good.
+        stored_d = stored.snapshot_distance.tolist()
+        passed = [r for r in self.requested.snapshots
+                  if r * s_star <= stored.distance * (1 + 1e-12)]
+        ahead = [r for r in self.requested.snapshots if r not in passed]
+        gone = [r for r in passed
+                if not any(abs(d - r * s_star) <= 1e-9 * max(d, r * s_star) + 1e-12 * s_star
+                           for d in stored_d)]
+        new_missing = [r * s_star for r in gone if r * s_star not in self.missing]
+        if new_missing:
+            self.missing += new_missing
+            notes.append(f"snapshots at {', '.join(f'{r:g}' for r in gone)} s* were passed "
+                         f"before this resume (at s = {here:.6g} s*) and are not in the file "
+                         f"(listed in the attribute snapshots_missing)")
+        self.history.append(self._part(stored.steps, stored.distance,
+                                       [d / s_star for d in new_missing]))
+        return notes, tuple(d / s_star for d in stored_d) + tuple(ahead)
+
+    def _part(self, steps, distance, missing):
+        return {"from_step": steps, "to_step": steps, "from_distance": distance,
+                "to_distance": distance, "status": "running", "settings": self.settings,
+                "snapshots_missing": missing}
+
+    def write(self, result, comparison=None, extra_attrs=None):
+        """Write a checkpoint or the final run; the file it replaces becomes the backup."""
+        from .output import backup_path, write_run
+
+        self.history[-1].update(to_step=result.steps, to_distance=result.distance,
+                                status=result.status)
+        attrs = dict(self.attrs, **(extra_attrs or {}))
+        attrs.update({
+            "options": repr(self.requested),
+            "settings_history": json.dumps(self.history),
+            "settings_history_units": "from_distance, to_distance: m; settings: distances "
+                                      "in s*, as in [transient]",
+            "snapshots_missing": np.asarray(self.missing, dtype=float),
+            "snapshots_missing_units": "m"})
+        with _interrupt_held():  # what saved_text() says must be what is on disk
+            write_run(self.path, result, attrs=attrs, arrays=self.arrays,
+                      comparison=comparison, backup=self.ours)
+            if not self.ours:
+                # A backup beside a new run belongs to the run this one replaced.
+                backup_path(self.path).unlink(missing_ok=True)
+            self.ours = True
+            self.saved = (result.steps, result.distance / result.run_in_distance)
+
+    def saved_text(self):
+        """What can be continued, for a message."""
+        if self.saved is None:
+            return "nothing was saved (no checkpoint had been written)"
+        return (f"the checkpoint in {str(self.path)!r} ({_at(*self.saved)}) can be continued "
+                f"with --resume")
 
 
 class _Progress:
@@ -146,67 +416,218 @@ class _Progress:
         self.bar.close()
 
 
-def run(args):
-    """Do the work for parsed arguments; return the exit status."""
-    from .comparison import compare_with_steady
-    from .output import read_run, write_run
-    from .problem import WearProblem
-    from .runin import run_in
-    from .scene import load_transient_scene
+def _note(text):
+    print(f"note: {text}", file=sys.stderr)
 
-    scene, settings, initial = load_transient_scene(args.scene)
-    options = _options(settings, args)
+
+def _check_outputs(args):
+    """Refuse what the output paths cannot be, before any work; create missing directories."""
+    from .output import backup_path, lock_path
+
     out = args.output
-    if args.plot is not None and args.plot.exists() and not args.force:
-        raise ValueError(f"{str(args.plot)!r} exists; use --force to overwrite it")
+    check_distinct([("the scene", args.scene), ("-o", out),
+                    ("the run file's backup", backup_path(out)),
+                    ("the run file's lock", lock_path(out)), ("--plot", args.plot)])
+    # Existence is checked again under the run's lock.
+    prepare_output(out, force=True)
+    if args.plot is not None:
+        # The figure of a resumed run is drawn anew from its file.
+        prepare_output(args.plot, force=args.force or args.resume, what="--plot")
+
+
+def _read_resume(out):
+    """The run stored in ``out``, verified; a damaged file is refused naming its backup."""
+    from .output import DamagedRunFileError, backup_path, read_run
+
+    try:
+        return read_run(out)
+    except DamagedRunFileError as err:
+        backup = backup_path(out)
+        try:
+            prev = read_run(backup)[0] if backup.exists() else None
+        except ValueError:
+            prev = None
+        if prev is None:
+            hint = "no intact previous checkpoint is left; start over with --force"
+        else:
+            hint = (f"the previous checkpoint {str(backup)!r} "
+                    f"({_at(prev.steps, prev.distance / prev.run_in_distance)}) is intact: "
+                    f"rename it to {str(out)!r} and --resume")
+        raise ValueError(f"{err}; {hint}") from None
+
+
+def _first_solve_failed(err, job):
+    """The message of a run whose initial contact solve fails, naming the likely cause."""
+    face = job.initial_height[job.problem.face_mask]
+    relief = float(np.ptp(face)) if np.all(np.isfinite(face)) else math.inf
+    relief_f = relief / job.problem.depth_scale
+    rtol = job.settings.contact_rtol
+    if not relief_f < 1e6:
+        cause = (f"the [initial_face] (kind {job.initial.kind!r}) has a relief of {relief:.3g} m "
+                 f"= {relief_f:.3g} f*")
+    elif rtol < 1e-13:
+        cause = f"[transient] contact_rtol = {rtol:g} is below what round-off allows"
+    else:
+        cause = (f"check [transient] contact_rtol = {rtol:g} and the [initial_face] (kind "
+                 f"{job.initial.kind!r}, relief {relief_f:.3g} f*)")
+    return f"the first contact solve failed: {cause} ({err})"
+
+
+def _report(result, comparison):
+    """The summary printed after the run."""
+    lines = [f"{result.status}: {result.message}",
+             f"scheme {result.scheme}: {result.steps} steps ({result.rejected} rejected, "
+             f"{result.failures} failed), {result.solves} contact solves, "
+             f"{result.iterations} solver iterations, {result.wall_time:.3g} s",
+             f"scales: f* = {result.depth_scale:.4g} m, s* = {result.run_in_distance:.4g} m, "
+             f"fastest relaxation h/(k_max E*) = {result.fast_distance:.4g} m"]
+    if comparison is not None:
+        lines += ["agreement with the steady face (eq. 9):", comparison.summary()]
+    return lines
+
+
+@dataclasses.dataclass
+class _Job:
+    """A run-in ready to start or continue, under the run file's lock."""
+
+    scene: object
+    settings: object
+    initial: object
+    problem: object
+    initial_height: np.ndarray
+    options: object
+    resume: object
+    run_file: _RunFile
+
+
+def _prepare(args, lock, scene, settings, initial, options):
+    """Check the run file under its lock, build the problem, read what is resumed."""
+    from .output import backup_path, remove_temporaries
+    from .problem import WearProblem
+
+    out = args.output
+    if lock.previous_pid is not None:
+        _note(f"took over the lock of {str(out)!r} left by process {lock.previous_pid}, which "
+              f"has ended")
+    for tmp in remove_temporaries(out):
+        logger.info("removed %s, left by a killed writer", tmp)
     if out.exists() and not (args.resume or args.force):
         raise ValueError(f"{str(out)!r} exists; use --resume to continue it or --force to "
                          f"start over")
+    if not out.exists() and backup_path(out).exists() and not args.force:
+        raise ValueError(f"{str(out)!r} does not exist but its backup "
+                         f"{str(backup_path(out))!r} does: rename it to {str(out)!r} to "
+                         f"continue from it, or use --force to start over")
     problem = WearProblem.from_scene(scene)
     h0 = initial.height(problem.n, scene.radius)
     attrs, arrays = _inputs(scene, problem)
-
+    run_file = _RunFile(out, attrs, arrays, _settings(options, settings.contact_rtol), options)
     resume = None
-    if args.resume and out.exists() and not args.force:
-        resume, stored_attrs, stored_arrays = read_run(out)
+    if args.resume and out.exists():
+        resume, stored_attrs, stored_arrays = _read_resume(out)
         _check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0)
-        logger.info("resuming %s at s = %.6g s* (%s)", out, resume.distance /
-                    resume.run_in_distance, resume.status)
-    run_attrs = dict(attrs, options=repr(options))
+        if "sha256" not in stored_attrs:
+            _note(f"{str(out)!r} carries no checksums; resumed without verification")
+        if resume.status == "steady":
+            _note(f"{str(out)!r} holds a finished run; nothing to continue")
+        else:
+            notes, snapshots = run_file.resume(resume, stored_attrs)
+            for text in notes:
+                _note(text)
+            options = dataclasses.replace(options, snapshots=snapshots)
+            check_memory(run_in_memory(scene.n, len(snapshots)),
+                         _run_in_text(scene.n, len(snapshots)), args.memory_limit)
+    else:
+        if args.resume:
+            _note(f"{str(out)!r} does not exist; starting a new run")
+        run_file.start()
+    return _Job(scene, settings, initial, problem, h0, options, resume, run_file)
 
-    def checkpoint(result):
-        write_run(out, result, attrs=run_attrs, arrays=arrays)
 
+def run(args):
+    """Do the work for parsed arguments; return the exit status."""
+    from .output import RunLock
+    from .scene import load_transient_scene
+
+    out = args.output
+    scene, settings, initial = load_transient_scene(args.scene)
+    options = _options(settings, args)
+    _check_outputs(args)
+    check_memory(run_in_memory(scene.n, len(options.snapshots)),
+                 _run_in_text(scene.n, len(options.snapshots)), args.memory_limit)
+    scene.phase_labels()  # names a phase without a face pixel before the run
+
+    with RunLock(out) as lock:
+        try:
+            job = _prepare(args, lock, scene, settings, initial, options)
+        except KeyboardInterrupt:
+            raise CommandError("interrupted before the run started; nothing was written",
+                               EXIT_INTERRUPTED) from None
+        try:
+            result, comparison = _run(job)
+        except KeyboardInterrupt:
+            raise CommandError(f"interrupted; {job.run_file.saved_text()}",
+                               EXIT_INTERRUPTED) from None
+        except OSError as err:
+            raise CommandError(f"{describe_os_error(err)}; {job.run_file.saved_text()}",
+                               EXIT_FAILED) from None
+        except _StepFailureAtStart as err:
+            raise CommandError(_first_solve_failed(err.__cause__, job),
+                               EXIT_BAD_INPUT) from None
+        print("\n".join(_report(result, comparison)))
+        status = EXIT_OK if result.success else EXIT_FAILED
+        at = _at(result.steps, result.distance / result.run_in_distance)
+        stop = f"run {result.status} at {at}: {result.message}; continue with --resume"
+        del job, result, comparison  # the figure is drawn from the file
+        if args.plot is not None:
+            _plot(out, args.plot)
+    if status != EXIT_OK:
+        print(f"error: {stop}", file=sys.stderr)
+    return status
+
+
+class _StepFailureAtStart(Exception):
+    """The initial contact solve of a new run failed (its ``__cause__`` says how)."""
+
+
+def _run(job):
+    """Run (or continue), checkpointing; compare and write the result; return both."""
+    from .comparison import compare_with_steady
+    from .problem import StepFailure
+    from .runin import run_in
+
+    problem, resume = job.problem, job.resume
+    finished = resume is not None and resume.status == "steady"
     bar = _Progress(0 if resume is None else resume.steps)
     try:
-        result = run_in(problem, h0, options, resume=resume, on_step=bar,
-                        on_checkpoint=checkpoint)
+        result = run_in(problem, job.initial_height, job.options, resume=resume, on_step=bar,
+                        on_checkpoint=None if finished else job.run_file.write)
+    except StepFailure as err:  # every later failure is retried inside the run
+        raise _StepFailureAtStart() from err
     finally:
         bar.close()
     comparison = None
     if result.success:
         comparison = compare_with_steady(result, problem.solve_steady(), problem)
-        run_attrs.update({"steady_rms_slope": comparison.steady_rms_slope})
-    write_run(out, result, attrs=run_attrs, arrays=arrays, comparison=comparison)
-    print(f"{result.status}: {result.message}")
-    print(f"scheme {result.scheme}: {result.steps} steps ({result.rejected} rejected, "
-          f"{result.failures} failed), {result.solves} contact solves, "
-          f"{result.iterations} solver iterations, {result.wall_time:.3g} s")
-    print(f"scales: f* = {result.depth_scale:.4g} m, s* = {result.run_in_distance:.4g} m, "
-          f"fastest relaxation h/(k_max E*) = {result.fast_distance:.4g} m")
-    if comparison is not None:
-        print("agreement with the steady face (eq. 9):")
-        print(comparison.summary())
-    if args.plot is not None:
-        from .plotting import plot_run  # deferred: matplotlib is slow to import
+    if not finished:
+        extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
+        job.run_file.write(result, comparison, extra)
+    return result, comparison
 
-        plot_run(out, args.plot)
-        print(f"figure: {args.plot}")
-    if not result.success:
-        print(f"error: run {result.status}: {result.message}; continue with --resume",
-              file=sys.stderr)
-        return 1
-    return 0
+
+def _plot(out, png):
+    """Draw the run file's figure; the run is saved whatever happens here."""
+    from .plotting import plot_run  # deferred: matplotlib is slow to import
+
+    try:
+        plot_run(out, png)
+    except OSError as err:
+        raise CommandError(f"cannot draw the figure: {describe_os_error(err)}; the run is "
+                           f"saved in {str(out)!r}", EXIT_FAILED) from None
+    except KeyboardInterrupt:
+        raise CommandError(f"interrupted while drawing the figure; the run is saved in "
+                           f"{str(out)!r}", EXIT_INTERRUPTED) from None
+    print(f"figure: {png}")
 
 
 def main(argv=None):
@@ -221,24 +642,14 @@ def main(argv=None):
     -------
     int
         Exit status: 0 steady state reached, 1 run stopped or failed
-        (resumable), 2 bad input, 130 interrupted.
+        (resumable) or an operating-system error, 2 bad input, 130
+        interrupted.
     """
     args = build_parser().parse_args(argv)
-    level = (logging.WARNING, logging.INFO, logging.DEBUG)[min(args.verbose, 2)]
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
-    try:
-        return run(args)
-    except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
-        # The reader of stdout went away (e.g. `| head`): nothing left to say.
-        sys.stdout = open(os.devnull, "w")
-        return 0
-    except KeyboardInterrupt:
-        print("error: interrupted; the last checkpoint can be continued with --resume",
-              file=sys.stderr)
-        return 130
+    # The summary and the error line say how a run ended: library warnings (a failed
+    # contact solve, retried) show with -v.
+    configure_logging(args.verbose)
+    return run_command(run, args, verbose=args.verbose)
 
 
 if __name__ == "__main__":

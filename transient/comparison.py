@@ -3,16 +3,22 @@
 The transient and the steady module reach the same limiting face by two
 independent routes (time integration of the contact problem against the
 closed form of eq. 7 and 9); :func:`compare_with_steady` measures how well
-they agree.
+they agree: the face's shape, the phase pressures and the friction proxy,
+the run's converged rms slope (:mod:`transient.history`) against the steady
+module's corrected one, each with its error bar.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
+from steady.accuracy import estimate_map_rms_slope
+
 from .diagnostics import face_rms_slope
+from .history import HistoryEstimator
 
 __all__ = ["SteadyComparison", "compare_with_steady"]
 
@@ -28,11 +34,29 @@ class SteadyComparison:
         best (minimax) constant, relief = max - min of ``f_inf``.
     face_rms_error : float
         Rms of the same difference with the least-squares constant, / relief.
-    rms_slope, steady_rms_slope : float
-        Plain pixel rms slopes of the run's face and of ``f_inf`` (exact kernel
-        gradient at the pixel centres of the face).
+    rms_slope, rms_slope_uncertainty : float
+        The run's final rms slope, the converged estimate the history
+        records (:class:`transient.history.HistoryEstimator`), and its error
+        bar.
+    steady_rms_slope, steady_rms_slope_uncertainty : float
+        The steady face's corrected rms slope and its error bar: those of
+        the steady result when it carries them
+        (:func:`steady.solution.solve_scene`), else the corrected estimate
+        on its grid with the error of its own map's ladder
+        (:func:`steady.accuracy.estimate_map_rms_slope`).
     rms_slope_error : float
         ``rms_slope / steady_rms_slope - 1``.
+    rms_slope_agrees : bool
+        ``|rms_slope - steady_rms_slope|`` is within the sum of the two error
+        bars.
+    rms_slope_plain, steady_rms_slope_plain : float
+        Plain pixel rms slopes of the run's face and of ``f_inf`` (exact
+        kernel gradient at the pixel centres of the face): the same
+        definition on both sides, equal to round-off when the run has
+        converged.
+    rms_height, steady_rms_height : float, m
+        Rms heights of the run's face and of ``f_inf`` about their
+        least-squares planes.
     phase_pressures, steady_phase_pressures : ndarray, shape (P,), Pa
         Mean pressure on each phase, run and eq. 7.
     phase_pressure_error : float
@@ -42,8 +66,15 @@ class SteadyComparison:
     face_error: float
     face_rms_error: float
     rms_slope: float
+    rms_slope_uncertainty: float
     steady_rms_slope: float
+    steady_rms_slope_uncertainty: float
     rms_slope_error: float
+    rms_slope_agrees: bool
+    rms_slope_plain: float
+    steady_rms_slope_plain: float
+    rms_height: float
+    steady_rms_height: float
     phase_pressures: np.ndarray
     steady_phase_pressures: np.ndarray
     phase_pressure_error: float
@@ -52,10 +83,15 @@ class SteadyComparison:
         """One line per figure, for the terminal."""
         pp = ", ".join(f"{a:.6g}/{b:.6g}" for a, b in
                        zip(self.phase_pressures, self.steady_phase_pressures, strict=True))
+        verdict = "within" if self.rms_slope_agrees else "OUTSIDE"
         return (f"face shape error (max, / steady relief): {self.face_error:.3e}\n"
                 f"face shape error (rms, / steady relief): {self.face_rms_error:.3e}\n"
-                f"rms slope: {self.rms_slope:.6g} vs steady {self.steady_rms_slope:.6g} "
-                f"(relative {self.rms_slope_error:+.3e})\n"
+                f"rms slope: {self.rms_slope:.6g} +- {self.rms_slope_uncertainty:.2g} vs steady "
+                f"{self.steady_rms_slope:.6g} +- {self.steady_rms_slope_uncertainty:.2g} "
+                f"(relative {self.rms_slope_error:+.3e}, {verdict} the error bars)\n"
+                f"rms slope, plain pixel: {self.rms_slope_plain:.6g} vs steady "
+                f"{self.steady_rms_slope_plain:.6g}\n"
+                f"rms height: {self.rms_height:.6g} m vs steady {self.steady_rms_height:.6g} m\n"
                 f"phase pressures (run/steady, Pa): {pp} "
                 f"(max relative {self.phase_pressure_error:.3e})")
 
@@ -69,7 +105,8 @@ def compare_with_steady(result, steady, problem):
     steady : steady.solution.SteadyResult
         For the same grid, phases, wear coefficients, force and exponent
         (:func:`steady.solution.solve` on ``problem.halfspace`` and
-        ``problem.labels``).
+        ``problem.labels``, e.g. ``problem.solve_steady()``, or
+        :func:`steady.solution.solve_scene` with its error bar).
     problem : transient.problem.WearProblem
         The problem the run solved.
 
@@ -86,16 +123,28 @@ def compare_with_steady(result, steady, problem):
     mid = 0.5 * (diff.max() + diff.min())
     face_error = float(np.max(np.abs(diff - mid)) / relief)
     face_rms = float(np.sqrt(np.mean((diff - diff.mean()) ** 2)) / relief)
-    rms = face_rms_slope(problem.halfspace, face_mask, np.where(face_mask, result.height, 0.0),
-                         result.pressure, result.approach)
-    # The plain pixel rms slope: the definition the run measures (``rms_slope``
-    # of a steady result may be the corrected continuum estimate).
-    steady_rms = float(steady.rms_slope_plain)
+    height = np.where(face_mask, result.height, 0.0)
+    plain = face_rms_slope(problem.halfspace, face_mask, height, result.pressure,
+                           result.approach)
+    estimator = HistoryEstimator(problem, np.where(face_mask, result.initial_height, 0.0))
+    final = estimator.figures(result.distance, height, result.pressure, result.approach)
+    if math.isfinite(steady.rms_slope_error):
+        steady_rms, steady_error = float(steady.rms_slope), float(steady.rms_slope_error)
+    else:
+        estimate = estimate_map_rms_slope(steady.labels, steady.wear_coefficients,
+                                          steady.normal_force, steady.radius, steady.E_star,
+                                          exponent=steady.exponent, energy=estimator.energy)
+        steady_rms, steady_error = estimate.rms_slope, estimate.error
+    rms, error = final["rms_slope"], final["rms_slope_error"]
     n_phases = len(steady.phase_pressures)
     pp = np.array([result.pressure[labels == i].mean() for i in range(n_phases)])
     return SteadyComparison(
-        face_error=face_error, face_rms_error=face_rms, rms_slope=rms,
-        steady_rms_slope=steady_rms,
+        face_error=face_error, face_rms_error=face_rms,
+        rms_slope=rms, rms_slope_uncertainty=error,
+        steady_rms_slope=steady_rms, steady_rms_slope_uncertainty=steady_error,
         rms_slope_error=rms / steady_rms - 1.0,
+        rms_slope_agrees=bool(abs(rms - steady_rms) <= error + steady_error),
+        rms_slope_plain=plain, steady_rms_slope_plain=float(steady.rms_slope_plain),
+        rms_height=final["rms_height"], steady_rms_height=float(steady.rms_height),
         phase_pressures=pp, steady_phase_pressures=np.asarray(steady.phase_pressures),
         phase_pressure_error=float(np.max(np.abs(pp / steady.phase_pressures - 1.0))))

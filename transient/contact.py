@@ -21,9 +21,10 @@ changes:
 - a preconditioner: by default the inverse Fourier symbol of the operator
   (``~ E* |q| / 2``), aliased to the ``n x n`` grid and restricted to the
   active set (after Vollebregt, J. Comput. Phys. 257 (2014) 333-351,
-  doi:10.1016/j.jcp.2013.10.005).  The iteration count then hardly grows
-  with the grid (8 to 14 for the flat punch from n = 32 to 1024 at
-  ``rtol = 1e-8``), where plain Polonsky-Keer needs 18 to 94;
+  doi:10.1016/j.jcp.2013.10.005), with one symbol per level of a
+  non-uniform shift, stitched by the shift map.  The iteration count then
+  hardly grows with the grid (8 to 14 for the flat punch from n = 32 to
+  1024 at ``rtol = 1e-8``), where plain Polonsky-Keer needs 18 to 94;
 - the displacement is updated with the conjugate direction's product (one
   padded FFT pair per iteration for the operator), the change from the
   few pixels that enter or leave the active set is summed directly, and
@@ -55,6 +56,12 @@ _DIRECT_UPDATE_PIXELS = 8
 # Incremental displacement updates between full recomputations; each adds
 # a round-off of order eps |u|, so the drift stays far below any tolerance.
 _REFRESH = 50
+# Bound of the round-off one iteration adds to every entry of the incrementally
+# updated displacement, in units of eps max|u|: the update u -= tau q, the
+# direct column sums of a set change and the load rescaling each round once
+# (by at most eps |u|), with a factor 2 for the growth of |u| between full
+# recomputations.
+_ROUNDING_PER_ITERATION = 8.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -157,7 +164,8 @@ def _check_field(name, value, shape):
 
 
 def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=None,
-                  rtol=1e-8, atol=0.0, maxiter=None, preconditioner="auto", callback=None):
+                  x0_displacement=None, rtol=1e-8, atol=0.0, maxiter=None,
+                  preconditioner="auto", callback=None):
     r"""Contact pressure and rigid approach of the face under a normal force.
 
     Solves the complementarity problem of the module docstring by a
@@ -183,6 +191,11 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         and the rest is scaled to the load.  Default (or an ``x0`` that is
         zero on the face): uniform on a flat face, else a Hertz-like
         pressure on the region a rigid estimate puts in contact.
+    x0_displacement : ndarray, shape (n, n), m, optional
+        ``K x0`` (the half-space's displacement, without the shift), when
+        the caller knows it: it saves the first operator product.  Used
+        only if ``x0`` is zero off the face and non-negative on it (else
+        the product is computed).
     rtol, atol : float, optional
         Relative (dimensionless, default 1e-8) and absolute (m, default 0)
         tolerances of the stopping rule below.
@@ -190,15 +203,17 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         Maximum number of iterations (default ``max(200, 10 n)``).
     preconditioner : {"auto", "fourier", "fourier-padded", "jacobi", "amg", "none"}, optional
         ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
-        ``K + shift`` aliased to the ``n x n`` grid (shift-aware; one
-        unpadded FFT pair per iteration, about a third of a padded one;
-        ``"fourier-padded"`` applies it on the padded grid), unless
-        the shift is non-uniform and at least ``3 K_00`` (``K_00`` the
-        self-influence) on every face pixel, where the problem is nearly
-        diagonal and ``"jacobi"`` (free) is as fast or faster
-        (docs/benchmarks.md).  ``"amg"`` (one
+        ``K + shift`` aliased to the ``n x n`` grid (one unpadded FFT pair
+        per iteration, about a third of a padded one; ``"fourier-padded"``
+        applies it on the padded grid); a non-uniform shift is split into
+        levels, one symbol and one FFT pair each, stitched by the shift map
+        (:class:`transient.preconditioners.FourierPreconditioner`).  Where
+        the shift is at least ten times the largest eigenvalue of ``K`` on
+        every face pixel the operator is diagonal to within 10 % and
+        ``"auto"`` takes ``"jacobi"`` (free).  ``"amg"`` (one
         smoothed-aggregation V-cycle on a truncated kernel) needs
-        :mod:`pyamg` and is slower in every case measured.
+        :mod:`pyamg` and is slower in every case measured
+        (docs/benchmarks.md).
     callback : callable, optional
         Called as ``callback(pressure)`` after each iteration with the
         current pressure (read-only view; copy it to keep it).
@@ -230,9 +245,10 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     the contact equation ``u = d - h`` on the contact area.  ``p >= 0``
     holds exactly and the load is met to round-off at every iteration.
     The returned ``approach`` is ``d``.  The displacement behind the
-    residual is updated with each step; when its accumulated round-off
-    could reach a thousandth of the tolerance, it is recomputed by FFT and
-    the rule checked again.
+    residual is updated with each step, which rounds each of its entries by
+    at most a few ``eps max|u|``; when the accumulated bound could reach a
+    thousandth of the tolerance, it is recomputed by FFT and the rule
+    checked again.
 
     Examples
     --------
@@ -315,8 +331,16 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         p = np.where(on_face & (x0 > 0), x0, 0.0)
     if p.sum() <= 0:
         p = _initial_pressure(h_face, on_face, force, halfspace)
-    p *= force / (area * p.sum())
-    u = operator(p)
+        x0_displacement = None
+    c = force / (area * p.sum())
+    p *= c
+    if x0_displacement is not None and np.array_equal(p, c * x0):
+        u = c * _check_field("x0_displacement", x0_displacement, shape)
+        if shift is not None:
+            u += shift * p
+    else:
+        u = operator(p)
+    u_max = float(np.abs(u).max())
 
     # Work arrays; the loop updates in place.
     face_f = on_face.astype(float)
@@ -357,7 +381,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
             message = f"non-finite residual at iteration {it}"
             history.append(residual)
             break
-        drift = since_full * 100 * np.finfo(float).eps * scale
+        drift = since_full * _ROUNDING_PER_ITERATION * np.finfo(float).eps * u_max
         if residual <= tolerance and (verified or drift < 1e-3 * tolerance):
             history.append(residual)
             success = True
@@ -367,6 +391,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         if (residual <= tolerance and not verified) or since_full >= _REFRESH:
             # Recompute the incrementally updated displacement (drift).
             u = operator(p)
+            u_max = float(np.abs(u).max())
             since_full = 0
             verified = True
             continue
@@ -430,6 +455,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
                 u += operator.columns(ii, jj, dp[ii, jj])
             else:
                 u = operator(p)
+                u_max = float(np.abs(u).max())
                 since_full = 0
             total = p.sum()
             if not total > 0:

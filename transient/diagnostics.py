@@ -1,8 +1,11 @@
-"""What the run-in measures on its face at every recorded step.
+"""Pixel figures of the run-in's face: shape, differences, plain rms slope, wear-rate spread.
 
-The run loop (:mod:`transient.runin`) records these figures in its history;
-the comparison with the steady face (:mod:`transient.comparison`) uses the
-same definitions, so that the last recorded point and the comparison agree.
+The run loop (:mod:`transient.runin`) and its step control use the shape
+and the spread; the history's rms slope and rms height
+(:mod:`transient.history`) use the differences and keep the plain pixel rms
+slope beside the continuum estimate; the comparison with the steady face
+(:mod:`transient.comparison`) uses the same definitions, so that the last
+recorded point and the comparison agree.
 """
 
 from __future__ import annotations
@@ -56,23 +59,23 @@ def masked_gradient(field, face_mask, h):
 
 
 def face_rms_slope(halfspace, face_mask, height, pressure, approach):
-    """Rms slope of the worn face over the face pixels, dimensionless.
+    """Plain pixel rms slope of the worn face over the face pixels, dimensionless.
 
     On the contact the face is ``d - w = K p``, whose gradient is the exact
     kernel derivative convolved with the pressure (the definition of
     :func:`steady.solution.solve`, so that the final value compares with
     it); the gap ``w - (d - K p)`` off the contact adds its finite-difference
-    gradient.
+    gradient.  The history records it as ``rms_slope_plain``, beside the
+    continuum estimate of :mod:`transient.history`.
 
-    This is the slope of the half-space surface under the pixel pressure.
-    For the flat punch at ``s = 0`` it is not zero but about 0.6 ``grad_f0``
-    (measured 0.589, 0.596, 0.598, 0.600 at n = 32, 64, 128, 256): the
-    pixel pressure of the edge singularity, ``~ (a/h)^(1/2)``, makes ``K p``
-    ripple between the pixel centres of the rim, whose share of the face
-    falls like ``h/a``, so the rms does not vanish under refinement.  The
-    run-in removes it with the singularity.  The history also records
-    ``rms_slope_fd``, finite differences of the worn face itself (zero for
-    a flat face).
+    This is the slope of the half-space surface under the pixel pressure,
+    at the pixel centres: a first-order quadrature of a log-singular
+    integrand.  For the flat punch at ``s = 0`` it is not zero but about
+    0.6 ``grad_f0`` (measured 0.589, 0.596, 0.598, 0.600 at n = 32, 64, 128,
+    256): the pixel pressure of the edge singularity, ``~ (a/h)^(1/2)``,
+    makes ``K p`` ripple between the pixel centres of the rim, whose share
+    of the face falls like ``h/a``, so the rms does not vanish under
+    refinement.
 
     Parameters
     ----------

@@ -9,22 +9,29 @@ point of the ideal (continuum) face to touch.
 
 Every shape is registered by the kind the scene section ``[initial_face]``
 names (:data:`INITIAL_FACES`, :func:`register_initial_face`), with the
-parameters it takes; :func:`initial_height` builds one by kind.
+parameters it takes; :func:`initial_height` builds one by kind.  A kind may
+also give the exact rms slope and rms height of its continuous face over the
+disk (:func:`exact_statistics`), the values the run-in history starts from
+(docs/model.md, "The run-in history").
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 
 import numpy as np
+import scipy.integrate
 
 from steady.grid import face_mask, pixel_centres
 
 __all__ = [
     "INITIAL_FACES",
+    "ExactStatistics",
     "InitialFaceKind",
     "crowned",
+    "exact_statistics",
     "flat",
     "from_array",
     "from_file",
@@ -46,24 +53,84 @@ class InitialFaceKind:
         ``build(n, radius, **parameters)``, returns the height, shape (n, n), m.
     required, optional : tuple of str
         Its parameters (``path`` is a file name; every other one a number).
+    statistics : callable or None
+        ``statistics(radius, **parameters)``, the :class:`ExactStatistics` of
+        the continuous face over the disk; None when there is no closed form.
     """
 
     kind: str
     build: object
     required: tuple = ()
     optional: tuple = ()
+    statistics: object = None
+
+
+@dataclasses.dataclass(frozen=True)
+class ExactStatistics:
+    """Rms slope and rms height of a continuous initial face over the disk.
+
+    Attributes
+    ----------
+    rms_slope : float
+        Rms of ``|grad h|`` over the disk (dimensionless).
+    rms_height : float, m
+        Rms of ``h`` about its least-squares plane over the disk.
+    """
+
+    rms_slope: float
+    rms_height: float
 
 
 #: Registered initial face shapes by kind (see :func:`register_initial_face`).
 INITIAL_FACES = {}
 
 
-def register_initial_face(kind, *, required=(), optional=()):
-    """Register ``build(n, radius, **parameters)`` as the initial face ``kind`` (a decorator)."""
+def register_initial_face(kind, *, required=(), optional=(), statistics=None):
+    """Register ``build(n, radius, **parameters)`` as the initial face ``kind`` (a decorator).
+
+    ``statistics(radius, **parameters)``, if given, returns the face's
+    :class:`ExactStatistics`.
+    """
     def decorate(build):
-        INITIAL_FACES[kind] = InitialFaceKind(kind, build, tuple(required), tuple(optional))
+        INITIAL_FACES[kind] = InitialFaceKind(kind, build, tuple(required), tuple(optional),
+                                              statistics)
         return build
     return decorate
+
+
+def exact_statistics(kind, radius, **parameters):
+    """Exact rms slope and rms height over the disk of a registered initial face.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`INITIAL_FACES`.
+    radius : float, m
+    **parameters
+        The kind's parameters.
+
+    Returns
+    -------
+    ExactStatistics or None
+        None for a kind without a closed form (``"file"``: the run-in then
+        measures its pixel heights, :func:`transient.history.face_statistics`).
+
+    Examples
+    --------
+    >>> bool(exact_statistics("tilted", 4e-3, angle=0.01).rms_slope == np.tan(0.01))
+    True
+    >>> stats = exact_statistics("crowned", 4e-3, sphere_radius=8e-3)
+    >>> print(f"{stats.rms_slope:.4f} {stats.rms_height * 1e6:.1f} um")
+    0.3882 309.1 um
+    """
+    try:
+        spec = INITIAL_FACES[kind]
+    except KeyError:
+        raise ValueError(f"initial face kind must be one of {sorted(INITIAL_FACES)}, "
+                         f"got {kind!r}") from None
+    if spec.statistics is None:
+        return None
+    return spec.statistics(float(radius), **parameters)
 
 
 def initial_height(kind, n, radius, **parameters):
@@ -113,7 +180,11 @@ def _coordinates(n, radius):
     return np.meshgrid(x, x, indexing="ij")
 
 
-@register_initial_face("flat")
+def _flat_statistics(radius):
+    return ExactStatistics(rms_slope=0.0, rms_height=0.0)
+
+
+@register_initial_face("flat", statistics=_flat_statistics)
 def flat(n, radius):
     """Flat face.
 
@@ -133,7 +204,12 @@ def flat(n, radius):
     return np.zeros((n, n))
 
 
-@register_initial_face("tilted", required=("angle",), optional=("azimuth",))
+def _tilted_statistics(radius, angle, azimuth=0.0):
+    return ExactStatistics(rms_slope=float(np.tan(angle)), rms_height=0.0)
+
+
+@register_initial_face("tilted", required=("angle",), optional=("azimuth",),
+                       statistics=_tilted_statistics)
 def tilted(n, radius, angle, azimuth=0.0):
     """Flat face tilted by ``angle`` so that it recedes towards ``azimuth``.
 
@@ -165,7 +241,32 @@ def tilted(n, radius, angle, azimuth=0.0):
     return np.tan(angle) * (X * np.cos(azimuth) + Y * np.sin(azimuth) + radius)
 
 
-@register_initial_face("crowned", required=("sphere_radius",))
+def _crowned_statistics(radius, sphere_radius):
+    """Sphere cap ``R - sqrt(R^2 - r^2)`` over the disk ``r < a``.
+
+    Mean-square slope ``(2/a^2) int_0^a r^3 / (R^2 - r^2) dr
+    = (R/a)^2 (-ln(1 - x) - x)``, ``x = (a/R)^2`` (infinite for ``R = a``);
+    the rms height (the best plane of a radial face is a constant) by
+    adaptive quadrature of the cap, written ``r^2 / (R + sqrt(R^2 - r^2))``
+    to avoid cancellation.
+    """
+    a, big = float(radius), float(sphere_radius)
+    x = (a / big) ** 2
+    mean_square = (-math.log1p(-x) - x) / x if x < 1 else math.inf
+
+    def cap(r):
+        return r * r / (big + math.sqrt(max(big * big - r * r, 0.0)))
+
+    def disk_mean(f):
+        return 2.0 / a**2 * scipy.integrate.quad(lambda r: f(r) * r, 0.0, a, epsabs=0.0,
+                                                 epsrel=1e-12)[0]
+
+    mean = disk_mean(cap)
+    variance = disk_mean(lambda r: (cap(r) - mean) ** 2)
+    return ExactStatistics(rms_slope=math.sqrt(mean_square), rms_height=math.sqrt(variance))
+
+
+@register_initial_face("crowned", required=("sphere_radius",), statistics=_crowned_statistics)
 def crowned(n, radius, sphere_radius):
     """Spherical cap: the face crowned to a sphere of radius ``sphere_radius``.
 

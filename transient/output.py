@@ -1,4 +1,4 @@
-"""HDF5 run files (layout ``runin.transient``, version 2).
+"""HDF5 run files (layout ``runin.transient``, version 2), their checksums and their lock.
 
 A run file holds a run-in, finished or in progress (a checkpoint): the
 state a resumed run needs, the history, the snapshots, the inputs that
@@ -26,12 +26,37 @@ Layout (root group)::
     comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
 
 Every dataset carries a ``units`` attribute.
+
+Checksums
+---------
+Every dataset carries the attribute ``sha256``: the SHA-256 of its dtype,
+shape and bytes and of its other attributes; every group, the root
+included, carries in ``sha256`` the SHA-256 of its attributes.
+:func:`read_run` verifies all of them, so that a flipped bit anywhere in
+what a resumed run depends on (the state, the pressure, the counters, the
+history, the snapshots, the inputs) is noticed, and raises
+:class:`DamagedRunFileError` naming the first part that does not match (or
+the reason the file cannot be read at all).  A file without a root
+``sha256`` is read unverified.
+
+Writers
+-------
+A run file has one writer at a time: :class:`RunLock` holds an exclusive
+lock (:func:`fcntl.flock`) on ``RUN.h5.lock`` beside it, which records the
+writer's process id; a second writer is refused at once with
+:class:`RunLockedError`.  The kernel drops the lock of a process that dies,
+so a lock file left by a killed run is taken over (its pid is reported).
+``write_run(..., backup=True)`` keeps the file it replaces as
+``RUN.h5.prev`` (:func:`backup_path`): a checkpoint damaged after it was
+written can be replaced by the one before it.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
+import os
 import pathlib
 import types
 
@@ -42,7 +67,23 @@ from steady.output import atomic_h5
 
 from .runin import HISTORY_UNITS, RunResult
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "read_run", "write_run"]
+try:
+    import fcntl
+except ImportError:  # not a POSIX system: runs are not locked
+    fcntl = None
+
+__all__ = [
+    "FORMAT",
+    "FORMAT_VERSION",
+    "DamagedRunFileError",
+    "RunLock",
+    "RunLockedError",
+    "backup_path",
+    "lock_path",
+    "read_run",
+    "remove_temporaries",
+    "write_run",
+]
 
 #: ``format`` attribute of a run file.
 FORMAT = "runin.transient"
@@ -60,10 +101,109 @@ _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
 _INTEGERS = ("steps", "rejected", "failures", "solves", "iterations")
 _STRINGS = ("status", "message", "scheme")
 _STATE_UNITS = {"height": "m", "initial_height": "m", "previous_height": "m",
-                "previous_rate": "1"}
+                "previous_rate": "1", "pressure_history": "Pa"}
+# State datasets every checkpoint has; the others are None before the first step.
+_REQUIRED_STATE = ("height", "initial_height")
+
+# Attribute holding the SHA-256 of a dataset or of a group's attributes.
+_CHECKSUM = "sha256"
 
 
-def write_run(path, result, *, attrs=None, arrays=None, comparison=None):
+class DamagedRunFileError(ValueError):
+    """A run file that cannot be trusted: unreadable, truncated, or failing its checksums.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The file.
+    """
+
+    def __init__(self, path, reason):
+        super().__init__(f"run file {str(path)!r} is damaged: {reason}")
+        self.path = pathlib.Path(path)
+
+
+class RunLockedError(ValueError):
+    """Another process is writing the run file (it holds its :class:`RunLock`).
+
+    Attributes
+    ----------
+    pid : int or None
+        The writer's process id, if it has recorded it.
+    """
+
+    def __init__(self, path, pid):
+        who = "pid not yet recorded" if pid is None else f"pid {pid}"
+        super().__init__(f"another run is writing {str(path)!r} ({who})")
+        self.pid = pid
+
+
+def backup_path(path):
+    """``RUN.h5.prev``: where ``write_run(..., backup=True)`` keeps the previous file."""
+    path = pathlib.Path(path)
+    return path.with_name(path.name + ".prev")
+
+
+def lock_path(path):
+    """``RUN.h5.lock``: the lock file of a run file (see :class:`RunLock`)."""
+    path = pathlib.Path(path)
+    return path.with_name(path.name + ".lock")
+
+
+# -- checksums ------------------------------------------------------------
+def _update(h, value):
+    """Feed one attribute value or array, as h5py returns it, to a hash."""
+    if isinstance(value, str):
+        h.update(b"s" + value.encode("utf-8", "surrogatepass"))
+    elif isinstance(value, bytes):
+        h.update(b"b" + value)
+    else:
+        a = np.asarray(value)
+        if a.dtype.hasobject:  # variable-length strings
+            h.update(b"o" + repr(a.tolist()).encode("utf-8", "surrogatepass"))
+        else:
+            h.update(f"a{a.dtype.str}{a.shape}".encode())
+            h.update(np.ascontiguousarray(a).reshape(-1).view(np.uint8))  # no copy
+    h.update(b"\0")
+
+
+def _attrs_digest(attrs):
+    """SHA-256 (hex) of a mapping of attributes, its own ``sha256`` left out."""
+    h = hashlib.sha256()
+    for name in sorted(attrs):
+        if name != _CHECKSUM:
+            h.update(name.encode("utf-8", "surrogatepass") + b"\0")
+            _update(h, attrs[name])
+    return h.hexdigest()
+
+
+def _dataset_digest(data, attrs):
+    """SHA-256 (hex) of a dataset's values (dtype, shape, bytes) and its other attributes."""
+    h = hashlib.sha256()
+    _update(h, data)
+    h.update(_attrs_digest(attrs).encode())
+    return h.hexdigest()
+
+
+def _put(group, name, value, unit, **options):
+    """Create a dataset with its ``units`` and ``sha256`` attributes."""
+    ds = group.create_dataset(name, data=value, **options)
+    ds.attrs["units"] = unit
+    data = np.asarray(value).astype(ds.dtype, copy=False).reshape(ds.shape)
+    ds.attrs[_CHECKSUM] = _dataset_digest(data, dict(ds.attrs))
+    return ds
+
+
+def _seal_groups(f):
+    """Store the digest of every group's attributes; the root's last."""
+    groups = []
+    f.visititems(lambda name, obj: groups.append(obj) if isinstance(obj, h5py.Group) else None)
+    for g in groups + [f]:
+        g.attrs[_CHECKSUM] = _attrs_digest(dict(g.attrs))
+
+
+# -- writing ----------------------------------------------------------------
+def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=False):
     """Write a run (or a checkpoint) to HDF5, atomically, replacing ``path``.
 
     Parameters
@@ -76,8 +216,17 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None):
         Extra root datasets (e.g. ``phase``).
     comparison : transient.comparison.SteadyComparison, optional
         Stored in the group ``comparison``.
+    backup : bool, optional
+        Keep the file that ``path`` held as :func:`backup_path` (default
+        False: it is replaced).
+
+    Raises
+    ------
+    OSError
+        The file cannot be written; the message names ``path``.
     """
-    with atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=True) as f:
+    with atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=True,
+                   backup=backup_path(path) if backup else None) as f:
         for name, unit in _SCALARS.items():
             f.attrs[name] = getattr(result, name)
             if unit:
@@ -88,37 +237,68 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None):
             f.attrs[f"{name}_units"] = unit
         for name, value in (attrs or {}).items():
             f.attrs[name] = value
-        f.create_dataset("worn_depth", data=result.worn_depth).attrs["units"] = "m"
-        f.create_dataset("pressure", data=result.pressure).attrs["units"] = "Pa"
+        _put(f, "worn_depth", result.worn_depth, "m")
+        _put(f, "pressure", result.pressure, "Pa")
         for name, value in (arrays or {}).items():
-            f.create_dataset(name, data=value).attrs["units"] = "1"
+            _put(f, name, value, "1")
         st = f.create_group("state")
         st.attrs["description"] = "everything a resumed run needs (face up to offset)"
         for name, unit in _STATE_UNITS.items():
             value = getattr(result, name)
             if value is not None:
-                st.create_dataset(name, data=value).attrs["units"] = unit
+                _put(st, name, value, unit)
         hist = f.create_group("history")
         for name, value in result.history.items():
-            hist.create_dataset(name, data=value).attrs["units"] = HISTORY_UNITS[name]
+            _put(hist, name, value, HISTORY_UNITS[name])
         snaps = f.create_group("snapshots")
-        snaps.create_dataset("distance", data=result.snapshot_distance).attrs["units"] = "m"
-        snaps.create_dataset("height", data=result.snapshot_height,
-                             compression="gzip").attrs["units"] = "m"
-        snaps.create_dataset("pressure", data=result.snapshot_pressure,
-                             compression="gzip").attrs["units"] = "Pa"
+        _put(snaps, "distance", result.snapshot_distance, "m")
+        _put(snaps, "height", result.snapshot_height, "m", compression="gzip")
+        _put(snaps, "pressure", result.snapshot_pressure, "Pa", compression="gzip")
         if comparison is not None:
             g = f.create_group("comparison")
             for fld in dataclasses.fields(comparison):
                 value = getattr(comparison, fld.name)
                 if isinstance(value, np.ndarray):
-                    g.create_dataset(fld.name, data=value).attrs["units"] = "Pa"
+                    _put(g, fld.name, value, "Pa")
                 else:
                     g.attrs[fld.name] = value
+        _seal_groups(f)
+
+
+# -- reading ----------------------------------------------------------------
+def _load(f):
+    """Every dataset (values and attributes) and every group's attributes, by path."""
+    datasets, groups = {}, {"": dict(f.attrs)}
+
+    def visit(name, obj):
+        if isinstance(obj, h5py.Dataset):
+            datasets[name] = (obj[()], dict(obj.attrs))
+        else:
+            groups[name] = dict(obj.attrs)
+
+    f.visititems(visit)
+    return datasets, groups
+
+
+def _verify(path, datasets, groups):
+    """Raise :class:`DamagedRunFileError` for the first part that fails its checksum."""
+    for name, (data, attrs) in sorted(datasets.items()):
+        stored = attrs.get(_CHECKSUM)
+        if stored is None or _dataset_digest(data, attrs) != stored:
+            raise DamagedRunFileError(path, f"dataset {name!r} does not match its checksum")
+    for name, attrs in sorted(groups.items()):
+        stored = attrs.get(_CHECKSUM)
+        if stored is None or _attrs_digest(attrs) != stored:
+            what = "the root attributes" if not name else f"the attributes of group {name!r}"
+            raise DamagedRunFileError(path, f"{what} do not match their checksum")
+
+
+def _plain(value):
+    return value.item() if isinstance(value, np.generic) else value
 
 
 def read_run(path):
-    """Read a run file written by :func:`write_run`.
+    """Read a run file written by :func:`write_run`, verifying its checksums.
 
     Parameters
     ----------
@@ -128,31 +308,69 @@ def read_run(path):
     -------
     result : transient.runin.RunResult
     attrs : dict
-        All root attributes.
+        All root attributes (``attrs["sha256"]`` absent: an unverified file
+        without checksums).
     arrays : dict
         Root datasets other than ``worn_depth`` and ``pressure``.
 
     Raises
     ------
+    DamagedRunFileError
+        The file is empty, truncated, unreadable or fails a checksum, or
+        lacks part of the state (a :class:`ValueError`).
     ValueError
-        Not a run file, an unknown layout version, or a damaged file.
+        Missing file, a directory, not a run file (another ``format``), or
+        an unknown layout version.
     """
     path = pathlib.Path(path)
+    if not path.exists():
+        raise ValueError(f"run file {str(path)!r} does not exist")
+    if not path.is_file():
+        raise ValueError(f"run file {str(path)!r} is not a regular file")
+    if path.stat().st_size == 0:
+        raise DamagedRunFileError(path, "the file is empty (0 bytes)")
+    # h5py reports damage with many exception types; these are all it raises for it.
+    damage = (OSError, RuntimeError, KeyError, TypeError, IndexError, ValueError)
     try:
+        if not h5py.is_hdf5(path):
+            raise DamagedRunFileError(path, "no HDF5 signature (not an HDF5 file)")
         f = h5py.File(path, "r")
-    except OSError as err:
-        raise ValueError(f"cannot read run file {str(path)!r}: {err}") from None
+    except damage as err:
+        if isinstance(err, DamagedRunFileError):
+            raise
+        raise DamagedRunFileError(path, f"cannot be opened ({str(err)[:200]})") from None
     with f:
-        if f.attrs.get("format") != FORMAT:
-            raise ValueError(f"{str(path)!r} is not a run file (format "
-                             f"{f.attrs.get('format')!r}, expected {FORMAT!r})")
-        version = f.attrs.get("format_version", -1)
-        if int(version) != FORMAT_VERSION:
+        try:
+            fmt = _plain(f.attrs.get("format"))
+            version = _plain(f.attrs.get("format_version", -1))
+        except damage as err:
+            raise DamagedRunFileError(path, f"cannot be read ({str(err)[:200]})") from None
+        if fmt != FORMAT:
+            raise ValueError(f"{str(path)!r} is not a run file (format {fmt!r}, expected "
+                             f"{FORMAT!r})")
+        if not isinstance(version, (int, np.integer)) or int(version) != FORMAT_VERSION:
             raise ValueError(f"{str(path)!r} has layout version {version!r}, expected "
                              f"{FORMAT_VERSION}")
-        attrs = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
-        st = f["state"]
-        kw = {name: attrs[name] for name in _SCALARS}
+        try:
+            datasets, groups = _load(f)
+        except damage as err:
+            raise DamagedRunFileError(path, f"cannot be read ({str(err)[:200]})") from None
+    if _CHECKSUM in groups[""]:
+        _verify(path, datasets, groups)
+    return _result(path, datasets, groups[""])
+
+
+def _result(path, datasets, root):
+    """The :class:`RunResult` of a run file's contents."""
+    needed = ["pressure", "history/distance", "snapshots/distance", "snapshots/height",
+              "snapshots/pressure"] + [f"state/{name}" for name in _REQUIRED_STATE]
+    missing = [name for name in needed if name not in datasets]
+    missing += [name for name in (*_SCALARS, *_OPTIONAL_SCALARS) if name not in root]
+    if missing:
+        raise DamagedRunFileError(path, f"it lacks {missing[0]!r}")
+    attrs = {k: _plain(v) for k, v in root.items()}
+    kw = {name: attrs[name] for name in _SCALARS}
+    try:
         for name in _INTEGERS:
             kw[name] = int(kw[name])
         for name in _STRINGS:
@@ -160,16 +378,147 @@ def read_run(path):
         for name in _OPTIONAL_SCALARS:
             v = float(attrs[name])
             kw[name] = None if math.isnan(v) else v
-        result = RunResult(
-            **kw,
-            height=st["height"][()], initial_height=st["initial_height"][()],
-            pressure=f["pressure"][()],
-            previous_height=st["previous_height"][()] if "previous_height" in st else None,
-            previous_rate=st["previous_rate"][()] if "previous_rate" in st else None,
-            history=types.MappingProxyType({k: v[()] for k, v in f["history"].items()}),
-            snapshot_distance=f["snapshots/distance"][()],
-            snapshot_height=f["snapshots/height"][()],
-            snapshot_pressure=f["snapshots/pressure"][()])
-        arrays = {k: f[k][()] for k in f if isinstance(f[k], h5py.Dataset)
-                  and k not in ("worn_depth", "pressure")}
+    except (TypeError, ValueError) as err:
+        raise DamagedRunFileError(path, f"a root attribute is malformed ({err})") from None
+    state = {name: datasets[f"state/{name}"][0] if f"state/{name}" in datasets else None
+             for name in _STATE_UNITS}
+    history = {name[len("history/"):]: value for name, (value, _) in datasets.items()
+               if name.startswith("history/")}
+    result = RunResult(
+        **kw, **state, pressure=datasets["pressure"][0],
+        history=types.MappingProxyType(history),
+        snapshot_distance=datasets["snapshots/distance"][0],
+        snapshot_height=datasets["snapshots/height"][0],
+        snapshot_pressure=datasets["snapshots/pressure"][0])
+    arrays = {name: value for name, (value, _) in datasets.items()
+              if "/" not in name and name not in ("worn_depth", "pressure")}
     return result, attrs, arrays
+
+
+# -- writers ----------------------------------------------------------------
+def remove_temporaries(path):
+    """Remove the temporary files killed writers of ``path`` left beside it.
+
+    Call it only while holding the run's :class:`RunLock` (no other writer
+    can be using them).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The run file.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed (``.<name>.*.tmp`` beside ``path``).
+    """
+    path = pathlib.Path(path)
+    removed = []
+    for tmp in path.parent.glob(f".{path.name}.*.tmp"):
+        try:
+            tmp.unlink()
+        except OSError:
+            continue
+        removed.append(tmp)
+    return removed
+
+
+class RunLock:
+    """Exclusive lock of a run file, so that two runs never write it at once.
+
+    ``RUN.h5.lock`` beside the run file is opened (created if need be),
+    locked with :func:`fcntl.flock` (``LOCK_EX | LOCK_NB``) and its content
+    replaced by this process's id.  A second writer fails at once with
+    :class:`RunLockedError`, naming the pid.  The kernel releases the lock
+    of a process that dies, so a lock file left by a killed run does not
+    block: it is taken over and :attr:`previous_pid` names the dead writer.
+    :meth:`release` removes the file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The run file (not the lock file).
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The lock file.
+    previous_pid : int or None
+        Pid found in a lock file left behind by a writer that ended without
+        releasing it (killed), else None.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> run = pathlib.Path(tempfile.mkdtemp()) / "run.h5"
+    >>> with RunLock(run) as lock:
+    ...     try:
+    ...         RunLock(run).acquire()
+    ...     except RunLockedError as err:
+    ...         print("refused:", err.pid == os.getpid())
+    refused: True
+    >>> lock.path.exists()
+    False
+    """
+
+    def __init__(self, path):
+        self.run_path = pathlib.Path(path)
+        self.path = lock_path(path)
+        self.previous_pid = None
+        self._fd = None
+
+    @staticmethod
+    def _pid(fd):
+        os.lseek(fd, 0, os.SEEK_SET)
+        text = os.read(fd, 64).decode("ascii", "replace").strip()
+        return int(text) if text.isdigit() else None
+
+    def acquire(self):
+        """Take the lock or raise :class:`RunLockedError`; returns ``self``."""
+        if fcntl is None:
+            return self
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:  # BlockingIOError: held by a live process
+                pid = self._pid(fd)
+                os.close(fd)
+                raise RunLockedError(self.run_path, pid) from None
+            # The holder may have removed the file between our open and flock:
+            # then this lock is on a file nobody else will see; start again.
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+        previous = self._pid(fd)
+        self.previous_pid = previous if previous not in (None, os.getpid()) else None
+        os.ftruncate(fd, 0)
+        os.lseek(fd, 0, os.SEEK_SET)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self._fd = fd
+        return self
+
+    def release(self):
+        """Remove the lock file and drop the lock (idempotent)."""
+        if self._fd is None:
+            return
+        # Unlink while still holding the lock: a waiter that opened the old
+        # file notices it is gone (acquire checks) and starts again.
+        try:
+            self.path.unlink()
+        except OSError:
+            pass
+        os.close(self._fd)
+        self._fd = None
+
+    def __enter__(self):
+        """Acquire."""
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        """Release."""
+        self.release()

@@ -10,9 +10,10 @@ positive definite there, which is all the projected conjugate gradient
 needs.
 
 - :class:`FourierPreconditioner`: the inverse symbol of the circulant
-  embedding of ``K`` (``~ E* |q| / 2`` at low wavenumber), on the padded
-  ``2n x 2n`` grid or aliased to the ``n x n`` grid (cheaper), plus a
-  diagonal share for a non-uniform shift.
+  embedding of ``K + s`` (``~ E* |q| / 2`` at low wavenumber), on the
+  padded ``2n x 2n`` grid or aliased to the ``n x n`` grid (cheaper); for
+  a non-uniform shift one symbol per level of the shift, stitched by the
+  shift map (:func:`shift_levels`).
 - :class:`JacobiPreconditioner`: ``1 / diag(A)``.  Free; exact in the
   limit ``shift >> self-influence``.
 - :class:`AMGPreconditioner`: one smoothed-aggregation V-cycle (pyamg) on
@@ -46,6 +47,7 @@ __all__ = [
     "PRECONDITIONERS",
     "make_preconditioner",
     "register_preconditioner",
+    "shift_levels",
 ]
 
 logger = logging.getLogger(__name__)
@@ -54,11 +56,17 @@ logger = logging.getLogger(__name__)
 #: (see :func:`register_preconditioner`); ``"none"`` maps to None.
 PRECONDITIONERS = {"none": None}
 
-# A non-uniform shift at least this many self-influences K_00 on every face
-# pixel makes the operator nearly diagonal: "auto" then takes Jacobi, which
-# needs about as many iterations as the Fourier blend and costs nothing
-# (docs/benchmarks.md, "Contact solver").
-_DIAGONAL_DOMINANCE = 3.0
+# A shift at least this many times the largest eigenvalue of K on every face
+# pixel makes the operator diagonal to within 10 %: "auto" then takes Jacobi,
+# which costs nothing and needs no more iterations than the Fourier
+# preconditioner there (docs/benchmarks.md, "Contact solver").
+_DIAGONAL_DOMINANCE = 10.0
+# Most levels of the stitched Fourier preconditioner for a non-uniform shift
+# (one FFT pair each); more distinct values are interpolated between nodes.
+_MAX_LEVELS = 4
+# Relative spread of the shift (in units of the smallest eigenvalue plus the
+# smallest shift) below which it is treated as uniform.
+_UNIFORM_SPREAD = 1e-2
 
 
 def register_preconditioner(name):
@@ -110,65 +118,132 @@ class JacobiPreconditioner:
 class FourierPreconditioner:
     """Inverse symbol of the influence operator, shift-aware.
 
-    ``padded=True``: the exact inverse of the ``2n x 2n`` circulant
-    embedding ``C`` of ``K`` (one padded FFT pair per application).
+    ``padded=True``: the inverse of the ``2n x 2n`` circulant embedding
+    ``C`` of ``K`` (one padded FFT pair per level and application).
     ``padded=False`` (default): the inverse of its ``n``-periodic
     aliasing, whose symbol is ``C``'s at the even wavenumbers (so it is
-    positive too); one unpadded FFT pair, about a third of the cost, for a
-    few more iterations (docs/benchmarks.md).
+    positive too); one unpadded FFT pair per level, about a third of the
+    cost, for a few more iterations (docs/benchmarks.md).
 
-    For a uniform shift ``s`` the symbol is that of ``K + s I``.  For a
-    non-uniform shift the preconditioner is ``W C_s^-1 W + (I - W^2) D^-1``
-    with ``C_s`` the circulant of ``K + min(shift) I``,
-    ``D = diag(K_00 + shift)`` and ``W^2 = (K_00 + min shift) / (K_00 + shift)``:
-    where the shift is small the Fourier part acts, where it dominates the
-    (then nearly exact) diagonal part takes over.  Both terms are symmetric
-    positive (semi-)definite, so the sum is too.
+    For a uniform shift ``s`` the preconditioner is ``(C + s I)^-1``.  A
+    non-uniform shift is sorted into levels ``sigma_j`` (its distinct
+    values on the face, at most ``max_levels`` of them; otherwise nodes
+    spaced evenly in ``log(lambda + s)``, ``lambda`` the smallest value of
+    the symbol) with weights ``phi_j(x) >= 0``, ``sum_j phi_j = 1`` (the
+    indicator of each value, or linear interpolation in ``log(lambda + s)``
+    between neighbouring nodes), and the preconditioner is
+
+        M = B B^T,    B = sum_j diag(phi_j) (C + sigma_j I)^(-1/2):
+
+    a Fourier multiplier per level, stitched by the shift map.  For a
+    pattern finer than the scale on which ``K`` equals the local shift it
+    is ``1 / (K + s(x))`` pixel by pixel; for a smooth pattern it is
+    ``C^-1``, whatever the shift.  ``M`` is symmetric positive definite.
+    One unpadded (padded) FFT pair per level and application.
 
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
     shift : ndarray, shape (n, n), m/Pa, or None
     face_mask : ndarray of bool, shape (n, n), optional
-        Pixels over which the shift's range is taken (default: all).
+        Pixels over which the shift's levels are taken (default: all).
     padded : bool, optional
         Apply on the zero-padded ``2n x 2n`` grid (default False).
+    max_levels : int, optional
+        Most levels of a non-uniform shift (default 4).
     """
 
-    def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False):
+    def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False,
+                 max_levels=_MAX_LEVELS):
         self.halfspace = halfspace
         self.padded = bool(padded)
-        k00 = halfspace.self_influence
-        self.weight = None
-        self.diagonal = None
-        s_ref = 0.0
-        if shift is not None:
-            s_face = shift if face_mask is None else shift[face_mask]
-            s_ref = float(s_face.min())
-            if float(s_face.max()) > s_ref * (1 + 1e-12):
-                self.weight = np.sqrt((k00 + s_ref) / (k00 + shift))
-                self.diagonal = (1.0 - self.weight**2) / (k00 + shift)
         symbol = halfspace.influence_symbol if self.padded else halfspace.aliased_symbol
-        self.inverse_symbol = 1.0 / symbol if s_ref == 0 else 1.0 / (symbol + s_ref)
+        levels, weights = shift_levels(shift, face_mask, float(symbol.min()), max_levels)
+        self.levels = levels
+        self.weights = weights
+        if weights is None:
+            self.inverse_symbol = 1.0 / (symbol + levels[0])
+        else:
+            self.inverse_root = [1.0 / np.sqrt(symbol + s) for s in levels]
 
-    def _apply(self, field):
+    def _forward(self, field):
         hs = self.halfspace
         if self.padded:
-            return hs.inverse(hs.forward(field) * self.inverse_symbol)
-        n = hs.n
-        spectrum = scipy.fft.rfft2(field, workers=hs.workers)
-        spectrum *= self.inverse_symbol
-        return scipy.fft.irfft2(spectrum, s=(n, n), workers=hs.workers)
+            return hs.forward(field)
+        return scipy.fft.rfft2(field, workers=hs.workers)
+
+    def _inverse(self, spectrum):
+        hs = self.halfspace
+        if self.padded:
+            return hs.inverse(spectrum, overwrite=True)
+        return scipy.fft.irfft2(spectrum, s=(hs.n, hs.n), workers=hs.workers,
+                                overwrite_x=True)
 
     def __call__(self, residual, active):
         """Apply to a residual (m), zero off the active set; returns Pa."""
-        if self.weight is None:
-            z = self._apply(residual)
+        if self.weights is None:
+            spectrum = self._forward(residual)
+            spectrum *= self.inverse_symbol
+            z = self._inverse(spectrum)
         else:
-            z = self.weight * self._apply(self.weight * residual)
-            z += self.diagonal * residual
+            # B^T r: one transform per level, summed in Fourier space ...
+            total = None
+            for phi, root in zip(self.weights, self.inverse_root, strict=True):
+                spectrum = self._forward(phi * residual)
+                spectrum *= root
+                total = spectrum if total is None else total.__iadd__(spectrum)
+            # ... then B: one inverse transform per level.
+            z = None
+            for phi, root in zip(self.weights, self.inverse_root, strict=True):
+                part = self._inverse(total * root)
+                part *= phi
+                z = part if z is None else z.__iadd__(part)
         z *= active
         return z
+
+
+def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
+    """Levels and weights of a diagonal shift for the stitched Fourier preconditioner.
+
+    Parameters
+    ----------
+    shift : ndarray, shape (n, n), m/Pa, or None
+    face_mask : ndarray of bool, shape (n, n), or None
+        Pixels whose shift counts (default: all).
+    scale : float, m/Pa
+        Smallest eigenvalue scale of the operator (the symbol's minimum):
+        shifts differing by much less than ``scale + shift`` are one level.
+    max_levels : int, optional
+        Most levels (default 4).
+
+    Returns
+    -------
+    levels : list of float, m/Pa
+        ``sigma_j``, increasing; one value for a uniform shift.
+    weights : list of ndarray, shape (n, n), or None
+        ``phi_j``, non-negative, summing to one on every pixel; None for a
+        uniform shift.
+    """
+    if shift is None:
+        return [0.0], None
+    values = shift if face_mask is None else shift[face_mask]
+    s_min, s_max = float(values.min()), float(values.max())
+    # A spread below 1 % of the smallest (scale + shift) changes the operator's
+    # eigenvalues by less than 1 %: one level (the minimum) is as good.
+    if s_max - s_min <= _UNIFORM_SPREAD * (scale + s_min):
+        return [s_min], None
+    distinct = _few_distinct(values, max_levels)
+    if distinct is not None:
+        levels = [float(v) for v in distinct]
+        weights = [(shift == v).astype(float) for v in distinct]
+        return levels, weights
+    # Linear interpolation in log(scale + s) between evenly spaced nodes.
+    t = np.log(scale + np.clip(shift, s_min, s_max))
+    nodes = np.linspace(np.log(scale + s_min), np.log(scale + s_max), max_levels)
+    position = np.clip((t - nodes[0]) / (nodes[1] - nodes[0]), 0.0, max_levels - 1.0)
+    levels = [float(np.exp(v) - scale) for v in nodes]
+    weights = [np.clip(1.0 - np.abs(position - j), 0.0, None) for j in range(max_levels)]
+    return levels, weights
 
 
 class AMGPreconditioner:
@@ -239,6 +314,22 @@ class AMGPreconditioner:
         return np.where(active, z, 0.0)
 
 
+def _few_distinct(values, limit):
+    """The sorted distinct values of an array if there are at most ``limit``, else None.
+
+    One pass over the array per value found, cheaper than a sort for the few
+    levels of a phase-wise shift.
+    """
+    found = []
+    rest = values
+    while rest.size:
+        if len(found) == limit:
+            return None
+        found.append(rest[0])
+        rest = rest[rest != rest[0]]
+    return sorted(found)
+
+
 @register_preconditioner("jacobi")
 def _jacobi(halfspace, face_mask, shift):
     return JacobiPreconditioner(halfspace, shift)
@@ -261,15 +352,15 @@ def _amg(halfspace, face_mask, shift):
 
 @register_preconditioner("auto")
 def _auto(halfspace, face_mask, shift):
-    """Fourier, unless a non-uniform shift makes the operator nearly diagonal (Jacobi).
+    """Fourier (stitched by the shift's levels), unless the shift makes the operator diagonal.
 
-    A uniform shift keeps the Fourier symbol exact; a non-uniform one of at
-    least ``_DIAGONAL_DOMINANCE`` self-influences everywhere on the face
-    leaves little for the Fourier part to do.
+    A shift of at least ``_DIAGONAL_DOMINANCE`` times the largest eigenvalue
+    of ``K`` (bounded by the largest value of the padded symbol) on every
+    face pixel leaves ``K + diag(shift)`` within 10 % of its diagonal:
+    Jacobi, which costs nothing, is then as good.
     """
     if shift is not None:
-        s_face = shift[face_mask]
-        if (s_face.max() > s_face.min()
-                and s_face.min() >= _DIAGONAL_DOMINANCE * halfspace.self_influence):
+        if shift[face_mask].min() >= (_DIAGONAL_DOMINANCE
+                                      * float(halfspace.influence_symbol.max())):
             return _jacobi(halfspace, face_mask, shift)
     return _fourier(halfspace, face_mask, shift)

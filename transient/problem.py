@@ -24,7 +24,12 @@ from steady.solution import solve
 
 from .contact import solve_contact
 
-__all__ = ["StepFailure", "WearProblem"]
+__all__ = ["PressureHistory", "StepFailure", "WearProblem"]
+
+
+# Eigenvalues of the predictor's Gram matrix below this fraction of the
+# largest are dropped (the pressures of a run are nearly collinear).
+_GRAM_CUTOFF = 1e-12
 
 
 class StepFailure(RuntimeError):
@@ -135,6 +140,8 @@ class WearProblem:
         self.area = float(face_mask.sum()) * halfspace.h ** 2
         self.solves = 0
         self.iterations = 0
+        # (x0, K x0) of the warm start implicit() predicted, for the next solve.
+        self._predicted = None
 
     @classmethod
     def from_scene(cls, scene, *, n=None, **options):
@@ -258,7 +265,7 @@ class WearProblem:
         return 2.0 * lam_min / slope
 
     # -- contact solves ------------------------------------------------
-    def contact(self, height, *, shift=None, x0=None):
+    def contact(self, height, *, shift=None, x0=None, x0_displacement=None):
         """One contact solve, counted; raises :class:`StepFailure` on failure.
 
         Parameters
@@ -267,6 +274,9 @@ class WearProblem:
         shift : ndarray, shape (n, n), m/Pa, optional
         x0 : ndarray, shape (n, n), Pa, optional
             Warm start.
+        x0_displacement : ndarray, shape (n, n), m, optional
+            ``K x0``, if known (see :func:`transient.contact.solve_contact`);
+            default: the one :meth:`implicit` predicted along with ``x0``.
 
         Returns
         -------
@@ -274,9 +284,12 @@ class WearProblem:
         """
         if not np.all(np.isfinite(height[self.face_mask])):
             raise StepFailure("non-finite face height")
+        predicted, self._predicted = self._predicted, None
+        if x0_displacement is None and predicted is not None and predicted[0] is x0:
+            x0_displacement = predicted[1]
         res = solve_contact(self.halfspace, self.face_mask, height, self.normal_force,
-                            shift=shift, x0=x0, rtol=self.contact_rtol,
-                            maxiter=self.contact_maxiter)
+                            shift=shift, x0=x0, x0_displacement=x0_displacement,
+                            rtol=self.contact_rtol, maxiter=self.contact_maxiter)
         self.solves += 1
         self.iterations += int(res.nit)
         if not res.success:
@@ -287,7 +300,7 @@ class WearProblem:
         return res
 
     def _rebuild(self, height, c, res):
-        """Face and approach of an implicit stage ``w = height + c k P(w)^m``.
+        """Face, contact and ``K p`` of an implicit stage ``w = height + c k P(w)^m``.
 
         On the contact the face is rebuilt as ``d - K p`` with ``K p`` recomputed
         from the pressure (one FFT product) and ``d`` the mean of
@@ -299,14 +312,24 @@ class WearProblem:
         p = res.pressure
         contact = self.face_mask & (p > 0)
         w = height + c * self.rate(p)
-        if not contact.any():
-            return w, res
         kp = self.halfspace.displacement(p)
+        if not contact.any():
+            return w, res, kp
         d = float(np.mean((w + kp)[contact]))
         w = np.where(contact, d - kp, w)
-        return w, dataclasses.replace(res, approach=d)
+        return w, dataclasses.replace(res, approach=d), kp
 
-    def implicit(self, height, c, x0):
+    def _linearisation(self, height, c, p0):
+        """Shift and height of the contact problem linearised about ``p0`` (m != 1)."""
+        m = self.exponent
+        # Off the face the wear coefficient is 0; 1 keeps p^(m-1) finite there.
+        floor = self.pressure_floor * self.pixel_mean_pressure if m < 1.0 else 0.0
+        pl = np.where(self.face_mask, np.maximum(p0, floor), 1.0)
+        shift = c * self.coefficient_field * m * pl ** (m - 1.0)
+        h_lin = height + c * self.coefficient_field * (1.0 - m) * pl ** m
+        return shift, h_lin
+
+    def implicit(self, height, c, x0, *, history=None):
         """Solve ``w = height + c k P(w)^m`` for ``w``.
 
         Parameters
@@ -315,7 +338,12 @@ class WearProblem:
         c : float, m
             Sliding distance multiplying the implicit rate (``ds``, ``gamma ds``...).
         x0 : ndarray, shape (n, n), Pa
-            Pressure guess (warm start and first linearisation point).
+            Pressure guess (warm start and first linearisation point), used
+            when ``history`` holds no pressure.
+        history : PressureHistory, optional
+            Recent pressures of the run: the warm start is their Galerkin
+            combination (:meth:`PressureHistory.predict`), and the stage's
+            pressure joins them.
 
         Returns
         -------
@@ -323,23 +351,138 @@ class WearProblem:
         result : ContactResult
             The contact of the face ``w`` (its pressure is ``P(w)``).
         """
-        if self.exponent == 1.0:
-            shift = c * self.coefficient_field
-            res = self.contact(height, shift=shift, x0=x0)
-            return self._rebuild(height, c, res)
         m = self.exponent
-        pbar = self.pixel_mean_pressure
-        p0 = np.asarray(x0, dtype=float)
-        for _ in range(self.newton_maxiter):
-            # Off the face the wear coefficient is 0; 1 keeps p^(m-1) finite there.
-            floor = self.pressure_floor * pbar if m < 1.0 else 0.0
-            pl = np.where(self.face_mask, np.maximum(p0, floor), 1.0)
-            shift = c * self.coefficient_field * m * pl ** (m - 1.0)
-            h_lin = height + c * self.coefficient_field * (1.0 - m) * pl ** m
-            res = self.contact(h_lin, shift=shift, x0=p0)
-            change = float(np.max(np.abs(res.pressure - p0))) / pbar
-            p0 = res.pressure
-            if change <= self.newton_rtol:
-                return self._rebuild(height, c, res)
-        raise StepFailure(f"power-law Newton iteration did not converge in "
-                          f"{self.newton_maxiter} iterations (last change {change:.3g} pbar)")
+        if m == 1.0:
+            shift = c * self.coefficient_field
+            if history is not None and len(history):
+                x0, kx0 = history.predict(height, shift)
+                self._predicted = (x0, kx0)
+            res = self.contact(height, shift=shift, x0=x0)
+        else:
+            pbar = self.pixel_mean_pressure
+            p0 = np.asarray(x0, dtype=float)
+            if history is not None and len(history):
+                # The stage linearised about the newest pressure predicts the
+                # first linearisation point.
+                shift, h_lin = self._linearisation(height, c, history.newest())
+                p0, kx0 = history.predict(h_lin, shift)
+                self._predicted = (p0, kx0)
+            for _ in range(self.newton_maxiter):
+                shift, h_lin = self._linearisation(height, c, p0)
+                res = self.contact(h_lin, shift=shift, x0=p0)
+                change = float(np.max(np.abs(res.pressure - p0))) / pbar
+                p0 = res.pressure
+                if change <= self.newton_rtol:
+                    break
+            else:
+                raise StepFailure(f"power-law Newton iteration did not converge in "
+                                  f"{self.newton_maxiter} iterations (last change "
+                                  f"{change:.3g} pbar)")
+        w, res, kp = self._rebuild(height, c, res)
+        if history is not None:
+            history.push(res.pressure, kp)
+        return w, res
+
+
+class PressureHistory:
+    """The last few contact pressures of a run: the warm start of its implicit stages.
+
+    Holds up to ``size`` pressures ``v_j`` (newest first), each with its
+    elastic displacement ``K v_j`` (the product the stage computes anyway
+    when it rebuilds the face).  :meth:`predict` returns the combination
+    ``x = sum_j alpha_j v_j`` with ``sum_j alpha_j = 1`` (so ``x`` carries
+    the load) that minimises the energy of the next contact problem,
+
+        E(x) = x^T (K + diag(shift)) x / 2 + x^T h,
+
+    over that affine span: the Galerkin projection of its solution, at
+    least as close in the operator's norm as any single pressure or any
+    polynomial extrapolation of them in the sliding distance.  Only the
+    pressures are state (a checkpoint stores them, :meth:`pressures`);
+    ``K v_j`` is a deterministic function of them.
+
+    Parameters
+    ----------
+    problem : WearProblem
+    size : int, optional
+        Pressures kept (default 6).
+    pressures : ndarray, shape (k, n, n), Pa, optional
+        Initial content, newest first (a checkpoint's).
+    """
+
+    def __init__(self, problem, size=6, pressures=None):
+        if int(size) != size or size < 1:
+            raise ValueError(f"size must be a positive integer, got {size!r}")
+        self.problem = problem
+        self.size = int(size)
+        self._values = []
+        self._products = []
+        if pressures is not None:
+            for p in np.asarray(pressures, dtype=float)[::-1]:
+                self.push(p)
+
+    def __len__(self):
+        """Number of pressures held."""
+        return len(self._values)
+
+    def push(self, pressure, displacement=None):
+        """Add a pressure (Pa, shape (n, n)) and its ``K p`` (m; computed if None)."""
+        pressure = np.where(self.problem.face_mask, pressure, 0.0)
+        if displacement is None:
+            displacement = self.problem.halfspace.displacement(pressure)
+        self._values.insert(0, pressure.ravel())
+        self._products.insert(0, np.array(displacement, dtype=float).ravel())
+        del self._values[self.size:], self._products[self.size:]
+
+    def newest(self):
+        """The newest pressure, Pa, shape (n, n)."""
+        return self._values[0].reshape(self.problem.n, -1).copy()
+
+    def pressures(self):
+        """The pressures held, newest first, Pa, shape (k, n, n)."""
+        n = self.problem.n
+        return np.array(self._values).reshape(-1, n, n)
+
+    def predict(self, height, shift=None):
+        """Warm start of the contact problem ``(K + diag(shift)) p = d - height``.
+
+        Parameters
+        ----------
+        height : ndarray, shape (n, n), m
+        shift : ndarray, shape (n, n), m/Pa, optional
+
+        Returns
+        -------
+        pressure : ndarray, shape (n, n), Pa
+            The energy-minimising combination of the pressures held (see the
+            class docstring); negative values are left to the solver, which
+            drops them.
+        displacement : ndarray, shape (n, n), m
+            ``K`` times it on the whole grid (the same combination of the
+            stored products).
+        """
+        n = self.problem.n
+        v0, kv0 = self._values[0], self._products[0]
+        beta = None
+        if len(self) > 1:
+            face = self.problem.face_mask.ravel()
+            s = 0.0 if shift is None else np.where(face, shift.ravel(), 0.0)
+            # Differences from the newest pressure: x = v0 + D^T beta keeps the
+            # load, and the small Gram matrix free of cancellation.  The
+            # pressures vanish off the face, so the sums run over the face.
+            diff = np.array(self._values[1:]) - v0
+            kdiff = np.array(self._products[1:]) - kv0
+            # einsum rather than BLAS: a threaded BLAS call on a loaded
+            # machine can cost more than an FFT pair.
+            gram = np.einsum("ij,kj->ik", diff, kdiff + s * diff)
+            gram = 0.5 * (gram + gram.T)
+            gradient = kv0 + s * v0 + height.ravel()
+            rhs = np.einsum("ij,j->i", diff, gradient - gradient[face].mean())
+            w, q = np.linalg.eigh(gram)
+            keep = w > _GRAM_CUTOFF * max(float(w[-1]), 0.0)
+            if keep.any():
+                beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
+        if beta is None:
+            return v0.reshape(n, n).copy(), kv0.reshape(n, n).copy()
+        return ((v0 + np.einsum("i,ij->j", beta, diff)).reshape(n, n),
+                (kv0 + np.einsum("i,ij->j", beta, kdiff)).reshape(n, n))

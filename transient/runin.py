@@ -63,21 +63,32 @@ import numpy as np
 from steady import reference
 
 from .control import DIVERGENCE_RELIEF, StepController, StopTests
-from .diagnostics import face_rms_slope, masked_gradient, shape_rms, wear_rate_spread
-from .problem import StepFailure
+from .diagnostics import shape_rms, wear_rate_spread
+from .history import HistoryEstimator
+from .problem import PressureHistory, StepFailure
 from .stepping import StepState, get_scheme
 
 __all__ = ["HISTORY_UNITS", "RunOptions", "RunResult", "run_in"]
 
 logger = logging.getLogger(__name__)
 
-#: History datasets and their units.
+#: History datasets and their units (docs/model.md, "The run-in history").
 HISTORY_UNITS = {
     "distance": "m",
     "step": "m",
-    "rms_slope": "1",
+    "rms_slope": "1 (continuum rms slope of the worn face over the face, estimated)",
     "normalised_rms_slope": "1 (rms_slope / grad_f0)",
-    "rms_slope_fd": "1 (finite differences of the worn face)",
+    "rms_slope_error": "1 (estimated discretisation error of rms_slope)",
+    "rms_slope_source": "code (0: the initial face's own slope; 1: corrected estimate, full "
+                        "contact; 2: the same plus differences off the contact)",
+    "rms_slope_plain": "1 (plain pixel rms of the exact-kernel slope of K p, gap differences "
+                       "off the contact)",
+    "rms_slope_spatial_error": "1 (|S_n - S_m| from the same run on a coarser grid m; empty "
+                               "unless transient.spatial_error filled it)",
+    "rim_layer_pixels": "1 (width k E* s of the slowest-wearing rim phase's worn layer, in "
+                        "pixels)",
+    "rms_height": "m (rms of the face about its least-squares plane)",
+    "normalised_rms_height": "1 (rms_height / (grad_f0 a))",
     "spread": "1 ((max - min) / mean of k p^m over the contact)",
     "shape_rate": "1 (rms shape change / f* per s*)",
     "peak_pressure": "Pa",
@@ -95,7 +106,9 @@ class RunOptions:
     Attributes
     ----------
     scheme : str
-        Registered integrator (default ``"sdirk2"``).
+        Registered integrator (default ``"esdirk3"``, third order: the
+        cheapest for a history error of 1e-3, docs/benchmarks.md "Run-in
+        speed").
     tol : float
         Local error per step, rms over the face of the shape error in units of
         ``f*`` (default 1e-5).
@@ -200,7 +213,12 @@ class RunResult:
         State of the previous accepted point (for resuming).
     previous_step, next_step : float or None, m
     history : mapping of str to ndarray, shape (steps + 1,)
-        See :data:`HISTORY_UNITS`.
+        See :data:`HISTORY_UNITS` and :mod:`transient.history`: ``rms_slope``
+        is the continuum rms slope of the face with its ``rms_slope_error``
+        (at ``s = 0`` the initial face's own value), ``rms_slope_plain`` the
+        plain pixel value, ``rms_height`` the relief about the best plane;
+        ``rms_slope_spatial_error`` is empty (shape (0,)) unless
+        :meth:`transient.spatial_error.SpatialError.attach` filled it.
     snapshot_distance : ndarray, shape (k,), m
     snapshot_height : ndarray, shape (k, n, n), m
         ``worn depth + initial shape`` at the snapshots (NaN off the face).
@@ -209,6 +227,9 @@ class RunResult:
     reference_slope : float
         ``f*`` (m), ``s*`` (m), ``h / (k_max E*)`` (m), ``F`` over the
         face's pixel area (Pa), ``grad_f0`` (eq. 12).
+    pressure_history : ndarray, shape (k, n, n), Pa, or None
+        The last contact pressures, newest first: the warm start of the
+        next implicit stages (:class:`transient.problem.PressureHistory`).
     """
 
     status: str
@@ -239,6 +260,7 @@ class RunResult:
     fast_distance: float
     pixel_mean_pressure: float
     reference_slope: float
+    pressure_history: np.ndarray | None = None
 
     @property
     def success(self):
@@ -280,20 +302,24 @@ class _Run:
             problem.halfspace.E_star)
         self.history = {name: [] for name in HISTORY_UNITS}
         self.snap_d, self.snap_h, self.snap_p = [], [], []
+        self.pressures = None
 
     # -- recording -----------------------------------------------------
     def record(self, step, shape_rate):
-        """Append the current point to the history."""
+        """Append the current point to the history (:class:`transient.history.HistoryEstimator`)."""
         p = self.problem
         face_mask = p.face_mask
         hist = self.history
-        rms = face_rms_slope(p.halfspace, face_mask, self.height, self.pressure, self.approach)
+        if getattr(self, "estimator", None) is None:  # a resumed run builds it here
+            self.estimator = HistoryEstimator(p, self.initial_height)
+        figures = self.estimator.figures(self.s, self.height, self.pressure, self.approach)
         hist["distance"].append(self.s)
         hist["step"].append(step)
-        hist["rms_slope"].append(rms)
-        hist["normalised_rms_slope"].append(rms / self.grad_f0)
-        gx, gy = masked_gradient(self.height, face_mask, p.halfspace.h)
-        hist["rms_slope_fd"].append(float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask]))))
+        for name in ("rms_slope", "rms_slope_error", "rms_slope_source", "rms_slope_plain",
+                     "rim_layer_pixels", "rms_height"):
+            hist[name].append(figures[name])
+        hist["normalised_rms_slope"].append(figures["rms_slope"] / self.grad_f0)
+        hist["normalised_rms_height"].append(figures["rms_height"] / (self.grad_f0 * p.radius))
         hist["spread"].append(wear_rate_spread(p, self.pressure))
         hist["shape_rate"].append(shape_rate)
         hist["peak_pressure"].append(float(self.pressure.max()))
@@ -335,7 +361,8 @@ class _Run:
             depth_scale=self.f_star, run_in_distance=self.s_star,
             fast_distance=self.problem.fast_distance,
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
-            reference_slope=self.grad_f0)
+            reference_slope=self.grad_f0,
+            pressure_history=None if self.pressures is None else self.pressures.pressures())
 
     # -- set-up --------------------------------------------------------
     def start(self, initial_height):
@@ -348,6 +375,7 @@ class _Run:
         if not np.all(np.isfinite(h0[face_mask])):
             raise ValueError("initial_height must be finite on the face")
         self.initial_height = h0
+        self.estimator = HistoryEstimator(p, h0)
         self.offset = float(h0[face_mask].mean())
         self.height = np.where(face_mask, h0 - self.offset, 0.0)
         res = p.contact(self.height)
@@ -392,6 +420,8 @@ class _Run:
         self.snap_h = list(saved.snapshot_height)
         self.snap_p = list(saved.snapshot_pressure)
         self.snap_index = len(self.snap_d)
+        if saved.pressure_history is not None:
+            self.pressures = PressureHistory(p, pressures=saved.pressure_history)
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
@@ -422,9 +452,13 @@ class _Run:
         """One trial step and its scaled error; raises :class:`StepFailure`."""
         p = self.problem
         face_mask = p.face_mask
-        # A jump starts from the closed-form steady pressure, its limit.
+        if self.pressures is None:
+            self.pressures = PressureHistory(p, pressures=self.pressure[None])
+        # A jump starts from the closed-form steady pressure, its limit; every
+        # other stage from the Galerkin combination of the recent pressures.
         state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
-                          self.approach, self.prev_height, self.prev_rate, self.prev_step)
+                          self.approach, self.prev_height, self.prev_rate, self.prev_step,
+                          history=None if jump else self.pressures)
         trial = scheme.step(p, state, ds)
         err = shape_rms(trial.error, face_mask) / (self.options.tol * self.f_star)
         if not (math.isfinite(err) and np.all(np.isfinite(trial.height[face_mask]))):
@@ -465,7 +499,7 @@ class _Run:
         o = self.options
         controller = self.controller
         fixed = controller.fixed
-        last_checkpoint = time.monotonic()
+        last_checkpoint = None  # the first checkpoint follows the first accepted step
         consecutive = 0
         while True:
             stop = self.stop.check(self)
@@ -502,8 +536,9 @@ class _Run:
             self.accept(trial, ds)
             if on_step is not None:
                 on_step(self)
-            if on_checkpoint is not None and \
-                    time.monotonic() - last_checkpoint >= o.checkpoint_interval:
+            if on_checkpoint is not None and (
+                    last_checkpoint is None
+                    or time.monotonic() - last_checkpoint >= o.checkpoint_interval):
                 on_checkpoint(self.result("running", "in progress"))
                 last_checkpoint = time.monotonic()
 
@@ -556,8 +591,8 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     >>> result.status
     'steady'
     >>> slope = result.history["normalised_rms_slope"]
-    >>> print(f"rms slope {slope[0]:.3f} -> {slope[-1]:.3f} grad_f0")
-    rms slope 0.593 -> 1.092 grad_f0
+    >>> print(f"rms slope {slope[0]:.3f} -> {slope[1]:.3f} -> {slope[-1]:.3f} grad_f0")
+    rms slope 0.000 -> 0.863 -> 1.352 grad_f0
     >>> comparison = compare_with_steady(result, problem.solve_steady(), problem)
     >>> bool(comparison.face_error < 1e-6)
     True

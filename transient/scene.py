@@ -38,6 +38,8 @@ import math
 import pathlib
 import types
 
+from steady.command_line import one_line, shorten
+from steady.phases import npy_header
 from steady.scene import load_scene
 
 from .initial_face import INITIAL_FACES, initial_height
@@ -102,16 +104,22 @@ class InitialFace:
         ValueError
             A parameter out of range for this grid and punch, named.
         """
+        path = self.parameters.get("path")
         try:
+            if path is not None:
+                # The header first: a wrong shape is refused before the data are read.
+                npy_header(path, what="initial face file", shape=(n, n))
             return initial_height(self.kind, n, radius, **self.parameters)
+        except (OSError, EOFError) as err:  # the file changed since the scene was read
+            raise ValueError(f"[initial_face]: cannot read {str(path)!r}: {err}") from None
         except ValueError as err:
-            raise ValueError(f"[initial_face]: {err}") from None
+            raise ValueError(f"[initial_face]: {one_line(err, 300)}") from None
 
 
 def _float(table, key):
     value = table[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{key} must be a number, got {value!r}")
+        raise ValueError(f"{key} must be a number, got {shorten(value)}")
     return float(value)
 
 
@@ -135,7 +143,7 @@ def parse_transient(table, base_dir):
     """
     unknown = sorted(set(table) - _TRANSIENT_KEYS)
     if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r} (allowed: "
+        raise ValueError(f"unknown key {shorten(unknown[0])} (allowed: "
                          f"{', '.join(sorted(_TRANSIENT_KEYS))})")
     kw = {}
     for key in _FLOAT_KEYS & set(table):
@@ -143,22 +151,27 @@ def parse_transient(table, base_dir):
     for key in _INT_KEYS & set(table):
         value = table[key]
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ValueError(f"{key} must be an integer, got {value!r}")
+            raise ValueError(f"{key} must be an integer, got {shorten(value)}")
         kw[key] = value
     if "scheme" in table:
         if not isinstance(table["scheme"], str):
-            raise ValueError(f"scheme must be a string, got {table['scheme']!r}")
+            raise ValueError(f"scheme must be a string, got {shorten(table['scheme'])}")
         kw["scheme"] = table["scheme"]
     if "snapshots" in table:
         snaps = table["snapshots"]
         if not isinstance(snaps, list) or any(isinstance(v, bool) or not
                                               isinstance(v, (int, float)) for v in snaps):
-            raise ValueError(f"snapshots must be an array of distances in s*, got {snaps!r}")
+            raise ValueError(f"snapshots must be an array of distances in s*, got "
+                             f"{shorten(snaps)}")
         kw["snapshots"] = tuple(float(v) for v in snaps)
     contact_rtol = kw.pop("contact_rtol", 1e-10)
     if not (math.isfinite(contact_rtol) and 0 < contact_rtol < 1):
-        raise ValueError(f"contact_rtol must lie in (0, 1), got {contact_rtol!r}")
-    return TransientSettings(options=RunOptions(**kw), contact_rtol=contact_rtol)
+        raise ValueError(f"contact_rtol must lie in (0, 1), got {shorten(contact_rtol)}")
+    try:
+        options = RunOptions(**kw)
+    except ValueError as err:
+        raise ValueError(one_line(err, 300)) from None
+    return TransientSettings(options=options, contact_rtol=contact_rtol)
 
 
 def parse_initial_face(table, base_dir):
@@ -182,12 +195,12 @@ def parse_initial_face(table, base_dir):
     """
     kind = table.get("kind", "flat")
     if kind not in INITIAL_FACES:
-        raise ValueError(f"kind must be one of {sorted(INITIAL_FACES)}, got {kind!r}")
+        raise ValueError(f"kind must be one of {sorted(INITIAL_FACES)}, got {shorten(kind)}")
     spec = INITIAL_FACES[kind]
     allowed = set(spec.required) | set(spec.optional) | {"kind"}
     unknown = sorted(set(table) - allowed)
     if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r} for kind {kind!r} (allowed: "
+        raise ValueError(f"unknown key {shorten(unknown[0])} for kind {kind!r} (allowed: "
                          f"{', '.join(sorted(allowed))})")
     missing = sorted(set(spec.required) - set(table))
     if missing:
@@ -197,15 +210,14 @@ def parse_initial_face(table, base_dir):
         if key == "path":
             path = table[key]
             if not isinstance(path, str) or not path:
-                raise ValueError(f"path must be a non-empty string, got {path!r}")
+                raise ValueError(f"path must be a non-empty string, got {shorten(path)}")
             full = pathlib.Path(base_dir) / path
-            if not full.is_file():
-                raise ValueError(f"initial face file {str(full)!r} does not exist")
+            npy_header(full, what="initial face file")  # exists, is a .npy, not truncated
             parameters[key] = full
         else:
             value = _float(table, key)
             if not math.isfinite(value):
-                raise ValueError(f"{key} must be finite, got {value!r}")
+                raise ValueError(f"{key} must be finite, got {shorten(value)}")
             parameters[key] = value
     return InitialFace(kind, types.MappingProxyType(parameters))
 

@@ -70,6 +70,7 @@ import numpy as np
 
 __all__ = [
     "BDF2",
+    "ESDIRK3",
     "ExplicitEuler",
     "ImplicitEuler",
     "SCHEMES",
@@ -126,6 +127,10 @@ class StepState:
         ``k p^m`` there.
     previous_step : float, m, or None
         The step that led from there to here.
+    history : transient.problem.PressureHistory or None
+        Recent pressures of the run, the warm start of every implicit stage
+        (:meth:`transient.problem.WearProblem.implicit`); None: each stage
+        starts from the pressure before it.
     """
 
     height: np.ndarray
@@ -134,6 +139,7 @@ class StepState:
     previous_height: np.ndarray | None = None
     previous_rate: np.ndarray | None = None
     previous_step: float | None = None
+    history: object = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -259,7 +265,7 @@ class ImplicitEuler(Scheme):
         The error estimate is ``ds/2`` times the change of the rate over the step.
         """
         f0 = problem.rate(state.pressure)
-        height, res = problem.implicit(state.height, ds, state.pressure)
+        height, res = problem.implicit(state.height, ds, state.pressure, history=state.history)
         error = 0.5 * ds * (problem.rate(res.pressure) - f0)
         return _trial(height, res, error)
 
@@ -292,7 +298,7 @@ class BDF2(Scheme):
         base = ((1 + omega) ** 2 * state.height
                 - omega ** 2 * state.previous_height) / (1 + 2 * omega)
         beta = (1 + omega) / (1 + 2 * omega)
-        height, res = problem.implicit(base, beta * ds, state.pressure)
+        height, res = problem.implicit(base, beta * ds, state.pressure, history=state.history)
         predictor = state.height + ds * ((1 + 0.5 * omega) * f0
                                          - 0.5 * omega * state.previous_rate)
         error = (8.0 / 23.0) * (height - predictor)
@@ -317,9 +323,68 @@ class SDIRK2(Scheme):
     def step(self, problem, state, ds):
         """One SDIRK2 step, two shifted contact solves (see :meth:`Scheme.step`)."""
         g = self.gamma
-        _, res1 = problem.implicit(state.height, g * ds, state.pressure)
+        _, res1 = problem.implicit(state.height, g * ds, state.pressure, history=state.history)
         f1 = problem.rate(res1.pressure)
         base = state.height + (1 - g) * ds * f1
-        height, res2 = problem.implicit(base, g * ds, res1.pressure)
+        height, res2 = problem.implicit(base, g * ds, res1.pressure, history=state.history)
         error = g * ds * (problem.rate(res2.pressure) - f1)
         return _trial(height, res2, error)
+
+
+def _esdirk3_tableau():
+    """Kennedy & Carpenter's ESDIRK3(2)4L[2]SA: ``gamma``, ``A`` (4 x 4), ``b``, ``b_hat``.
+
+    ``gamma`` is the root of ``6 g^3 - 18 g^2 + 9 g - 1`` that makes the
+    method L-stable; ``c = (0, 2 gamma, 3/5, 1)``; the last row of ``A`` is
+    ``b`` (stiffly accurate); ``b_hat`` is the embedded second-order method
+    (A-stable, ``R(inf) = 0.218``).  Appl. Numer. Math. 44 (2003) 139-181,
+    doi:10.1016/S0168-9274(02)00138-1, table of ARK3(2)4L[2]SA.
+    """
+    g = 0.43586652150845899941601945
+    c3 = 0.6
+    a = np.zeros((4, 4))
+    a[1, :2] = g
+    a[2, 1] = c3 * (c3 - 2 * g) / (4 * g)
+    a[2, 0] = c3 - a[2, 1] - g
+    a[2, 2] = g
+    b3 = (1 - 6 * g + 6 * g * g) / (3 * c3 * (c3 - 2 * g))
+    b2 = (-2 + 3 * c3 + 6 * g * (1 - c3)) / (12 * g * (c3 - 2 * g))
+    a[3] = (1 - b2 - b3 - g, b2, b3, g)
+    b_hat = np.array([926040629867 / 8503851176844, -19534562426408 / 21341649249991,
+                      17036650473653 / 13401246206802, 4543788980243 / 8490594148910])
+    return g, a, a[3].copy(), b_hat
+
+
+@register_scheme
+class ESDIRK3(Scheme):
+    """Kennedy & Carpenter's ESDIRK3(2)4L[2]SA: third order, L-stable, stiffly accurate.
+
+    Four stages with ``c = (0, 2 gamma, 3/5, 1)``, ``gamma = 0.4358665``; the
+    first is explicit and is the rate of the accepted point, so a step costs
+    three shifted contact solves, all with the same shift ``gamma ds k``::
+
+        W_i = w + ds sum_{j<i} a_ij f(W_j) + gamma ds f(W_i),   i = 2, 3, 4,
+        w+ = W_4.
+
+    Stage order 2.  The embedded second-order weights ``b_hat`` give the
+    error estimate ``ds sum_i (b_i - b_hat_i) f(W_i)``, of order ``ds^3``.
+    """
+
+    name = "esdirk3"
+    order = 3
+    error_order = 2
+    solves_per_step = 3
+    gamma, a, b, b_hat = _esdirk3_tableau()
+
+    def step(self, problem, state, ds):
+        """One ESDIRK3 step, three shifted contact solves (see :meth:`Scheme.step`)."""
+        rates = [problem.rate(state.pressure)]
+        x0 = state.pressure
+        for i in range(1, 4):
+            base = state.height + ds * sum(self.a[i, j] * rates[j] for j in range(i))
+            height, res = problem.implicit(base, self.gamma * ds, x0, history=state.history)
+            rates.append(problem.rate(res.pressure))
+            x0 = res.pressure
+        weights = self.b - self.b_hat
+        error = ds * sum(weights[j] * rates[j] for j in range(4))
+        return _trial(height, res, error)

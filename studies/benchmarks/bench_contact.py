@@ -26,7 +26,8 @@ Run (about 40 min on 2 shared cores), in a separate environment with the peers::
     /work/peers-venv/bin/pip install -e . -r studies/benchmarks/requirements-peers.txt
     /work/peers-venv/bin/python studies/benchmarks/bench_contact.py --out bench_contact.h5
 
-``--sizes 32 --pc-sizes 32 --repeat 1 --skip-peers`` makes a smoke run.  A
+``--sizes 32 --pc-sizes 32 --repeat 1 --skip-peers`` makes a smoke run;
+``--preconditioners-only`` runs table 2 alone (no peers needed).  A
 peer that cannot be imported is skipped and the reason recorded.  Writes an HDF5 file (one group per
 table) and prints the tables in Markdown.
 """
@@ -50,6 +51,7 @@ from steady import reference
 from steady.grid import face_mask, pixel_size, polar
 from steady.halfspace import HalfSpace
 from steady.output import atomic_h5
+from steady.phases import Voronoi
 from transient.contact import solve_contact
 
 # -- parameters -------------------------------------------------------------------
@@ -65,7 +67,13 @@ ACCURACY = 1e-7      # relative agreement of the approach with the reference
 OUR_RTOL = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
 CM_PENTOL = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)   # times the approach
 TAMAAS_TOL = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
-SHIFTS = {"shift 1 K00": 1.0, "shift 100 K00, two phases 1:0.01": 100.0}
+# Shifted scenes: label -> (shift on phase 1 in units of K00, phase map, shift
+# ratio of phase 0 to phase 1).  "pixels": 40 % of the pixels drawn at random
+# (seed 3571) are phase 1; "voronoi": the run-in scene's map (400 seeds, 30 %
+# phase 1, seed 2029), as in an implicit stage of studies/scenes/voronoi_transient.toml.
+SHIFTS = {"shift 1 K00": (1.0, None, 1.0),
+          "shift 100 K00, two phases 1:0.01": (100.0, "pixels", 1e-2),
+          "shift 10 K00, Voronoi 1:0.1": (10.0, "voronoi", 1e-1)}
 
 logger = logging.getLogger("bench_contact")
 
@@ -356,13 +364,16 @@ def preconditioner_table(sizes, repeat):
     for n in sizes:
         hs = CountingHalfSpace(n, pixel_size(n, RADIUS), E_STAR, workers=1)
         unit = fft_unit(hs)
-        phase = np.random.default_rng(3571).random((n, n)) < 0.4
+        phases = {"pixels": np.random.default_rng(3571).random((n, n)) < 0.4,
+                  # (fewer seeds on grids below the 400 seeds' minimum, n = 40)
+                  "voronoi": Voronoi(min(400, (n // 2) ** 2), (0.7, 0.3), 2029).labels(n) == 1}
         scenes = [("flat", None), ("crowned", None)] + list(SHIFTS.items())
-        for label, magnitude in scenes:
+        for label, spec in scenes:
             face, height, force, _ = case_setup("crowned" if label == "crowned" else "flat", n)
             shift = None
-            if magnitude is not None:
-                ratio = np.where(phase, 1.0, 1e-2) if "two phases" in label else 1.0
+            if spec is not None:
+                magnitude, kind, low = spec
+                ratio = 1.0 if kind is None else np.where(phases[kind], 1.0, low)
                 shift = hs.self_influence * magnitude * ratio * np.ones((n, n))
 
             def approach(pressure, hs=hs, shift=shift, face=face, height=height):
@@ -463,11 +474,14 @@ def main(argv=None):
     parser.add_argument("--repeat", type=int, default=REPEAT)
     parser.add_argument("--out", default="bench_contact.h5")
     parser.add_argument("--skip-peers", action="store_true")
+    parser.add_argument("--preconditioners-only", action="store_true",
+                        help="only table 2 (no peers, no table 1)")
     args = parser.parse_args(argv)
     # One thread for every code; set before the peers load their FFT libraries.
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
-    found, missing = ({}, {"all": "skipped"}) if args.skip_peers else peers()
+    skip = args.skip_peers or args.preconditioners_only
+    found, missing = ({}, {"all": "skipped"}) if skip else peers()
     meta = dict(python=platform.python_version(), numpy=np.__version__,
                 missing_peers=repr(missing), same_operator=repr(check_same_operator()),
                 accuracy=ACCURACY, repeat=args.repeat)
@@ -478,8 +492,9 @@ def main(argv=None):
         except AttributeError:
             pass
     print("meta:", meta)
-    peer_rows = peer_table(args.sizes, args.repeat, found)
-    print(markdown_peers(peer_rows, found))
+    peer_rows = [] if args.preconditioners_only else peer_table(args.sizes, args.repeat, found)
+    if peer_rows:
+        print(markdown_peers(peer_rows, found))
     pc_rows = preconditioner_table(args.pc_sizes, args.repeat)
     print(markdown_preconditioners(pc_rows))
     write_h5(args.out, peer_rows, pc_rows, meta)

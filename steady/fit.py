@@ -1,0 +1,932 @@
+"""Wear ratios from a measured worn face: the inverse problem of eq. 7 and 9.
+
+The steady face is linear in the phase pressures,
+``f_inf = sum_i p_i K chi_i`` (eq. 9), and in the steady state
+``k_i p_i^m = C`` (eq. 3, 7), so the wear ratios follow from the pressures:
+``k_i / k_ref = (p_ref / p_i)^m``.  A measured height map ``z`` of a worn
+face is fitted by linear least squares,
+
+    z(x, y) = sum_i p_i F_i(x - s_x, y - s_y) + c_0 + c_1 (x - s_x) + c_2 (y - s_y),
+
+with ``F_i = K chi_i`` the face under unit pressure on phase ``i``
+(:class:`FaceModel`, the per-phase faces of :class:`steady.basis.PhaseBasis`),
+a free offset ``c_0`` and tilt ``(c_1, c_2)``, and ``s`` the position of the
+punch axis in the map (zero, given, or searched).  The pressures are free:
+the load ``sum_i A_i p_i = F_N`` is not imposed, so the ratios do not depend
+on ``E*`` or ``F_N``, which only scale the relief; the fitted load
+``sum_i A_i p_i`` over ``F_N`` (:attr:`FitResult.load_scale`) is reported as
+a consistency figure (1 when the scene's ``E*`` and ``F_N`` explain the
+relief's amplitude).
+
+Confidence intervals come from the least-squares covariance with the
+residual treated as a stationary, spatially correlated field: its
+autocovariance is estimated from the residual map itself and enters the
+sandwich covariance ``(X^T X)^-1 X^T Sigma X (X^T X)^-1``; the effective
+number of independent samples sets the degrees of freedom of the t
+quantile.  Ratio intervals are Fieller's intervals for ``p_ref / p_i``
+(exact for a ratio of two normal estimates, unbounded when the denominator
+is not distinguished from zero), raised to the power ``m``.  See
+``docs/model.md``, "Wear ratios from a measured face".
+
+Command line (``runin-fit``, or ``python -m steady.fit``)::
+
+    runin-fit SCENE.toml MEASURED -o FIT.h5 [--pixel-size DX [DY]] [--height-scale S]
+              [--plot FIT.png] [--shift] [--max-shift M] [--rim-margin M] [--n N]
+              [--reference-phase I] [--confidence C] [--force] [-v]
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import pathlib
+import sys
+
+import numpy as np
+from scipy import fft, ndimage, optimize, signal, special
+
+from .command_line import (
+    EXIT_FAILED,
+    EXIT_OK,
+    ArgumentParser,
+    prepare_output,
+    program_name,
+    run_command,
+)
+from .fit_files import MeasuredFace, plot_fit, read_measured, write_fit
+from .grid import pixel_size
+from .halfspace import HalfSpace
+from .phases import extend_off_face, validate_labels
+from .scene import load_scene
+
+__all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceModel", "FitResult", "build_parser", "fit_face",
+           "fit_scene", "main"]
+
+logger = logging.getLogger(__name__)
+
+#: A phase must cover at least this many fitted pixels to be determined.
+DEFAULT_MIN_PHASE_PIXELS = 10
+
+#: A phase face whose part independent of the other columns (sine of its
+#: angle to their span) is below this is not determined by the data.
+_COLLINEAR_TOL = 1e-6
+
+#: Default search radius of the lateral shift, in units of the punch radius.
+_DEFAULT_MAX_SHIFT = 0.05
+
+#: Pixels on which the grid stage of the shift search runs (at most).
+_SEARCH_PIXELS = 8000
+
+#: Fewest measured pixels across the fitted disk.
+_MIN_PIXELS_ACROSS = 8
+
+
+def _positive(value, name, unit, *, zero=False):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not (math.isfinite(v) and (v >= 0 if zero else v > 0)):
+        kind = "non-negative" if zero else "positive"
+        raise ValueError(f"{name} must be a {kind} finite number ({unit}), got {value!r}")
+    return v
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FitResult:
+    """Wear ratios that best explain a measured worn face.
+
+    Attributes
+    ----------
+    ratios : ndarray, shape (P,)
+        ``k_i / k_ref = (p_ref / p_i)^m``; 1 for the reference phase, NaN
+        where a fitted pressure is not positive.
+    ratio_intervals : ndarray, shape (P, 2)
+        Confidence interval of each ratio at level ``confidence`` (Fieller);
+        the upper end is ``inf`` when phase ``i``'s pressure is not
+        distinguished from zero (the face gives only a lower bound), the
+        lower end 0 when the reference's is not.
+    phase_pressures : ndarray, shape (P,), Pa
+        Fitted steady pressure of each phase, at the scene's ``E*``.
+    phase_pressure_errors : ndarray, shape (P,), Pa
+        Their standard errors.
+    pressure_covariance : ndarray, shape (P, P), Pa^2
+    offset : float, m
+        Fitted height of the plane at the punch axis.
+    tilt : tuple of float, dimensionless
+        ``(dz/dx, dz/dy)`` of the fitted plane.
+    shift : tuple of float, m
+        Position of the punch axis from the map's centre (given or found).
+    residual_rms : float, m
+        Rms of measured minus fitted over the fitted pixels.
+    relief : float, m
+        Max minus min of the fitted face without its plane, over the fitted
+        pixels: the scale the residual compares with.
+    samples : int
+        Pixels in the fit.
+    effective_samples : float
+        Independent samples: ``samples`` over the residual's correlation
+        area in pixels (equal to ``samples`` for white noise).
+    correlation_length : float, m
+        Radius at which the residual's radially averaged autocorrelation
+        falls to ``1/e`` (below one pixel for white noise).
+    degrees_of_freedom : float
+        ``effective_samples - (P + 3)``: of the t quantile of the intervals.
+    load_scale : float
+        ``sum_i A_i p_i / F_N`` (areas of the model's face): 1 when the
+        scene's load and modulus explain the relief's amplitude.
+    load_scale_interval : tuple of float
+    implied_normal_force : float, N
+        ``sum_i A_i p_i``: the load that explains the relief at the scene's ``E*``.
+    implied_E_star : float, Pa
+        ``E* / load_scale``: the modulus that explains it at the scene's load.
+    confidence : float
+    reference_phase : int
+    exponent : float
+        ``m`` of the wear law.
+    normal_force : float, N
+    E_star : float, Pa
+    radius : float, m
+    n : int
+        Pixels across the diameter of the model grid.
+    success : bool
+        All fitted phase pressures are positive.
+    message : str
+        Why the fit failed, and notes (unbounded intervals, a shift at the
+        search limit, a residual correlated over the whole window).
+    measured : MeasuredFace
+    fitted : ndarray, shape (nx, ny), m
+        Fitted face with its plane on the measured grid; NaN off the face.
+    residual : ndarray, shape (nx, ny), m
+        Measured minus fitted on the fitted pixels; NaN elsewhere.
+    fit_mask : ndarray of bool, shape (nx, ny)
+        The fitted pixels: finite, within ``a - rim_margin`` of the axis.
+    phase : ndarray, shape (nx, ny), int
+        Phase at each measured pixel, -1 off the face.
+    scene_ratios : ndarray, shape (P,), or None
+        The ratios of the scene's wear coefficients, for comparison (not
+        used by the fit).
+    """
+
+    ratios: np.ndarray
+    ratio_intervals: np.ndarray
+    phase_pressures: np.ndarray
+    phase_pressure_errors: np.ndarray
+    pressure_covariance: np.ndarray
+    offset: float
+    tilt: tuple
+    shift: tuple
+    residual_rms: float
+    relief: float
+    samples: int
+    effective_samples: float
+    correlation_length: float
+    degrees_of_freedom: float
+    load_scale: float
+    load_scale_interval: tuple
+    implied_normal_force: float
+    implied_E_star: float
+    confidence: float
+    reference_phase: int
+    exponent: float
+    normal_force: float
+    E_star: float
+    radius: float
+    n: int
+    success: bool
+    message: str
+    measured: MeasuredFace
+    fitted: np.ndarray
+    residual: np.ndarray
+    fit_mask: np.ndarray
+    phase: np.ndarray
+    scene_ratios: np.ndarray | None = None
+
+    @property
+    def n_phases(self):
+        """Number of phases ``P``."""
+        return self.phase_pressures.shape[0]
+
+    def summary_lines(self):
+        """Short human-readable summary, a list of lines."""
+        ref = self.reference_phase
+        level = f"{100 * self.confidence:g} %"
+        lines = [f"wear ratios k_i/k_{ref} ({level} intervals)"]
+        for i in range(self.n_phases):
+            if i == ref:
+                continue
+            lo, hi = self.ratio_intervals[i]
+            upper = "inf" if not math.isfinite(hi) else f"{hi:.4g}"
+            scene = ("" if self.scene_ratios is None
+                     else f"   (scene: {self.scene_ratios[i]:.4g})")
+            lines.append(f"  phase {i}        {self.ratios[i]:.4g}  [{lo:.4g}, {upper}]{scene}")
+        pressures = ", ".join(f"{p:.4g} +- {e:.2g}" for p, e in
+                              zip(self.phase_pressures, self.phase_pressure_errors, strict=True))
+        lo, hi = self.load_scale_interval
+        lines += [
+            f"phase pressures  {pressures} Pa",
+            f"residual rms     {self.residual_rms:.4g} m  (relief {self.relief:.4g} m)",
+            f"samples          {self.samples} pixels, {self.effective_samples:.4g} effective "
+            f"(correlation length {self.correlation_length:.3g} m)",
+            f"load scale       {self.load_scale:.4g}  [{lo:.4g}, {hi:.4g}]  (implied load "
+            f"{self.implied_normal_force:.4g} N at E* = {self.E_star:.4g} Pa, or E* = "
+            f"{self.implied_E_star:.4g} Pa at {self.normal_force:.4g} N)",
+            f"offset, tilt     {self.offset:.4g} m, ({self.tilt[0]:.3g}, {self.tilt[1]:.3g})",
+            f"shift            ({self.shift[0]:.4g}, {self.shift[1]:.4g}) m",
+        ]
+        if self.message:
+            lines.append(("note             " if self.success else "fit failed       ")
+                         + self.message)
+        return lines
+
+
+def _fieller(a, b, vaa, vbb, vab, t):
+    """Confidence interval of ``a / b`` on ``(0, inf)`` (Fieller's theorem).
+
+    The set ``{r : (a - r b)^2 <= t^2 (vaa - 2 r vab + r^2 vbb)}``,
+    intersected with the positive reals; its hull when that is two pieces.
+    """
+    qa = b * b - t * t * vbb
+    qb = a * b - t * t * vab
+    qc = a * a - t * t * vaa
+    disc = qb * qb - qa * qc
+    if qa > 0:
+        root = math.sqrt(max(disc, 0.0))
+        lo, hi = (qb - root) / qa, (qb + root) / qa
+        return max(lo, 0.0), hi if hi > 0 else 0.0
+    # Denominator not distinguished from zero: the set is unbounded.
+    if disc <= 0 or qa == 0:
+        return 0.0, math.inf
+    root = math.sqrt(disc)
+    lo, hi = sorted(((qb - root) / qa, (qb + root) / qa))
+    if lo > 0:
+        return 0.0, math.inf
+    return max(hi, 0.0), math.inf
+
+
+def _ring_profile(values, radius, step):
+    """Mean of ``values`` over rings of width ``step`` (ring 0 the centre alone)."""
+    ring = np.floor(radius / step + 0.5).astype(int)
+    count = np.bincount(ring.ravel())
+    total = np.bincount(ring.ravel(), weights=values.ravel())
+    return np.divide(total, count, out=np.full(count.shape, np.nan), where=count > 0), ring
+
+
+class _Covariance:
+    """Autocovariance of a residual map, corrected for the fit, and the sandwich meat.
+
+    The noise is treated as a stationary field with autocovariance ``C(l)``
+    at lag ``l``.  The estimate from the residual,
+    ``C_hat(l) = mean of e(r) e(r + l)`` over the pairs of fitted pixels
+    (zero-padded FFTs), is biased low: the fit absorbs the part of the noise
+    that resembles its columns, so ``E[e e^T] = M Sigma M`` with
+    ``M = I - X (X^T X)^-1 X^T``.  The expected bias is linear in ``C`` and
+    costs a few FFTs (the pair sums of ``H Sigma``, ``Sigma H`` and
+    ``H Sigma H``); ``C = C_hat + bias(C)`` is solved by fixed-point
+    iteration.  ``C`` is summed over a window: the lags out to the first
+    ring where the radial average of the corrected ``C`` is not positive
+    (beyond it the estimate is noise), at most ``max_radius``.
+
+    Attributes
+    ----------
+    meat : ndarray, shape (k, k)
+        ``X^T Sigma X`` for the columns given.
+    correlation_area : float
+        ``sum_l C(l) / C(0)`` over the window, pixels (at least 1).
+    length : float, m
+        Radius where the ring average of ``C / C(0)`` falls to ``1/e``.
+    window_limited : bool
+        The corrected ``C`` stays positive out to ``max_radius``.
+    """
+
+    def __init__(self, residual, mask, pixel, max_radius, columns, *, max_iterations=50,
+                 rtol=1e-4):
+        nx, ny = mask.shape
+        dx, dy = pixel
+        self._mask = mask
+        self._columns = columns
+        self._shape = (fft.next_fast_len(2 * nx, real=True),
+                       fft.next_fast_len(2 * ny, real=True))
+        lx_max = min(nx - 1, max(1, int(math.ceil(max_radius / dx))))
+        ly_max = min(ny - 1, max(1, int(math.ceil(max_radius / dy))))
+        lx = np.arange(-lx_max, lx_max + 1)
+        ly = np.arange(-ly_max, ly_max + 1)
+        self._index = np.ix_(lx % self._shape[0], ly % self._shape[1])
+        self._centre = (lx_max, ly_max)
+        self._radius = np.hypot(lx[:, None] * dx, ly[None, :] * dy)
+        self._step = min(dx, dy)
+        self._max_radius = max_radius
+        e_q = self._rfft(np.where(mask, residual, 0.0))
+        m_q = self._rfft(mask.astype(float))
+        pairs = np.rint(self._lags(m_q.conj() * m_q))
+        self._pairs = np.where(pairs > 0.5, pairs, np.inf)
+        c_hat = self._lags(e_q.conj() * e_q) / self._pairs
+        self.iterations, self.converged, self.window_limited = 0, True, False
+        if not c_hat[self._centre] > 0:  # an exact fit: no noise to speak of
+            c = np.zeros_like(c_hat)
+        else:
+            self._g = np.linalg.pinv(columns.T @ columns)
+            self._columns_q = [self._rfft(self._image(col)) for col in columns.T]
+            c = self._windowed(c_hat)
+            self.converged = False
+            for self.iterations in range(1, max_iterations + 1):  # noqa: B007
+                updated = self._windowed(c_hat + self._bias(c))
+                change = abs(updated.sum() - c.sum()) / abs(updated.sum())
+                c = updated
+                if change < rtol:
+                    self.converged = True
+                    break
+        self.kernel = c
+        self.meat = self._columns.T @ self._apply(c)
+        self.meat = 0.5 * (self.meat + self.meat.T)
+        c0 = c[self._centre]
+        self.correlation_area = max(float(c.sum() / c0), 1.0) if c0 > 0 else 1.0
+        self.length = self._length(c) if c0 > 0 else 0.0
+
+    def _windowed(self, c):
+        """``c`` inside the window (rings before the first non-positive one), zero outside."""
+        rho, ring = _ring_profile(c / c[self._centre], self._radius, self._step)
+        non_positive = np.flatnonzero(~(rho[1:] > 0)) + 1
+        self.window_limited = non_positive.size == 0
+        stop = int(non_positive[0]) if non_positive.size else rho.size
+        return np.where((ring < stop) & (self._radius <= self._max_radius), c, 0.0)
+
+    def _length(self, c):
+        """Radius where the ring average of ``c / c(0)`` falls to ``1/e``, m."""
+        rho, _ = _ring_profile(c / c[self._centre], self._radius, self._step)
+        rho = np.nan_to_num(rho)
+        level = math.exp(-1.0)
+        below = np.flatnonzero(rho[1:] < level)
+        if below.size == 0:
+            return (rho.size - 1) * self._step
+        j = int(below[0]) + 1
+        return self._step * (j - 1 + (rho[j - 1] - level) / (rho[j - 1] - rho[j]))
+
+    def _rfft(self, image):
+        return fft.rfft2(image, self._shape)
+
+    def _lags(self, spectrum):
+        return fft.irfft2(spectrum, self._shape)[self._index]
+
+    def _image(self, values):
+        image = np.zeros(self._mask.shape)
+        image[self._mask] = values
+        return image
+
+    def _apply(self, c):
+        """``Sigma X`` on the fitted pixels for the kernel ``c``, shape (N, k)."""
+        # Only the window's bounding box, centred, enters the convolution.
+        ix, iy = np.nonzero(c)
+        cx, cy = self._centre
+        rx = int(np.max(np.abs(ix - cx))) if ix.size else 0
+        ry = int(np.max(np.abs(iy - cy))) if iy.size else 0
+        kernel = c[cx - rx:cx + rx + 1, cy - ry:cy + ry + 1]
+        # C is even in the lag, so convolution and correlation agree.
+        return np.column_stack([signal.fftconvolve(self._image(col), kernel,
+                                                   mode="same")[self._mask]
+                                for col in self._columns.T])
+
+    def _bias(self, c):
+        """``C - E[C_hat]`` at every lag for the noise autocovariance ``c``."""
+        sigma_x = self._apply(c)
+        meat = self._columns.T @ sigma_x
+        g = self._g
+        y = sigma_x @ g                                        # Sigma X G
+        z = self._columns @ (g @ (0.5 * (meat + meat.T)) @ g)  # X G B G
+        h_sigma = np.zeros(self._columns_q[0].shape, dtype=complex)
+        h_sigma_h = np.zeros_like(h_sigma)
+        for a, x_q in enumerate(self._columns_q):
+            h_sigma += x_q.conj() * self._rfft(self._image(y[:, a]))
+            h_sigma_h += self._rfft(self._image(z[:, a])).conj() * x_q
+        # Pair sums over (r, r + l) of H Sigma, Sigma H (the same at -l) and H Sigma H.
+        s1 = self._lags(h_sigma)
+        s2 = self._lags(h_sigma_h)
+        return (s1 + s1[::-1, ::-1] - s2) / self._pairs
+
+
+class FaceModel:
+    """Per-phase faces of a phase map, sampled anywhere on the face.
+
+    The operator of the fit: the faces ``F_i = K chi_i`` under unit pressure
+    on each phase (m/Pa) are computed once on the model grid, then sampled
+    at the measured pixels by cubic-spline interpolation (the faces are
+    continuous; only their slope is log-singular at phase boundaries).
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n, n), int
+        Phase index on the face, -1 off it (:mod:`steady.phases`).
+    radius : float, m
+        Punch radius ``a``; the grid covers ``[-a, a]^2``.
+    E_star : float, Pa
+    normal_force : float, N
+        Only enters the consistency figure :attr:`FitResult.load_scale`.
+    exponent : float, optional
+        ``m`` of the wear law (default 1): ``k_i / k_ref = (p_ref / p_i)^m``.
+    wear_coefficients : array_like, shape (P,), optional
+        The scene's ``k_i``, reported beside the fit (not used by it).
+
+    Notes
+    -----
+    Cost: ``P`` half-space products on the ``n x n`` grid.  Build one model
+    and call :meth:`fit` for many measured faces.
+    """
+
+    def __init__(self, labels, radius, E_star, normal_force, *, exponent=1.0,
+                 wear_coefficients=None):
+        labels = np.asarray(labels)
+        if labels.ndim != 2 or labels.shape[0] != labels.shape[1]:
+            raise ValueError(f"labels must be a square array, got shape {labels.shape}")
+        if not np.issubdtype(labels.dtype, np.integer):
+            raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
+        self.radius = _positive(radius, "radius", "m")
+        self.E_star = _positive(E_star, "E_star", "Pa")
+        self.normal_force = _positive(normal_force, "normal_force", "N")
+        self.exponent = _positive(exponent, "exponent", "dimensionless")
+        self.n = labels.shape[0]
+        self.n_phases = int(labels.max()) + 1
+        self.counts = validate_labels(labels, self.n_phases)
+        self.labels = labels
+        self.h = pixel_size(self.n, self.radius)
+        self.areas = self.counts * self.h**2
+        self.wear_coefficients = None
+        if wear_coefficients is not None:
+            k = np.asarray(wear_coefficients, dtype=float)
+            if k.shape != (self.n_phases,):
+                raise ValueError(f"need {self.n_phases} wear coefficients, got {k.tolist()}")
+            self.wear_coefficients = k
+        hs = HalfSpace(self.n, self.h, self.E_star)
+        faces = np.array([hs.displacement((labels == i).astype(float))
+                          for i in range(self.n_phases)])
+        faces.flags.writeable = False
+        #: ``F_i = K chi_i`` on the model grid, shape (P, n, n), m/Pa.
+        self.faces = faces
+        self._splines = [ndimage.spline_filter(f, order=3, mode="nearest") for f in faces]
+        self._filled = extend_off_face(labels)
+
+    @classmethod
+    def from_scene(cls, scene, *, n=None):
+        """The model of a :class:`steady.scene.Scene`, rasterised at ``n`` (default ``scene.n``)."""
+        n = scene.n if n is None else n
+        return cls(scene.geometry.labels(n), scene.radius, scene.E_star, scene.normal_force,
+                   exponent=scene.exponent, wear_coefficients=scene.wear_coefficients)
+
+    def _index(self, x):
+        return (np.asarray(x, dtype=float) + self.radius) / self.h - 0.5
+
+    def faces_at(self, x, y):
+        """Per-phase faces at points (cubic-spline interpolation).
+
+        Parameters
+        ----------
+        x, y : ndarray, shape (N,), m
+            Coordinates from the punch axis.
+
+        Returns
+        -------
+        ndarray, shape (P, N), m/Pa
+        """
+        coords = np.array([self._index(x), self._index(y)])
+        return np.array([ndimage.map_coordinates(s, coords, order=3, mode="nearest",
+                                                 prefilter=False) for s in self._splines])
+
+    def phases_at(self, x, y):
+        """Phase at points: the nearest model pixel's, -1 off the disk of radius ``a``.
+
+        Parameters
+        ----------
+        x, y : ndarray, shape (N,), m
+
+        Returns
+        -------
+        ndarray, shape (N,), int
+        """
+        i = np.clip(np.rint(self._index(x)).astype(int), 0, self.n - 1)
+        j = np.clip(np.rint(self._index(y)).astype(int), 0, self.n - 1)
+        return np.where(np.hypot(x, y) < self.radius, self._filled[i, j], -1)
+
+    def _design(self, x, y, shift):
+        """Design columns ``F_0 .. F_{P-1}, 1, x - s_x, y - s_y``, shape (N, P + 3)."""
+        u, v = x - shift[0], y - shift[1]
+        return np.column_stack([*self.faces_at(u, v), np.ones_like(u), u, v])
+
+    def _check_determined(self, columns, phases, min_pixels):
+        """Raise ``ValueError`` naming a phase the fitted pixels cannot determine."""
+        counts = np.bincount(phases[phases >= 0], minlength=self.n_phases)
+        n_fit = phases.size
+        for i, c in enumerate(counts):
+            if c < min_pixels:
+                raise ValueError(f"phase {i} covers {c} of the {n_fit} fitted pixels (at least "
+                                 f"{min_pixels} needed): its wear coefficient is not determined "
+                                 f"(masked by NaN holes or the rim margin?)")
+        scaled = columns / np.sqrt(np.mean(columns**2, axis=0))
+        for i in range(self.n_phases):
+            others = np.delete(scaled, i, axis=1)
+            coef = np.linalg.lstsq(others, scaled[:, i], rcond=None)[0]
+            independent = np.linalg.norm(scaled[:, i] - others @ coef) / math.sqrt(n_fit)
+            if independent < _COLLINEAR_TOL:
+                raise ValueError(f"phase {i}: its face is a combination of the other phases' "
+                                 f"faces and the plane on the fitted pixels (independent part "
+                                 f"{independent:.1e}); its wear coefficient is not determined")
+
+    @staticmethod
+    def _solve(columns, z):
+        scale = np.sqrt(np.mean(columns**2, axis=0))
+        scaled = columns / scale
+        coef = np.linalg.lstsq(scaled, z, rcond=None)[0]
+        return coef / scale, scaled, scale
+
+    def _search_shift(self, x, y, z, start, max_shift):
+        """Shift minimising the residual: a grid of model-pixel steps, then Nelder-Mead.
+
+        The grid runs on at most ``_SEARCH_PIXELS`` of the fitted pixels
+        (every ``s``-th), the refinement on all of them.
+        """
+        def rss(offset, x, y, z):
+            if np.hypot(*offset) > max_shift * (1 + 1e-9):
+                return math.inf
+            columns = self._design(x, y, start + offset)
+            beta = self._solve(columns, z)[0]
+            r = z - columns @ beta
+            return float(r @ r)
+
+        step = min(self.h, max_shift)
+        if step == 0.0:
+            return start, False
+        m = int(math.ceil(max_shift / step - 1e-9))
+        grid = [np.array([i * step, j * step]) for i in range(-m, m + 1)
+                for j in range(-m, m + 1) if math.hypot(i, j) * step <= max_shift * (1 + 1e-9)]
+        stride = max(1, z.size // _SEARCH_PIXELS)
+        sample = (x[::stride], y[::stride], z[::stride])
+        best = grid[int(np.argmin([rss(g, *sample) for g in grid]))]
+        reference = max(rss(best, x, y, z), np.finfo(float).tiny)
+        simplex = np.array([best, best + [0.5 * step, 0.0], best + [0.0, 0.5 * step]])
+        found = optimize.minimize(lambda o: rss(o, x, y, z) / reference, best,
+                                  method="Nelder-Mead",
+                                  options={"initial_simplex": simplex, "xatol": 1e-2 * self.h,
+                                           "fatol": 1e-9, "maxiter": 200})
+        offset = found.x if found.fun <= 1.0 else best
+        at_limit = np.hypot(*offset) > max_shift - 0.5 * step
+        logger.info("shift search: %d grid points on %d pixels, %d refinement steps, offset "
+                    "(%.3g, %.3g) m", len(grid), sample[2].size, found.nit, *offset)
+        return start + offset, bool(at_limit)
+
+    def fit(self, measured, *, shift=(0.0, 0.0), search_shift=False, max_shift=None,
+            rim_margin=0.0, reference_phase=0, confidence=0.95,
+            min_phase_pixels=DEFAULT_MIN_PHASE_PIXELS):
+        """Fit the wear ratios to a measured face; see :func:`fit_face`."""
+        if not isinstance(measured, MeasuredFace):
+            raise ValueError(f"measured must be a MeasuredFace, got {type(measured).__name__}")
+        a = self.radius
+        start = np.asarray(shift, dtype=float)
+        if start.shape != (2,) or not np.all(np.isfinite(start)):
+            raise ValueError(f"shift must be two finite lengths (m), got {shift!r}")
+        rim_margin = _positive(rim_margin, "rim_margin", "m", zero=True)
+        max_shift = (_DEFAULT_MAX_SHIFT * a if max_shift is None
+                     else _positive(max_shift, "max_shift", "m", zero=True))
+        confidence = float(confidence)
+        if not 0 < confidence < 1:
+            raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
+        if (isinstance(reference_phase, bool)
+                or not isinstance(reference_phase, (int, np.integer))
+                or not 0 <= reference_phase < self.n_phases):
+            raise ValueError(f"reference_phase must be a phase index 0..{self.n_phases - 1}, "
+                             f"got {reference_phase!r}")
+        reach = a - rim_margin - (max_shift if search_shift else 0.0)
+        if reach <= 0:
+            raise ValueError(f"nothing left to fit: the rim margin {rim_margin:.4g} m "
+                             f"(and the shift search radius) cover the face of radius {a:.4g} m")
+        dx, dy = measured.pixel_size
+        nx, ny = measured.shape
+        half = 0.5 * np.array(measured.extent)
+        need = np.abs(start) + reach
+        if np.any(need > half + 0.5 * np.array([dx, dy]) * (1 + 1e-9)):
+            extra = "" if not (np.any(start) or rim_margin or search_shift) else (
+                f" (fitted disk of radius {reach * 1e3:.4g} mm about the axis at "
+                f"({start[0] * 1e3:.4g}, {start[1] * 1e3:.4g}) mm)")
+            raise ValueError(
+                f"measured map {measured.source} of {nx} x {ny} pixels of {dx * 1e3:.4g} x "
+                f"{dy * 1e3:.4g} mm ({2 * half[0] * 1e3:.4g} x {2 * half[1] * 1e3:.4g} mm) "
+                f"cannot cover the face of diameter {2 * a * 1e3:.4g} mm{extra}; check the "
+                f"pixel size, or crop the map to the face with the axis at its centre")
+        if 2 * reach < _MIN_PIXELS_ACROSS * max(dx, dy):
+            raise ValueError(f"measured map {measured.source}: pixels of {max(dx, dy):.4g} m "
+                             f"give fewer than {_MIN_PIXELS_ACROSS} pixels across the fitted "
+                             f"disk of diameter {2 * reach:.4g} m")
+        xs, ys = measured.coordinates()
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        heights = measured.heights
+        mask = np.isfinite(heights) & (np.hypot(X - start[0], Y - start[1]) < reach)
+        x, y, z = X[mask], Y[mask], heights[mask]
+        k = self.n_phases + 3
+        self._check_determined(self._design(x, y, start),
+                               self.phases_at(x - start[0], y - start[1]), min_phase_pixels)
+        at_limit = False
+        if search_shift:
+            start, at_limit = self._search_shift(x, y, z, start, max_shift)
+            self._check_determined(self._design(x, y, start),
+                                   self.phases_at(x - start[0], y - start[1]),
+                                   min_phase_pixels)
+        columns = self._design(x, y, start)
+        beta, scaled, scale = self._solve(columns, z)
+        residual = z - columns @ beta
+
+        residual_map = np.full(measured.shape, np.nan)
+        residual_map[mask] = residual
+        covariance = _Covariance(residual_map, mask, measured.pixel_size, 0.5 * reach, scaled)
+        n_fit = int(mask.sum())
+        n_eff = n_fit / covariance.correlation_area
+        dof = max(n_eff - k, 1.0)
+        bread = np.linalg.pinv(scaled.T @ scaled)
+        cov = bread @ covariance.meat @ bread
+        cov /= np.outer(scale, scale)
+        t = float(special.stdtrit(dof, 0.5 + 0.5 * confidence))
+
+        P, ref, m = self.n_phases, int(reference_phase), self.exponent
+        p = beta[:P]
+        v = cov[:P, :P]
+        notes, failures = [], []
+        ratios = np.full(P, np.nan)
+        intervals = np.full((P, 2), np.nan)
+        for i in range(P):
+            if i == ref:
+                ratios[i], intervals[i] = 1.0, (1.0, 1.0)
+                continue
+            if p[ref] > 0 and p[i] > 0:
+                ratios[i] = (p[ref] / p[i]) ** m
+            lo, hi = _fieller(p[ref], p[i], v[ref, ref], v[i, i], v[ref, i], t)
+            intervals[i] = (lo**m, hi**m)
+            if math.isinf(hi):
+                notes.append(f"k{i}/k{ref} is bounded only from below: phase {i}'s pressure is "
+                             f"not distinguished from zero")
+            elif lo == 0.0:
+                notes.append(f"k{i}/k{ref} is bounded only from above: phase {ref}'s pressure "
+                             f"is not distinguished from zero")
+        for i in range(P):
+            if not p[i] > 0:
+                failures.append(f"phase {i}: fitted pressure {p[i]:.4g} Pa is not positive")
+        if failures and np.all(p < 0):
+            failures.append("is the height map upside down? The fit expects the face's "
+                            "elevation, larger = protruding")
+        if at_limit:
+            notes.append(f"the shift lies at the search limit {max_shift:.4g} m")
+        if not covariance.converged:
+            notes.append(f"the estimate of the residual's correlation did not settle in "
+                         f"{covariance.iterations} iterations: the intervals are approximate")
+        if covariance.window_limited:
+            notes.append("the residual stays correlated out to the covariance window "
+                         f"({0.5 * reach:.3g} m): the intervals may be too narrow")
+
+        load = float(self.areas @ p)
+        load_sd = math.sqrt(max(float(self.areas @ v @ self.areas), 0.0))
+        load_scale = load / self.normal_force
+        load_interval = ((load - t * load_sd) / self.normal_force,
+                         (load + t * load_sd) / self.normal_force)
+
+        on_face = np.hypot(X - start[0], Y - start[1]) < a
+        fitted = np.full(measured.shape, np.nan)
+        fitted[on_face] = self._design(X[on_face], Y[on_face], start) @ beta
+        phase = np.full(measured.shape, -1, dtype=np.int64)
+        phase[on_face] = self.phases_at(X[on_face] - start[0], Y[on_face] - start[1])
+        relief_values = columns[:, :P] @ p
+        scene_ratios = None
+        if self.wear_coefficients is not None:
+            scene_ratios = self.wear_coefficients / self.wear_coefficients[ref]
+        message = "; ".join(failures + notes)
+        logger.info("fit: %d pixels (%.0f effective), residual rms %.3g m, ratios %s", n_fit,
+                    n_eff, math.sqrt(np.mean(residual**2)), ratios.tolist())
+        return FitResult(
+            ratios=ratios,
+            ratio_intervals=intervals,
+            phase_pressures=p,
+            phase_pressure_errors=np.sqrt(np.maximum(np.diag(v), 0.0)),
+            pressure_covariance=v,
+            offset=float(beta[P]),
+            tilt=(float(beta[P + 1]), float(beta[P + 2])),
+            shift=(float(start[0]), float(start[1])),
+            residual_rms=float(math.sqrt(np.mean(residual**2))),
+            relief=float(np.ptp(relief_values)),
+            samples=n_fit,
+            effective_samples=float(n_eff),
+            correlation_length=float(covariance.length),
+            degrees_of_freedom=float(dof),
+            load_scale=load_scale,
+            load_scale_interval=load_interval,
+            implied_normal_force=load,
+            implied_E_star=self.E_star / load_scale if load_scale > 0 else math.nan,
+            confidence=confidence,
+            reference_phase=ref,
+            exponent=m,
+            normal_force=self.normal_force,
+            E_star=self.E_star,
+            radius=a,
+            n=self.n,
+            success=not failures,
+            message=message,
+            measured=measured,
+            fitted=fitted,
+            residual=residual_map,
+            fit_mask=mask,
+            phase=phase,
+            scene_ratios=scene_ratios,
+        )
+
+
+def fit_face(measured, labels, radius, E_star, normal_force, *, exponent=1.0, **options):
+    """Wear ratios that best explain a measured worn face (inverse of eq. 7, 9).
+
+    Least squares over the phase pressures, a height offset and a tilt
+    (and, with ``search_shift``, a lateral shift of the phase map); the
+    ratios ``k_i / k_ref = (p_ref / p_i)^m`` with confidence intervals from
+    the covariance of a spatially correlated residual.
+
+    Parameters
+    ----------
+    measured : MeasuredFace
+        Height map (m, larger = protruding, NaN where missing) with its
+        pixel size; its centre is the punch axis unless ``shift`` says
+        otherwise.  It must cover the face.
+    labels : ndarray, shape (n, n), int
+        The phase map on the model grid over ``[-a, a]^2`` (-1 off the face).
+    radius : float, m
+    E_star : float, Pa
+        Scales the relief only: the ratios do not depend on it.
+    normal_force : float, N
+        Enters only the consistency figure ``load_scale``.
+    exponent : float, optional
+        ``m`` of the wear law (default 1).
+    **options
+        Keywords of the fit:
+
+        - ``shift`` : (float, float), m -- position of the punch axis from
+          the map's centre (default ``(0, 0)``); the start of a search;
+        - ``search_shift`` : bool -- search the shift that minimises the
+          residual within ``max_shift`` of ``shift`` (default False);
+        - ``max_shift`` : float, m -- search radius (default ``0.05 a``);
+          the fitted disk shrinks by it so that every shift sees the same
+          pixels;
+        - ``rim_margin`` : float, m -- leave out a ring of this width at the
+          rim (default 0);
+        - ``reference_phase`` : int -- the phase the ratios refer to
+          (default 0);
+        - ``confidence`` : float -- level of the intervals (default 0.95);
+        - ``min_phase_pixels`` : int -- fewest fitted pixels of a phase
+          (default :data:`DEFAULT_MIN_PHASE_PIXELS`).
+
+    Returns
+    -------
+    FitResult
+        ``success`` is False (with the reason in ``message``) when a
+        fitted phase pressure is not positive.
+
+    Raises
+    ------
+    ValueError
+        The map cannot cover the face (names both sizes), bad options, or
+        the fit is not determined: a phase covers too few fitted pixels, or
+        its face is a combination of the other columns (names the phase).
+
+    See Also
+    --------
+    FaceModel : build once, fit many faces.
+    fit_scene : the same from a scene file.
+
+    Examples
+    --------
+    A synthetic measured face from the forward model (eq. 7, 9) with
+    ``k_1 / k_0 = 3``, a tilt, an offset, noise of 1 % of the relief and the
+    face's outside as NaN (masked):
+
+    >>> import numpy as np
+    >>> from steady import HalfSpace, MeasuredFace, Voronoi, fit_face, pixel_size, solve
+    >>> n, a, E_star, force = 48, 4e-3, 1.3e6, 10.0
+    >>> labels = Voronoi(64, (0.6, 0.4), seed=2029).labels(n)
+    >>> h = pixel_size(n, a)
+    >>> truth = solve(HalfSpace(n, h, E_star), labels, [1e-13, 3e-13], force)
+    >>> relief = np.nanmax(truth.face) - np.nanmin(truth.face)
+    >>> x = (np.arange(n) - (n - 1) / 2) * h
+    >>> noise = np.random.default_rng(8191).standard_normal((n, n))
+    >>> heights = truth.face + 2e-5 + 1e-3 * x[:, None] + 0.01 * relief * noise
+    >>> fit = fit_face(MeasuredFace(heights, h), labels, a, E_star, force)
+    >>> lo, hi = fit.ratio_intervals[1]
+    >>> print(f"k1/k0 = {fit.ratios[1]:.3f} in [{lo:.3f}, {hi:.3f}], tilt {fit.tilt[0]:.4f}")
+    k1/k0 = 3.008 in [2.986, 3.030], tilt 0.0012
+    >>> print(f"load scale {fit.load_scale:.3f}, success {fit.success}")
+    load scale 1.000, success True
+    """
+    model = FaceModel(labels, radius, E_star, normal_force, exponent=exponent)
+    return model.fit(measured, **options)
+
+
+def fit_scene(scene, measured, *, n=None, **options):
+    """Fit the wear ratios of a scene's phase map to a measured face.
+
+    Parameters
+    ----------
+    scene : Scene
+        Phase map, radius, ``E*``, load and exponent (its wear coefficients
+        are reported beside the fit, not used).
+    measured : MeasuredFace
+    n : int, optional
+        Model grid (default ``scene.n``).
+    **options
+        As :func:`fit_face`.
+
+    Returns
+    -------
+    FitResult
+    """
+    return FaceModel.from_scene(scene, n=n).fit(measured, **options)
+
+
+def build_parser():
+    """The argument parser of ``runin-fit`` (``python -m steady.fit``)."""
+    parser = ArgumentParser(
+        prog=program_name("python -m steady.fit"),
+        description="Wear-coefficient ratios that best explain a measured worn face "
+                    "(least squares over the phase pressures of the steady face, eq. 7, 9).")
+    parser.add_argument("scene", type=pathlib.Path,
+                        help="scene file (.toml): phase map, radius, E*, load, exponent")
+    parser.add_argument("measured", type=pathlib.Path,
+                        help="measured height map: .npy, text grid (.txt .csv .dat .asc) or a "
+                             "profilometer file (needs runin[surface])")
+    parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
+                        help="HDF5 fit file to write")
+    parser.add_argument("--pixel-size", type=float, nargs="+", metavar="M",
+                        help="pixel size of the map, m (one value, or DX DY); required for "
+                             ".npy and text grids")
+    parser.add_argument("--height-scale", type=float, default=1.0, metavar="S",
+                        help="metres per height unit of a .npy or text grid (default 1; 1e-6 "
+                             "for micrometres)")
+    parser.add_argument("--plot", type=pathlib.Path, metavar="PNG",
+                        help="also draw measured, fitted and residual faces into this PNG")
+    parser.add_argument("--shift", action="store_true",
+                        help="search the lateral shift of the phase map that fits best")
+    parser.add_argument("--max-shift", type=float, metavar="M",
+                        help="search radius of --shift, m (default 5 %% of the radius)")
+    parser.add_argument("--rim-margin", type=float, default=0.0, metavar="M",
+                        help="leave out a ring of this width at the rim, m (default 0)")
+    parser.add_argument("--n", type=int, help="model grid (default: the scene's n)")
+    parser.add_argument("--reference-phase", type=int, default=0, metavar="I",
+                        help="the phase the ratios refer to (default 0)")
+    parser.add_argument("--confidence", type=float, default=0.95,
+                        help="level of the intervals (default 0.95)")
+    parser.add_argument("--force", action="store_true", help="overwrite existing output files")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log progress (-v) or details (-vv) to stderr")
+    return parser
+
+
+def run(args):
+    """Do the work for parsed arguments; return the exit status."""
+    if args.plot and args.plot.resolve() == args.output.resolve():
+        raise ValueError(f"--plot and -o name the same file {str(args.output)!r}")
+    prepare_output(args.output, force=args.force)
+    if args.plot:
+        prepare_output(args.plot, force=args.force, what="--plot")
+    if args.pixel_size is not None and len(args.pixel_size) > 2:
+        raise ValueError(f"--pixel-size takes one or two values, got {len(args.pixel_size)}")
+    scene = load_scene(args.scene)
+    if scene.ignored_sections:
+        print("note: ignoring run-in sections "
+              + ", ".join(f"[{name}]" for name in scene.ignored_sections), file=sys.stderr)
+    measured = read_measured(args.measured, pixel_size=args.pixel_size,
+                             height_scale=args.height_scale)
+    result = fit_scene(scene, measured, n=args.n, search_shift=args.shift,
+                       max_shift=args.max_shift, rim_margin=args.rim_margin,
+                       reference_phase=args.reference_phase, confidence=args.confidence)
+    write_fit(args.output, result, scene, force=args.force)
+    lines = result.summary_lines() + [f"result           {args.output}"]
+    if args.plot:
+        plot_fit(args.output, args.plot, force=args.force)
+        lines.append(f"figure           {args.plot}")
+    print("\n".join(lines))
+    return EXIT_OK if result.success else EXIT_FAILED
+
+
+def main(argv=None):
+    """Entry point of ``runin-fit`` and ``python -m steady.fit``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status (:mod:`steady.command_line`): 0; 1 when a fitted
+        pressure is not positive (the file is written, the reason printed)
+        or the operating system refused a read or write; 2 for bad input,
+        with one line ``error: ...`` on stderr (a map that cannot cover the
+        face, a phase the fit cannot determine, ...).
+    """
+    args = build_parser().parse_args(argv)
+    level = logging.WARNING - 10 * min(args.verbose, 2)
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    return run_command(run, args, verbose=args.verbose)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,589 @@
+"""Files of the wear-ratio fit: measured height maps in, HDF5 results and figures out.
+
+Measured worn faces (:class:`MeasuredFace`, :func:`read_measured`):
+
+- ``.npy``: a 2-d float array of heights;
+- ``.txt``, ``.csv``, ``.dat``, ``.asc``: a plain text grid read by
+  :func:`numpy.loadtxt`, whitespace or comma separated, ``nan`` for a
+  missing pixel;
+- any other file: a profilometer file read by the package SurfaceTopography
+  (``SurfaceTopography.read_topography``, which detects the format from the
+  contents: x3p, gwy, sur, opd, datx, ...), the optional extra ``surface``
+  (``pip install 'runin[surface]'``).  Such files carry their pixel size
+  and height unit, which are converted to metres.
+
+Arrays are indexed ``[i, j]`` with ``i`` along x, like every field of the
+project: row ``i`` of a text grid is the line ``x = x_i``.  Heights of
+``.npy`` and text grids are in metres unless ``height_scale`` says how many
+metres one file unit is (``1e-6`` for micrometres); their pixel size must be
+given.  A height is the face's elevation towards the counter-body (larger =
+protruding), as a profilometer sees the worn face turned upwards: the sign
+of the steady face ``f_inf = K p``.  NaN marks a missing pixel.
+
+Fit result files (layout ``runin.fit``, version 1), written by
+:func:`write_fit` through :func:`steady.output.atomic_h5`::
+
+    root attributes (unit of attribute x in x_units)
+        ratios                 k_i / k_ref, one per phase (1 for the reference)
+        ratio_lower, ratio_upper   confidence interval of each ratio (inf: unbounded)
+        confidence             level of the intervals (0.95)
+        reference_phase        index of the phase the ratios refer to
+        phase_pressures        fitted steady pressure of each phase, Pa
+        phase_pressure_errors  their standard errors, Pa
+        pressure_covariance    (P, P) covariance of the phase pressures, Pa^2
+        offset                 fitted height at the punch axis, m
+        tilt                   fitted slopes dz/dx, dz/dy of the plane, 1
+        shift                  position of the punch axis in the map (from its centre), m
+        residual_rms           rms of the residual over the fitted pixels, m
+        relief                 max - min of the fitted face without the plane, m
+        samples                pixels in the fit
+        effective_samples      independent samples (residual correlation), 1
+        correlation_length     1/e radius of the residual's correlation, m
+        degrees_of_freedom     of the t quantile of the intervals
+        load_scale, load_scale_lower, load_scale_upper
+                               sum_i A_i p_i / F_N and its interval, 1
+        implied_normal_force   load implied by the relief at the scene's E*, N
+        implied_E_star         modulus implied by the relief at the scene's load, Pa
+        success, message       all phase pressures positive; notes
+        exponent, normal_force, E_star, radius, n, scene_ratios
+                               the scene (n: the model grid; scene_ratios: the
+                               ratios written in the scene, not used by the fit)
+        pixel_size             (dx, dy) of the measured map, m
+        measured_source        the measured file
+    root datasets, each with a units attribute
+        measured  (nx, ny)  measured heights, NaN where missing        m
+        fitted    (nx, ny)  fitted face with its plane, NaN off the face m
+        residual  (nx, ny)  measured - fitted on the fitted pixels, NaN  m
+        fit_mask  (nx, ny)  1 for the pixels of the fit                1
+        phase     (nx, ny)  phase index at each pixel, -1 off the face 1
+        scene     string    the scene TOML (attribute source_path)
+
+:func:`plot_fit` draws the measured, fitted and residual faces side by
+side from such a file (matplotlib without pyplot, imported on demand).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import pathlib
+
+import h5py
+import numpy as np
+
+from .output import atomic_h5
+
+__all__ = [
+    "FIT_FORMAT",
+    "FIT_FORMAT_VERSION",
+    "MeasuredFace",
+    "StoredFit",
+    "TEXT_SUFFIXES",
+    "fit_figure",
+    "plot_fit",
+    "read_fit",
+    "read_measured",
+    "write_fit",
+]
+
+logger = logging.getLogger(__name__)
+
+FIT_FORMAT = "runin.fit"
+FIT_FORMAT_VERSION = 1
+
+#: Suffixes read as plain text grids (anything else but ``.npy`` goes to
+#: SurfaceTopography).
+TEXT_SUFFIXES = (".txt", ".csv", ".dat", ".asc")
+
+_SURFACE_HINT = ("install the optional extra with pip install 'runin[surface]' "
+                 "(SurfaceTopography), or give a .npy or text grid")
+
+
+def _pixel_pair(pixel_size, what):
+    """``(dx, dy)`` from a number or a pair; ``ValueError`` unless positive and finite."""
+    values = np.atleast_1d(np.asarray(pixel_size, dtype=float)) if pixel_size is not None \
+        else np.array([])
+    if values.ndim != 1 or values.size not in (1, 2) or not np.all(np.isfinite(values)) \
+            or not np.all(values > 0):
+        raise ValueError(f"{what} must be one or two positive finite lengths (m), got "
+                         f"{pixel_size!r}")
+    return (float(values[0]), float(values[-1]))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class MeasuredFace:
+    """A measured height map of a worn face.
+
+    Parameters
+    ----------
+    heights : array_like, shape (nx, ny), m
+        Face elevation (larger = protruding) at the pixel centres, indexed
+        ``[i, j]`` with ``i`` along x; NaN where the measurement has no
+        value.  Stored as a read-only float array.
+    pixel_size : float or (float, float), m
+        Pixel side, or ``(dx, dy)``.
+    source : str, optional
+        Where the map came from (for messages and the result file).
+
+    Notes
+    -----
+    The map's centre, the middle of its pixel array, is taken as the punch
+    axis unless the fit is given or searches a shift.
+    """
+
+    heights: np.ndarray
+    pixel_size: tuple
+    source: str = "array"
+
+    def __post_init__(self):
+        """Check the array and the pixel size; store them read-only."""
+        h = np.array(self.heights, dtype=float)
+        if h.ndim != 2 or min(h.shape) < 2:
+            raise ValueError(f"measured map {self.source} must be a 2-d array, got shape "
+                             f"{h.shape}")
+        if np.any(np.isinf(h)):
+            raise ValueError(f"measured map {self.source} holds infinite heights")
+        if not np.any(np.isfinite(h)):
+            raise ValueError(f"measured map {self.source} holds no finite height")
+        h.flags.writeable = False
+        object.__setattr__(self, "heights", h)
+        object.__setattr__(self, "pixel_size",
+                           _pixel_pair(self.pixel_size, f"pixel size of {self.source}"))
+
+    @property
+    def shape(self):
+        """``(nx, ny)``, pixels."""
+        return self.heights.shape
+
+    @property
+    def extent(self):
+        """Size of the map ``(nx dx, ny dy)``, m."""
+        return (self.shape[0] * self.pixel_size[0], self.shape[1] * self.pixel_size[1])
+
+    def coordinates(self):
+        """Pixel-centre coordinates from the map's centre.
+
+        Returns
+        -------
+        x : ndarray, shape (nx,), m
+        y : ndarray, shape (ny,), m
+        """
+        (nx, ny), (dx, dy) = self.shape, self.pixel_size
+        return (np.arange(nx) - 0.5 * (nx - 1)) * dx, (np.arange(ny) - 0.5 * (ny - 1)) * dy
+
+
+def _text_grid(path):
+    """A text grid, whitespace or comma separated (decided by its first data line)."""
+    delimiter = None
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            stripped = line.strip()
+            if stripped and not stripped.startswith("#"):
+                delimiter = "," if "," in stripped else None
+                break
+    return np.loadtxt(path, delimiter=delimiter, ndmin=2, dtype=float)
+
+
+def _surface_topography(path, pixel_size):
+    """Heights (m, NaN where undefined) and pixel size (m) through SurfaceTopography."""
+    try:
+        from SurfaceTopography import open_topography
+    except ImportError:
+        raise ValueError(f"cannot read {str(path)!r}: a profilometer file needs "
+                         f"SurfaceTopography; {_SURFACE_HINT}") from None
+    try:
+        reader = open_topography(str(path))
+        channel = reader.default_channel
+        kwargs = {}
+        if channel.physical_sizes is None:
+            if pixel_size is None:
+                raise ValueError(f"{str(path)!r} does not give its pixel size: give it "
+                                 f"(--pixel-size, m)")
+            dx, dy = _pixel_pair(pixel_size, "pixel size")
+            nx, ny = channel.nb_grid_pts
+            kwargs["physical_sizes"] = (nx * dx, ny * dy)
+        if channel.unit is None:
+            kwargs["unit"] = "m"
+        topography = reader.topography(**kwargs).to_unit("m")
+    except ValueError:
+        raise
+    except Exception as err:  # the readers raise many kinds for a file they cannot parse
+        raise ValueError(f"SurfaceTopography cannot read {str(path)!r}: "
+                         f"{type(err).__name__}: {err}") from None
+    if topography.dim != 2:
+        raise ValueError(f"{str(path)!r} is a line scan ({topography.dim}-d); the fit needs "
+                         f"a 2-d height map")
+    heights = np.ma.filled(np.ma.asarray(topography.heights(), dtype=float), np.nan)
+    file_pixel = tuple(float(s) / int(g) for s, g in zip(topography.physical_sizes,
+                                                        topography.nb_grid_pts, strict=True))
+    if pixel_size is not None and "physical_sizes" not in kwargs:
+        given = _pixel_pair(pixel_size, "pixel size")
+        if not np.allclose(given, file_pixel, rtol=1e-6):
+            raise ValueError(f"pixel size {given} m given, but {str(path)!r} says "
+                             f"{file_pixel} m")
+    return heights, file_pixel
+
+
+def read_measured(path, *, pixel_size=None, height_scale=1.0):
+    """Read a measured height map.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``.npy`` (2-d float array), a text grid (``.txt``, ``.csv``,
+        ``.dat``, ``.asc``) or a profilometer file (SurfaceTopography).
+    pixel_size : float or (float, float), m, optional
+        Pixel side or ``(dx, dy)``; required for ``.npy`` and text grids.
+        For a profilometer file it is read from the file; a value given
+        here must agree with it.
+    height_scale : float, optional
+        Metres per height unit of the file (default 1: the file is in m;
+        ``1e-6`` for micrometres).  Profilometer files are converted to m
+        first, so keep the default for them.
+
+    Returns
+    -------
+    MeasuredFace
+
+    Raises
+    ------
+    ValueError
+        Missing or unreadable file, not a 2-d map, missing pixel size, or
+        a profilometer file without SurfaceTopography installed (the
+        message says how to install it).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "face.txt"
+    >>> np.savetxt(path, [[1.0, 2.0, 3.0], [4.0, np.nan, 6.0]])
+    >>> face = read_measured(path, pixel_size=1e-4, height_scale=1e-6)
+    >>> face.shape, face.pixel_size, int(np.isnan(face.heights).sum())
+    ((2, 3), (0.0001, 0.0001), 1)
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise ValueError(f"measured map {str(path)!r} does not exist")
+    scale = float(height_scale)
+    if not (math.isfinite(scale) and scale > 0):
+        raise ValueError(f"height scale must be a positive finite number (m per file unit), "
+                         f"got {height_scale!r}")
+    suffix = path.suffix.lower()
+    if suffix == ".npy" or suffix in TEXT_SUFFIXES:
+        if pixel_size is None:
+            raise ValueError(f"the pixel size of {str(path)!r} is unknown: give it "
+                             f"(--pixel-size, m)")
+        try:
+            heights = (np.load(path, allow_pickle=False) if suffix == ".npy"
+                       else _text_grid(path))
+        except (OSError, ValueError) as err:
+            raise ValueError(f"cannot read measured map {str(path)!r}: {err}") from None
+        if not np.issubdtype(np.asarray(heights).dtype, np.number):
+            raise ValueError(f"measured map {str(path)!r} must hold numbers, got dtype "
+                             f"{np.asarray(heights).dtype}")
+        pixel = pixel_size
+    else:
+        heights, pixel = _surface_topography(path, pixel_size)
+    return MeasuredFace(np.asarray(heights, dtype=float) * scale, pixel, source=repr(str(path)))
+
+
+_DATASETS = {"measured": "m", "fitted": "m", "residual": "m", "fit_mask": "1", "phase": "1"}
+_ATTRIBUTES = {
+    "ratios": "1",
+    "ratio_lower": "1",
+    "ratio_upper": "1",
+    "confidence": "1",
+    "reference_phase": "1",
+    "phase_pressures": "Pa",
+    "phase_pressure_errors": "Pa",
+    "pressure_covariance": "Pa^2",
+    "offset": "m",
+    "tilt": "1",
+    "shift": "m",
+    "residual_rms": "m",
+    "relief": "m",
+    "samples": "1",
+    "effective_samples": "1",
+    "correlation_length": "m",
+    "degrees_of_freedom": "1",
+    "load_scale": "1",
+    "load_scale_lower": "1",
+    "load_scale_upper": "1",
+    "implied_normal_force": "N",
+    "implied_E_star": "Pa",
+    "exponent": "1",
+    "normal_force": "N",
+    "E_star": "Pa",
+    "radius": "m",
+    "n": "1",
+    "scene_ratios": "1",
+    "pixel_size": "m",
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class StoredFit:
+    """A fit read back from HDF5 (:func:`read_fit`).
+
+    Attributes
+    ----------
+    attrs : dict
+        The attributes of the layout (see the module notes), plus
+        ``success`` (bool), ``message`` and ``measured_source`` (str).
+    arrays : dict of str to ndarray
+        ``measured``, ``fitted``, ``residual`` (m), ``fit_mask`` (bool),
+        ``phase`` (int), each of shape ``(nx, ny)``.
+    scene_text : str
+    path : pathlib.Path
+    """
+
+    attrs: dict
+    arrays: dict
+    scene_text: str
+    path: pathlib.Path
+
+
+def write_fit(path, result, scene=None, *, force=False):
+    """Write a fit to an HDF5 file (layout ``runin.fit``), atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Missing parent directories are created.
+    result : steady.fit.FitResult
+    scene : Scene, optional
+        Its TOML text and source path are stored.
+    force : bool, optional
+        Overwrite an existing file (default False).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        ``path`` exists and ``force`` is False, or is a directory.
+    """
+    path = pathlib.Path(path)
+    values = {
+        "ratios": result.ratios,
+        "ratio_lower": result.ratio_intervals[:, 0],
+        "ratio_upper": result.ratio_intervals[:, 1],
+        "confidence": result.confidence,
+        "reference_phase": result.reference_phase,
+        "phase_pressures": result.phase_pressures,
+        "phase_pressure_errors": result.phase_pressure_errors,
+        "pressure_covariance": result.pressure_covariance,
+        "offset": result.offset,
+        "tilt": np.asarray(result.tilt),
+        "shift": np.asarray(result.shift),
+        "residual_rms": result.residual_rms,
+        "relief": result.relief,
+        "samples": result.samples,
+        "effective_samples": result.effective_samples,
+        "correlation_length": result.correlation_length,
+        "degrees_of_freedom": result.degrees_of_freedom,
+        "load_scale": result.load_scale,
+        "load_scale_lower": result.load_scale_interval[0],
+        "load_scale_upper": result.load_scale_interval[1],
+        "implied_normal_force": result.implied_normal_force,
+        "implied_E_star": result.implied_E_star,
+        "exponent": result.exponent,
+        "normal_force": result.normal_force,
+        "E_star": result.E_star,
+        "radius": result.radius,
+        "n": result.n,
+        "scene_ratios": (np.full(result.n_phases, np.nan) if result.scene_ratios is None
+                         else np.asarray(result.scene_ratios)),
+        "pixel_size": np.asarray(result.measured.pixel_size),
+    }
+    arrays = {
+        "measured": result.measured.heights,
+        "fitted": result.fitted,
+        "residual": result.residual,
+        "fit_mask": result.fit_mask.astype(np.int8),
+        "phase": result.phase.astype(np.int8 if result.n_phases < 127 else np.int16),
+    }
+    with atomic_h5(path, format=FIT_FORMAT, version=FIT_FORMAT_VERSION, force=force) as f:
+        for name, unit in _ATTRIBUTES.items():
+            f.attrs[name] = values[name]
+            f.attrs[f"{name}_units"] = unit
+        f.attrs["success"] = bool(result.success)
+        f.attrs["message"] = result.message
+        f.attrs["measured_source"] = result.measured.source
+        for name, unit in _DATASETS.items():
+            ds = f.create_dataset(name, data=arrays[name])
+            ds.attrs["units"] = unit
+        ds = f.create_dataset("scene", data="" if scene is None else scene.text,
+                              dtype=h5py.string_dtype())
+        ds.attrs["source_path"] = ("" if scene is None or scene.source_path is None
+                                   else str(scene.source_path))
+    return path
+
+
+def _text(value):
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def read_fit(path):
+    """Read and check a file written by :func:`write_fit`.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    StoredFit
+
+    Raises
+    ------
+    ValueError
+        Missing file, not HDF5, another layout or version, or incomplete
+        (the message names the path and the problem).
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise ValueError(f"fit file {str(path)!r} does not exist")
+    if not h5py.is_hdf5(path):
+        raise ValueError(f"fit file {str(path)!r} is not an HDF5 file")
+    with h5py.File(path, "r") as f:
+        fmt = _text(f.attrs.get("format", ""))
+        version = f.attrs.get("format_version")
+        if fmt != FIT_FORMAT or version is None or int(version) != FIT_FORMAT_VERSION:
+            raise ValueError(f"{str(path)!r} is not a {FIT_FORMAT} file of version "
+                             f"{FIT_FORMAT_VERSION} (format {fmt!r}, version {version!r})")
+        missing = [name for name in (*_DATASETS, "scene") if name not in f]
+        missing += [name for name in (*_ATTRIBUTES, "success", "message") if name not in f.attrs]
+        if missing:
+            raise ValueError(f"fit file {str(path)!r} lacks {missing[0]!r}")
+        attrs = {name: f.attrs[name] for name in _ATTRIBUTES}
+        attrs["success"] = bool(f.attrs["success"])
+        attrs["message"] = _text(f.attrs["message"])
+        attrs["measured_source"] = _text(f.attrs.get("measured_source", ""))
+        arrays = {name: f[name][()] for name in _DATASETS}
+        scene_text = _text(f["scene"][()])
+    arrays["fit_mask"] = arrays["fit_mask"].astype(bool)
+    arrays["phase"] = arrays["phase"].astype(np.int64)
+    return StoredFit(attrs=attrs, arrays=arrays, scene_text=scene_text, path=path)
+
+
+def _plane(stored):
+    """The fitted plane (offset and tilt) on the measured grid, m."""
+    a, shape = stored.attrs, stored.arrays["measured"].shape
+    dx, dy = a["pixel_size"]
+    x = (np.arange(shape[0]) - 0.5 * (shape[0] - 1)) * dx - a["shift"][0]
+    y = (np.arange(shape[1]) - 0.5 * (shape[1] - 1)) * dy - a["shift"][1]
+    return a["offset"] + a["tilt"][0] * x[:, None] + a["tilt"][1] * y[None, :]
+
+
+def _interval(lo, hi):
+    upper = "inf" if not np.isfinite(hi) else f"{hi:.4g}"
+    return f"[{lo:.4g}, {upper}]"
+
+
+def fit_figure(stored):
+    """Measured, fitted and residual faces side by side.
+
+    Parameters
+    ----------
+    stored : StoredFit
+        From :func:`read_fit`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: the measured face less the fitted plane (offset and tilt);
+        middle: the fitted face ``sum_i p_i K chi_i`` on the same colour
+        scale; right: the residual with the phase boundaries.  Heights in
+        micrometres, axes in mm from the map's centre.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    a, arr = stored.attrs, stored.arrays
+    plane = _plane(stored)
+    measured = (arr["measured"] - plane) * 1e6
+    fitted = (arr["fitted"] - plane) * 1e6
+    residual = arr["residual"] * 1e6
+    on_face = arr["phase"] >= 0
+    measured = np.where(on_face, measured, np.nan)
+    nx, ny = measured.shape
+    dx, dy = a["pixel_size"]
+    extent = (-0.5e3 * nx * dx, 0.5e3 * nx * dx, -0.5e3 * ny * dy, 0.5e3 * ny * dy)
+    values = np.concatenate([measured[np.isfinite(measured)], fitted[np.isfinite(fitted)]])
+    vmin, vmax = np.percentile(values, [0.5, 99.5]) if values.size else (0.0, 1.0)
+    finite = residual[np.isfinite(residual)]
+    rmax = float(np.percentile(np.abs(finite), 99.5)) if finite.size else 1.0
+
+    fig = Figure(figsize=(13.0, 4.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, 3, sharex=True, sharey=True)
+    panels = [(measured, "measured face, plane removed", "viridis", (vmin, vmax)),
+              (fitted, r"fitted $\sum_i p_i K\chi_i$", "viridis", (vmin, vmax)),
+              (residual, f"residual, rms {a['residual_rms'] * 1e6:.3g} µm", "RdBu_r",
+               (-rmax, rmax))]
+    for ax, (field, title, cmap, (lo, hi)) in zip(axes, panels, strict=True):
+        # Arrays are indexed [x, y]; imshow wants [row = y, column = x].
+        im = ax.imshow(field.T, origin="lower", extent=extent, cmap=cmap, vmin=lo, vmax=hi,
+                       interpolation="nearest")
+        fig.colorbar(im, ax=ax, shrink=0.85).set_label("height (µm)")
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("x (mm)")
+        ax.set_aspect("equal")
+    axes[0].set_ylabel("y (mm)")
+    x = np.linspace(extent[0], extent[1], nx, endpoint=False) + 0.5e3 * dx
+    y = np.linspace(extent[2], extent[3], ny, endpoint=False) + 0.5e3 * dy
+    n_phases = len(a["ratios"])
+    if n_phases > 1:
+        axes[2].contour(x, y, arr["phase"].T.astype(float), levels=np.arange(n_phases) + 0.5,
+                        colors="k", linewidths=0.4)
+    ref = int(a["reference_phase"])
+    ratios = ", ".join(
+        f"k{i}/k{ref} = {r:.4g} {_interval(lo, hi)}"
+        for i, (r, lo, hi) in enumerate(zip(a["ratios"], a["ratio_lower"], a["ratio_upper"],
+                                            strict=True)) if i != ref)
+    level = f"{100 * a['confidence']:.0f} %"
+    shift = a["shift"] * 1e3
+    title = (f"{ratios or 'one phase'} ({level} intervals); load scale {a['load_scale']:.4g} "
+             f"{_interval(a['load_scale_lower'], a['load_scale_upper'])}; "
+             f"shift ({shift[0]:.3g}, {shift[1]:.3g}) mm")
+    if not a["success"]:
+        title += f"\nfit failed: {a['message']}"
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def plot_fit(fit_path, png_path, *, force=False, dpi=100):
+    """Draw the figure of an HDF5 fit file into a PNG file.
+
+    Parameters
+    ----------
+    fit_path : str or path-like
+        File written by :func:`write_fit`.
+    png_path : str or path-like
+        Output image; missing parent directories are created.
+    force : bool, optional
+        Overwrite an existing image (default False).
+    dpi : int, optional
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        Unreadable fit file, or ``png_path`` exists and ``force`` is False.
+    """
+    png_path = pathlib.Path(png_path)
+    if png_path.exists() and not force:
+        raise ValueError(f"output {str(png_path)!r} exists (use force to overwrite)")
+    fig = fit_figure(read_fit(fit_path))
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(png_path, dpi=dpi)
+    logger.info("figure written to %s", png_path)
+    return png_path

@@ -1,0 +1,267 @@
+"""Run-in speed: contact-solver work against the grid, and the integrators at equal history error.
+
+What it reproduces
+    docs/benchmarks.md, "Run-in speed":
+
+    ``--table``: the shipped scene ``studies/scenes/voronoi_transient.toml``
+    with only ``[grid] n`` changed (its ``[transient]`` settings, ``tol``
+    overridable, flat start to the steady state, no checkpoints): accepted
+    steps, contact solves, solver iterations, iterations per solve, padded
+    FFT products (``HalfSpace.displacement``), unpadded FFT pairs of the
+    preconditioner and the wall time of the run, per grid.
+
+    ``--schemes``: the same scene (wear ratio overridable with ``--ratio``)
+    at one grid, no jump, up to ``3 s*``: every implicit integrator of the
+    registry on a ladder of tolerances, against ``sdirk2`` at ``tol = 1e-6``
+    on the same grid.  History error: the largest relative deviation of the
+    plain pixel rms slope of the face (:func:`transient.diagnostics.face_rms_slope`,
+    computed from the stored snapshots, so that it does not depend on the
+    figures the run itself records) at ``s/s* = 1e-4, 1e-3, 1e-2, 0.1, 0.3, 1, 3``;
+    face error: rms of the shape difference at ``3 s*`` (best constant
+    removed) over the reference's relief.
+
+    Wall times here are in-process and single; the side-by-side timing of
+    two versions of the code is done on whole processes (docs/benchmarks.md
+    gives the command).
+
+How to run
+    python studies/benchmarks/bench_runin.py --table --sizes 64 128 256 512 1024   # ~5 min
+    python studies/benchmarks/bench_runin.py --schemes --n 256          # ~15 min on 2 cores
+    python studies/benchmarks/bench_runin.py --schemes --n 256 --ratio 1000
+    python studies/benchmarks/bench_runin.py --table --schemes --sizes 40 --n 40 --quick
+                                                        # smoke test, seconds
+
+Writes ``--out`` (HDF5: one group per table row) and prints the tables in
+Markdown.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import logging
+import pathlib
+import platform
+import sys
+import time
+
+import numpy as np
+import scipy.fft
+
+from steady.halfspace import HalfSpace
+from steady.output import atomic_h5
+from transient.diagnostics import face_rms_slope, shape_rms
+from transient.problem import WearProblem
+from transient.runin import RunOptions, run_in
+from transient.scene import load_transient_scene
+from transient.stepping import SCHEMES
+
+# -- parameters -------------------------------------------------------------------
+SCENE = pathlib.Path(__file__).resolve().parents[1] / "scenes" / "voronoi_transient.toml"
+SIZES = (64, 128, 256, 512, 1024)
+TABLE_TOL = 1e-4
+SCHEME_N = 256
+DISTANCES = (1e-4, 1e-3, 1e-2, 0.1, 0.3, 1.0, 3.0)   # s*, where the history is compared
+REFERENCE = ("sdirk2", 1e-6)
+QUICK_REFERENCE = ("sdirk2", 1e-4)
+LADDERS = {
+    "implicit_euler": (1e-3, 1e-4, 1e-5),
+    "bdf2": (1e-4, 1e-5, 3e-6),
+    "sdirk2": (2e-3, 1e-3, 5e-4, 2e-4, 1e-4),
+    "esdirk3": (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5),
+}
+QUICK_LADDER = (1e-2, 1e-3)
+
+logger = logging.getLogger("bench_runin")
+
+
+@contextlib.contextmanager
+def counted_transforms():
+    """Count padded products (``HalfSpace.displacement``) and all ``scipy.fft.rfft2`` calls."""
+    counts = {"products": 0, "rfft2": 0}
+    displacement, rfft2 = HalfSpace.displacement, scipy.fft.rfft2
+
+    def counting_displacement(self, pressure_r):
+        counts["products"] += 1
+        return displacement(self, pressure_r)
+
+    def counting_rfft2(*args, **kwargs):
+        counts["rfft2"] += 1
+        return rfft2(*args, **kwargs)
+
+    HalfSpace.displacement, scipy.fft.rfft2 = counting_displacement, counting_rfft2
+    try:
+        yield counts
+    finally:
+        HalfSpace.displacement, scipy.fft.rfft2 = displacement, rfft2
+
+
+def problem_of(scene, n, ratio=None):
+    """The scene's wear problem on the ``n x n`` grid, wear ratio ``k_2/k_1`` optionally reset."""
+    if ratio is not None:
+        k = scene.wear_coefficients
+        scene = dataclasses.replace(scene, wear_coefficients=(k[0], k[0] * ratio))
+    return WearProblem.from_scene(scene, n=n)
+
+
+def run_counted(problem, initial_height, options):
+    """One run-in with its work: ``(result, row)``.
+
+    ``row``: steps, rejected, solves, iterations, products (padded FFT
+    products), pairs (unpadded FFT pairs, the preconditioner's), wall (s).
+    """
+    with counted_transforms() as counts:
+        t = time.perf_counter()
+        result = run_in(problem, initial_height, options)
+        wall = time.perf_counter() - t
+    # Every padded product does one padded rfft2; the rest are the preconditioner's.
+    row = dict(status=result.status, steps=result.steps, rejected=result.rejected,
+               solves=result.solves, iterations=result.iterations,
+               products=counts["products"], pairs=counts["rfft2"] - counts["products"],
+               wall=wall)
+    return result, row
+
+
+def grid_table(scene_path, sizes, tol):
+    """Rows of the table: the scene at each grid size, to the steady state."""
+    scene, settings, initial = load_transient_scene(scene_path)
+    options = dataclasses.replace(settings.options, tol=tol, checkpoint_interval=1e9)
+    rows = []
+    for n in sizes:
+        problem = problem_of(scene, n)
+        result, row = run_counted(problem, initial.height(n, scene.radius), options)
+        row.update(n=n, scheme=options.scheme, tol=tol)
+        rows.append(row)
+        logger.info("n = %d: %s", n, row)
+    return rows
+
+
+def history(result, problem):
+    """Plain pixel rms slope of the face at the snapshots, and the last face (m)."""
+    hs, face = problem.halfspace, problem.face_mask
+    slopes = []
+    for height, pressure in zip(result.snapshot_height, result.snapshot_pressure,
+                                strict=True):
+        height = np.where(face, height, 0.0)
+        kp = hs.displacement(pressure)
+        contact = face & (pressure > 0)
+        approach = float(np.mean((height + kp)[contact]))
+        slopes.append(face_rms_slope(hs, face, height, pressure, approach))
+    return np.array(slopes), np.where(face, result.snapshot_height[-1], 0.0)
+
+
+def scheme_table(scene_path, n, ratio, ladders, reference=REFERENCE):
+    """Rows of the integrator comparison at equal history error (see the module docstring)."""
+    scene, _, _ = load_transient_scene(scene_path)
+
+    def one(name, tol):
+        problem = problem_of(scene, n, ratio)
+        options = RunOptions(scheme=name, tol=tol, snapshots=DISTANCES,
+                             max_distance=DISTANCES[-1], jump_spread=0.0, spread_tol=1e-300,
+                             shape_tol=1e-300, max_steps=10 ** 6, checkpoint_interval=1e9)
+        result, row = run_counted(problem, np.zeros((n, n)), options)
+        slopes, face = history(result, problem)
+        return row, slopes, face, problem.face_mask
+
+    _, ref_slopes, ref_face, face_mask = one(*reference)
+    relief = shape_rms(ref_face, face_mask)
+    rows = []
+    for name, ladder in ladders.items():
+        for tol in ladder:
+            row, slopes, face = one(name, tol)[:3]
+            deviation = np.abs(slopes / ref_slopes - 1)
+            row.update(scheme=name, tol=tol, n=n, history_error=float(deviation.max()),
+                       worst_distance=DISTANCES[int(np.argmax(deviation))],
+                       face_error=shape_rms(face - ref_face, face_mask) / relief)
+            rows.append(row)
+            logger.info("%s tol %.0e: %s", name, tol, row)
+    return rows
+
+
+def markdown_table(rows):
+    """The grid table in Markdown."""
+    lines = ["| n | scheme, tol | steps | contact solves | iterations | iterations / solve "
+             "| padded products | preconditioner pairs | wall (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['n']} | {r['scheme']}, {r['tol']:.0e} | {r['steps']} | "
+                     f"{r['solves']} | {r['iterations']} | "
+                     f"{r['iterations'] / r['solves']:.1f} | {r['products']} | {r['pairs']} | "
+                     f"{r['wall']:.1f} |")
+    return "\n".join(lines)
+
+
+def markdown_schemes(rows):
+    """The integrator table in Markdown."""
+    lines = ["| integrator | tol | steps | contact solves | iterations | padded products "
+             "| history error (at s/s*) | face error at 3 s* | wall (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['scheme']} | {r['tol']:.0e} | {r['steps']} | {r['solves']} | "
+                     f"{r['iterations']} | {r['products']} | {r['history_error']:.1e} "
+                     f"({r['worst_distance']:g}) | {r['face_error']:.1e} | {r['wall']:.1f} |")
+    return "\n".join(lines)
+
+
+def write_h5(path, groups, meta):
+    """Write the tables (a group per row) and the run's metadata."""
+    with atomic_h5(path, format="runin.bench_runin", version=1, force=True) as f:
+        f.attrs["wall_units"] = "s"
+        for k, v in meta.items():
+            f.attrs[k] = v
+        for name, rows in groups.items():
+            g = f.create_group(name)
+            for i, row in enumerate(rows):
+                r = g.create_group(f"{i:03d}")
+                for k, v in row.items():
+                    r.attrs[k] = v
+
+
+def main(argv=None):
+    """Command line of the benchmark (see the module docstring).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    dict
+        The rows of the tables that were run, by table name.
+    """
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--table", action="store_true", help="work per solve against n")
+    parser.add_argument("--schemes", action="store_true", help="integrators at equal error")
+    parser.add_argument("--scene", type=pathlib.Path, default=SCENE)
+    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
+    parser.add_argument("--tol", type=float, default=TABLE_TOL, help="tol of --table")
+    parser.add_argument("--n", type=int, default=SCHEME_N, help="grid of --schemes")
+    parser.add_argument("--ratio", type=float, help="k_2/k_1 of --schemes (default: the scene's)")
+    parser.add_argument("--quick", action="store_true", help="smoke test: short ladders")
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("bench_runin.h5"))
+    args = parser.parse_args(argv)
+    if not (args.table or args.schemes):
+        parser.error("choose --table and/or --schemes")
+    logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
+    groups = {}
+    if args.table:
+        groups["grids"] = grid_table(args.scene, args.sizes, args.tol)
+        print(markdown_table(groups["grids"]))
+    if args.schemes:
+        implicit = [name for name, s in sorted(SCHEMES.items()) if not s.explicit]
+        ladders = {name: QUICK_LADDER if args.quick else LADDERS.get(name, (1e-3, 1e-4))
+                   for name in implicit}
+        groups["schemes"] = scheme_table(args.scene, args.n, args.ratio, ladders,
+                                         QUICK_REFERENCE if args.quick else REFERENCE)
+        print(markdown_schemes(groups["schemes"]))
+    meta = dict(machine=platform.processor() or platform.machine(),
+                python=platform.python_version(), numpy=np.__version__,
+                scene=str(args.scene), command=" ".join(sys.argv))
+    write_h5(args.out, groups, meta)
+    return groups
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,312 @@
+"""Bad inputs through the steady and the run-in command lines, in-process.
+
+Each case is a malformed or hostile scene, file map, initial face, flag or
+output path.  Every one must end in exactly one line ``error: ...`` on
+stderr that names the bad key, value or file, with the status of bad input
+(2), no traceback, nothing written and every existing file byte-identical.
+"""
+
+import dataclasses
+import pathlib
+import re
+
+import numpy as np
+import numpy.lib.format as npy_format
+import pytest
+from conftest import scene_text
+
+import steady.__main__ as steady_cli
+import transient.__main__ as transient_cli
+
+PRECIOUS = b"a result someone cares about"
+
+#: The scenes each command starts from: n = 40 (steady) and n = 32 (run-in).
+BASE = {"steady": scene_text("steady"), "transient": scene_text("runin")}
+
+
+def run_cli(command, argv, capsys):
+    """Exit status, stdout and stderr of ``main(argv)`` of a command."""
+    module = steady_cli if command == "steady" else transient_cli
+    try:
+        status = module.main([str(a) for a in argv])
+    except SystemExit as done:  # argument errors exit from the parser
+        status = done.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def write(d, name, text):
+    path = d / name
+    path.write_text(text)
+    return path
+
+
+def header_only(path, shape, descr="<i8"):
+    """A .npy file whose header announces ``shape`` but holds no data."""
+    with open(path, "wb") as f:
+        npy_format.write_array_header_1_0(f, {"descr": descr, "fortran_order": False,
+                                             "shape": shape})
+
+
+def with_key(text, key, value):
+    """The scene with ``key = ...`` (the first one) set to ``value`` (TOML text)."""
+    new, count = re.subn(rf"^{key} = .*$", f"{key} = {value}", text, count=1, flags=re.M)
+    assert count == 1, f"test setup: no key {key!r}"
+    return new
+
+
+def file_map(text, path):
+    return re.sub(r"^map = .*$", f'map = {{ kind = "file", path = "{path}" }}', text,
+                  count=1, flags=re.M)
+
+
+def with_section(text, section, body):
+    """Replace (or add) a whole section ``[section]``."""
+    text = re.sub(rf"^\[{section}\]\n(?:[^\[].*\n)*", "", text, flags=re.M)
+    return text + f"[{section}]\n{body}\n"
+
+
+@dataclasses.dataclass(frozen=True)
+class Case:
+    """A bad input and the fragment its error line must hold.
+
+    ``make(d, base)`` writes what the case needs into the directory ``d``
+    (``base``: the command's good scene text) and returns the arguments;
+    ``-o d/out.h5 --force`` is added unless they name an output, or
+    ``output`` is False.
+    """
+
+    name: str
+    make: object
+    fragment: str
+    commands: tuple = ("steady", "transient")
+    output: bool = True
+    marks: tuple = ()
+
+
+def scene(text_of):
+    """A case maker writing one scene ``s.toml`` from the base text."""
+    def make(d, base):
+        return [write(d, "s.toml", text_of(base))]
+    return make
+
+
+def scene_and(prepare, text_of, *flags):
+    """A case maker that first prepares files in ``d``, then writes the scene."""
+    def make(d, base):
+        prepare(d)
+        return [write(d, "s.toml", text_of(base)), *flags]
+    return make
+
+
+def argv(*args):
+    """A case maker with a good scene and these arguments (``{d}`` is the directory)."""
+    def make(d, base):
+        return [write(d, "s.toml", base), *(str(a).format(d=d) for a in args)]
+    return make
+
+
+def png_garbage(d):
+    (d / "map.png").write_bytes(b"GIF89a" + bytes(64))
+
+
+CASES = [
+    # -- the scene file itself
+    Case("scene missing", lambda d, base: [d / "nope.toml"], "nope.toml' does not exist"),
+    Case("scene a directory", lambda d, base: [d], "is a directory, not a file"),
+    Case("scene a device", lambda d, base: ["/dev/zero"], "'/dev/zero' is not a regular file"),
+    Case("scene over 1 MiB", scene(lambda t: with_key(t, "coefficients",
+                                                      "[" + "1e-9, " * 200_000 + "1e-9]")),
+         "is larger than 1 MiB"),
+    Case("scene not UTF-8", lambda d, base: [(d / "s.toml", (d / "s.toml").write_bytes(
+        base.encode() + b"# \xff\n"))[0]], "is not UTF-8 text"),
+    Case("malformed TOML", scene(lambda t: t.replace("[grid]", "[grid")), "malformed TOML"),
+    Case("nested 100,000 deep", scene(lambda t: with_key(t, "coefficients",
+                                                         "[" * 100_000 + "]" * 100_000)),
+         "nested too deeply"),
+    # -- values: shortened in the message
+    Case("100,000 coefficients", scene(lambda t: with_key(t, "coefficients",
+                                                          "[" + "1e-9, " * 99_999 + "1e-9]")),
+         "[wear] coefficients has 100000 values [1e-09, 1e-09"),
+    Case("900 kB string", scene(lambda t: t.replace("[wear]", '[wear]\nexponent = "'
+                                                    + "x" * 900_000 + '"')),
+         "[wear] exponent must be a number (dimensionless), got 'xxx"),
+    Case("100 kB key", scene(lambda t: t.replace("[grid]", "[grid]\n" + "k" * 100_000 + " = 1")),
+         "unknown key 'kkkk"),
+    Case("radius a string", scene(lambda t: with_key(t, "radius", '"4 mm"')),
+         "[punch] radius must be a number (m), got '4 mm'"),
+    Case("n not an integer", scene(lambda t: with_key(t, "n", "32.5")),
+         "[grid] n must be an integer, got 32.5"),
+    Case("E_star nan", scene(lambda t: with_key(t, "E_star", "nan")),
+         "[counterbody] E_star must be a positive finite number (Pa), got nan"),
+    Case("too few coefficients", scene(lambda t: with_key(t, "coefficients", "[1e-9]")),
+         "[wear] coefficients has 1 values [1e-09] but the phase map has 2 phases"),
+    Case("Voronoi phase off the face", scene(lambda t: with_key(with_key(t, "n", "8"), "map", (
+        '{ kind = "voronoi", n_seeds = 2, fill_factors = [0.5, 0.5], seed = 2306 }'))),
+         "phase 1 has no pixel on the face with these 2 seeds (seed = 2306) at n = 8"),
+    # -- size
+    Case("n = 100000", scene(lambda t: with_key(t, "n", "100000")),
+         "at n = 100000"),
+    Case("n = 12000", lambda d, base: [write(d, "s.toml", with_key(base, "n", "12000")),
+                                       "--memory-limit", "16"],
+         "GiB may be used (--memory-limit)"),
+    Case("--memory-limit tiny", argv("--memory-limit", "0.001"),
+         "1.02 MiB may be used (--memory-limit)"),
+    Case("--memory-limit not a number", argv("--memory-limit", "lots"),
+         "argument --memory-limit: expected a size in GiB, got 'lots'"),
+    # -- file maps
+    Case("map missing", scene(lambda t: file_map(t, "gone.npy")), "gone.npy' does not exist"),
+    Case("map a directory", scene_and(lambda d: (d / "dir.npy").mkdir(),
+                                      lambda t: file_map(t, "dir.npy")),
+         "dir.npy' is a directory, not a file"),
+    Case("map a device", scene(lambda t: file_map(t, "/dev/null")),
+         "'/dev/null' is not a regular file"),
+    Case("map empty", scene_and(lambda d: (d / "m.npy").write_bytes(b""),
+                                lambda t: file_map(t, "m.npy")), "m.npy' is empty (0 bytes)"),
+    Case("map truncated", scene_and(lambda d: header_only(d / "m.npy", (8, 8)),
+                                    lambda t: file_map(t, "m.npy")),
+         "m.npy' is truncated: its header announces 8 x 8 values of int64"),
+    Case("map claims 100000 x 100000", scene_and(
+        lambda d: header_only(d / "m.npy", (100000, 100000)), lambda t: file_map(t, "m.npy")),
+         "m.npy' has 100000 x 100000 pixels, more than the grid's n"),
+    Case("map not a .npy", scene_and(lambda d: (d / "m.npy").write_text("0 1\n1 0\n"),
+                                     lambda t: file_map(t, "m.npy")),
+         "m.npy' is not a .npy file"),
+    Case("map of floats", scene_and(lambda d: np.save(d / "m.npy", np.zeros((8, 8))),
+                                    lambda t: file_map(t, "m.npy")),
+         "m.npy' must hold integers, got dtype float64"),
+    Case("map PNG garbage", scene_and(png_garbage, lambda t: file_map(t, "map.png")),
+         "map.png' is not a PNG image"),
+    # -- output paths
+    Case("no -o", lambda d, base: [write(d, "s.toml", base)], "the following arguments are "
+                                                              "required: -o/--output",
+         output=False),
+    Case("-o a directory", argv("-o", "{d}", "--force"), "is a directory"),
+    Case("-o a device", argv("-o", "/dev/null", "--force"), "'/dev/null' is not a regular file"),
+    Case("-o below a file", argv("-o", "{d}/s.toml/x.h5"), "s.toml' is a file, not a directory"),
+    Case("-o unwritable", argv("-o", "/proc/runin-out.h5"), "cannot write into '/proc'"),
+    Case("-o exists", argv("-o", "{d}/out.h5"), "out.h5' exists"),
+    Case("--plot is -o", argv("-o", "{d}/out.h5", "--plot", "{d}/out.h5", "--force"),
+         "out.h5'"),
+    Case("--plot a directory", argv("--plot", "{d}", "--force"), "--plot"),
+    Case("unknown flag", argv("--fast"), "unrecognized arguments: --fast"),
+    # -- the run-in's own sections and flags
+    Case("[transient] unknown key", scene(lambda t: with_section(t, "transient", "bogus = 1")),
+         "[transient]: unknown key 'bogus'", ("transient",)),
+    Case("[transient] scheme", scene(lambda t: with_section(t, "transient", 'scheme = "rk4"')),
+         "unknown scheme 'rk4'", ("transient",)),
+    Case("[transient] snapshots", scene(lambda t: with_section(t, "transient",
+                                                               'snapshots = "often"')),
+         "snapshots must be an array of distances in s*, got 'often'", ("transient",)),
+    Case("[transient] max_steps", scene(lambda t: with_section(t, "transient", "max_steps = 0")),
+         "max_steps must be a positive integer, got 0", ("transient",)),
+    Case("[transient] contact_rtol", scene(lambda t: with_section(t, "transient",
+                                                                  "contact_rtol = 0.0")),
+         "contact_rtol must lie in (0, 1), got 0.0", ("transient",)),
+    Case("100,000 snapshots", scene(lambda t: with_key(with_section(
+        t, "transient", "snapshots = [" + ", ".join(f"{i}.0" for i in range(100_000)) + "]"),
+        "n", "256")), "a run-in at n = 256 with 100000 snapshots needs about", ("transient",)),
+    Case("[initial_face] missing file", scene(lambda t: with_section(
+        t, "initial_face", 'kind = "file"\npath = "h.npy"')), "h.npy' does not exist",
+        ("transient",)),
+    Case("[initial_face] empty file", scene_and(
+        lambda d: (d / "h.npy").write_bytes(b""),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "initial face file", ("transient",)),
+    Case("[initial_face] wrong shape", scene_and(
+        lambda d: np.save(d / "h.npy", np.zeros((8, 8))),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "h.npy' holds an array of shape (8, 8); (32, 32) is needed", ("transient",)),
+    Case("[initial_face] angle", scene(lambda t: with_section(
+        t, "initial_face", 'kind = "tilted"\nangle = 2.0')), "angle must lie in [0, pi/2)",
+        ("transient",)),
+    Case("[initial_face] kind", scene(lambda t: with_section(t, "initial_face",
+                                                             'kind = "wavy"')),
+         "kind must be one of", ("transient",)),
+    Case("first solve: contact_rtol 1e-300", scene(lambda t: with_section(
+        t, "transient", "contact_rtol = 1e-300")),
+         "the first contact solve failed: [transient] contact_rtol = 1e-300 is below what "
+         "round-off allows", ("transient",)),
+    Case("first solve: a 1e300 pixel", scene_and(
+        lambda d: np.save(d / "h.npy", np.where(np.arange(32 * 32).reshape(32, 32) == 528,
+                                                1e300, 0.0)),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "the first contact solve failed: the [initial_face] (kind 'file') has a relief of "
+         "1e+300 m", ("transient",),
+         # The command logs numpy's overflow warning (shown with -v); here it must not raise.
+         marks=(pytest.mark.filterwarnings("ignore::RuntimeWarning"),)),
+    Case("--tol negative", argv("--tol", "-3"), "argument --tol: expected a positive number",
+         ("transient",)),
+    Case("--max-steps 0", argv("--max-steps", "0"), "max_steps must be a positive integer",
+         ("transient",)),
+    Case("--checkpoint-interval -1", argv("--checkpoint-interval", "-1"),
+         "checkpoint_interval must be >= 0 s", ("transient",)),
+    Case("--scheme rk4", argv("--scheme", "rk4"), "argument --scheme: invalid choice: 'rk4'",
+         ("transient",)),
+    Case("--resume with --force", argv("--resume", "--force"),
+         "argument --force: not allowed with argument --resume", ("transient",)),
+    Case("--plot is the backup", argv("--plot", "{d}/out.h5.prev", "--force"),
+         "--plot and the run file's backup name the same file", ("transient",)),
+    Case("-o is the scene", argv("-o", "{d}/s.toml", "--force"),
+         "-o and the scene name the same file"),
+]
+
+#: Fragments that differ between the commands.
+FRAGMENTS = {
+    ("n = 100000", "steady"): "a steady solve at n = 100000 needs about",
+    ("n = 100000", "transient"): "a run-in at n = 100000 with 2 snapshots needs about",
+    ("-o exists", "steady"): "out.h5' exists (use --force to overwrite)",
+    ("-o exists", "transient"): "out.h5' exists; use --resume to continue it or --force",
+    ("--plot is -o", "steady"): "--plot and -o name the same file",
+    ("--plot is -o", "transient"): "--plot and -o name the same file",
+}
+
+
+def _params():
+    for case in CASES:
+        for command in case.commands:
+            yield pytest.param(case, command, id=f"{command}: {case.name}", marks=case.marks)
+
+
+@pytest.mark.parametrize("case, command", list(_params()))
+def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, command):
+    d = tmp_path / "case"
+    d.mkdir()
+    (d / "out.h5").write_bytes(PRECIOUS)
+    args = case.make(d, BASE[command])
+    if case.output and "-o" not in args:
+        args += ["-o", d / "out.h5"]
+        if "--force" not in args and "--resume" not in args:
+            args.append("--force")
+    before = {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()}
+    status, out, err = run_cli(command, args, capsys)
+    fragment = FRAGMENTS.get((case.name, command), case.fragment)
+    lines = err.splitlines()
+    assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
+    assert status == 2, f"exit {status}, stderr {err[:500]!r}"
+    assert len(lines) == 1 and lines[0].startswith("error: "), \
+        f"expected one 'error:' line, got {len(lines)}: {err[:1000]!r}"
+    assert fragment in lines[0], f"{lines[0][:500]!r} lacks {fragment!r}"
+    assert len(lines[0]) < 500, f"error line of {len(lines[0])} characters"
+    assert out == "", f"stdout after a refusal: {out[:200]!r}"
+    after = {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()}
+    assert after == before, \
+        f"files changed: {sorted(set(after) ^ set(before))} or contents of {sorted(before)}"
+
+
+def test_every_case_names_what_is_bad():
+    """The table covers every class of the bad-input list at least once per command."""
+    names = {c.name for c in CASES}
+    assert len(names) == len(CASES), "case names must be unique"
+    per_command = {cmd: sum(cmd in c.commands for c in CASES) for cmd in BASE}
+    assert per_command["steady"] >= 35 and per_command["transient"] >= 50, per_command
+
+
+def test_memory_override_lets_a_scene_run(tmp_path, capsys):
+    """``--memory-limit inf`` skips the check; a scene that fits runs as before."""
+    (tmp_path / "s.toml").write_text(BASE["steady"])
+    status, out, err = run_cli("steady", [tmp_path / "s.toml", "-o", tmp_path / "r.h5",
+                                          "--memory-limit", "inf", "--no-slope-error"], capsys)
+    assert status == 0 and err == "", f"exit {status}: {err!r}"
+    assert "rms / grad_f0" in out, f"summary {out!r}"
+    assert pathlib.Path(tmp_path / "r.h5").is_file(), "result written"

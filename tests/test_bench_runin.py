@@ -1,0 +1,44 @@
+"""Smoke tests of the run-in benchmark scripts (studies/benchmarks) at a small size."""
+
+import importlib.util
+import pathlib
+
+import h5py
+
+BENCHMARKS = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
+
+
+def load(name):
+    spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_bench_runin_smoke(tmp_path):
+    out = tmp_path / "bench.h5"
+    groups = load("bench_runin").main(["--table", "--schemes", "--sizes", "40", "--n", "40",
+                                       "--quick", "--out", str(out)])
+    (row,) = groups["grids"]
+    assert row["status"] == "steady" and row["solves"] > 2 * row["steps"] - 2, \
+        f"grid table row {row}"
+    schemes = {r["scheme"] for r in groups["schemes"]}
+    assert {"sdirk2", "esdirk3", "bdf2", "implicit_euler"} <= schemes, f"schemes run: {schemes}"
+    for r in groups["schemes"]:
+        assert 0 <= r["history_error"] < 0.1, f"{r['scheme']} {r['tol']}: {r}"
+    with h5py.File(out) as f:
+        assert f.attrs["format"] == "runin.bench_runin", "layout attribute"
+        assert len(f["schemes"]) == len(groups["schemes"]), "one group per row"
+
+
+def test_profile_runin_smoke(tmp_path):
+    out = tmp_path / "profile.h5"
+    rows = load("profile_runin").main(["--n", "40", "--quick", "--out", str(out)])
+    whole = rows[-1]
+    assert whole["part"] == "whole run" and "missing" not in whole, f"parts absent: {whole}"
+    total = sum(r["seconds"] for r in rows[:-1])
+    assert abs(total - whole["seconds"]) < 1e-6 * whole["seconds"] + 1e-9, \
+        f"parts sum to {total} s, the run took {whole['seconds']} s"
+    contact = rows[0]
+    assert contact["part"] == "contact solves" and contact["calls"] > 0, f"{contact}"
+    assert out.exists(), "the profile writes its HDF5 file"

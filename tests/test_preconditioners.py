@@ -1,0 +1,205 @@
+"""Shift-aware Fourier preconditioner and the Galerkin warm start of implicit stages.
+
+The implicit stages of the run-in solve ``(K + ds diag(k)) p = d - w`` with a
+shift that differs from phase to phase.  The stitched Fourier preconditioner
+(:class:`transient.preconditioners.FourierPreconditioner`) is checked against
+dense spectra of the preconditioned operator, and the warm start
+(:class:`transient.problem.PressureHistory`) against the linearity of the
+full-contact problem.
+"""
+
+import numpy as np
+import pytest
+import scipy.linalg
+from conftest import FORCE, GEOMETRIES, halfspace, wear_problem
+
+from transient.contact import solve_contact
+from transient.preconditioners import (
+    FourierPreconditioner,
+    JacobiPreconditioner,
+    shift_levels,
+)
+from transient.problem import PressureHistory
+from transient.runin import RunOptions, run_in
+
+
+def two_phase_shift(labels, hs, magnitude, ratio=0.1):
+    """Shift of a stage: ``magnitude K_00`` on phase 1, ``ratio`` times that on phase 0."""
+    face = labels >= 0
+    return np.where(face, hs.self_influence * magnitude * np.where(labels == 1, 1.0, ratio), 0.0)
+
+
+def dense(operator, face):
+    """Matrix of a linear map of (n, n) fields, restricted to the face pixels."""
+    n = face.shape[0]
+    idx = np.flatnonzero(face)
+    out = np.empty((idx.size, idx.size))
+    for j, i in enumerate(idx):
+        e = np.zeros(n * n)
+        e[i] = 1.0
+        out[:, j] = operator(e.reshape(n, n)).ravel()[idx]
+    return out
+
+
+def preconditioned_condition(matrix, precondition, face):
+    """Condition number of ``P A`` on the zero-mean subspace (the load constraint).
+
+    ``precondition``: a preconditioner, or its dense matrix on the face.
+    """
+    basis = scipy.linalg.null_space(np.ones((1, int(face.sum()))))
+    p = precondition
+    if callable(precondition):
+        p = dense(lambda r: precondition(r, face), face)
+    factor = np.linalg.cholesky(basis.T @ (0.5 * (p + p.T)) @ basis)
+    ev = np.linalg.eigvalsh(factor.T @ (basis.T @ matrix @ basis) @ factor)
+    return ev[-1] / ev[0]
+
+
+# -- the levels of a shift -------------------------------------------------------
+
+def test_phase_wise_shift_gives_one_level_per_phase():
+    n = 32
+    hs = halfspace(n)
+    labels = GEOMETRIES["voronoi"].labels(n)
+    face = labels >= 0
+    shift = two_phase_shift(labels, hs, 3.0)
+    levels, weights = shift_levels(shift, face, hs.self_influence)
+    assert levels == sorted({float(v) for v in shift[face]}), f"levels {levels}"
+    for level, phi in zip(levels, weights, strict=True):
+        assert np.array_equal(phi[face] == 1.0, shift[face] == level), \
+            "a phase-wise shift must be split by indicators"
+    assert np.array_equal(sum(weights)[face], np.ones(face.sum())), "weights must sum to one"
+
+
+def test_continuous_shift_is_interpolated_between_nodes():
+    n = 24
+    hs = halfspace(n)
+    rng = np.random.default_rng(6113)
+    shift = hs.self_influence * 10 ** rng.uniform(-2.0, 2.0, (n, n))
+    levels, weights = shift_levels(shift, None, hs.self_influence, max_levels=4)
+    assert len(levels) == 4, f"{len(levels)} levels, expected the 4 allowed"
+    assert levels[0] == pytest.approx(shift.min(), rel=1e-12) and \
+        levels[-1] == pytest.approx(shift.max(), rel=1e-12), "nodes must span the shift"
+    stacked = np.array(weights)
+    assert stacked.min() >= 0.0, "interpolation weights must be non-negative"
+    assert np.allclose(stacked.sum(axis=0), 1.0, rtol=0, atol=1e-14), "weights must sum to one"
+    assert np.count_nonzero(stacked > 0, axis=0).max() <= 2, \
+        "each pixel interpolates between two neighbouring nodes"
+
+
+def test_nearly_uniform_shift_is_one_level():
+    hs = halfspace(16)
+    shift = np.full((16, 16), 2 * hs.self_influence)
+    shift[3, 4] *= 1.001
+    levels, weights = shift_levels(shift, None, hs.self_influence)
+    assert weights is None and levels == [shift.min()], f"levels {levels}"
+
+
+# -- the preconditioned spectrum -----------------------------------------------
+
+@pytest.mark.parametrize("n, magnitude", [(16, 0.1), (17, 1.0), (16, 10.0), (17, 100.0)])
+def test_stitched_fourier_bounds_the_two_phase_spectrum(n, magnitude):
+    hs = halfspace(n)
+    labels = GEOMETRIES["voronoi"].labels(n)
+    face = labels >= 0
+    shift = two_phase_shift(labels, hs, magnitude)
+    k = dense(hs.displacement, face)
+    a = 0.5 * (k + k.T) + np.diag(shift[face])
+    stitched = FourierPreconditioner(hs, shift, face_mask=face)
+    p = dense(lambda r: stitched(r, face), face)
+    assert np.abs(p - p.T).max() < 1e-13 * np.abs(p).max(), "preconditioner not symmetric"
+    assert np.linalg.eigvalsh(0.5 * (p + p.T))[0] > 0, "preconditioner not positive definite"
+    cond = preconditioned_condition(a, p, face)
+    single = preconditioned_condition(
+        a, FourierPreconditioner(hs, np.full((n, n), shift[face].min())), face)
+    jacobi = preconditioned_condition(a, JacobiPreconditioner(hs, shift), face)
+    # Measured 1.91 .. 2.83 for these four cases (one level, the smaller
+    # shift: 2.86 .. 9.93; Jacobi 2.74 .. 9.65); 2.0 .. 3.1 at n = 20, 21.
+    assert cond < 3.2, f"stitched condition number {cond:.2f}"
+    assert cond <= single * (1 + 1e-9), f"stitched {cond:.2f} worse than one level {single:.2f}"
+    assert cond < jacobi, f"stitched {cond:.2f} not better than Jacobi {jacobi:.2f}"
+
+
+@pytest.mark.parametrize("magnitude", [0.3, 30.0])
+def test_stitched_fourier_solves_the_shifted_problem(magnitude):
+    # Same answer as the unpreconditioned iteration, in fewer iterations than Jacobi.
+    n = 41
+    hs = halfspace(n)
+    labels = GEOMETRIES["voronoi"].labels(n)
+    shift = two_phase_shift(labels, hs, magnitude, ratio=0.01)
+    face = labels >= 0
+    height = np.zeros((n, n))
+    plain = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11, preconditioner="none")
+    res = {name: solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11,
+                               preconditioner=name) for name in ("fourier", "jacobi")}
+    diff = np.abs(res["fourier"].pressure - plain.pressure).max() / plain.pressure.max()
+    assert diff < 1e-8, f"fourier differs from the plain iteration by {diff:.2e}"
+    assert res["fourier"].nit < res["jacobi"].nit, \
+        f"fourier {res['fourier'].nit} iterations, jacobi {res['jacobi'].nit}"
+
+
+# -- the warm start ------------------------------------------------------------
+
+def test_galerkin_warm_start_is_exact_on_the_span():
+    # In full contact the stage problem is linear in the height: the solution for
+    # a combination of two heights is the same combination of their pressures,
+    # which the prediction must find (extrapolation included).
+    n = 48
+    problem = wear_problem("voronoi", (1.0, 10.0), n)
+    hs, face = problem.halfspace, problem.face_mask
+    shift = 0.05 * problem.run_in_distance * problem.coefficient_field
+    r, _ = np.meshgrid(np.arange(n) - n / 2, np.arange(n) - n / 2, indexing="ij")
+    heights = [np.zeros((n, n)), 2e-4 * (r / n) ** 2]   # m, a third of f*
+    solves = [solve_contact(hs, face, h, FORCE, shift=shift, rtol=1e-12) for h in heights]
+    assert all(s.contact_fraction == 1.0 for s in solves), "the test needs full contact"
+    history = PressureHistory(problem)
+    for s in solves:
+        history.push(s.pressure)
+    for theta in (0.3, 1.7):
+        height = (1 - theta) * heights[0] + theta * heights[1]
+        exact = (1 - theta) * solves[0].pressure + theta * solves[1].pressure
+        guess, displacement = history.predict(height, shift)
+        err = np.abs(guess - exact).max() / exact.max()
+        # The two pressures differ by 6.6 % of the peak; the prediction is off by
+        # 9e-15 .. 4e-14 of it (measured), the solves' round-off.
+        assert err < 1e-11, f"theta {theta}: prediction off by {err:.2e} of the peak"
+        assert np.allclose(displacement, hs.displacement(guess), rtol=0,
+                           atol=1e-12 * np.abs(displacement).max()), "K x0 of the prediction"
+        warm = solve_contact(hs, face, height, FORCE, shift=shift, x0=guess,
+                             x0_displacement=displacement, rtol=1e-10)
+        assert warm.success and warm.nit == 0, f"theta {theta}: {warm.nit} iterations"
+
+
+def test_history_restored_from_its_pressures_predicts_bit_for_bit():
+    # What a checkpoint stores (the pressures) determines the predictions.
+    n = 33
+    problem = wear_problem("voronoi", (1.0, 10.0), n)
+    rng = np.random.default_rng(7919)
+    history = PressureHistory(problem, size=3)
+    for _ in range(5):
+        history.push(np.where(problem.face_mask, 1e5 * (1 + 0.01 * rng.random((n, n))), 0.0))
+    assert len(history) == 3, f"{len(history)} pressures kept, expected 3"
+    again = PressureHistory(problem, size=3, pressures=history.pressures())
+    height = 1e-7 * rng.random((n, n))
+    shift = 1e-3 * problem.run_in_distance * problem.coefficient_field
+    for a, b in zip(history.predict(height, shift), again.predict(height, shift), strict=True):
+        assert np.array_equal(a, b), "restored history predicts differently"
+
+
+def test_stage_iterations_do_not_grow_with_the_grid():
+    # Early run-in (the flat punch's edge layer and the first grains), sdirk2:
+    # measured 4.5 (n = 64) and 5.2 (n = 128) iterations per solve, the cold
+    # first solve included (13.3 and 16.1 before the shift-aware preconditioner
+    # and the Galerkin warm start).
+    per_solve = {}
+    for n in (64, 128):
+        problem = wear_problem("voronoi_fine", (1.0, 10.0), n)
+        result = run_in(problem, np.zeros((n, n)),
+                        RunOptions(scheme="sdirk2", tol=1e-4, max_distance=0.03,
+                                   spread_tol=1e-300, shape_tol=1e-300))
+        assert result.status == "stopped", result.message
+        cold = problem.solves - 2 * result.steps  # the initial solve
+        per_solve[n] = result.iterations / result.solves
+        assert cold == 1, f"{cold} solves outside the stages"
+    assert max(per_solve.values()) < 7.0, f"iterations per solve {per_solve}"
+    assert per_solve[128] < per_solve[64] + 1.0, f"iterations grow with n: {per_solve}"

@@ -1,0 +1,337 @@
+"""The friction proxy along the run-in: the worn face's rms slope, its error bar, its rms height.
+
+The run loop (:mod:`transient.runin`) records at every accepted step what a
+:class:`HistoryEstimator` measures of the face (docs/model.md, "The run-in
+history"):
+
+``rms_slope``
+    The continuum rms slope of the worn face ``f = d - w`` over the face.
+    In contact ``f = K p`` up to a constant, so its mean-square slope is that
+    of the half-space surface under the run's pressure, which the
+    energy-corrected estimator of :mod:`steady.accuracy` gives (the same as
+    the steady module's ``rms_slope``).  Off the contact (partial contact)
+    the pixel quadrature of ``|grad f|^2 - |grad K p|^2``, ``f`` by finite
+    differences (it is smooth there), is added.  At ``s = 0`` the value is
+    the initial face's own (:func:`face_statistics`: exact for a flat or a
+    tilted face).
+``rms_slope_error``
+    Its estimated discretisation error: the uncertainty of the rim-layer
+    correction (below) and the estimator's error on the run's own phase map
+    (:func:`steady.accuracy.estimate_map_rms_slope`, relative, carried along
+    the history), added in quadrature.
+``rms_height``
+    Rms of ``f`` over the face after removing its least-squares plane
+    (:mod:`steady.relief`).
+
+The rim layer
+-------------
+A flat face starts with the ``(a^2 - r^2)^(-1/2)`` rim pressure.  For any
+``s > 0`` the wear has flattened it in a layer of width ``l = k E* s``
+along the rim, with slopes of order ``K / (E* l^(1/2))`` (``K`` the rim's
+stress intensity): a mean-square slope per unit rim length of order
+``K^2 / E*^2``, whatever ``l``.  (Another initial face in contact at the
+rim has the same singularity with another ``K``: each rim pixel's excess
+below is weighted by the square of its initial pressure over the flat
+punch's.)  The continuum history therefore jumps at
+``s = 0`` from the flat face's 0 to about ``0.848 grad_f0``
+(:mod:`transient.axisymmetric`).  Where ``l`` is not much wider than a
+pixel, the corrected estimator over-estimates the mean-square slope by an
+amount that depends only on the resolution ``rho = l / h``:
+:func:`rim_layer_excess`, fitted to the homogeneous cylinder's run-in on
+n = 64 ... 512 against the axisymmetric reference.  For Archard's law
+(``m = 1``) the excess of every rim pixel (its own phase's ``rho``) is
+subtracted, and :data:`RIM_LAYER_SCATTER` of it enters the error bar; for
+``m != 1`` nothing is subtracted and the whole excess is the error bar.
+
+Interior phase boundaries wear into steps that are smoothed over a layer of
+width ``k E* s`` of the faster phase; while that layer is narrower than a
+few pixels (``s`` below about ten fastest relaxation distances
+``h / (k_max E*)``) the estimate is low.  The per-step error bar does not
+include this; the companion run on a coarser grid
+(:mod:`transient.spatial_error`) measures part of it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from steady import reference
+from steady.accuracy import SlopeEnergy, estimate_map_rms_slope
+from steady.relief import PlaneFit, rms_height
+
+from .contact import solve_contact
+from .diagnostics import face_rms_slope, masked_gradient
+
+__all__ = [
+    "RIM_LAYER_FIT",
+    "RIM_LAYER_SCATTER",
+    "SOURCE_CONTACT",
+    "SOURCE_INITIAL",
+    "SOURCE_PARTIAL_CONTACT",
+    "FaceStatistics",
+    "HistoryEstimator",
+    "face_statistics",
+    "rim_layer_excess",
+]
+
+#: ``(G0, b, c)`` of the rim-layer excess ``G0 / (1 + b rho + c rho^2)``,
+#: grad_f0^2: a least-squares fit (in the logarithm) to the excess of the
+#: corrected estimator's mean-square slope over the axisymmetric reference,
+#: homogeneous cylinder from flat, n = 64, 128, 256, 512,
+#: ``s = 1e-3 .. 0.03 s*`` (16 points, rho = 0.03 .. 7.7; residuals within
+#: 8 %).  Its large-rho end, ``G0 / c rho^2 = 0.132 / rho^2``, is the
+#: second-order quadrature error of a resolved layer.  The 33 points of
+#: ``studies/runin_convergence.py`` refit to (0.368, 0.609, 2.75).
+RIM_LAYER_FIT = (0.371, 0.627, 2.81)
+
+#: Relative uncertainty of :func:`rim_layer_excess` carried into the error bar:
+#: its residuals on the 33 points of ``studies/runin_convergence.py`` are within
+#: 12 % for rho <= 4 (beyond, the excess is below 0.5 % of the mean square).
+RIM_LAYER_SCATTER = 0.15
+
+#: ``rms_slope_source``: the initial face's own value (``s = 0``).
+SOURCE_INITIAL = 0
+#: ``rms_slope_source``: corrected estimate, the face in full contact.
+SOURCE_CONTACT = 1
+#: ``rms_slope_source``: corrected estimate plus differences off the contact.
+SOURCE_PARTIAL_CONTACT = 2
+
+
+def rim_layer_excess(rho):
+    """Excess of the corrected mean-square slope from an unresolved rim layer.
+
+    Parameters
+    ----------
+    rho : array_like
+        Width ``k E* s / h`` of the worn rim layer in pixels (``k`` the
+        rim phase's rate constant, ``s`` the distance slid).
+
+    Returns
+    -------
+    ndarray
+        ``G0 / (1 + b rho + c rho^2)`` (:data:`RIM_LAYER_FIT`), in units of
+        ``grad_f0^2``, for the flat punch's rim stress intensity.
+
+    Examples
+    --------
+    >>> print(f"{rim_layer_excess(0.0):.3f} {rim_layer_excess(10.0):.5f}")
+    0.371 0.00128
+    """
+    g0, b, c = RIM_LAYER_FIT
+    rho = np.asarray(rho, dtype=float)
+    return g0 / (1.0 + b * rho + c * rho * rho)
+
+
+@dataclasses.dataclass(frozen=True)
+class FaceStatistics:
+    """Rms slope and rms height of a smooth face from its pixel heights.
+
+    Attributes
+    ----------
+    rms_slope : float
+        Rms over the face pixels of the finite-difference slope.
+    rms_slope_error : float
+        ``|S_h - S_2h|``, the same on every other pixel with differences
+        over ``2h``: zero for a plane, whose differences are exact.
+    rms_height : float, m
+        Rms of the height about its least-squares plane
+        (:func:`steady.relief.rms_height`).
+    """
+
+    rms_slope: float
+    rms_slope_error: float
+    rms_height: float
+
+
+def _difference_rms_slope(face, face_mask, h):
+    gx, gy = masked_gradient(np.where(face_mask, face, 0.0), face_mask, h)
+    return float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
+
+
+def face_statistics(face, face_mask, h):
+    """Rms slope (finite differences) and rms height of a smooth face over the face pixels.
+
+    For the initial faces of :mod:`transient.initial_face`: exact for a
+    flat or tilted face (differences of a plane are exact, its residual
+    plane is zero); second order in ``h`` inside a smooth face, with the
+    staircase rim's first-order share.
+
+    Parameters
+    ----------
+    face : ndarray, shape (n, n), m
+        Heights at the pixel centres (either sign convention).
+    face_mask : ndarray of bool, shape (n, n)
+    h : float, m
+
+    Returns
+    -------
+    FaceStatistics
+
+    Examples
+    --------
+    >>> from steady.grid import face_mask
+    >>> from transient.initial_face import tilted
+    >>> stats = face_statistics(tilted(33, 4e-3, 0.01), face_mask(33), 8e-3 / 33)
+    >>> print(f"{stats.rms_slope:.6f} {stats.rms_slope_error:.1e} {stats.rms_height:.1e}")
+    0.010000 0.0e+00 0.0e+00
+    """
+    face = np.asarray(face, dtype=float)
+    slope = _difference_rms_slope(face, face_mask, h)
+    coarse_mask = face_mask[::2, ::2]
+    coarse = _difference_rms_slope(face[::2, ::2], coarse_mask, 2 * h)
+    # A plane's differences are exact on both: round-off is not an error.
+    error = abs(slope - coarse)
+    if error <= 1e-12 * max(slope, coarse):
+        error = 0.0
+    return FaceStatistics(rms_slope=slope, rms_slope_error=error,
+                          rms_height=rms_height(face, face_mask, h))
+
+
+class HistoryEstimator:
+    """What the history records of the worn face at every step (see module notes).
+
+    Built once per run: the corrected estimator of the grid, the rim pixels
+    and their rate constants, the initial face's own figures and the
+    estimator's error on the run's phase map.
+
+    Parameters
+    ----------
+    problem : transient.problem.WearProblem
+    initial_height : ndarray, shape (n, n), m
+        Initial face (larger = recessed), as given to
+        :func:`transient.runin.run_in`.
+
+    Attributes
+    ----------
+    reference_slope : float
+        ``grad_f0 = 4 pbar / (pi E*)``, ``pbar = F / (pi a^2)`` (eq. 12).
+    initial : FaceStatistics
+        Of the initial face (:func:`face_statistics`).
+    map_error : float
+        Relative error of the corrected estimator on the run's phase map at
+        the steady state (:func:`steady.accuracy.estimate_map_rms_slope`),
+        NaN on grids too small for a ladder.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from transient.problem import WearProblem
+    >>> from transient.scene import load_transient_scene
+    >>> scene, _, _ = load_transient_scene("studies/scenes/voronoi_transient.toml")
+    >>> problem = WearProblem.from_scene(scene, n=40)
+    >>> estimator = HistoryEstimator(problem, np.zeros((40, 40)))
+    >>> res = problem.contact(np.zeros((40, 40)))
+    >>> fig = estimator.figures(0.0, np.zeros((40, 40)), res.pressure, res.approach)
+    >>> fig["rms_slope"], fig["rms_slope_error"], fig["rms_height"]
+    (0.0, 0.0, 0.0)
+    """
+
+    def __init__(self, problem, initial_height):
+        hs = problem.halfspace
+        self.problem = problem
+        self.face_mask = problem.face_mask
+        self.h = hs.h
+        self.energy = SlopeEnergy(problem.n, hs.h, hs.E_star)
+        self._plane = PlaneFit(self.face_mask, hs.h)
+        self.reference_slope = reference.reference_slope(
+            reference.mean_pressure(problem.normal_force, problem.radius), hs.E_star)
+        h0 = np.where(self.face_mask, np.asarray(initial_height, dtype=float), 0.0)
+        self.initial = face_statistics(-h0, self.face_mask, hs.h)
+        padded = np.pad(self.face_mask, 1)
+        interior = (padded[2:, 1:-1] & padded[:-2, 1:-1] & padded[1:-1, 2:]
+                    & padded[1:-1, :-2])
+        self.rim = self.face_mask & ~interior
+        m = problem.exponent
+        rate = problem.coefficient_field[self.rim] * m * problem.pixel_mean_pressure ** (m - 1)
+        # Layer width per unit sliding distance, in pixels.
+        self._rim_growth = rate * hs.E_star / hs.h
+        self._rim_weight = self._rim_weights(h0)
+        estimate = estimate_map_rms_slope(problem.labels, problem.wear_coefficients,
+                                          problem.normal_force, problem.radius, hs.E_star,
+                                          exponent=m, energy=self.energy)
+        self.map_error = estimate.error / estimate.rms_slope
+
+    def _rim_weights(self, h0):
+        """Squared rim stress intensity of each rim pixel relative to the flat punch's.
+
+        1 for a flat face.  Otherwise the ratio of the initial contact
+        pressure to the flat punch's on each rim pixel, squared: 0 where the
+        rim is out of contact at ``s = 0`` (no layer is worn there from the
+        start; if the contact reaches it later, the layer that forms there is
+        neither corrected nor in the per-step error bar).
+        """
+        f_star = self.problem.depth_scale
+        if np.ptp(h0[self.face_mask]) <= 1e-12 * f_star:
+            return np.ones(int(self.rim.sum()))
+        p = self.problem
+        kw = dict(rtol=p.contact_rtol, maxiter=p.contact_maxiter)
+        flat = solve_contact(p.halfspace, self.face_mask, np.zeros_like(h0), p.normal_force,
+                             **kw).pressure[self.rim]
+        start = solve_contact(p.halfspace, self.face_mask, h0, p.normal_force,
+                              **kw).pressure[self.rim]
+        return (start / flat) ** 2
+
+    def rim_layer_pixels(self, distance):
+        """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels."""
+        return float(np.min(self._rim_growth)) * distance
+
+    def figures(self, distance, height, pressure, approach):
+        """The history's figures of the face at one point of the run.
+
+        Parameters
+        ----------
+        distance : float, m
+            Sliding distance; at 0 the slope figures are the initial face's.
+        height : ndarray, shape (n, n), m
+            Face height (larger = recessed), any constant offset.
+        pressure : ndarray, shape (n, n), Pa
+            Contact pressure of ``height``.
+        approach : float, m
+            Rigid approach in the frame of ``height``.
+
+        Returns
+        -------
+        dict
+            ``rms_slope``, ``rms_slope_error``, ``rms_slope_source``,
+            ``rms_slope_plain``, ``rim_layer_pixels`` and ``rms_height`` (m).
+        """
+        face_mask = self.face_mask
+        hs = self.problem.halfspace
+        height = np.where(face_mask, height, 0.0)
+        face = np.where(face_mask, approach - height, 0.0)
+        integrals = self.energy(np.where(face_mask, pressure, 0.0), face_mask)
+        off = face_mask & ~(pressure > 0)
+        # In full contact the plain value is the estimator's own face sum.
+        plain = (face_rms_slope(hs, face_mask, height, pressure, approach) if off.any()
+                 else math.sqrt(integrals.face_sum / integrals.face_area))
+        out = {"rms_slope_plain": plain, "rim_layer_pixels": self.rim_layer_pixels(distance),
+               "rms_height": self._plane(face)}
+        if distance == 0:
+            out.update(rms_slope=self.initial.rms_slope,
+                       rms_slope_error=self.initial.rms_slope_error,
+                       rms_slope_source=SOURCE_INITIAL)
+            return out
+        energy = float(integrals.corrected)
+        source = SOURCE_CONTACT
+        if off.any():
+            gx, gy = hs.gradient(np.where(face_mask, pressure, 0.0))
+            fx, fy = masked_gradient(face, face_mask, self.h)
+            energy += float(np.sum((fx * fx + fy * fy - gx * gx - gy * gy)[off])) * self.h ** 2
+            source = SOURCE_PARTIAL_CONTACT
+        mean_square = energy / integrals.face_area
+        excess = self.reference_slope ** 2 * float(
+            np.mean(self._rim_weight * rim_layer_excess(self._rim_growth * distance)))
+        if self.problem.exponent == 1.0:
+            slope = math.sqrt(max(mean_square - excess, 0.0))
+            spread = RIM_LAYER_SCATTER * excess
+            rim_error = max(abs(math.sqrt(max(mean_square - excess + sign * spread, 0.0)) - slope)
+                            for sign in (-1.0, 1.0))
+        else:
+            slope = math.sqrt(max(mean_square, 0.0))
+            rim_error = slope - math.sqrt(max(mean_square - excess, 0.0))
+        out.update(rms_slope=slope, rms_slope_error=math.hypot(rim_error, self.map_error * slope),
+                   rms_slope_source=source)
+        return out
