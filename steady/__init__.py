@@ -7,6 +7,8 @@ pressure on each phase and the half-space displacement under it.  Modules:
 - :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
 - :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
 - :mod:`steady.phases` -- phase geometries rasterised at any grid size;
+- :mod:`steady.micrograph` -- micrographs segmented into phases and placed
+  on the face (needs the extra ``runin[micrograph]``);
 - :mod:`steady.pressures` -- the steady phase pressures (eq. 7) and their field;
 - :mod:`steady.solution` -- the steady solve;
 - :mod:`steady.accuracy` -- the energy-corrected rms slope and its error bar;
@@ -34,6 +36,7 @@ from .basis import PhaseBasis, SweepSlopes
 from .fit_files import MeasuredFace, read_fit, read_measured, write_fit
 from .grid import face_mask, pixel_centres, pixel_size, polar
 from .halfspace import HalfSpace
+from .micrograph import Micrograph, Segmentation, load_micrograph, segment
 from .output import StoredResult, atomic_h5, read_result, write_result
 from .phases import (
     ArrayMap,
@@ -56,9 +59,11 @@ __all__ = [
     "HalfSpace",
     "Homogeneous",
     "MeasuredFace",
+    "Micrograph",
     "PhaseBasis",
     "Rods",
     "Scene",
+    "Segmentation",
     "SlopeEnergy",
     "SlopeEstimate",
     "SteadyResult",
@@ -72,6 +77,7 @@ __all__ = [
     "face_mask",
     "fit_face",
     "fit_scene",
+    "load_micrograph",
     "load_phase_map",
     "load_scene",
     "parse_scene",
@@ -86,6 +92,7 @@ __all__ = [
     "realised_fill_factors",
     "reference",
     "ring_average",
+    "segment",
     "solve",
     "solve_scene",
     "validate_labels",

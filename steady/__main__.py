@@ -39,6 +39,7 @@ from .command_line import (
     run_command,
     steady_memory,
 )
+from .micrograph import Micrograph
 from .output import write_result
 from .scene import load_scene
 from .solution import solve_scene
@@ -107,6 +108,8 @@ def run(args):
     try:
         result = solve_scene(scene, slope_error=args.slope_error)
         lines = summary_lines(result)
+        if isinstance(scene.geometry, Micrograph):
+            lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
         write_result(args.output, result, scene, force=args.force)
         saved = args.output
         lines.append(f"result           {args.output}")

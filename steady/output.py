@@ -30,6 +30,14 @@ Steady result files (layout ``runin.steady``, version 1)::
         face      (n, n) float64      limiting face f_inf, NaN off   units "m"
         slope     (n, n) float64      |grad f_inf|, NaN off the face units "1"
         scene     scalar string       the scene TOML (attribute ``source_path``)
+    group ``micrograph``, only for a segmented micrograph (map kind "micrograph",
+    :mod:`steady.micrograph`); attributes
+        source            the image file
+        n_phases, smoothing (pixels), min_speck (pixels), specks, speck_pixels
+        thresholds        grey levels between the phases (PNG: fraction of full scale)
+        image_fill_factors  fraction of the image's pixels per phase
+        image_shape       (rows, cols)
+        pixel_size m, cover "crop" or "tile", offset (x, y) m
 
 An attribute cannot carry attributes, so the unit of attribute ``x`` is the
 string attribute ``x_units``.
@@ -46,6 +54,7 @@ import tempfile
 import h5py
 import numpy as np
 
+from .micrograph import Micrograph
 from .solution import SteadyResult
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "atomic_h5", "read_result",
@@ -317,6 +326,33 @@ def _write(f, result, scene):
                           dtype=h5py.string_dtype())
     ds.attrs["source_path"] = "" if scene is None or scene.source_path is None else str(
         scene.source_path)
+    if scene is not None and isinstance(scene.geometry, Micrograph):
+        _write_micrograph(f.create_group("micrograph"), scene.geometry)
+
+
+def _write_micrograph(group, geometry):
+    """The segmentation and placement of a micrograph map, as attributes of ``group``."""
+    seg = geometry.segmentation
+    values = {
+        "source": geometry.source,
+        "n_phases": seg.n_phases,
+        "thresholds": np.asarray(seg.thresholds, dtype=float),
+        "image_fill_factors": np.asarray(seg.fill_factors),
+        "smoothing": seg.smoothing,
+        "min_speck": seg.min_speck,
+        "specks": seg.specks,
+        "speck_pixels": seg.speck_pixels,
+        "image_shape": np.asarray(seg.shape),
+        "pixel_size": geometry.pixel_size,
+        "pixel_size_units": "m",
+        "cover": geometry.cover,
+        "offset": np.asarray(geometry.offset),
+        "offset_units": "m",
+        "smoothing_units": "pixels",
+        "min_speck_units": "pixels",
+    }
+    for name, value in values.items():
+        group.attrs[name] = value
 
 
 def read_result(path):

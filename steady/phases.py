@@ -25,7 +25,10 @@ Resolution rules (``labels`` refuses coarser grids):
   pixel is ``2 / n`` wide, so ``n >= ceil(2 sqrt(N))``;
 - :class:`Rods`: at least 3 pixels per radius of the smallest rod,
   ``n >= ceil(6 / r_min)`` (``r_min`` in units of ``a``);
-- :class:`ArrayMap`: ``n`` must be a multiple of the map's size.
+- :class:`ArrayMap`: ``n`` must be a multiple of the map's size;
+- :class:`~steady.inclusions.Inclusions` (random circular inclusions, in
+  :mod:`steady.inclusions`, exported here): at least 3 pixels per mean
+  radius, ``n >= ceil(6 / r)``.
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ from .grid import face_mask, pixel_centres
 __all__ = [
     "ArrayMap",
     "Homogeneous",
+    "Inclusions",
     "MIN_GRID",
     "Rods",
     "Voronoi",
@@ -733,8 +737,14 @@ def _png_labels(path, max_phases, max_size=None):
     levels, inverse = np.unique(pixels[on_face], axis=0, return_inverse=True)
     if len(levels) > max_phases:
         raise ValueError(f"phase map {str(path)!r} has {len(levels)} distinct levels on the "
-                         f"face, more than max_phases={max_phases} (anti-aliased image?)")
+                         f"face, more than max_phases={max_phases} (an anti-aliased image? "
+                         f"a micrograph is segmented by the map kind \"micrograph\")")
     labels = np.full(n0 * n0, -1, dtype=np.int64)
     labels[on_face] = inverse.ravel()
     logger.debug("%s: %d phases from levels %s", path, len(levels), levels.tolist())
     return labels.reshape(n0, n0)
+
+
+# Random circular inclusions live in their own module, which builds on the
+# helpers above; imported last so that the import is not circular.
+from .inclusions import Inclusions  # noqa: E402

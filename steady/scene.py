@@ -24,8 +24,21 @@ Map kinds (``[phases] map``):
   matrix_phase = 0, rod_phases = [1, ...] }`` -- centres and radii in m
   (like ``[punch] radius``); ``matrix_phase`` (default 0) and
   ``rod_phases`` (default 1 for every rod) optional.
+- ``{ kind = "inclusions", radius = 0.0002, fill_factor = 0.2, seed = 2024 }``
+  -- random non-overlapping circular inclusions (phase 1) in a matrix
+  (phase 0); ``radius`` is the mean radius in m; ``count`` (expected
+  inclusion centres on the face) instead of ``fill_factor``;
+  ``radius_spread`` (relative standard deviation of log-normal radii,
+  default 0) optional (see :class:`steady.inclusions.Inclusions`).
 - ``{ kind = "file", path = "phases.npy" }`` -- ``.npy`` or ``.png``, the
   path relative to the scene file (see :func:`steady.phases.load_phase_map`).
+- ``{ kind = "micrograph", path = "grains.png", n_phases = 2, smoothing = 1.0,
+  min_speck = 20, pixel_size = 2e-6, cover = "crop", offset = [0.0, 0.0] }``
+  -- a grey-level image segmented into ``n_phases`` phases; ``smoothing``
+  (Gaussian sigma, pixels, default 0), ``min_speck`` (pixels, default 0),
+  ``pixel_size`` (m, default: a square image spans the diameter), ``cover``
+  (``"crop"``, default, or ``"tile"``) and ``offset`` (m, default centred)
+  optional (see :func:`steady.micrograph.load_micrograph`).
 
 Every key is checked; unknown sections and keys are errors, so that a typo
 cannot pass silently.  Other packages can add sections through
@@ -51,6 +64,8 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 from .command_line import one_line, shorten
+from .inclusions import Inclusions
+from .micrograph import load_micrograph
 from .phases import Homogeneous, Rods, Voronoi, load_phase_map, validate_labels
 
 __all__ = ["CORE_SECTIONS", "MAX_SCENE_BYTES", "RUN_IN_SECTIONS", "Scene", "load_scene",
@@ -79,7 +94,10 @@ _MAP_KEYS = {
     "homogeneous": (set(), set()),
     "voronoi": ({"n_seeds", "fill_factors", "seed"}, set()),
     "rods": ({"centres", "radii"}, {"matrix_phase", "rod_phases"}),
+    "inclusions": ({"radius", "seed"}, {"fill_factor", "count", "radius_spread"}),
     "file": ({"path"}, set()),
+    "micrograph": ({"path", "n_phases"},
+                   {"smoothing", "min_speck", "pixel_size", "cover", "offset"}),
 }
 
 
@@ -249,10 +267,29 @@ def _geometry(spec, radius, base_dir, n):
             return Rods(tuple(centres), tuple(radii), matrix_phase, rod_phases)
         except ValueError as err:
             raise ValueError(f"{where}: {one_line(err, 300)}") from None
-    # kind == "file"
+    if kind == "inclusions":
+        options = {"seed": _integer(spec["seed"], f"{where} seed", minimum=0),
+                   "radius": _number(spec["radius"], f"{where} radius", "m") / radius}
+        for key, unit in (("fill_factor", "dimensionless"), ("count", "dimensionless"),
+                          ("radius_spread", "dimensionless")):
+            if key in spec:
+                options[key] = _number(spec[key], f"{where} {key}", unit,
+                                       positive=key != "radius_spread")
+        try:
+            return Inclusions(**options)
+        except ValueError as err:
+            raise ValueError(f"{where}: {one_line(err, 300)}") from None
+    # kind == "file" or "micrograph"
     path = spec["path"]
     if not isinstance(path, str) or not path:
         raise ValueError(f"{where} path must be a non-empty string, got {shorten(path)}")
+    if kind == "micrograph":
+        # The keys are load_micrograph's parameters, which check their values.
+        options = {key: value for key, value in spec.items() if key not in ("kind", "path")}
+        try:
+            return load_micrograph(pathlib.Path(base_dir) / path, radius, **options)
+        except ValueError as err:
+            raise ValueError(f"{where}: {one_line(err, 300)}") from None
     # The map's size must divide n: a larger one is refused before its data are read.
     return load_phase_map(pathlib.Path(base_dir) / path, max_size=n)
 

@@ -15,7 +15,7 @@ import pytest
 
 STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
-SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods"]
+SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
             "design_table", "runin_history", "runin_convergence"]
 
@@ -114,6 +114,19 @@ def test_fig78_rods_signs(runs):
     """k_steel/k_brass = 1.7: steel wears faster, so steel rods sit low, brass rods high."""
     a = attrs_of(runs["fig78_rods"][1])
     assert a["steel_in_brass_side_rods"] < 0 < a["brass_in_steel_side_rods"], a
+
+
+def test_rods_both_ways(runs):
+    """Steel proud only with the inverse ratio; each scene's inverse is the other's printed.
+
+    Steel rods in brass at 1/1.7 and brass rods in steel at 1.7 both have rods at 1.7 times
+    the matrix pressure: the same face up to the labels, so the same rms slope to round-off.
+    """
+    a = attrs_of(runs["rods_both_ways"][1])
+    for key in ("steel_in_brass", "brass_in_steel"):
+        assert a[f"{key}_printed_steel_relief"] < 0 < a[f"{key}_inverse_steel_relief"], a
+    assert a["steel_in_brass_inverse_rms_slope"] == pytest.approx(
+        a["brass_in_steel_printed_rms_slope"], rel=1e-12), "rods at 1.7 x the matrix pressure"
 
 
 def test_fig4_map_is_symmetric_in_the_mean(runs):

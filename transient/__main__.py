@@ -145,6 +145,10 @@ def build_parser():
     p.add_argument("--checkpoint-interval", type=float, metavar="SEC",
                    help="wall-clock seconds between checkpoints (0: every step; the first "
                         "one follows the first step)")
+    p.add_argument("--spatial-error", action="store_true",
+                   help="after the run, run the scene again on about half the grid and store "
+                        "the history's spatial error |S_n - S_n/2| as rms_slope_spatial_error "
+                        "(about a quarter of the cost)")
     add_memory_limit(p)
     p.add_argument("-v", "--verbose", action="count", default=0,
                    help="log progress (-v) or details (-vv) to stderr")
@@ -498,6 +502,7 @@ class _Job:
     options: object
     resume: object
     run_file: _RunFile
+    spatial_error: bool = False
 
 
 def _prepare(args, lock, scene, settings, initial, options):
@@ -541,7 +546,22 @@ def _prepare(args, lock, scene, settings, initial, options):
         if args.resume:
             _note(f"{str(out)!r} does not exist; starting a new run")
         run_file.start()
-    return _Job(scene, settings, initial, problem, h0, options, resume, run_file)
+    if args.spatial_error:
+        _check_companion(scene, initial, problem.n)
+    return _Job(scene, settings, initial, problem, h0, options, resume, run_file,
+                spatial_error=args.spatial_error)
+
+
+def _check_companion(scene, initial, n):
+    """Refuse ``--spatial-error`` before the run when no companion grid exists."""
+    from .spatial_error import companion_grid
+
+    m = companion_grid(scene.geometry, n)  # ValueError names the minimum grid
+    try:
+        initial.height(m, scene.radius)
+    except ValueError as err:
+        raise ValueError(f"--spatial-error needs the initial face on the companion grid "
+                         f"n = {m}: {err}") from None
 
 
 def run(args):
@@ -609,10 +629,28 @@ def _run(job):
     comparison = None
     if result.success:
         comparison = compare_with_steady(result, problem.solve_steady(), problem)
+        if job.spatial_error and not finished:
+            result = _companion(job, result)
     if not finished:
         extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
         job.run_file.write(result, comparison, extra)
     return result, comparison
+
+
+def _companion(job, result):
+    """The run on about half the grid beside it: the history's spatial error bar."""
+    from .spatial_error import spatial_error
+
+    bar = _Progress(0)
+    try:
+        companion = spatial_error(job.scene, job.initial, job.options, result, on_step=bar)
+    finally:
+        bar.close()
+    result = companion.attach(result)
+    error = result.history["rms_slope_spatial_error"] / result.reference_slope
+    print(f"spatial error (companion run on n = {companion.grid}, {companion.run.wall_time:.3g}"
+          f" s): largest {np.nanmax(error):.3g} grad_f0, at the end {error[-1]:.3g} grad_f0")
+    return result
 
 
 def _plot(out, png):

@@ -59,6 +59,7 @@ import math
 import numpy as np
 
 from steady import reference
+from steady.halfspace import HalfSpace
 from steady.accuracy import SlopeEnergy, estimate_map_rms_slope
 from steady.relief import PlaneFit, rms_height
 
@@ -235,6 +236,7 @@ class HistoryEstimator:
         self.face_mask = problem.face_mask
         self.h = hs.h
         self.energy = SlopeEnergy(problem.n, hs.h, hs.E_star)
+        self._own_halfspace = None
         self._plane = PlaneFit(self.face_mask, hs.h)
         self.reference_slope = reference.reference_slope(
             reference.mean_pressure(problem.normal_force, problem.radius), hs.E_star)
@@ -274,6 +276,19 @@ class HistoryEstimator:
                               **kw).pressure[self.rim]
         return (start / flat) ** 2
 
+    def _halfspace(self):
+        """A half-space operator of this estimator's own.
+
+        Its work buffers are not shared with the run's contact solver, so
+        that :meth:`figures` may run on another thread than the solves (as
+        :func:`transient.runin.run_in` does).  Built on first use: a run in
+        full contact never needs it.
+        """
+        if self._own_halfspace is None:
+            hs = self.problem.halfspace
+            self._own_halfspace = HalfSpace(hs.n, hs.h, hs.E_star, workers=hs.workers)
+        return self._own_halfspace
+
     def rim_layer_pixels(self, distance):
         """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels."""
         return float(np.min(self._rim_growth)) * distance
@@ -299,7 +314,7 @@ class HistoryEstimator:
             ``rms_slope_plain``, ``rim_layer_pixels`` and ``rms_height`` (m).
         """
         face_mask = self.face_mask
-        hs = self.problem.halfspace
+        hs = self._halfspace()
         height = np.where(face_mask, height, 0.0)
         face = np.where(face_mask, approach - height, 0.0)
         integrals = self.energy(np.where(face_mask, pressure, 0.0), face_mask)

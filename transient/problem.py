@@ -417,6 +417,7 @@ class PressureHistory:
         self.size = int(size)
         self._values = []
         self._products = []
+        self._work = None  # differences from the newest pressure and their products
         if pressures is not None:
             for p in np.asarray(pressures, dtype=float)[::-1]:
                 self.push(p)
@@ -470,11 +471,19 @@ class PressureHistory:
             # Differences from the newest pressure: x = v0 + D^T beta keeps the
             # load, and the small Gram matrix free of cancellation.  The
             # pressures vanish off the face, so the sums run over the face.
-            diff = np.array(self._values[1:]) - v0
-            kdiff = np.array(self._products[1:]) - kv0
+            k = len(self) - 1
+            if self._work is None:
+                self._work = np.empty((2, self.size - 1, v0.size))
+            diff, kdiff = self._work[0, :k], self._work[1, :k]
+            for i in range(k):  # in place: no temporaries of k full fields
+                np.subtract(self._values[i + 1], v0, out=diff[i])
+                np.subtract(self._products[i + 1], kv0, out=kdiff[i])
+            applied = kdiff
+            if shift is not None:
+                applied = kdiff + s * diff
             # einsum rather than BLAS: a threaded BLAS call on a loaded
             # machine can cost more than an FFT pair.
-            gram = np.einsum("ij,kj->ik", diff, kdiff + s * diff)
+            gram = np.einsum("ij,kj->ik", diff, applied)
             gram = 0.5 * (gram + gram.T)
             gradient = kv0 + s * v0 + height.ravel()
             rhs = np.einsum("ij,j->i", diff, gradient - gradient[face].mean())

@@ -52,6 +52,7 @@ library versions.
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import logging
 import math
@@ -71,6 +72,11 @@ from .stepping import StepState, get_scheme
 __all__ = ["HISTORY_UNITS", "RunOptions", "RunResult", "run_in"]
 
 logger = logging.getLogger(__name__)
+
+# History datasets filled by transient.history.HistoryEstimator.figures.
+_FACE_FIGURES = ("rms_slope", "rms_slope_error", "rms_slope_source", "rms_slope_plain",
+                 "rim_layer_pixels", "rms_height", "normalised_rms_slope",
+                 "normalised_rms_height")
 
 #: History datasets and their units (docs/model.md, "The run-in history").
 HISTORY_UNITS = {
@@ -303,6 +309,8 @@ class _Run:
         self.history = {name: [] for name in HISTORY_UNITS}
         self.snap_d, self.snap_h, self.snap_p = [], [], []
         self.pressures = None
+        self._worker = None
+        self._pending = []
 
     # -- recording -----------------------------------------------------
     def record(self, step, shape_rate):
@@ -312,14 +320,19 @@ class _Run:
         hist = self.history
         if getattr(self, "estimator", None) is None:  # a resumed run builds it here
             self.estimator = HistoryEstimator(p, self.initial_height)
-        figures = self.estimator.figures(self.s, self.height, self.pressure, self.approach)
+        # The face's figures are computed on a worker thread while the run goes on
+        # (they do not steer it); :meth:`result` waits for them.
+        if self._worker is None:
+            self._worker = concurrent.futures.ThreadPoolExecutor(
+                max_workers=1, thread_name_prefix="runin-history")
+        index = len(hist["distance"])
+        self._pending.append((index, self._worker.submit(
+            self.estimator.figures, self.s, self.height.copy(), self.pressure.copy(),
+            self.approach)))
         hist["distance"].append(self.s)
         hist["step"].append(step)
-        for name in ("rms_slope", "rms_slope_error", "rms_slope_source", "rms_slope_plain",
-                     "rim_layer_pixels", "rms_height"):
-            hist[name].append(figures[name])
-        hist["normalised_rms_slope"].append(figures["rms_slope"] / self.grad_f0)
-        hist["normalised_rms_height"].append(figures["rms_height"] / (self.grad_f0 * p.radius))
+        for name in _FACE_FIGURES:
+            hist[name].append(math.nan)
         hist["spread"].append(wear_rate_spread(p, self.pressure))
         hist["shape_rate"].append(shape_rate)
         hist["peak_pressure"].append(float(self.pressure.max()))
@@ -328,6 +341,26 @@ class _Run:
         worn = self.height + self.offset - self.initial_height
         hist["worn_volume"].append(float(np.sum(worn[face_mask])) * p.halfspace.h ** 2)
         hist["solves"].append(p.solves)
+
+    def collect(self):
+        """Wait for the face's figures still being computed and put them into the history."""
+        hist = self.history
+        pending, self._pending = self._pending, []
+        for index, future in pending:
+            figures = future.result()
+            for name in _FACE_FIGURES:
+                if name in figures:
+                    hist[name][index] = figures[name]
+            hist["normalised_rms_slope"][index] = figures["rms_slope"] / self.grad_f0
+            hist["normalised_rms_height"][index] = figures["rms_height"] / (
+                self.grad_f0 * self.problem.radius)
+
+    def close(self):
+        """Stop the worker thread (figures not collected are dropped)."""
+        if self._worker is not None:
+            self._worker.shutdown(wait=True, cancel_futures=True)
+            self._worker = None
+        self._pending = []
 
     def snapshot(self):
         """Store the face and the pressure at the current distance."""
@@ -338,6 +371,7 @@ class _Run:
 
     def result(self, status, message):
         """The run so far as a :class:`RunResult`."""
+        self.collect()
         n = self.problem.n
         k = len(self.snap_d)
         face_mask = self.problem.face_mask
@@ -600,13 +634,16 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     options = RunOptions() if options is None else options
     run = _Run(problem, options)
     run.t0 = time.monotonic()
-    if resume is None:
-        run.start(initial_height)
-    else:
-        run.restore(resume)
-    if resume is not None and resume.status == "steady":
-        return run.result("steady", resume.message)
-    status, message = run.loop(on_step, on_checkpoint)
-    log = logger.info if status == "steady" else logger.warning
-    log("%s: %s", status, message)
-    return run.result(status, message)
+    try:
+        if resume is None:
+            run.start(initial_height)
+        else:
+            run.restore(resume)
+        if resume is not None and resume.status == "steady":
+            return run.result("steady", resume.message)
+        status, message = run.loop(on_step, on_checkpoint)
+        log = logger.info if status == "steady" else logger.warning
+        log("%s: %s", status, message)
+        return run.result(status, message)
+    finally:
+        run.close()

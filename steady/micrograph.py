@@ -1,0 +1,602 @@
+"""Micrographs as phase maps: segmentation of a grey-level image and its placement on the face.
+
+A micrograph has hundreds of grey levels and noise, so it cannot be read
+like a pixel-exact phase map (one phase per grey level, see
+:func:`steady.phases.load_phase_map`).  Here it becomes a phase map in two
+steps:
+
+1. :func:`segment` splits the grey levels into a requested number of
+   phases: optional Gaussian smoothing, multi-level Otsu thresholds
+   (:func:`skimage.filters.threshold_multiotsu`; Liao, Chen & Chung,
+   J. Inf. Sci. Eng. 17, 2001), and removal of specks, connected patches
+   smaller than a given number of pixels, which take the phase that
+   surrounds them.  Phase 0 is the darkest.  The thresholds and the
+   realised fill factors are reported in a :class:`Segmentation`.
+2. :class:`Micrograph` places the segmented image on the face with its
+   own pixel size in metres: centred (or shifted by an offset) and either
+   cropped to the face's bounding square, which it must then cover, or
+   tiled periodically.  Each grid pixel takes the phase of the image pixel
+   under its centre (nearest neighbour: phases are labels, not values), so
+   the geometry can be rasterised at any grid size.
+
+The image is placed as it is viewed: its columns run along ``x`` (to the
+right), its rows along ``-y`` (the top row lies at the largest ``y``), so
+the phase map drawn by :mod:`steady.plotting` looks like the micrograph.
+
+Segmentation needs scikit-image, an optional extra:
+``pip install 'runin[micrograph]'``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import pathlib
+
+import numpy as np
+from scipy import ndimage
+
+from .command_line import shorten
+from .grid import face_mask, pixel_centres
+from .phases import MIN_GRID, _check_grid, _input_file, _png_size, npy_header
+
+__all__ = [
+    "COVERS",
+    "MAX_PIXELS",
+    "Micrograph",
+    "Segmentation",
+    "load_micrograph",
+    "read_grey",
+    "segment",
+]
+
+logger = logging.getLogger(__name__)
+
+#: Ways to fill the face from a micrograph of another size: ``"crop"`` (the
+#: image must cover the face's bounding square) or ``"tile"`` (periodic copies).
+COVERS = ("crop", "tile")
+
+#: Largest micrograph read, pixels (4096 x 4096); checked before its data
+#: are read.  Speck removal holds a few integer arrays of this size.
+MAX_PIXELS = 4096 * 4096
+
+#: Histogram bins of the Otsu thresholds: a threshold is known to within one
+#: bin, ``(max - min) / 256`` of the grey range.
+_OTSU_BINS = 256
+
+#: Luminance weights of ITU-R BT.709, for colour images (as scikit-image's rgb2gray).
+_LUMINANCE = (0.2125, 0.7154, 0.0721)
+
+#: Relative slack on the cover test, so that an image exactly as wide as the
+#: face passes despite rounding.
+_COVER_SLACK = 1e-9
+
+
+def _threshold_multiotsu():
+    """:func:`skimage.filters.threshold_multiotsu`, or ``ValueError`` naming the extra."""
+    try:
+        from skimage.filters import threshold_multiotsu  # optional dependency
+    except ImportError:
+        raise ValueError("segmenting a micrograph needs scikit-image: install the optional "
+                         "extra with pip install 'runin[micrograph]'") from None
+    return threshold_multiotsu
+
+
+def _is_integer(value):
+    return not isinstance(value, bool) and isinstance(value, (int, np.integer))
+
+
+def _is_number(value):
+    return not isinstance(value, bool) and isinstance(value, (int, float, np.integer,
+                                                              np.floating))
+
+
+def _check_n_phases(n_phases):
+    if not _is_integer(n_phases) or n_phases < 2:
+        raise ValueError(f"n_phases must be an integer of at least 2, got {shorten(n_phases)}")
+    return int(n_phases)
+
+
+def _check_smoothing(smoothing):
+    if not _is_number(smoothing) or not math.isfinite(smoothing) or smoothing < 0:
+        raise ValueError(f"smoothing must be a finite number >= 0 (Gaussian sigma, pixels), "
+                         f"got {shorten(smoothing)}")
+    return float(smoothing)
+
+
+def _check_min_speck(min_speck):
+    if not _is_integer(min_speck) or min_speck < 0:
+        raise ValueError(f"min_speck must be an integer >= 0 (pixels), got "
+                         f"{shorten(min_speck)}")
+    return int(min_speck)
+
+
+def _mm(value):
+    """A length in m, written in mm."""
+    return f"{value * 1e3:.6g} mm"
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Segmentation:
+    """A grey-level image split into phases, with what the split found.
+
+    Attributes
+    ----------
+    labels : ndarray, shape (rows, cols), int
+        Phase index of every image pixel, ``0..P-1`` by increasing grey
+        level (read-only).
+    thresholds : tuple of float, shape (P-1,)
+        Increasing grey levels between the phases, in the units of the
+        image (a PNG is read as a fraction of full scale, 0 black to 1
+        white); a pixel at or above ``thresholds[i]`` belongs to phase
+        ``i + 1`` or above.
+    fill_factors : tuple of float, shape (P,)
+        Fraction of the image's pixels in each phase after speck removal;
+        they sum to 1.  (The fill factors on the face depend on the crop
+        and the grid: :meth:`Micrograph.face_fill_factors`.)
+    smoothing : float, pixels
+        Standard deviation of the Gaussian smoothing (0: none).
+    min_speck : int, pixels
+        Connected patches smaller than this were relabelled (0 or 1: none).
+    specks : int
+        Number of patches relabelled.
+    speck_pixels : int
+        Number of pixels relabelled.
+    """
+
+    labels: np.ndarray
+    thresholds: tuple
+    fill_factors: tuple
+    smoothing: float
+    min_speck: int
+    specks: int
+    speck_pixels: int
+
+    @property
+    def n_phases(self):
+        """Number of phases ``P``."""
+        return len(self.fill_factors)
+
+    @property
+    def shape(self):
+        """``(rows, cols)`` of the image."""
+        return self.labels.shape
+
+    def summary(self):
+        """One line: the phases, the thresholds, the fill factors and the specks."""
+        thresholds = ", ".join(f"{t:.4g}" for t in self.thresholds)
+        fill = ", ".join(f"{f:.4f}" for f in self.fill_factors)
+        return (f"{self.n_phases} phases, thresholds {thresholds}, image fill factors {fill}, "
+                f"{self.specks} specks ({self.speck_pixels} pixels) relabelled")
+
+
+def _remove_specks(labels, n_phases, min_speck):
+    """Labels with every patch under ``min_speck`` pixels given the surrounding phase.
+
+    Patches are 4-connected (pixels sharing a side).  A removed pixel takes
+    the phase of the nearest kept pixel (Euclidean distance transform), so a
+    speck inside a grain takes the grain's phase and one on a boundary is
+    shared among its neighbours.
+    """
+    keep = np.ones(labels.shape, dtype=bool)
+    specks = 0
+    for phase in range(n_phases):
+        patches, _ = ndimage.label(labels == phase)
+        sizes = np.bincount(patches.ravel())
+        small = sizes < min_speck
+        small[0] = False  # background of this phase's labelling
+        specks += int(np.count_nonzero(small))
+        keep &= ~small[patches]
+    removed = int(labels.size - np.count_nonzero(keep))
+    if removed == 0:
+        return labels, 0, 0
+    if not keep.any():
+        raise ValueError(f"min_speck = {min_speck} removes every patch of the image: no phase "
+                         f"has a connected patch of {min_speck} pixels")
+    _, (ii, jj) = ndimage.distance_transform_edt(~keep, return_indices=True)
+    return labels[ii, jj], specks, removed
+
+
+def segment(image, n_phases, *, smoothing=0.0, min_speck=0):
+    """Split a grey-level image into phases by multi-level Otsu thresholds.
+
+    Parameters
+    ----------
+    image : ndarray, shape (rows, cols), float
+        Grey levels (any units; brighter is larger).
+    n_phases : int
+        Number of phases ``P >= 2``.
+    smoothing : float, optional
+        Standard deviation of a Gaussian smoothing applied first, in
+        pixels (default 0: none).  Noise of a few grey levels scatters
+        pixels across the thresholds; a sigma of about one pixel removes
+        most of that speckle at the cost of rounding grain corners.
+    min_speck : int, optional
+        After thresholding, connected patches (sharing a side) of fewer
+        than ``min_speck`` pixels take the phase of the pixels around them
+        (default 0: none).
+
+    Returns
+    -------
+    Segmentation
+        Phase 0 is the darkest.
+
+    Raises
+    ------
+    ValueError
+        scikit-image is not installed (the message names the extra), the
+        image is not a finite 2-d array, it has fewer distinct grey levels
+        than phases, a parameter is out of range, or a phase ends up with
+        no pixel (the message gives the thresholds).
+
+    Notes
+    -----
+    The thresholds maximise the between-class variance of the grey-level
+    histogram (256 bins between the smallest and the largest value, so a
+    threshold is resolved to one bin, 1/256 of the grey range).  Pixels are
+    classed by :func:`numpy.digitize`: a pixel equal to a threshold goes to
+    the brighter phase.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> image = np.zeros((40, 40))
+    >>> image[:, 10:] = 1.0             # three quarters bright
+    >>> image[5, 5] = 1.0               # a one-pixel speck in the dark part
+    >>> seg = segment(image, 2, min_speck=4)
+    >>> seg.fill_factors, seg.specks
+    ((0.25, 0.75), 1)
+    """
+    threshold_multiotsu = _threshold_multiotsu()
+    n_phases = _check_n_phases(n_phases)
+    smoothing = _check_smoothing(smoothing)
+    min_speck = _check_min_speck(min_speck)
+    image = np.asarray(image)
+    if image.ndim != 2:
+        raise ValueError(f"a micrograph must be a 2-d grey-level image, got shape {image.shape}")
+    if not (np.issubdtype(image.dtype, np.integer) or np.issubdtype(image.dtype, np.floating)
+            or np.issubdtype(image.dtype, np.bool_)):
+        raise ValueError(f"a micrograph must hold numbers, got dtype {image.dtype}")
+    image = image.astype(np.float64)
+    if not np.all(np.isfinite(image)):
+        raise ValueError(f"the micrograph has {np.count_nonzero(~np.isfinite(image))} "
+                         f"non-finite pixels (NaN or inf)")
+    if min(image.shape) < 2:
+        raise ValueError(f"a micrograph needs at least 2 x 2 pixels, got {image.shape}")
+    if smoothing >= min(image.shape):
+        raise ValueError(f"smoothing = {smoothing:g} pixels is not smaller than the image "
+                         f"({image.shape[0]} x {image.shape[1]} pixels)")
+    if min_speck > image.size:
+        raise ValueError(f"min_speck = {min_speck} pixels exceeds the image's {image.size} "
+                         f"pixels")
+    if smoothing > 0:
+        image = ndimage.gaussian_filter(image, smoothing, mode="nearest")
+    levels = np.unique(image)
+    if len(levels) < n_phases:
+        raise ValueError(f"the micrograph has {len(levels)} distinct grey levels, fewer than "
+                         f"the {n_phases} phases asked for")
+    try:
+        thresholds = np.asarray(threshold_multiotsu(image, classes=n_phases, nbins=_OTSU_BINS),
+                                dtype=np.float64)
+    except ValueError as err:
+        raise ValueError(f"cannot split the micrograph into {n_phases} phases: "
+                         f"{str(err)[:200]}") from None
+    labels = np.digitize(image, thresholds).astype(np.int64)
+    labels, specks, speck_pixels = _remove_specks(labels, n_phases, min_speck)
+    counts = np.bincount(labels.ravel(), minlength=n_phases)
+    empty = np.flatnonzero(counts == 0)
+    if empty.size:
+        raise ValueError(f"phase {int(empty[0])} has no pixel after segmentation into "
+                         f"{n_phases} phases (thresholds {thresholds.tolist()}, pixel counts "
+                         f"{counts.tolist()}); ask for fewer phases or a smaller min_speck")
+    labels = np.ascontiguousarray(labels)
+    labels.flags.writeable = False
+    return Segmentation(labels=labels, thresholds=tuple(float(t) for t in thresholds),
+                        fill_factors=tuple(float(c) for c in counts / labels.size),
+                        smoothing=smoothing, min_speck=min_speck, specks=specks,
+                        speck_pixels=speck_pixels)
+
+
+def read_grey(path):
+    """Read a micrograph as grey levels.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``.png`` (grey, grey with alpha, RGB or RGBA, 8 or 16 bits): read
+        as a fraction of full scale, 0 black to 1 white; colours become
+        their luminance (ITU-R BT.709 weights), alpha is ignored.
+        ``.npy``: a 2-d array of numbers, used as they are.
+
+    Returns
+    -------
+    ndarray, shape (rows, cols), float64
+
+    Raises
+    ------
+    ValueError
+        Missing, empty or unreadable file, an unsupported suffix, more than
+        :data:`MAX_PIXELS` pixels (refused before the data are read), not
+        2-d, not numbers.
+    """
+    path = pathlib.Path(path)
+    what = "micrograph"
+    suffix = path.suffix.lower()
+    _input_file(path, what)
+    if suffix == ".npy":
+        shape, dtype = npy_header(path, what=what)
+        if len(shape) != 2:
+            raise ValueError(f"{what} {str(path)!r} must be a 2-d array, got shape {shape}")
+        if math.prod(shape) > MAX_PIXELS:
+            raise ValueError(f"{what} {str(path)!r} has {shape[0]} x {shape[1]} pixels, more "
+                             f"than the {MAX_PIXELS} read")
+        if not (np.issubdtype(dtype, np.integer) or np.issubdtype(dtype, np.floating)
+                or np.issubdtype(dtype, np.bool_)):
+            raise ValueError(f"{what} {str(path)!r} must hold real numbers, got dtype {dtype}")
+        try:
+            return np.load(path, allow_pickle=False).astype(np.float64)
+        except (OSError, ValueError, EOFError) as err:
+            raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+    if suffix != ".png":
+        raise ValueError(f"{what} {str(path)!r} must be a .png or .npy file")
+    import matplotlib.image  # deferred: only PNG micrographs need it
+
+    try:
+        size = _png_size(path)
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
+    if size is None:
+        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
+    if size[0] * size[1] > MAX_PIXELS:
+        raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more than "
+                         f"the {MAX_PIXELS} read")
+    try:
+        img = matplotlib.image.imread(path)
+    except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
+        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+    img = np.asarray(img, dtype=np.float64)
+    if img.ndim == 3:
+        if img.shape[2] >= 3:
+            img = img[..., :3] @ np.asarray(_LUMINANCE)
+        else:  # grey and alpha
+            img = img[..., 0]
+    return img
+
+
+def _placement(shape, radius, pixel_size, cover, offset, source):
+    """Checked ``(pixel_size, cover, offset)`` of an image of ``shape`` on a face of ``radius``."""
+    rows, cols = shape
+    if not _is_number(radius) or not math.isfinite(radius) or radius <= 0:
+        raise ValueError(f"radius must be a positive finite number (m), got {shorten(radius)}")
+    if cover not in COVERS:
+        raise ValueError(f"cover must be one of {list(COVERS)}, got {shorten(cover)}")
+    try:
+        if isinstance(offset, (str, bytes)) or len(offset) != 2:
+            raise TypeError
+        offset = tuple(offset)
+        if not all(_is_number(v) and math.isfinite(v) for v in offset):
+            raise TypeError
+    except TypeError:
+        raise ValueError(f"offset must be a pair [x, y] of finite numbers (m), got "
+                         f"{shorten(offset)}") from None
+    offset = (float(offset[0]), float(offset[1]))
+    if pixel_size is None:
+        if rows != cols:
+            raise ValueError(f"micrograph {source!r} is {cols} x {rows} pixels: without a "
+                             f"pixel_size it must be square (it then spans the face's diameter)")
+        pixel_size = 2.0 * radius / cols
+    elif not _is_number(pixel_size) or not math.isfinite(pixel_size) or pixel_size <= 0:
+        raise ValueError(f"pixel_size must be a positive finite number (m), got "
+                         f"{shorten(pixel_size)}")
+    pixel_size = float(pixel_size)
+    if cover == "crop":
+        width, height = cols * pixel_size, rows * pixel_size
+        slack = 1.0 + _COVER_SLACK
+        if (abs(offset[0]) + radius > 0.5 * width * slack
+                or abs(offset[1]) + radius > 0.5 * height * slack):
+            raise ValueError(
+                f"micrograph {source!r} covers {_mm(width)} x {_mm(height)} ({cols} x {rows} "
+                f"pixels of {pixel_size:.6g} m) but the face needs {_mm(2 * radius)} x "
+                f"{_mm(2 * radius)} (diameter 2a) around offset ({_mm(offset[0])}, "
+                f"{_mm(offset[1])}): use cover = \"tile\", a larger image or a smaller offset")
+    return pixel_size, cover, offset
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Micrograph:
+    """A segmented micrograph placed on the face: a phase geometry.
+
+    Parameters
+    ----------
+    segmentation : Segmentation
+        The image's phases (see :func:`segment`).
+    radius : float, m
+        Punch radius ``a``.
+    pixel_size : float, m, optional
+        Side of one image pixel.  Default: the image must be square and
+        spans the face's diameter, ``2a / cols``.
+    cover : {"crop", "tile"}, optional
+        ``"crop"`` (default): the image, centred on the face (shifted by
+        ``offset``), must cover the face's bounding square
+        ``[-a, a]^2``; ``"tile"``: the image is repeated periodically, so
+        any pixel size covers the face.
+    offset : (float, float), m, optional
+        Position ``(x, y)`` of the face centre relative to the image
+        centre, ``x`` to the right, ``y`` up (default ``(0, 0)``).
+    source : str, optional
+        Where the image came from, e.g. its path (for messages and records).
+
+    Raises
+    ------
+    ValueError
+        A bad ``pixel_size``, ``cover`` or ``offset``, a non-square image
+        without ``pixel_size``, or a crop that does not cover the face (the
+        message gives both sizes).
+
+    Notes
+    -----
+    The grid pixel at ``(x, y)`` takes the phase of image pixel
+    ``(row, col) = (floor((H/2 - y - y0) / p), floor((x + x0 + W/2) / p))``
+    (taken modulo the image size when tiling), ``p`` the pixel size,
+    ``W x H`` the image's size and ``(x0, y0)`` the offset.  When
+    ``pixel_size = 2a / n0`` and ``n = k n0``, each image pixel becomes
+    exactly ``k x k`` grid pixels.  A grid coarser than the image keeps
+    one image pixel in every few: features smaller than the grid pixel
+    ``2a / n`` are lost or kept at random, like any nearest-neighbour
+    resampling.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> labels = np.zeros((4, 6), dtype=int)
+    >>> labels[:, 3:] = 1                    # right half of the image is phase 1
+    >>> seg = Segmentation(labels, (0.5,), (0.5, 0.5), 0.0, 0, 0, 0)
+    >>> geometry = Micrograph(seg, radius=1e-3, pixel_size=0.5e-3)   # 3 mm x 2 mm
+    >>> geometry.labels(8)[[0, 7], 4]        # left and right edge of the face, y ~ 0
+    array([0, 1])
+    """
+
+    segmentation: Segmentation
+    radius: float
+    pixel_size: float | None = None
+    cover: str = "crop"
+    offset: tuple = (0.0, 0.0)
+    source: str = "image"
+
+    def __post_init__(self):
+        """Check the placement; store the resolved pixel size and the offset as floats."""
+        if not isinstance(self.segmentation, Segmentation):
+            raise ValueError(f"segmentation must be a Segmentation, got "
+                             f"{shorten(self.segmentation)}")
+        pixel_size, cover, offset = _placement(self.segmentation.shape, self.radius,
+                                               self.pixel_size, self.cover, self.offset,
+                                               self.source)
+        object.__setattr__(self, "radius", float(self.radius))
+        object.__setattr__(self, "pixel_size", pixel_size)
+        object.__setattr__(self, "offset", offset)
+
+    @property
+    def n_phases(self):
+        """Number of phases of the segmentation."""
+        return self.segmentation.n_phases
+
+    @property
+    def extent(self):
+        """``(width, height)`` of the image, m."""
+        rows, cols = self.segmentation.shape
+        return cols * self.pixel_size, rows * self.pixel_size
+
+    def min_grid(self):
+        """Smallest accepted grid, :data:`steady.phases.MIN_GRID`."""
+        return MIN_GRID
+
+    def check_grid(self, n):
+        """``n`` as an int; ``ValueError`` if the grid is too coarse."""
+        return _check_grid(n, self.min_grid(), f"micrograph {self.source!r}")
+
+    def image_indices(self, n):
+        """Image row and column under each grid pixel centre.
+
+        Parameters
+        ----------
+        n : int
+            Pixels across the diameter.
+
+        Returns
+        -------
+        rows : ndarray, shape (n,), int
+            Image row under grid column ``j`` (coordinate ``y_j``).
+        cols : ndarray, shape (n,), int
+            Image column under grid row ``i`` (coordinate ``x_i``).
+        """
+        n = self.check_grid(n)
+        n_rows, n_cols = self.segmentation.shape
+        width, height = self.extent
+        x = pixel_centres(n, self.radius)
+        cols = np.floor((x + self.offset[0] + 0.5 * width) / self.pixel_size).astype(np.int64)
+        rows = np.floor((0.5 * height - x - self.offset[1]) / self.pixel_size).astype(np.int64)
+        if self.cover == "tile":
+            return rows % n_rows, cols % n_cols
+        # A crop covers the face: only rounding at an exact edge can step outside.
+        return np.clip(rows, 0, n_rows - 1), np.clip(cols, 0, n_cols - 1)
+
+    def labels(self, n):
+        """Phase of the image pixel under each face pixel centre, -1 off the face; shape (n, n)."""
+        rows, cols = self.image_indices(n)
+        picked = self.segmentation.labels[rows[None, :], cols[:, None]]
+        return np.where(face_mask(len(rows)), picked, -1)
+
+    def face_fill_factors(self, n):
+        """Fraction of the face pixels of each phase at grid ``n``, shape (P,).
+
+        Unlike :attr:`Segmentation.fill_factors` (the whole image), these
+        are what the model sees.  A phase absent from the face counts 0.
+        """
+        labels = self.labels(n)
+        counts = np.bincount(labels[labels >= 0], minlength=self.n_phases)
+        return counts / counts.sum()
+
+
+def load_micrograph(path, radius, n_phases, *, smoothing=0.0, min_speck=0, pixel_size=None,
+                    cover="crop", offset=(0.0, 0.0)):
+    """Read, segment and place a micrograph: the map kind ``micrograph`` of scene files.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``.png`` or ``.npy`` image (see :func:`read_grey`).
+    radius : float, m
+        Punch radius ``a``.
+    n_phases : int
+        Number of phases ``P >= 2``.
+    smoothing : float, pixels, optional
+        Gaussian sigma before thresholding (default 0).
+    min_speck : int, pixels, optional
+        Patches smaller than this take the surrounding phase (default 0).
+    pixel_size : float, m, optional
+        Side of one image pixel (default: a square image spanning ``2a``).
+    cover : {"crop", "tile"}, optional
+        Default ``"crop"``; see :class:`Micrograph`.
+    offset : (float, float), m, optional
+        Face centre relative to the image centre (default ``(0, 0)``).
+
+    Returns
+    -------
+    Micrograph
+        Its ``segmentation`` holds the thresholds and the image's fill
+        factors, also logged (``INFO``).
+
+    Raises
+    ------
+    ValueError
+        Any error of :func:`read_grey`, :func:`segment` or
+        :class:`Micrograph`; the parameters and the cover are checked
+        before the image is segmented.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "grey.npy"
+    >>> image = np.zeros((50, 60))
+    >>> image[:, 30:] = 1.0                  # dark left half, bright right half
+    >>> np.save(path, image)
+    >>> geometry = load_micrograph(path, 1e-3, 2, pixel_size=5e-5)  # 3 x 2.5 mm, face 2 mm
+    >>> geometry.segmentation.fill_factors, geometry.face_fill_factors(40)
+    ((0.5, 0.5), array([0.5, 0.5]))
+    """
+    path = pathlib.Path(path)
+    source = str(path)
+    n_phases = _check_n_phases(n_phases)
+    smoothing = _check_smoothing(smoothing)
+    min_speck = _check_min_speck(min_speck)
+    _threshold_multiotsu()  # name the missing extra before reading anything
+    image = read_grey(path)
+    _placement(image.shape, radius, pixel_size, cover, offset, source)  # before the work
+    try:
+        seg = segment(image, n_phases, smoothing=smoothing, min_speck=min_speck)
+    except ValueError as err:
+        raise ValueError(f"micrograph {source!r}: {err}") from None
+    logger.info("micrograph %s: %s", path, seg.summary())
+    return Micrograph(seg, radius, pixel_size, cover, offset, source)

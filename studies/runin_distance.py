@@ -1,0 +1,233 @@
+"""Run-in distance: how far a face slides before its friction proxy is within 1 % of steady.
+
+From a flat face, :func:`transient.runin.run_in` (SDIRK2, local error
+``tol`` in ``f*``) wears biphasic Voronoi punches to their steady state; the
+friction proxy is the history's ``normalised_rms_slope`` (the continuum
+estimate of :mod:`transient.history`, in units of ``grad_f0``).  The run-in
+distance ``s_1%`` is the distance after which it stays within 1 % of its
+steady value (the run's last value, the steady face of eq. 9): the last
+crossing of the 1 % band, interpolated in ``log s``.  Its bounds use the
+history's error bar: the band widened and narrowed by the error at each
+step.  Distances are in ``s* = a / (k_min E*)`` (``k_min`` the smaller wear
+coefficient) and, for the epoxy scene (``studies/scenes/epoxy_cylinder.toml``:
+``a = 4 mm``, ``E* = 1.3 MPa``, its ``k = 1e-13 1/Pa`` for the matrix), in
+metres.
+
+Sweeps (around ``k_2/k_1 = 0.1``, ``rho_2 = 0.3``, 20^2 seeds; two
+realisations each): the wear ratio ``k_2/k_1 = 0.01 .. 100``, the fill
+factor ``rho_2 = 0.1 .. 0.7``, the grain size (10^2, 20^2, 40^2 seeds), the
+homogeneous cylinder, and the grid (n = 64, 128, 256) for one map.
+
+Run::
+
+    python studies/runin_distance.py            # n = 128, 22 run-ins, about 5 min on one core
+    python studies/runin_distance.py --quick    # a few seconds
+    python studies/runin_distance.py --plot-only
+
+Writes ``out/runin_distance.h5`` and ``docs/figures/runin_distance.png``.
+"""
+
+import sys
+
+import numpy as np
+import study_io
+
+from steady.phases import Homogeneous, Voronoi
+from steady.scene import Scene, load_scene
+
+NAME = "runin_distance"
+BASE = {"ratio": 0.1, "fill": 0.3, "n_seeds": 400}
+PARAMS = {"n": 128, "tol": 1e-5, "band": 0.01, "base": BASE,
+          "ratios": [0.01, 0.1, 10.0, 100.0], "fills": [0.1, 0.3, 0.5, 0.7],
+          "n_seeds": [100, 400, 1600], "seeds": [1000, 1001], "grids": [64, 128, 256],
+          "scene": "epoxy_cylinder.toml"}
+QUICK = {"n": 32, "tol": 1e-3, "band": 0.01, "base": {"ratio": 0.1, "fill": 0.3, "n_seeds": 25},
+         "ratios": [0.1, 10.0], "fills": [0.3], "n_seeds": [25], "seeds": [1000],
+         "grids": [32, 48], "scene": "epoxy_cylinder.toml"}
+
+
+def crossing(distance, value, band):
+    """Distance after which ``|value - value[-1]|`` stays within ``band`` (array or scalar).
+
+    Parameters
+    ----------
+    distance : ndarray, shape (S,)
+        Increasing sliding distances (the first is 0).
+    value : ndarray, shape (S,)
+        The history; its last value is the steady one.
+    band : float or ndarray, shape (S,)
+        Allowed deviation at each sample.
+
+    Returns
+    -------
+    float
+        Interpolated in ``log s`` between the last sample outside the band and
+        the next; 0 if every sample after the first is inside; NaN if the last
+        outside sample is followed by a jump to the steady state (``s`` grows
+        by more than 1e3 in one step: the crossing is not resolved).
+    """
+    dev = np.abs(value - value[-1]) - band
+    outside = np.flatnonzero(dev > 0)
+    outside = outside[outside > 0]  # the flat face at s = 0 is not a history value
+    if outside.size == 0:
+        return 0.0
+    i = outside[-1]
+    if i + 1 >= distance.size or distance[i + 1] > 1e3 * distance[i]:
+        return float("nan")
+    t = dev[i] / (dev[i] - dev[i + 1])
+    return float(np.exp(np.log(distance[i]) + t * np.log(distance[i + 1] / distance[i])))
+
+
+def _run(case, n, tol, band):
+    """One run-in from a flat face; its history and run-in distances."""
+    from transient.initial_face import flat
+    from transient.problem import WearProblem
+    from transient.runin import RunOptions, run_in
+
+    if case["n_seeds"] == 0:
+        geometry, k = Homogeneous(), (1.0,)
+    else:
+        geometry = Voronoi(case["n_seeds"], (1 - case["fill"], case["fill"]), case["seed"])
+        k = (1.0, case["ratio"])
+    # a = 1 m, pbar = 1 Pa, E* = 1 Pa: distances come out in units of a / (k E*).
+    scene = Scene(radius=1.0, normal_force=np.pi, E_star=1.0, n=n, wear_coefficients=k,
+                  exponent=1.0, geometry=geometry)
+    result = run_in(WearProblem.from_scene(scene, n=n), flat(n, 1.0), RunOptions(tol=tol))
+    if not result.success:
+        raise ValueError(f"run-in of {case} ended {result.status}: {result.message}")
+    h = result.history
+    s = h["distance"] / result.run_in_distance
+    value = h["normalised_rms_slope"]
+    error = h["rms_slope_error"] / result.reference_slope
+    steady = value[-1]
+    return {"distance": s, "value": value, "error": error, "steady": steady,
+            "s1": crossing(s, value, band * steady),
+            "s1_low": crossing(s, value, band * steady + error),
+            "s1_high": crossing(s, value, np.maximum(band * steady - error, 0.0)),
+            "steps": result.steps, "wall_time": result.wall_time}
+
+
+def cases(params):
+    """The run-in cases of a study run: name -> (case, grid)."""
+    base, seeds = params["base"], params["seeds"]
+    out = {"homogeneous": ({"n_seeds": 0, "ratio": 1.0, "fill": 0.0, "seed": 0},
+                           params["n"])}
+
+    def add(group, **change):
+        for seed in seeds:
+            case = dict(base, seed=seed, **change)
+            out[f"{group}/seed{seed}"] = (case, params["n"])
+
+    for r in params["ratios"]:
+        add(f"ratio_{r:g}", ratio=r)
+    for f in params["fills"]:
+        add(f"fill_{f:g}", fill=f)
+    for c in params["n_seeds"]:
+        add(f"seeds_{c}", n_seeds=c)
+    for g in params["grids"]:
+        out[f"grid_{g}/seed{seeds[0]}"] = (dict(base, seed=seeds[0]), g)
+    return out
+
+
+def compute(path, params):
+    """Every case (the base case once per group that holds it); write HDF5."""
+    done, datasets, attrs = {}, {}, {}
+    for name, (case, n) in cases(params).items():
+        key = (tuple(sorted(case.items())), n)
+        if key not in done:
+            done[key] = _run(case, n, params["tol"], params["band"])
+        v = done[key]
+        for field in ("distance", "value", "error"):
+            datasets[f"{name}/{field}"] = (v[field], "s*" if field == "distance" else "grad_f0")
+        for field in ("steady", "s1", "s1_low", "s1_high", "steps", "wall_time"):
+            unit = {"steady": "grad_f0", "steps": "1", "wall_time": "s"}.get(field, "s*")
+            attrs[f"{name.replace('/', '_')}_{field}"] = (v[field], unit)
+    scene = load_scene(study_io.ROOT / "studies" / "scenes" / params["scene"])
+    attrs["epoxy_radius"] = (scene.radius, "m")
+    attrs["epoxy_E_star"] = (scene.E_star, "Pa")
+    attrs["epoxy_k"] = (scene.wear_coefficients[0], "1/Pa")
+    return study_io.write_study(path, NAME, params, datasets, attrs)
+
+
+def epoxy_metres(attrs, ratio):
+    """``s*`` in metres for the epoxy scene with ``k_1`` its coefficient, ``k_2 = ratio k_1``."""
+    k_min = attrs["epoxy_k"] * min(1.0, ratio)
+    return attrs["epoxy_radius"] / (k_min * attrs["epoxy_E_star"])
+
+
+def _group(attrs, params, group):
+    """Run-in distances of a group over its realisations: values, lows, highs (s*)."""
+    keys = [f"{group}_seed{s}" for s in params["seeds"]]
+    return tuple(np.array([attrs[f"{k}_{f}"] for k in keys]) for f in ("s1", "s1_low",
+                                                                          "s1_high"))
+
+
+def plot(path, png):
+    """Histories and the run-in distance against ratio, fill factor and grain size."""
+    d, a = study_io.read_study(path, NAME)
+    p = a["params"]
+    base = p["base"]
+    seed0 = p["seeds"][0]
+    fig = study_io.figure(13.0, 8.0)
+    axes = fig.subplots(2, 2)
+    ax = axes[0, 0]
+    names = ["homogeneous"] + [f"ratio_{r:g}/seed{seed0}" for r in p["ratios"]]
+    for j, name in enumerate(names):
+        s, v = d[f"{name}/distance"], d[f"{name}/value"]
+        ok = (s > 0) & (s < 1e6)
+        label = ("homogeneous" if name == "homogeneous"
+                 else f"$k_2/k_1$ = {name.split('/')[0][6:]}")
+        ax.loglog(s[ok], np.abs(v[ok] / v[-1] - 1), color=f"C{j}", lw=1, label=label)
+        s1 = a[f"{name.replace('/', '_')}_s1"]
+        ax.plot([s1], [p["band"]], "o", color=f"C{j}", ms=4)
+    ax.axhline(p["band"], color="k", lw=0.7, ls="--")
+    ax.set_ylim(1e-5, 2)
+    ax.set_xlabel(r"sliding distance / $s^* = a/(k_{min} E^*)$")
+    ax.set_ylabel("|rms slope / steady - 1|")
+    ax.set_title(f"from a flat face, $\\rho_2$ = {base['fill']:g}, "
+                 f"{int(round(np.sqrt(base['n_seeds'])))}$^2$ seeds, seed {seed0}, "
+                 f"n = {p['n']}; dots: $s_{{1\\%}}$", fontsize=9)
+    ax.legend(fontsize=7)
+    homog = a["homogeneous_s1"]
+    panels = [(axes[0, 1], "ratios", "ratio", r"wear ratio $k_2/k_1$", True),
+              (axes[1, 0], "fills", "fill", r"fill factor $\rho_2$", False),
+              (axes[1, 1], "n_seeds", "seeds", "mean seed spacing d / a", True)]
+    for ax, key, prefix, xlabel, logx in panels:
+        xs = np.asarray(p[key], dtype=float)
+        x_plot = 2 / np.sqrt(xs) if key == "n_seeds" else xs
+        for i, x in enumerate(xs):
+            group = f"{prefix}_{int(x) if key == 'n_seeds' else f'{x:g}'}"
+            s1, lo, hi = _group(a, p, group)
+            for m in range(s1.size):
+                ax.errorbar([x_plot[i] * (1 + 0.04 * (m - 0.5))], [s1[m]],
+                            yerr=[[s1[m] - lo[m]], [hi[m] - s1[m]]], fmt="o", ms=4,
+                            color=f"C{m}", capsize=2, lw=0.8,
+                            label=f"seed {p['seeds'][m]}" if i == 0 else "_nolegend_")
+        ax.axhline(homog, color="0.4", ls="--", lw=0.8, label="homogeneous")
+        if logx:
+            ax.set_xscale("log")
+        ax.set_yscale("log")
+        study_io.plain_log_ticks(ax)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(r"$s_{1\%}$ / $s^*$")
+        ax.legend(fontsize=7)
+    grid = ", ".join(f"n = {g}: {a[f'grid_{g}_seed{seed0}_s1']:.3g}" for g in p["grids"])
+    axes[0, 1].set_title(f"$\\rho_2$ = {base['fill']:g}, "
+                         f"{int(round(np.sqrt(base['n_seeds'])))}$^2$ seeds; bars: the history's "
+                         f"error bar\nbase case on other grids: {grid}", fontsize=9)
+    axes[1, 0].set_title(f"$k_2/k_1$ = {base['ratio']:g}, "
+                         f"{int(round(np.sqrt(base['n_seeds'])))}$^2$ seeds", fontsize=9)
+    metres = epoxy_metres(a, base["ratio"])
+    axes[1, 1].set_title(f"$k_2/k_1$ = {base['ratio']:g}, $\\rho_2$ = {base['fill']:g}; epoxy "
+                         f"scene: $s^*$ = {metres / 1e3:.3g} km, a = "
+                         f"{a['epoxy_radius'] * 1e3:g} mm", fontsize=9)
+    study_io.save_figure(fig, png, dpi=75)
+
+
+def main(argv=None):
+    """Run the study from the command line (``--help`` lists the options); exit status."""
+    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
