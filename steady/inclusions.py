@@ -44,13 +44,18 @@ _MAX_TRIES = 20_000
 _TAIL = 3.0
 
 
-def _positive(value, name):
-    if isinstance(value, bool):
+def _float(value, name):
+    """``value`` as a float; ``ValueError`` naming ``name`` if it is not a number."""
+    if isinstance(value, (bool, str, bytes)):
         raise ValueError(f"{name} must be a number, got {value!r}")
     try:
-        v = float(value)
+        return float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
+
+
+def _positive(value, name):
+    v = _float(value, name)
     if not (math.isfinite(v) and v > 0):
         raise ValueError(f"{name} must be positive and finite, got {value!r}")
     return v
@@ -116,13 +121,7 @@ class Inclusions:
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) \
                 or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
-        if isinstance(self.radius_spread, bool):
-            raise ValueError(f"radius_spread must be a number, got {self.radius_spread!r}")
-        try:
-            spread = float(self.radius_spread)
-        except (TypeError, ValueError):
-            raise ValueError(f"radius_spread must be a number, got "
-                             f"{self.radius_spread!r}") from None
+        spread = _float(self.radius_spread, "radius_spread")
         if not (math.isfinite(spread) and spread >= 0):
             raise ValueError(f"radius_spread must be finite and >= 0, got "
                              f"{self.radius_spread!r}")
@@ -143,13 +142,7 @@ class Inclusions:
             object.__setattr__(self, "count", count)
             what = f"count {count:g} (fill factor {fill:.4g})"
         else:
-            if isinstance(self.fill_factor, bool):
-                raise ValueError(f"fill_factor must be a number, got {self.fill_factor!r}")
-            try:
-                fill = float(self.fill_factor)
-            except (TypeError, ValueError):
-                raise ValueError(f"fill_factor must be a number, got "
-                                 f"{self.fill_factor!r}") from None
+            fill = _float(self.fill_factor, "fill_factor")
             if not (math.isfinite(fill) and 0.0 < fill < 1.0):
                 raise ValueError(f"fill_factor must lie in (0, 1), got {self.fill_factor!r}")
             object.__setattr__(self, "fill_factor", fill)

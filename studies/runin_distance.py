@@ -1,6 +1,6 @@
 """Run-in distance: how far a face slides before its friction proxy is within 1 % of steady.
 
-From a flat face, :func:`transient.runin.run_in` (SDIRK2, local error
+From a flat face, :func:`transient.runin.run_in` (ESDIRK3, local error
 ``tol`` in ``f*``) wears biphasic Voronoi punches to their steady state; the
 friction proxy is the history's ``normalised_rms_slope`` (the continuum
 estimate of :mod:`transient.history`, in units of ``grad_f0``).  The run-in
@@ -11,16 +11,19 @@ history's error bar: the band widened and narrowed by the error at each
 step.  Distances are in ``s* = a / (k_min E*)`` (``k_min`` the smaller wear
 coefficient) and, for the epoxy scene (``studies/scenes/epoxy_cylinder.toml``:
 ``a = 4 mm``, ``E* = 1.3 MPa``, its ``k = 1e-13 1/Pa`` for the matrix), in
-metres.
+metres.  Also the mean depth worn off by ``s_1%`` at the steady wear rate
+``k_eff pbar`` (``k_eff = 1 / sum_i rho_i / k_i``, eq. 6), in units of
+``f* = pbar a / E*``: it does not depend on the wear coefficients' scale.
 
-Sweeps (around ``k_2/k_1 = 0.1``, ``rho_2 = 0.3``, 20^2 seeds; two
+Sweeps (around ``k_2/k_1 = 0.1``, ``rho_2 = 0.3``, 20^2 seeds; four
 realisations each): the wear ratio ``k_2/k_1 = 0.01 .. 100``, the fill
 factor ``rho_2 = 0.1 .. 0.7``, the grain size (10^2, 20^2, 40^2 seeds), the
-homogeneous cylinder, and the grid (n = 64, 128, 256) for one map.
+homogeneous cylinder, and the grids n = 128, 256, 512 for one map of 20^2
+and one of 40^2 seeds.
 
 Run::
 
-    python studies/runin_distance.py            # n = 128, 22 run-ins, about 5 min on one core
+    python studies/runin_distance.py            # n = 256, 41 run-ins, about 5 min on one core
     python studies/runin_distance.py --quick    # a few seconds
     python studies/runin_distance.py --plot-only
 
@@ -37,13 +40,14 @@ from steady.scene import Scene, load_scene
 
 NAME = "runin_distance"
 BASE = {"ratio": 0.1, "fill": 0.3, "n_seeds": 400}
-PARAMS = {"n": 128, "tol": 1e-5, "band": 0.01, "base": BASE,
+PARAMS = {"n": 256, "scheme": "esdirk3", "tol": 1e-5, "band": 0.01, "base": BASE,
           "ratios": [0.01, 0.1, 10.0, 100.0], "fills": [0.1, 0.3, 0.5, 0.7],
-          "n_seeds": [100, 400, 1600], "seeds": [1000, 1001], "grids": [64, 128, 256],
-          "scene": "epoxy_cylinder.toml"}
-QUICK = {"n": 32, "tol": 1e-3, "band": 0.01, "base": {"ratio": 0.1, "fill": 0.3, "n_seeds": 25},
+          "n_seeds": [100, 400, 1600], "seeds": [1000, 1001, 1002, 1003],
+          "grids": [128, 256, 512], "grid_levels": [400, 1600], "scene": "epoxy_cylinder.toml"}
+QUICK = {"n": 32, "scheme": "esdirk3", "tol": 1e-3, "band": 0.01,
+         "base": {"ratio": 0.1, "fill": 0.3, "n_seeds": 25},
          "ratios": [0.1, 10.0], "fills": [0.3], "n_seeds": [25], "seeds": [1000],
-         "grids": [32, 48], "scene": "epoxy_cylinder.toml"}
+         "grids": [32, 48], "grid_levels": [25], "scene": "epoxy_cylinder.toml"}
 
 
 def crossing(distance, value, band):
@@ -78,7 +82,7 @@ def crossing(distance, value, band):
     return float(np.exp(np.log(distance[i]) + t * np.log(distance[i + 1] / distance[i])))
 
 
-def _run(case, n, tol, band):
+def _run(case, n, scheme, tol, band):
     """One run-in from a flat face; its history and run-in distances."""
     from transient.initial_face import flat
     from transient.problem import WearProblem
@@ -92,7 +96,8 @@ def _run(case, n, tol, band):
     # a = 1 m, pbar = 1 Pa, E* = 1 Pa: distances come out in units of a / (k E*).
     scene = Scene(radius=1.0, normal_force=np.pi, E_star=1.0, n=n, wear_coefficients=k,
                   exponent=1.0, geometry=geometry)
-    result = run_in(WearProblem.from_scene(scene, n=n), flat(n, 1.0), RunOptions(tol=tol))
+    problem = WearProblem.from_scene(scene, n=n)
+    result = run_in(problem, flat(n, 1.0), RunOptions(scheme=scheme, tol=tol))
     if not result.success:
         raise ValueError(f"run-in of {case} ended {result.status}: {result.message}")
     h = result.history
@@ -100,7 +105,12 @@ def _run(case, n, tol, band):
     value = h["normalised_rms_slope"]
     error = h["rms_slope_error"] / result.reference_slope
     steady = value[-1]
+    # Steady wear rate k_eff pbar with k_eff = 1 / sum_i (rho_i / k_i) (eq. 6): the mean
+    # depth worn off by the distance s (in s*) is s k_eff / k_min, in units of f*.
+    rho = problem.counts / problem.counts.sum()
+    depth_factor = 1.0 / np.sum(rho / np.asarray(k)) / min(k)
     return {"distance": s, "value": value, "error": error, "steady": steady,
+            "depth_factor": depth_factor,
             "s1": crossing(s, value, band * steady),
             "s1_low": crossing(s, value, band * steady + error),
             "s1_high": crossing(s, value, np.maximum(band * steady - error, 0.0)),
@@ -124,8 +134,10 @@ def cases(params):
         add(f"fill_{f:g}", fill=f)
     for c in params["n_seeds"]:
         add(f"seeds_{c}", n_seeds=c)
-    for g in params["grids"]:
-        out[f"grid_{g}/seed{seeds[0]}"] = (dict(base, seed=seeds[0]), g)
+    for level in params["grid_levels"]:
+        for g in params["grids"]:
+            out[f"grid_{level}_{g}/seed{seeds[0]}"] = (dict(base, seed=seeds[0],
+                                                            n_seeds=level), g)
     return out
 
 
@@ -135,17 +147,21 @@ def compute(path, params):
     for name, (case, n) in cases(params).items():
         key = (tuple(sorted(case.items())), n)
         if key not in done:
-            done[key] = _run(case, n, params["tol"], params["band"])
+            done[key] = _run(case, n, params["scheme"], params["tol"], params["band"])
         v = done[key]
         for field in ("distance", "value", "error"):
             datasets[f"{name}/{field}"] = (v[field], "s*" if field == "distance" else "grad_f0")
-        for field in ("steady", "s1", "s1_low", "s1_high", "steps", "wall_time"):
-            unit = {"steady": "grad_f0", "steps": "1", "wall_time": "s"}.get(field, "s*")
+        for field in ("steady", "s1", "s1_low", "s1_high", "depth_factor", "steps",
+                      "wall_time"):
+            unit = {"steady": "grad_f0", "steps": "1", "wall_time": "s",
+                    "depth_factor": "f* per s*"}.get(field, "s*")
             attrs[f"{name.replace('/', '_')}_{field}"] = (v[field], unit)
     scene = load_scene(study_io.ROOT / "studies" / "scenes" / params["scene"])
     attrs["epoxy_radius"] = (scene.radius, "m")
     attrs["epoxy_E_star"] = (scene.E_star, "Pa")
     attrs["epoxy_k"] = (scene.wear_coefficients[0], "1/Pa")
+    attrs["epoxy_depth_scale"] = (scene.normal_force / (np.pi * scene.radius * scene.E_star),
+                                  "m")
     return study_io.write_study(path, NAME, params, datasets, attrs)
 
 
@@ -156,10 +172,11 @@ def epoxy_metres(attrs, ratio):
 
 
 def _group(attrs, params, group):
-    """Run-in distances of a group over its realisations: values, lows, highs (s*)."""
+    """Run-in distances of a group over its realisations: values, lows, highs (s*), depth (f*)."""
     keys = [f"{group}_seed{s}" for s in params["seeds"]]
-    return tuple(np.array([attrs[f"{k}_{f}"] for k in keys]) for f in ("s1", "s1_low",
-                                                                          "s1_high"))
+    s1, low, high, factor = (np.array([attrs[f"{k}_{f}"] for k in keys])
+                             for f in ("s1", "s1_low", "s1_high", "depth_factor"))
+    return s1, low, high, s1 * factor
 
 
 def plot(path, png):
@@ -197,30 +214,38 @@ def plot(path, png):
         x_plot = 2 / np.sqrt(xs) if key == "n_seeds" else xs
         for i, x in enumerate(xs):
             group = f"{prefix}_{int(x) if key == 'n_seeds' else f'{x:g}'}"
-            s1, lo, hi = _group(a, p, group)
-            for m in range(s1.size):
-                ax.errorbar([x_plot[i] * (1 + 0.04 * (m - 0.5))], [s1[m]],
-                            yerr=[[s1[m] - lo[m]], [hi[m] - s1[m]]], fmt="o", ms=4,
-                            color=f"C{m}", capsize=2, lw=0.8,
-                            label=f"seed {p['seeds'][m]}" if i == 0 else "_nolegend_")
-        ax.axhline(homog, color="0.4", ls="--", lw=0.8, label="homogeneous")
+            s1, lo, hi, depth = _group(a, p, group)
+            hi = np.where(np.isfinite(hi), hi, 10 * s1)  # unresolved upper bound: off scale
+            jitter = x_plot[i] * (1 + 0.025 * (np.arange(s1.size) - 0.5 * (s1.size - 1)))
+            ax.errorbar(jitter, s1, yerr=[s1 - lo, hi - s1], fmt="o", ms=3.5, color="C0",
+                        capsize=2, lw=0.7,
+                        label=r"$s_{1\%}/s^*$ (bars: history error)" if i == 0 else "_nolegend_")
+            ax.plot(jitter, depth, "s", ms=4, mfc="none", color="C3",
+                    label=r"mean worn depth at $s_{1\%}$ / $f^*$" if i == 0 else "_nolegend_")
+        ax.axhline(homog, color="0.4", ls="--", lw=0.8, label="homogeneous (both)")
         if logx:
             ax.set_xscale("log")
         ax.set_yscale("log")
         study_io.plain_log_ticks(ax)
         ax.set_xlabel(xlabel)
-        ax.set_ylabel(r"$s_{1\%}$ / $s^*$")
+        ax.set_ylabel(r"$s_{1\%}$ / $s^*$;  worn depth / $f^*$")
         ax.legend(fontsize=7)
-    grid = ", ".join(f"n = {g}: {a[f'grid_{g}_seed{seed0}_s1']:.3g}" for g in p["grids"])
+    grid = "; ".join(
+        f"{int(round(np.sqrt(lv)))}$^2$: " + ", ".join(
+            f"{a[f'grid_{lv}_{g}_seed{seed0}_s1']:.3g}" for g in p["grids"])
+        for lv in p["grid_levels"])
     axes[0, 1].set_title(f"$\\rho_2$ = {base['fill']:g}, "
-                         f"{int(round(np.sqrt(base['n_seeds'])))}$^2$ seeds; bars: the history's "
-                         f"error bar\nbase case on other grids: {grid}", fontsize=9)
+                         f"{int(round(np.sqrt(base['n_seeds'])))}$^2$ seeds, {len(p['seeds'])} "
+                         f"realisations\n$s_{{1\\%}}$ on n = "
+                         f"{', '.join(str(g) for g in p['grids'])} (seed {seed0}): {grid}",
+                         fontsize=9)
     axes[1, 0].set_title(f"$k_2/k_1$ = {base['ratio']:g}, "
                          f"{int(round(np.sqrt(base['n_seeds'])))}$^2$ seeds", fontsize=9)
     metres = epoxy_metres(a, base["ratio"])
     axes[1, 1].set_title(f"$k_2/k_1$ = {base['ratio']:g}, $\\rho_2$ = {base['fill']:g}; epoxy "
-                         f"scene: $s^*$ = {metres / 1e3:.3g} km, a = "
-                         f"{a['epoxy_radius'] * 1e3:g} mm", fontsize=9)
+                         f"scene (a = {a['epoxy_radius'] * 1e3:g} mm): $s^*$ = "
+                         f"{metres / 1e3:.3g} km, $f^*$ = {a['epoxy_depth_scale'] * 1e3:.3g} mm",
+                         fontsize=9)
     study_io.save_figure(fig, png, dpi=75)
 
 

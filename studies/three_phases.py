@@ -250,7 +250,8 @@ def plot(path, png):
                           strict=True))
     ax.set_title(f"reduction: same pixels merged, max rel. diff. "
                  f"{a['reduction_max_relative_difference']:.1e};\nnew Voronoi labels, mean "
-                 f"diff. (R = {', '.join(f'{c:g}' for c in contrasts)}): {diffs}", fontsize=8)
+                 f"diff. (R = {', '.join(f'{c:g}' for c in contrasts)}):\n{diffs}",
+                 fontsize=8)
     ax.legend(fontsize=7)
     study_io.save_figure(fig, png, dpi=75)
 

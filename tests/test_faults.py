@@ -251,10 +251,10 @@ def test_sigint(tmp_path, write_slow_scene):
 
 @pytest.fixture
 def write_slow_scene(scene_file):
-    """A run of a thousand steps or more (n = 64, tol 1e-6): long enough to be interrupted."""
+    """A run of a thousand steps or more (n = 64, SDIRK2 at tol 1e-6): long enough to be interrupted."""
     def write():
         return scene_file("runin", filename="slow.toml", n=64,
-                          transient={"tol": 1e-6, "snapshots": (0.1, 1.0)})
+                          transient={"scheme": "sdirk2", "tol": 1e-6, "snapshots": (0.1, 1.0)})
     return write
 
 
@@ -403,11 +403,11 @@ def test_resume_with_another_scheme_is_recorded(stopped_run, capsys):
     notes = err.splitlines()
     assert len(notes) == 1 and notes[0].startswith(
         f"note: resuming {str(out)!r} at step 3, s = 0.000612691 s* with changed settings: "
-        f"scheme 'sdirk2' -> 'bdf2'; max_steps 3 -> 100000; checkpoint_interval 0.0 -> "
+        f"scheme 'esdirk3' -> 'bdf2'; max_steps 3 -> 100000; checkpoint_interval 0.0 -> "
         f"10.0"), f"stderr {err!r}"
     result, attrs, _ = read_run(out)
     parts = json.loads(attrs["settings_history"])
-    assert [p["settings"]["scheme"] for p in parts] == ["sdirk2", "bdf2"], parts
+    assert [p["settings"]["scheme"] for p in parts] == ["esdirk3", "bdf2"], parts
     assert [(p["from_step"], p["to_step"]) for p in parts] == [(0, 3), (3, result.steps)], parts
     assert [p["status"] for p in parts] == ["stopped", "steady"], parts
     assert parts[1]["from_distance"] == parts[0]["to_distance"], "parts must join"

@@ -87,6 +87,8 @@ def test_lognormal_mean_square_radius():
     ({"radius": 0.05, "seed": 3, "fill_factor": 0.0}, "must lie in (0, 1)"),
     ({"radius": 0.05, "seed": 3, "fill_factor": 1.2}, "must lie in (0, 1)"),
     ({"radius": 0.05, "seed": 3, "fill_factor": float("nan")}, "must lie in (0, 1)"),
+    ({"radius": 0.05, "seed": 3, "fill_factor": "0.2"}, "must be a number"),
+    ({"radius": 0.05, "seed": 3, "fill_factor": True}, "must be a number"),
     ({"radius": 0.05, "seed": 3, "fill_factor": 0.6}, "impossible packing"),
     ({"radius": 0.05, "seed": 3, "count": 300}, "impossible packing"),
     ({"radius": MAX_RADIUS, "seed": 3, "fill_factor": 0.1}, "too large"),

@@ -412,8 +412,7 @@ def test_shipped_scene_builds_its_phase_map(skimage, make_micrograph):
     assert abs(face[1] - 0.279) < 0.005, f"face fill factors {face}"
 
 
-@pytest.mark.slow
-def test_shipped_scene_runs_in(tmp_path):
+def test_shipped_scene_runs_in(skimage, tmp_path):  # about 2 s
     proc = subprocess.run([sys.executable, "-m", "transient",
                            str(SCENES / "micrograph_steady.toml"), "-o", str(tmp_path / "t.h5")],
                           cwd=tmp_path, capture_output=True, text=True, timeout=600)

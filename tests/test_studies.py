@@ -15,7 +15,8 @@ import pytest
 
 STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
-SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways"]
+SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways",
+          "three_phases", "wear_exponent", "random_inclusions", "runin_distance"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
             "design_table", "runin_history", "runin_convergence"]
 
@@ -127,6 +128,62 @@ def test_rods_both_ways(runs):
         assert a[f"{key}_printed_steel_relief"] < 0 < a[f"{key}_inverse_steel_relief"], a
     assert a["steel_in_brass_inverse_rms_slope"] == pytest.approx(
         a["brass_in_steel_printed_rms_slope"], rel=1e-12), "rods at 1.7 x the matrix pressure"
+
+
+@pytest.mark.parametrize("n", [63, 64])
+def test_three_phases_reduce_to_two(studies, n):
+    """k_soft = k_matrix: the three-phase map is the two-phase map of the same pixels.
+
+    Round-off only: over the 250 maps of the full study (n = 512) the largest relative
+    difference was 6.7e-16.
+    """
+    from steady.phases import Voronoi
+
+    geometry = Voronoi(100, (0.5, 0.2, 0.3), 4409)
+    three, merged, voronoi = studies["three_phases"].reduction(geometry, n, [10.0, 100.0])
+    assert np.allclose(three, merged, rtol=1e-12, atol=0), f"{three} vs {merged}"
+    assert np.all(three > 1.0) and np.all(voronoi > 1.0), "a biphasic face is rougher"
+
+
+def test_three_phases_quick(runs):
+    with h5py.File(runs["three_phases"][1], "r") as f:
+        assert f.attrs["reduction_max_relative_difference"] < 1e-12, "reduction to two phases"
+        rel = f["rms_slope"][()][..., :2] / f["closed_form_realised"][()][..., :2] - 1
+    # 10^2 seeds at n = 64: within 15 % of the fine-grain form (measured: 7 %).
+    assert np.all(np.abs(rel) < 0.15), f"three-phase map off the closed form: {rel}"
+
+
+def test_wear_exponent_is_an_effective_ratio(runs):
+    """Exponent m at k_2/k_1 is Archard's law at (k_2/k_1)^(1/m): the same pressures (eq. 7).
+
+    Round-off only (2.2e-16 in the quick run; the same in the full one).
+    """
+    a = attrs_of(runs["wear_exponent"][1])
+    assert a["map_max_difference_from_effective_ratio"] < 1e-12, a
+    assert a["collapse_max_difference_from_effective_ratio"] < 1e-12, a
+    peaks = a["map_max_mean"]
+    assert np.all(np.diff(peaks[1:]) < 0), f"larger m flattens the map: peaks {peaks}"
+
+
+def test_random_inclusions_quick(runs):
+    with h5py.File(runs["random_inclusions"][1], "r") as f:
+        rel = f["relative_to_closed_form"][()]
+        face, bound = f["face"][()], f["realised_fill"][()]
+    # Inclusions of 0.08 and 0.16 a at n = 96 against the fine-grain form: within 15 %
+    # (measured: 3.6 % for the realisation means, 8 % for single maps).
+    assert np.all(np.abs(rel) < 0.15), f"off the fine-grain form: {rel}"
+    # Parseval bound on the face, pillars case k_2/k_1 = 1e-3 (first ratio).
+    assert np.all(face[..., 0] <= 0.5 * np.pi / np.sqrt(bound) + 1e-9), "above the bound"
+
+
+def test_runin_distance_quick(runs):
+    """Every quick run-in has a run-in distance of order s*, bracketed by its bounds."""
+    a = attrs_of(runs["runin_distance"][1])
+    s1 = {k: v for k, v in a.items() if k.endswith("_s1")}
+    assert s1, "no run-in distances"
+    for key, value in s1.items():
+        low = a[key + "_low"]
+        assert 0 < low <= value < 10, f"{key}: {value} (low {low})"
 
 
 def test_fig4_map_is_symmetric_in_the_mean(runs):

@@ -144,9 +144,9 @@ def test_resume_refuses_another_scene(tmp_path, write_scene):
 
 
 def test_sigkill_at_any_moment_then_resume_is_bitwise_identical(tmp_path, write_scene):
-    # A run long enough to be killed mid-way (n = 48, tol 1e-5: ~300 steps),
-    # checkpointed after every step.
-    scene = write_scene(n=48, tol=1e-5)
+    # A run long enough to be killed mid-way (n = 48, SDIRK2 at tol 1e-5: ~300
+    # steps), checkpointed after every step.
+    scene = write_scene(n=48, tol=1e-5, scheme="sdirk2")
     reference = tmp_path / "reference.h5"
     proc = cli(scene, "-o", reference, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr

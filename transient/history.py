@@ -59,8 +59,8 @@ import math
 import numpy as np
 
 from steady import reference
-from steady.halfspace import HalfSpace
 from steady.accuracy import SlopeEnergy, estimate_map_rms_slope
+from steady.halfspace import HalfSpace
 from steady.relief import PlaneFit, rms_height
 
 from .contact import solve_contact

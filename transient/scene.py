@@ -4,7 +4,7 @@ They are registered with :func:`steady.scene.load_scene` through its
 ``extra_sections`` (``steady`` knows nothing of them)::
 
     [transient]
-    scheme = "sdirk2"           # registered integrator (transient.stepping.SCHEMES)
+    scheme = "esdirk3"          # registered integrator (transient.stepping.SCHEMES)
     tol = 1e-5                  # local error per step, rms shape / f*
     spread_tol = 1e-6           # steady: (max - min) / mean of k p^m over the contact ...
     shape_tol = 1e-6            # ... and shape change per s*, in f*
