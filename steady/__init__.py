@@ -36,6 +36,7 @@ from .basis import PhaseBasis, SweepSlopes
 from .fit_files import MeasuredFace, read_fit, read_measured, write_fit
 from .grid import face_mask, pixel_centres, pixel_size, polar
 from .halfspace import HalfSpace
+from .inclusions import Inclusions
 from .micrograph import Micrograph, Segmentation, load_micrograph, segment
 from .output import StoredResult, atomic_h5, read_result, write_result
 from .phases import (
@@ -58,6 +59,7 @@ __all__ = [
     "FitResult",
     "HalfSpace",
     "Homogeneous",
+    "Inclusions",
     "MeasuredFace",
     "Micrograph",
     "PhaseBasis",

@@ -251,7 +251,7 @@ def test_sigint(tmp_path, write_slow_scene):
 
 @pytest.fixture
 def write_slow_scene(scene_file):
-    """A run of a thousand steps or more (n = 64, SDIRK2 at tol 1e-6): long enough to be interrupted."""
+    """A run of a thousand steps or more (n = 64, SDIRK2, tol 1e-6): long enough to interrupt."""
     def write():
         return scene_file("runin", filename="slow.toml", n=64,
                           transient={"scheme": "sdirk2", "tol": 1e-6, "snapshots": (0.1, 1.0)})

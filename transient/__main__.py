@@ -170,13 +170,19 @@ def run_in_memory(n, snapshots=0):
     - the history's slope estimator (:class:`transient.history.HistoryEstimator`:
       :class:`steady.accuracy.SlopeEnergy`), kept (about 100,
       :func:`steady.command_line.slope_estimator_memory`);
-    - the larger of one step and one history record: SDIRK2's step, the
-      largest, has two stages, each a contact solve (pressure, gap,
-      preconditioned residual, direction, its product, displacement, shift
-      and warm start: 64), the stages' faces and error (32), the transforms
-      of one half-space product (112), the preconditioner's (16) and the
-      gradient of the record (64): 288; a record applies the slope
-      estimator (about 150);
+    - the pressure history of the warm starts
+      (:class:`transient.problem.PressureHistory`: six pressures and their
+      products, 96, and the differences of five of each, 80): 176;
+    - the larger of one step and the slope estimator's work: a step of
+      ESDIRK3, the largest, has three stages, each a contact solve
+      (pressure, gap, preconditioned residual, direction, its product,
+      displacement, shift and warm start: 64), the stages' rates, faces
+      and error (64), the transforms of one half-space product (112), the
+      stitched preconditioner's weights, symbols and transforms (48) and
+      the gradient of a partial-contact record (64): 352; the estimator
+      applied (about 150);
+    - one history record computed on the worker thread beside the step:
+      the face and pressure it copies (16) and the estimator applied;
     - each snapshot: face and pressure kept (16), their copies in every
       checkpoint (16), and the checkpoint's file image, built in memory and
       copied to disk (:func:`steady.output.atomic_h5`, 32): 64.
@@ -184,9 +190,9 @@ def run_in_memory(n, snapshots=0):
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
     The closing steady solve of the comparison needs less than one step.
-    Measured against the peak resident memory of a run (from
-    ``resource.getrusage``) at ``n = 256`` and 512 with 0 to 30 snapshots,
-    the estimate is an upper bound by a factor of 1.2 to 1.5
+    Measured against the peak resident memory of a run (the process's
+    high-water mark) at ``n = 256`` and 512 with 0 to 10 snapshots,
+    the estimate is an upper bound by a factor of 1.22 to 1.38
     (``tests/test_memory.py``).
 
     Parameters
@@ -204,13 +210,14 @@ def run_in_memory(n, snapshots=0):
     --------
     >>> from steady.command_line import format_bytes
     >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
-    256 MiB 95.7 GiB
+    384 MiB 163 GiB
     """
     n = int(n)
     pixels = n * n
     kept, applied = slope_estimator_memory(n)
-    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40) * pixels + kept
-            + max(288 * pixels, applied) + 64 * pixels * int(snapshots))
+    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 176) * pixels + kept
+            + max(352 * pixels, applied) + 16 * pixels + applied
+            + 64 * pixels * int(snapshots))
     return int(1.25 * peak) + 16 * 2 ** 20
 
 
