@@ -579,11 +579,7 @@ def plot_fit(fit_path, png_path, *, force=False, dpi=100):
     ValueError
         Unreadable fit file, or ``png_path`` exists and ``force`` is False.
     """
-    png_path = pathlib.Path(png_path)
-    if png_path.exists() and not force:
-        raise ValueError(f"output {str(png_path)!r} exists (use force to overwrite)")
-    fig = fit_figure(read_fit(fit_path))
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png_path, dpi=dpi)
-    logger.info("figure written to %s", png_path)
-    return png_path
+    from .plotting import _check_png, save_png  # deferred: matplotlib is slow to import
+
+    png_path = _check_png(png_path, force)
+    return save_png(fit_figure(read_fit(fit_path)), png_path, dpi=dpi)

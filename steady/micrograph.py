@@ -342,12 +342,7 @@ def read_grey(path):
         raise ValueError(f"{what} {str(path)!r} must be a .png or .npy file")
     import matplotlib.image  # deferred: only PNG micrographs need it
 
-    try:
-        size = _png_size(path)
-    except OSError as err:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
-    if size is None:
-        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
+    size = _png_size(path, what)
     if size[0] * size[1] > MAX_PIXELS:
         raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more than "
                          f"the {MAX_PIXELS} read")

@@ -692,12 +692,19 @@ def load_phase_map(path, *, max_phases=16, max_size=None):
     return ArrayMap(a, source=repr(str(path)))
 
 
-def _png_size(path):
-    """Width and height from a PNG's header, or None if it has no PNG signature."""
-    with open(path, "rb") as f:
-        head = f.read(24)
+def _png_size(path, what):
+    """Width and height from a PNG's header.
+
+    Raises ``ValueError`` naming the file as ``what`` if it cannot be read or
+    has no PNG signature.
+    """
+    try:
+        with open(path, "rb") as f:
+            head = f.read(24)
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
     if len(head) < 24 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
-        return None
+        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
     return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
 
 
@@ -706,12 +713,7 @@ def _png_labels(path, max_phases, max_size=None):
 
     what = "phase map"
     _input_file(path, what)
-    try:
-        size = _png_size(path)
-    except OSError as err:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
-    if size is None:
-        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
+    size = _png_size(path, what)
     if size[0] != size[1]:
         raise ValueError(f"{what} {str(path)!r} must be square, got {size[0]} x {size[1]} "
                          f"pixels")

@@ -104,10 +104,31 @@ def plot_file(result_path, png_path, *, force=False, dpi=120):
         Unreadable result file, or ``png_path`` exists and ``force`` is
         False.
     """
+    png_path = _check_png(png_path, force)
+    return save_png(result_figure(read_result(result_path)), png_path, dpi=dpi)
+
+
+def _check_png(png_path, force):
+    """``png_path`` as a path; ``ValueError`` if it exists and ``force`` is False."""
     png_path = pathlib.Path(png_path)
     if png_path.exists() and not force:
         raise ValueError(f"output {str(png_path)!r} exists (use force to overwrite)")
-    fig = result_figure(read_result(result_path))
+    return png_path
+
+
+def save_png(fig, png_path, *, dpi=120):
+    """Write a figure to a PNG file, creating missing parent directories.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    png_path : pathlib.Path
+    dpi : int, optional
+
+    Returns
+    -------
+    pathlib.Path
+    """
     png_path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(png_path, dpi=dpi)
     logger.info("figure written to %s", png_path)

@@ -509,7 +509,7 @@ class _Job:
     options: object
     resume: object
     run_file: _RunFile
-    spatial_error: bool = False
+    companion_grid: int | None = None  # --spatial-error: the companion run's grid
 
 
 def _prepare(args, lock, scene, settings, initial, options):
@@ -553,14 +553,13 @@ def _prepare(args, lock, scene, settings, initial, options):
         if args.resume:
             _note(f"{str(out)!r} does not exist; starting a new run")
         run_file.start()
-    if args.spatial_error:
-        _check_companion(scene, initial, problem.n)
+    grid = _companion_grid(scene, initial, problem.n) if args.spatial_error else None
     return _Job(scene, settings, initial, problem, h0, options, resume, run_file,
-                spatial_error=args.spatial_error)
+                companion_grid=grid)
 
 
-def _check_companion(scene, initial, n):
-    """Refuse ``--spatial-error`` before the run when no companion grid exists."""
+def _companion_grid(scene, initial, n):
+    """The grid of ``--spatial-error``'s companion run; refused before the run if none exists."""
     from .spatial_error import companion_grid
 
     m = companion_grid(scene.geometry, n)  # ValueError names the minimum grid
@@ -569,6 +568,7 @@ def _check_companion(scene, initial, n):
     except ValueError as err:
         raise ValueError(f"--spatial-error needs the initial face on the companion grid "
                          f"n = {m}: {err}") from None
+    return m
 
 
 def run(args):
@@ -636,7 +636,7 @@ def _run(job):
     comparison = None
     if result.success:
         comparison = compare_with_steady(result, problem.solve_steady(), problem)
-        if job.spatial_error and not finished:
+        if job.companion_grid is not None and not finished:
             result = _companion(job, result)
     if not finished:
         extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
@@ -650,7 +650,8 @@ def _companion(job, result):
 
     bar = _Progress(0)
     try:
-        companion = spatial_error(job.scene, job.initial, job.options, result, on_step=bar)
+        companion = spatial_error(job.scene, job.initial, job.options, result,
+                                  grid=job.companion_grid, on_step=bar)
     finally:
         bar.close()
     result = companion.attach(result)

@@ -58,7 +58,7 @@ def masked_gradient(field, face_mask, h):
     return out
 
 
-def face_rms_slope(halfspace, face_mask, height, pressure, approach):
+def face_rms_slope(halfspace, face_mask, height, pressure, approach, *, gradient=None):
     """Plain pixel rms slope of the worn face over the face pixels, dimensionless.
 
     On the contact the face is ``d - w = K p``, whose gradient is the exact
@@ -85,13 +85,17 @@ def face_rms_slope(halfspace, face_mask, height, pressure, approach):
     pressure : ndarray, shape (n, n), Pa
         Contact pressure of ``height``.
     approach : float, m
+    gradient : tuple of ndarray, optional
+        ``halfspace.gradient(pressure)``, when the caller has it already.
 
     Returns
     -------
     float
     """
     pressure_q = halfspace.forward(pressure)
-    gx, gy = halfspace.gradient(pressure, pressure_q=pressure_q)
+    if gradient is None:
+        gradient = halfspace.gradient(pressure, pressure_q=pressure_q)
+    gx, gy = gradient
     contact = pressure > 0
     if np.any(face_mask & ~contact):
         kp = halfspace.displacement_q(pressure_q)

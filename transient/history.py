@@ -317,11 +317,15 @@ class HistoryEstimator:
         hs = self._halfspace()
         height = np.where(face_mask, height, 0.0)
         face = np.where(face_mask, approach - height, 0.0)
-        integrals = self.energy(np.where(face_mask, pressure, 0.0), face_mask)
+        pressure = np.where(face_mask, pressure, 0.0)
+        integrals = self.energy(pressure, face_mask)
         off = face_mask & ~(pressure > 0)
-        # In full contact the plain value is the estimator's own face sum.
-        plain = (face_rms_slope(hs, face_mask, height, pressure, approach) if off.any()
-                 else math.sqrt(integrals.face_sum / integrals.face_area))
+        # In partial contact the plain value and the correction off the contact
+        # share the exact-kernel gradient of K p; in full contact the plain
+        # value is the estimator's own face sum.
+        gradient = hs.gradient(pressure) if off.any() else None
+        plain = (face_rms_slope(hs, face_mask, height, pressure, approach, gradient=gradient)
+                 if off.any() else math.sqrt(integrals.face_sum / integrals.face_area))
         out = {"rms_slope_plain": plain, "rim_layer_pixels": self.rim_layer_pixels(distance),
                "rms_height": self._plane(face)}
         if distance == 0:
@@ -332,7 +336,7 @@ class HistoryEstimator:
         energy = float(integrals.corrected)
         source = SOURCE_CONTACT
         if off.any():
-            gx, gy = hs.gradient(np.where(face_mask, pressure, 0.0))
+            gx, gy = gradient
             fx, fy = masked_gradient(face, face_mask, self.h)
             energy += float(np.sum((fx * fx + fy * fy - gx * gx - gy * gy)[off])) * self.h ** 2
             source = SOURCE_PARTIAL_CONTACT
