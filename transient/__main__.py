@@ -274,16 +274,24 @@ def _at(steps, distance_s_star):
 
 @contextlib.contextmanager
 def _interrupt_held():
-    """Hold Ctrl-C (SIGINT) back until the block is done; it arrives right after."""
-    if (not hasattr(signal, "pthread_sigmask")
-            or threading.current_thread() is not threading.main_thread()):
+    """Hold Ctrl-C (SIGINT) back until the block is done; it arrives right after.
+
+    A handler of its own notes the signal during the block and the
+    interrupt is raised when the block ends.  (Blocking the signal with a
+    thread's signal mask instead lets the kernel hand it to another thread
+    of the process, a transform or BLAS worker, where it can be lost.)
+    """
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    held = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        signal.signal(signal.SIGINT, previous)
+    if held:
+        raise KeyboardInterrupt
 
 
 class _RunFile:
