@@ -1,20 +1,20 @@
-"""Elastic half-space operator on a square pixel grid (paper eq. 8).
+"""Elastic half-space operator on a rectangular grid of square pixels (paper eq. 8).
 
 The surface displacement of an elastic half-space under a pressure that is
 constant on each square pixel of side ``h`` is an aperiodic convolution of the
 pixel pressures with the exact pixel influence coefficient (Love's closed form
 of the integral of ``1/r`` over a rectangle; Johnson, *Contact Mechanics*,
 sec. 3.9).  The surface gradient is the convolution with the exact
-derivative of the same integral.  Both convolutions are done by zero padding
-to ``2n x 2n`` and real FFTs (DC-FFT; Liu, Wang & Liu, Wear 243, 2000,
-doi:10.1016/S0043-1648(00)00427-0).
+derivative of the same integral.  On an ``nx x ny`` grid both convolutions
+are done by zero padding to ``2nx x 2ny`` and real FFTs (DC-FFT; Liu, Wang &
+Liu, Wear 243, 2000, doi:10.1016/S0043-1648(00)00427-0).
 
 Fourier-space arrays carry the suffix ``_q``.  The influence kernel is even
 in both axes, so its spectrum is real; the derivative kernels are odd in
 one axis, so their spectra are purely imaginary.  Only the real (resp.
 imaginary) parts are stored.
 
-The inverse transform keeps only the ``n`` rows of the face after its
+The inverse transform keeps only the ``nx`` rows of the grid after its
 column pass, and the padded input and the product's spectrum live in work
 buffers allocated once, so that one product costs less than a plain padded
 FFT pair.  The buffers make an instance unsafe to share between threads.
@@ -28,7 +28,7 @@ import logging
 import numpy as np
 import scipy.fft
 
-__all__ = ["HalfSpace", "pixel_integral", "pixel_integral_gradient"]
+__all__ = ["HalfSpace", "grid_shape", "pixel_integral", "pixel_integral_gradient"]
 
 logger = logging.getLogger(__name__)
 
@@ -125,26 +125,49 @@ def _pixel_corner_sum(ox, oy, h, antiderivative):
             - F(Xp[:, None], Ym[None, :]) + F(Xm[:, None], Ym[None, :]))
 
 
-def _corner_asinh(n, h):
-    """``asinh(Y/|X|)`` on the ``(n + 2)^2`` lattice of pixel corners.
+def _corner_asinh(shape, h):
+    """Corner coordinates and ``asinh`` lattices of an ``nx x ny`` grid.
 
-    Corners sit at ``(i - 1/2) h`` for ``i = 0..n+1``; none is zero, so no
-    case needs special treatment.  The same array yields the influence
-    kernel and the x-derivative kernel.
+    Corners sit at ``(i - 1/2) h`` for ``i = 0..nx+1`` along x and
+    ``j = 0..ny+1`` along y; none is zero, so no case needs special
+    treatment.  Returns ``(cx, cy, asinh(Y/|X|), asinh(X/|Y|))``, the two
+    lattices of shape ``(nx + 2, ny + 2)``.  The same arrays yield the
+    influence kernel and both derivative kernels; on a square grid the
+    second lattice is the transpose of the first.
     """
-    corners = (np.arange(n + 2) - 0.5) * h
-    return corners, np.arcsinh(corners[None, :] / np.abs(corners[:, None]))
+    nx, ny = shape
+    corners = (np.arange(max(nx, ny) + 2) - 0.5) * h
+    lattice = np.arcsinh(corners[None, :] / np.abs(corners[:, None]))
+    cx, cy = corners[: nx + 2], corners[: ny + 2]
+    return cx, cy, lattice[: nx + 2, : ny + 2], lattice.T[: nx + 2, : ny + 2]
 
 
-def _influence_quadrant(corners, asinh):
-    """Pixel integral of ``1/r`` at offsets ``0..n`` pixels, from the corner lattice."""
-    g = corners[:, None] * asinh  # X asinh(Y/|X|); the other half is its transpose
-    g += g.T
-    return _corner_sum(g)
+def _influence_quadrant(cx, cy, asinh_yx, asinh_xy):
+    """Pixel integral of ``1/r`` at offsets ``0..nx`` by ``0..ny`` pixels, from the corners."""
+    return _corner_sum(cx[:, None] * asinh_yx + cy[None, :] * asinh_xy)
+
+
+def grid_shape(n):
+    """``(nx, ny)`` of a grid given as ``n`` (square) or ``(nx, ny)``, checked.
+
+    Raises
+    ------
+    ValueError
+        If a size is not an integer of at least 2.
+    """
+    shape = (n, n) if np.ndim(n) == 0 else tuple(n)
+    if len(shape) != 2:
+        raise ValueError(f"grid shape must be n or (nx, ny), got {n!r}")
+    out = []
+    for v in shape:
+        if isinstance(v, (bool, np.bool_)) or int(v) != v or int(v) < 2:
+            raise ValueError(f"grid sizes must be integers of at least 2, got {n!r}")
+        out.append(int(v))
+    return tuple(out)
 
 
 class HalfSpace:
-    """Aperiodic elastic half-space operator on an ``n x n`` pixel grid.
+    """Aperiodic elastic half-space operator on an ``nx x ny`` pixel grid.
 
     Build once per grid and modulus; the influence spectra are computed at
     construction (displacement) or on first use (gradient) and cached, so
@@ -152,10 +175,11 @@ class HalfSpace:
 
     Parameters
     ----------
-    n : int
-        Pixels along each axis of the square grid.
+    n : int or (int, int)
+        Pixels along each axis: ``n`` for a square ``n x n`` grid, or
+        ``(nx, ny)`` (x along axis 0, y along axis 1).
     h : float, m
-        Pixel side.
+        Pixel side (pixels are square).
     E_star : float, Pa
         Effective modulus ``E / (1 - nu^2)`` of the half-space.
     workers : int, optional
@@ -164,7 +188,7 @@ class HalfSpace:
     Notes
     -----
     Arrays are indexed ``[i, j]`` with ``i`` along x (axis 0) and ``j``
-    along y (axis 1).  The displacement is ``u = K p`` with
+    along y (axis 1); fields have the shape :attr:`shape`.  The displacement is ``u = K p`` with
     ``K(x) = 1/(pi E*) * integral over a pixel of 1/r``; it is positive
     into the half-space.
 
@@ -185,117 +209,129 @@ class HalfSpace:
     """
 
     def __init__(self, n, h, E_star, *, workers=-1):
-        n = int(n)
-        if n < 2:
-            raise ValueError(f"grid size n must be at least 2, got {n}")
+        self.shape = grid_shape(n)
         if not (np.isfinite(h) and h > 0):
             raise ValueError(f"pixel size h must be positive and finite, got {h!r} m")
         if not (np.isfinite(E_star) and E_star > 0):
             raise ValueError(f"E_star must be positive and finite, got {E_star!r} Pa")
-        self.n = n
+        nx, ny = self.shape
         self.h = float(h)
         self.E_star = float(E_star)
         self.workers = workers
-        self._m = 2 * n  # padded size
-        self._corners = _corner_asinh(n, self.h)
+        self.padded_shape = (2 * nx, 2 * ny)
+        self._corners = _corner_asinh(self.shape, self.h)
         self._influence_q = self._even_spectrum(self.influence_quadrant)
         self._influence_q.flags.writeable = False
         self._gradient_q = None
         # Work buffers, reused by every product: the zero padding is written
         # once, and the products need no fresh allocation.
-        self._padded = np.zeros((self._m, self._m))
-        self._work = np.empty((self._m, n + 1), dtype=complex)
+        self._padded = np.zeros(self.padded_shape)
+        self._work = np.empty((2 * nx, ny + 1), dtype=complex)
+
+    @property
+    def n(self):
+        """Pixels along each axis of a square grid (``shape`` is ``(n, n)``).
+
+        Raises
+        ------
+        ValueError
+            On a rectangular grid, which has no single size: use :attr:`shape`.
+        """
+        nx, ny = self.shape
+        if nx != ny:
+            raise ValueError(f"the grid is {nx} x {ny}, not square: use HalfSpace.shape")
+        return nx
 
     # -- spectra -------------------------------------------------------
-    # The circulant 2n x 2n embeddings of the kernels are even (influence)
+    # The circulant 2nx x 2ny embeddings of the kernels are even (influence)
     # or odd in one axis (derivatives), so their spectra follow from the
-    # (n+1) x (n+1) quadrant by type-I cosine and sine transforms, without
-    # building the embedding.  The entry at offset n never reaches the face
-    # (offsets there span -(n-1)..n-1); the transforms take it as the even
-    # extension's value, or as zero for an odd extension.
+    # (nx+1) x (ny+1) quadrant by type-I cosine and sine transforms, without
+    # building the embedding.  The entries at offset nx (ny) never reach the
+    # grid (offsets there span -(nx-1)..nx-1); the transforms take them as the
+    # even extension's value, or as zero for an odd extension.
     def _even_spectrum(self, quadrant):
-        """Real spectrum (2n, n + 1) of a kernel even in both axes."""
-        n, w = self.n, self.workers
+        """Real spectrum (2nx, ny + 1) of a kernel even in both axes."""
+        nx, w = self.shape[0], self.workers
         c = scipy.fft.dct(scipy.fft.dct(quadrant, type=1, axis=0, workers=w),
                           type=1, axis=1, workers=w)
-        return np.concatenate([c, c[n - 1:0:-1]], axis=0)
+        return np.concatenate([c, c[nx - 1:0:-1]], axis=0)
 
     def _odd_x_spectrum(self, quadrant):
-        """Imaginary part (2n, n + 1) of the spectrum of a kernel odd in x, even in y.
+        """Imaginary part (2nx, ny + 1) of the spectrum of a kernel odd in x, even in y.
 
-        ``X_k = -2i sum_j x_j sin(pi j k / n)``: minus i times a type-I sine
-        transform of the interior rows; ``X_{2n-k} = -X_k``.
+        ``X_k = -2i sum_j x_j sin(pi j k / nx)``: minus i times a type-I sine
+        transform of the interior rows; ``X_{2nx-k} = -X_k``.
         """
-        n, w = self.n, self.workers
-        c = scipy.fft.dct(quadrant[1:n], type=1, axis=1, workers=w)
+        (nx, ny), w = self.shape, self.workers
+        c = scipy.fft.dct(quadrant[1:nx], type=1, axis=1, workers=w)
         s = scipy.fft.dst(c, type=1, axis=0, workers=w)
-        out = np.empty((2 * n, n + 1))
-        out[0] = out[n] = 0.0
-        out[1:n] = -s
-        out[n + 1:] = s[::-1]
+        out = np.empty((2 * nx, ny + 1))
+        out[0] = out[nx] = 0.0
+        out[1:nx] = -s
+        out[nx + 1:] = s[::-1]
         return out
 
     def _odd_y_spectrum(self, quadrant):
-        """Imaginary part (2n, n + 1) of the spectrum of a kernel even in x, odd in y."""
-        n, w = self.n, self.workers
-        c = scipy.fft.dct(quadrant[:, 1:n], type=1, axis=0, workers=w)
+        """Imaginary part (2nx, ny + 1) of the spectrum of a kernel even in x, odd in y."""
+        (nx, ny), w = self.shape, self.workers
+        c = scipy.fft.dct(quadrant[:, 1:ny], type=1, axis=0, workers=w)
         s = scipy.fft.dst(c, type=1, axis=1, workers=w)
-        out = np.empty((2 * n, n + 1))
-        out[:, 0] = out[:, n] = 0.0
-        out[: n + 1, 1:n] = -s
-        out[n + 1:, 1:n] = -s[n - 1:0:-1]
+        out = np.empty((2 * nx, ny + 1))
+        out[:, 0] = out[:, ny] = 0.0
+        out[: nx + 1, 1:ny] = -s
+        out[nx + 1:, 1:ny] = -s[nx - 1:0:-1]
         return out
 
     def _ensure_gradient(self):
         if self._gradient_q is None:
-            _, asinh = self._corners
-            dx = _corner_sum(asinh) / (np.pi * self.E_star)
-            # d/dy is d/dx transposed.  Both spectra are purely imaginary;
-            # their imaginary parts are kept.
-            self._gradient_q = (self._odd_x_spectrum(dx), self._odd_y_spectrum(dx.T))
+            _, _, asinh_yx, asinh_xy = self._corners
+            scale = 1.0 / (np.pi * self.E_star)
+            # d/dx: corner sum of asinh(Y/|X|); d/dy: of asinh(X/|Y|).  Both
+            # spectra are purely imaginary; their imaginary parts are kept.
+            self._gradient_q = (self._odd_x_spectrum(_corner_sum(asinh_yx) * scale),
+                                self._odd_y_spectrum(_corner_sum(asinh_xy) * scale))
             for a in self._gradient_q:
                 a.flags.writeable = False
-            logger.debug("gradient spectra built for n=%d", self.n)
+            logger.debug("gradient spectra built for a %d x %d grid", *self.shape)
         return self._gradient_q
 
     # -- transforms ----------------------------------------------------
     def forward(self, field_r):
-        """Spectrum of a face field zero-padded to ``2n x 2n``.
+        """Spectrum of a grid field zero-padded to ``2nx x 2ny``.
 
         Parameters
         ----------
-        field_r : ndarray, shape (n, n)
+        field_r : ndarray, shape (nx, ny)
 
         Returns
         -------
-        ndarray, shape (2n, n + 1), complex
+        ndarray, shape (2nx, ny + 1), complex
         """
         field_r = np.asarray(field_r)
-        if field_r.shape != (self.n, self.n):
-            raise ValueError(
-                f"field must have shape {(self.n, self.n)}, got {field_r.shape}")
-        n = self.n
-        self._padded[:n, :n] = field_r
+        if field_r.shape != self.shape:
+            raise ValueError(f"field must have shape {self.shape}, got {field_r.shape}")
+        nx, ny = self.shape
+        self._padded[:nx, :ny] = field_r
         return scipy.fft.rfft2(self._padded, workers=self.workers)
 
     def inverse(self, spectrum_q, *, overwrite=False):
-        """Real field on the face from a padded half spectrum.
+        """Real field on the grid from a padded half spectrum.
 
         Parameters
         ----------
-        spectrum_q : ndarray, shape (2n, n + 1), complex
+        spectrum_q : ndarray, shape (2nx, ny + 1), complex
         overwrite : bool, optional
             The spectrum may be destroyed (default False).
 
         Returns
         -------
-        ndarray, shape (n, n)
+        ndarray, shape (nx, ny)
         """
-        n, m = self.n, self._m
-        # Only the face's n rows are kept after the column transform.
+        nx, ny = self.shape
+        # Only the grid's nx rows are kept after the column transform.
         cols = scipy.fft.ifft(spectrum_q, axis=0, workers=self.workers,
-                              overwrite_x=overwrite)[:n]
-        return scipy.fft.irfft(cols, n=m, axis=1, workers=self.workers)[:, :n]
+                              overwrite_x=overwrite)[:nx]
+        return scipy.fft.irfft(cols, n=2 * ny, axis=1, workers=self.workers)[:, :ny]
 
     def _product(self, pressure_q, kernel_q):
         """Field on the face of ``kernel_q * pressure_q``, through the work buffer."""
@@ -308,11 +344,11 @@ class HalfSpace:
 
         Parameters
         ----------
-        pressure_r : ndarray, shape (n, n), Pa
+        pressure_r : ndarray, shape (nx, ny), Pa
 
         Returns
         -------
-        ndarray, shape (n, n), m
+        ndarray, shape (nx, ny), m
         """
         return self._product(self.forward(pressure_r), self._influence_q)
 
@@ -328,13 +364,13 @@ class HalfSpace:
 
         Parameters
         ----------
-        pressure_r : ndarray, shape (n, n), Pa
-        pressure_q : ndarray, shape (2n, n + 1), optional
+        pressure_r : ndarray, shape (nx, ny), Pa
+        pressure_q : ndarray, shape (2nx, ny + 1), optional
             The pressure's spectrum, if already computed.
 
         Returns
         -------
-        gx, gy : ndarray, shape (n, n), dimensionless
+        gx, gy : ndarray, shape (nx, ny), dimensionless
         """
         gx_q, gy_q = self._ensure_gradient()
         if pressure_q is None:
@@ -346,10 +382,10 @@ class HalfSpace:
 
     @functools.cached_property
     def influence_quadrant(self):
-        """Influence coefficients at pixel offsets ``0..n`` along each axis, m/Pa.
+        """Influence coefficients at pixel offsets ``0..nx`` by ``0..ny``, m/Pa.
 
         Displacement at offset ``(i, j)`` pixels from a pixel under unit
-        pressure; the kernel is even in both axes.  Shape ``(n + 1, n + 1)``,
+        pressure; the kernel is even in both axes.  Shape ``(nx + 1, ny + 1)``,
         computed once, read-only.
         """
         quadrant = _influence_quadrant(*self._corners) / (np.pi * self.E_star)
@@ -358,10 +394,10 @@ class HalfSpace:
 
     @functools.cached_property
     def aliased_symbol(self):
-        """Symbol of the ``n``-periodic aliasing of the influence kernel, m/Pa.
+        """Symbol of the ``(nx, ny)``-periodic aliasing of the influence kernel, m/Pa.
 
         The padded symbol at the even wavenumbers (positive, like it); shape
-        ``(n, n // 2 + 1)``, the spectrum layout of an unpadded ``rfft2``.
+        ``(nx, ny // 2 + 1)``, the spectrum layout of an unpadded ``rfft2``.
         Computed once, read-only.  The Fourier preconditioner of the contact
         solver inverts it.
         """
@@ -371,10 +407,10 @@ class HalfSpace:
 
     @property
     def influence_symbol(self):
-        """Real spectrum of the padded ``2n x 2n`` influence kernel, m/Pa.
+        """Real spectrum of the padded ``2nx x 2ny`` influence kernel, m/Pa.
 
         ``inverse(forward(p) * influence_symbol)`` is :meth:`displacement`;
-        shape ``(2n, n + 1)``, read-only.
+        shape ``(2nx, ny + 1)``, read-only.
         """
         return self._influence_q
 

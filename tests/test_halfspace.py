@@ -10,17 +10,17 @@ from steady.halfspace import HalfSpace, pixel_integral, pixel_integral_gradient
 
 
 def _direct(p, h, E_star):
-    """Dense O(n^4) sums of the exact pixel kernels."""
-    n = p.shape[0]
-    c = np.arange(n) * h
-    u = np.zeros((n, n))
-    gx = np.zeros((n, n))
-    gy = np.zeros((n, n))
-    for i in range(n):
-        for j in range(n):
-            u += p[i, j] * pixel_integral(c - c[i], c - c[j], h)
-            gx += p[i, j] * pixel_integral_gradient(c - c[i], c - c[j], h)
-            gy += p[i, j] * pixel_integral_gradient(c - c[j], c - c[i], h).T
+    """Dense O(nx^2 ny^2) sums of the exact pixel kernels."""
+    nx, ny = p.shape
+    cx, cy = np.arange(nx) * h, np.arange(ny) * h
+    u = np.zeros((nx, ny))
+    gx = np.zeros((nx, ny))
+    gy = np.zeros((nx, ny))
+    for i in range(nx):
+        for j in range(ny):
+            u += p[i, j] * pixel_integral(cx - cx[i], cy - cy[j], h)
+            gx += p[i, j] * pixel_integral_gradient(cx - cx[i], cy - cy[j], h)
+            gy += p[i, j] * pixel_integral_gradient(cy - cy[j], cx - cx[i], h).T
     s = 1 / (np.pi * E_star)
     return s * u, s * gx, s * gy
 
@@ -51,12 +51,12 @@ def test_pixel_gradient_is_the_derivative(point):
     assert got == pytest.approx(fd, abs=1e-8), f"gradient at {point}"
 
 
-@pytest.mark.parametrize("n", [7, 8, 13])
+@pytest.mark.parametrize("n", [7, 8, 13, (7, 12), (12, 5), (2, 9)])
 def test_products_match_dense_sums(n):
-    """FFT products equal the dense sums to round-off (no wrap-around)."""
+    """FFT products equal the dense sums to round-off (no wrap-around), square or not."""
     rng = np.random.default_rng(2718)
-    p = rng.random((n, n))
     hs = HalfSpace(n, 0.1, 2.0)
+    p = rng.random(hs.shape)
     u, gx, gy = _direct(p, 0.1, 2.0)
     got_u = hs.displacement(p)
     got_gx, got_gy = hs.gradient(p)
@@ -104,7 +104,8 @@ def test_far_field_is_a_point_load():
     assert u[60, 0] == pytest.approx(want, rel=1e-4), "far field of one pixel"
 
 
-@pytest.mark.parametrize("bad", [dict(n=1), dict(h=0.0), dict(h=np.nan), dict(E_star=-1.0)])
+@pytest.mark.parametrize("bad", [dict(n=1), dict(n=(8, 1)), dict(n=(8, 2.5)), dict(n=(2, 3, 4)),
+                                 dict(h=0.0), dict(h=np.nan), dict(E_star=-1.0)])
 def test_bad_arguments(bad):
     args = dict(n=8, h=1.0, E_star=1.0) | bad
     with pytest.raises(ValueError, match="must"):
@@ -114,3 +115,25 @@ def test_bad_arguments(bad):
 def test_wrong_shape():
     with pytest.raises(ValueError, match="shape"):
         HalfSpace(8, 1.0, 1.0).displacement(np.zeros((8, 9)))
+    with pytest.raises(ValueError, match=r"shape \(8, 9\)"):
+        HalfSpace((8, 9), 1.0, 1.0).displacement(np.zeros((9, 8)))
+
+
+def test_rectangular_grid_has_no_single_size():
+    hs = HalfSpace((8, 12), 1.0, 1.0)
+    assert hs.shape == (8, 12), "shape of a rectangular grid"
+    with pytest.raises(ValueError, match="8 x 12"):
+        _ = hs.n
+
+
+def test_transposed_grid_transposes_the_products():
+    """Swapping the axes of the grid and of the pressure swaps the gradient components."""
+    rng = np.random.default_rng(1618)
+    p = rng.random((9, 14))
+    a, b = HalfSpace((9, 14), 0.3, 1.0), HalfSpace((14, 9), 0.3, 1.0)
+    gx, gy = a.gradient(p)
+    gx_t, gy_t = b.gradient(p.T)
+    assert np.allclose(a.displacement(p), b.displacement(p.T).T, rtol=1e-14, atol=0), "u"
+    assert np.allclose(gx, gy_t.T, rtol=1e-13, atol=1e-16), "d/dx is d/dy of the transpose"
+    assert np.allclose(gy, gx_t.T, rtol=1e-13, atol=1e-16), "d/dy is d/dx of the transpose"
+    assert np.array_equal(a.aliased_symbol.shape, (9, 8)), "aliased symbol layout"
