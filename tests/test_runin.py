@@ -238,11 +238,11 @@ def test_failed_steps_are_retried_smaller():
     real = problem.contact
     calls = {"n": 0}
 
-    def flaky(height, *, shift=None, x0=None):
+    def flaky(height, **kw):
         calls["n"] += 1
         if calls["n"] in (5, 6, 7):
             raise StepFailure("injected failure")
-        return real(height, shift=shift, x0=x0)
+        return real(height, **kw)
 
     problem.contact = flaky
     result = run_in(problem, np.zeros((32, 32)), FAST)
@@ -255,11 +255,11 @@ def test_persistent_failure_stops_with_a_resumable_state():
     real = problem.contact
     calls = {"n": 0}
 
-    def broken(height, *, shift=None, x0=None):
+    def broken(height, **kw):
         calls["n"] += 1
         if calls["n"] > 10:
             raise StepFailure("solver gave up")
-        return real(height, shift=shift, x0=x0)
+        return real(height, **kw)
 
     problem.contact = broken
     result = run_in(problem, np.zeros((32, 32)), dataclasses.replace(FAST, max_failures=4))

@@ -25,10 +25,14 @@ changes:
   non-uniform shift, stitched by the shift map.  The iteration count then
   hardly grows with the grid (8 to 14 for the flat punch from n = 32 to
   1024 at ``rtol = 1e-8``), where plain Polonsky-Keer needs 18 to 94;
-- the displacement is updated with the conjugate direction's product (one
-  padded FFT pair per iteration for the operator), the change from the
-  few pixels that enter or leave the active set is summed directly, and
-  it is recomputed by FFT only when many do or every 50 iterations;
+- the elastic displacement ``K p`` is updated with the conjugate
+  direction's product (one padded FFT pair per iteration for the
+  operator), the change from the few pixels that enter or leave the active
+  set is summed directly, and it is recomputed by FFT only when many do or
+  every 50 iterations.  It is kept apart from the shift's part
+  ``shift * p`` (exact from ``p``), so that its round-off stays that of
+  ``K p`` however large the shift, and the caller gets ``K p`` without a
+  further product;
 - pixels that penetrate enter the active set with the pressure of the
   current step length (Polonsky & Keer's rule, made unit-consistent for a
   preconditioned direction and capped by the pressure ``-g / A_ii`` that
@@ -54,13 +58,13 @@ logger = logging.getLogger(__name__)
 # of an FFT pair); more trigger a full FFT recomputation.
 _DIRECT_UPDATE_PIXELS = 8
 # Incremental displacement updates between full recomputations; each adds
-# a round-off of order eps |u|, so the drift stays far below any tolerance.
+# a round-off of order eps |K p|, so the drift stays far below any tolerance.
 _REFRESH = 50
 # Bound of the round-off one iteration adds to every entry of the incrementally
-# updated displacement, in units of eps max|u|: the update u -= tau q, the
-# direct column sums of a set change and the load rescaling each round once
-# (by at most eps |u|), with a factor 2 for the growth of |u| between full
-# recomputations.
+# updated displacement K p, in units of eps max|K p|: the update v -= tau K t,
+# the direct column sums of a set change and the load rescaling each round
+# once (by at most eps |K p|), with a factor 2 for the growth of |K p|
+# between full recomputations.
 _ROUNDING_PER_ITERATION = 8.0
 
 
@@ -78,6 +82,10 @@ class ContactResult:
         ``(K + diag(shift)) p`` on the whole grid, consistent with
         ``pressure`` to round-off (updated with each step and recomputed
         by FFT at least every 50 iterations).
+    elastic_displacement : ndarray, shape (n, n), m
+        ``K p``, the half-space's part of ``displacement`` (the same
+        without ``shift * p``), on the whole grid, with the round-off of
+        ``K p`` alone.
     contact_fraction : float
         Pixels with ``p > 0`` over face pixels.
     nit : int
@@ -95,6 +103,7 @@ class ContactResult:
     pressure: np.ndarray
     approach: float
     displacement: np.ndarray
+    elastic_displacement: np.ndarray
     contact_fraction: float
     nit: int
     residual: float
@@ -104,30 +113,27 @@ class ContactResult:
 
 
 class _Operator:
-    """``A = K + diag(shift)`` with the direct column sums for a few pixels."""
+    """``K`` (the half-space part of ``A = K + diag(shift)``), by FFT or by a few columns."""
 
     def __init__(self, halfspace, shift):
         self.halfspace = halfspace
         self.shift = shift
         self.diagonal = halfspace.self_influence + (0.0 if shift is None else shift)
-        self._arange = np.arange(halfspace.n)
+        self._aranges = tuple(np.arange(m) for m in halfspace.shape)
         self.products = 0
 
     def __call__(self, p):
+        """``K p`` by one padded FFT product."""
         self.products += 1
-        u = np.ascontiguousarray(self.halfspace.displacement(p))
-        if self.shift is not None:
-            u += self.shift * p
-        return u
+        return np.ascontiguousarray(self.halfspace.displacement(p))
 
     def columns(self, ii, jj, values):
-        """``A`` applied to a pressure that is ``values`` on pixels ``(ii, jj)``, else 0."""
-        q, ar = self.halfspace.influence_quadrant, self._arange
-        u = np.zeros((self.halfspace.n, self.halfspace.n))
+        """``K`` applied to a pressure that is ``values`` on pixels ``(ii, jj)``, else 0."""
+        q = self.halfspace.influence_quadrant
+        ax, ay = self._aranges
+        u = np.zeros(self.halfspace.shape)
         for i, j, v in zip(ii, jj, values, strict=True):
-            u += v * q[np.abs(ar - i)][:, np.abs(ar - j)]
-        if self.shift is not None:
-            u[ii, jj] += self.shift[ii, jj] * values
+            u += v * q[np.abs(ax - i)][:, np.abs(ay - j)]
         return u
 
 
@@ -267,8 +273,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     >>> print(f"{res.approach / reference.flat_punch_approach(force, a, E_star):.3f}")
     1.002
     """
-    n = int(halfspace.n)
-    shape = (n, n)
+    shape = tuple(halfspace.shape)
     on_face = np.asarray(face_mask)
     if on_face.shape != shape:
         raise ValueError(f"face_mask must have shape {shape}, got {on_face.shape}")
@@ -306,7 +311,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     if rtol == 0 and atol == 0:
         raise ValueError("rtol and atol cannot both be zero")
     if maxiter is None:
-        maxiter = max(200, 10 * n)
+        maxiter = max(200, 10 * max(shape))
     if int(maxiter) != maxiter or maxiter < 1:
         raise ValueError(f"maxiter must be a positive integer, got {maxiter!r}")
     maxiter = int(maxiter)
@@ -320,8 +325,8 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
 
     if force == 0.0:
         zero = np.zeros(shape)
-        return ContactResult(zero, float(h_face[on_face].min()), zero.copy(), 0.0, 0, 0.0,
-                             np.zeros(1), True, "zero load: no pressure")
+        return ContactResult(zero, float(h_face[on_face].min()), zero.copy(), zero.copy(), 0.0,
+                             0, 0.0, np.zeros(1), True, "zero load: no pressure")
 
     precondition = make_preconditioner(preconditioner, halfspace, on_face, shift)
 
@@ -334,17 +339,17 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         x0_displacement = None
     c = force / (area * p.sum())
     p *= c
+    # v = K p, the elastic displacement; u = v + shift p is formed from it.
     if x0_displacement is not None and np.array_equal(p, c * x0):
-        u = c * _check_field("x0_displacement", x0_displacement, shape)
-        if shift is not None:
-            u += shift * p
+        v = c * _check_field("x0_displacement", x0_displacement, shape)
     else:
-        u = operator(p)
-    u_max = float(np.abs(u).max())
+        v = operator(p)
+    v_max = float(np.abs(v).max())
 
     # Work arrays; the loop updates in place.
     face_f = on_face.astype(float)
     t = np.zeros(shape)
+    u = np.empty(shape)
     g = np.empty(shape)
     r = np.empty(shape)
     history = []
@@ -365,6 +370,11 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
             n_active = float(active.sum())
             off_f = face_f - active_f
             full_contact = n_active == n_face
+        if shift is None:
+            u[...] = v
+        else:
+            np.multiply(shift, p, out=u)
+            u += v
         np.add(u, h_face, out=g)
         d = _dot(g, active_f) / n_active
         g -= d                        # the gap, on the face
@@ -381,7 +391,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
             message = f"non-finite residual at iteration {it}"
             history.append(residual)
             break
-        drift = since_full * _ROUNDING_PER_ITERATION * np.finfo(float).eps * u_max
+        drift = since_full * _ROUNDING_PER_ITERATION * np.finfo(float).eps * v_max
         if residual <= tolerance and (verified or drift < 1e-3 * tolerance):
             history.append(residual)
             success = True
@@ -390,8 +400,8 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
             break
         if (residual <= tolerance and not verified) or since_full >= _REFRESH:
             # Recompute the incrementally updated displacement (drift).
-            u = operator(p)
-            u_max = float(np.abs(u).max())
+            v = operator(p)
+            v_max = float(np.abs(v).max())
             since_full = 0
             verified = True
             continue
@@ -417,14 +427,16 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
                 t *= active_f
                 t -= (_dot(t, active_f) / n_active) * active_f
         gz_old = gz
-        q = operator(t)
+        q = operator(t)               # K t; A t = K t + shift t
         tq = _dot(t, q)
+        if shift is not None:
+            tq += _dot(t * t, shift)
         if not tq > 0:
             message = f"breakdown at iteration {it}: non-positive curvature {tq!r}"
             break
         tau = _dot(r, t) / tq
         p -= tau * t
-        u -= tau * q
+        v -= tau * q
         since_full += 1
 
         # Pixels leaving (negative pressure) and entering (penetrating) the set.
@@ -452,10 +464,10 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
             p[leaving] = 0.0
             ii, jj = np.nonzero(dp)
             if ii.size <= _DIRECT_UPDATE_PIXELS:
-                u += operator.columns(ii, jj, dp[ii, jj])
+                v += operator.columns(ii, jj, dp[ii, jj])
             else:
-                u = operator(p)
-                u_max = float(np.abs(u).max())
+                v = operator(p)
+                v_max = float(np.abs(v).max())
                 since_full = 0
             total = p.sum()
             if not total > 0:
@@ -463,7 +475,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
                 break
             c = force / (area * total)
             p *= c
-            u *= c
+            v *= c
         if callback is not None:
             view = p.view()
             view.flags.writeable = False
@@ -473,16 +485,17 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     if not success:
         logger.warning("contact solver failed: %s", message)
         if np.all(np.isfinite(p)):
-            u = operator(p)
+            v = operator(p)
             active = p > 0
             if active.any():
-                d = float((u + h_face)[active].mean())
+                d = float((v + (0.0 if shift is None else shift * p) + h_face)[active].mean())
     else:
         logger.debug("contact solver: %s (%d operator products)", message, operator.products)
     return ContactResult(
         pressure=p,
         approach=float(d),
-        displacement=u,
+        displacement=v if shift is None else v + shift * p,
+        elastic_displacement=v,
         contact_fraction=float((p > 0).sum() / n_face),
         nit=it,
         residual=residual,

@@ -101,7 +101,8 @@ _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
 _INTEGERS = ("steps", "rejected", "failures", "solves", "iterations")
 _STRINGS = ("status", "message", "scheme")
 _STATE_UNITS = {"height": "m", "initial_height": "m", "previous_height": "m",
-                "previous_rate": "1", "pressure_history": "Pa"}
+                "previous_rate": "1", "pressure_history": "Pa",
+                "pressure_history_displacement": "m"}
 # State datasets every checkpoint has; the others are None before the first step.
 _REQUIRED_STATE = ("height", "initial_height")
 

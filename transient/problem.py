@@ -300,24 +300,25 @@ class WearProblem:
         return res
 
     def _rebuild(self, height, c, res):
-        """Face, contact and ``K p`` of an implicit stage ``w = height + c k P(w)^m``.
+        """Face and contact of an implicit stage ``w = height + c k P(w)^m``.
 
-        On the contact the face is rebuilt as ``d - K p`` with ``K p`` recomputed
-        from the pressure (one FFT product) and ``d`` the mean of
+        On the contact the face is rebuilt as ``d - K p``, with the solver's
+        own ``K p`` (kept apart from the shift's part, so exact to the
+        round-off of ``K p`` whatever the shift) and ``d`` the mean of
         ``height + c k p^m + K p`` there: the solver's residual, which scales
         with the shifted operator and so with ``c``, is projected out of the
-        shape (it would reach ``rtol * ds / s*`` of ``f*`` after a jump), while
-        the rigid part keeps the exact mean of the update.
+        shape (it would reach ``rtol * ds / s*`` of ``f*`` after a jump),
+        while the rigid part keeps the exact mean of the update.
         """
         p = res.pressure
         contact = self.face_mask & (p > 0)
         w = height + c * self.rate(p)
-        kp = self.halfspace.displacement(p)
+        kp = res.elastic_displacement
         if not contact.any():
-            return w, res, kp
+            return w, res
         d = float(np.mean((w + kp)[contact]))
         w = np.where(contact, d - kp, w)
-        return w, dataclasses.replace(res, approach=d), kp
+        return w, dataclasses.replace(res, approach=d)
 
     def _linearisation(self, height, c, p0):
         """Shift and height of the contact problem linearised about ``p0`` (m != 1)."""
@@ -350,6 +351,7 @@ class WearProblem:
         w : ndarray, shape (n, n), m
         result : ContactResult
             The contact of the face ``w`` (its pressure is ``P(w)``).
+
         """
         m = self.exponent
         if m == 1.0:
@@ -378,9 +380,9 @@ class WearProblem:
                 raise StepFailure(f"power-law Newton iteration did not converge in "
                                   f"{self.newton_maxiter} iterations (last change "
                                   f"{change:.3g} pbar)")
-        w, res, kp = self._rebuild(height, c, res)
+        w, res = self._rebuild(height, c, res)
         if history is not None:
-            history.push(res.pressure, kp)
+            history.push(res.pressure, res.elastic_displacement)
         return w, res
 
 
@@ -388,8 +390,8 @@ class PressureHistory:
     """The last few contact pressures of a run: the warm start of its implicit stages.
 
     Holds up to ``size`` pressures ``v_j`` (newest first), each with its
-    elastic displacement ``K v_j`` (the product the stage computes anyway
-    when it rebuilds the face).  :meth:`predict` returns the combination
+    elastic displacement ``K v_j`` (the solver's own, which it returns with
+    the pressure).  :meth:`predict` returns the combination
     ``x = sum_j alpha_j v_j`` with ``sum_j alpha_j = 1`` (so ``x`` carries
     the load) that minimises the energy of the next contact problem,
 
@@ -397,9 +399,11 @@ class PressureHistory:
 
     over that affine span: the Galerkin projection of its solution, at
     least as close in the operator's norm as any single pressure or any
-    polynomial extrapolation of them in the sliding distance.  Only the
-    pressures are state (a checkpoint stores them, :meth:`pressures`);
-    ``K v_j`` is a deterministic function of them.
+    polynomial extrapolation of them in the sliding distance.  Both the
+    pressures and the displacements are state (a checkpoint stores them,
+    :meth:`pressures`, :meth:`displacements`): the solver's ``K v_j`` carry
+    the round-off of its updates, so that a resumed run needs them as they
+    were to repeat the run bit for bit.
 
     Parameters
     ----------
@@ -408,9 +412,11 @@ class PressureHistory:
         Pressures kept (default 6).
     pressures : ndarray, shape (k, n, n), Pa, optional
         Initial content, newest first (a checkpoint's).
+    displacements : ndarray, shape (k, n, n), m, optional
+        ``K`` times each of ``pressures`` (default: computed by FFT).
     """
 
-    def __init__(self, problem, size=6, pressures=None):
+    def __init__(self, problem, size=6, pressures=None, displacements=None):
         if int(size) != size or size < 1:
             raise ValueError(f"size must be a positive integer, got {size!r}")
         self.problem = problem
@@ -419,8 +425,14 @@ class PressureHistory:
         self._products = []
         self._work = None  # differences from the newest pressure and their products
         if pressures is not None:
-            for p in np.asarray(pressures, dtype=float)[::-1]:
-                self.push(p)
+            pressures = np.asarray(pressures, dtype=float)
+            if displacements is None:
+                displacements = [None] * len(pressures)
+            elif np.shape(displacements) != pressures.shape:
+                raise ValueError(f"displacements must have the shape of the pressures "
+                                 f"{pressures.shape}, got {np.shape(displacements)}")
+            for p, kp in zip(pressures[::-1], displacements[::-1], strict=True):
+                self.push(p, kp)
 
     def __len__(self):
         """Number of pressures held."""
@@ -443,6 +455,11 @@ class PressureHistory:
         """The pressures held, newest first, Pa, shape (k, n, n)."""
         n = self.problem.n
         return np.array(self._values).reshape(-1, n, n)
+
+    def displacements(self):
+        """Their elastic displacements ``K p``, newest first, m, shape (k, n, n)."""
+        n = self.problem.n
+        return np.array(self._products).reshape(-1, n, n)
 
     def predict(self, height, shift=None):
         """Warm start of the contact problem ``(K + diag(shift)) p = d - height``.

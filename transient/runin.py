@@ -237,6 +237,10 @@ class RunResult:
     pressure_history : ndarray, shape (k, n, n), Pa, or None
         The last contact pressures, newest first: the warm start of the
         next implicit stages (:class:`transient.problem.PressureHistory`).
+    pressure_history_displacement : ndarray, shape (k, n, n), m, or None
+        Their elastic displacements ``K p`` as the run holds them (the
+        solver's own, which a resumed run needs to repeat the run bit for
+        bit).
     """
 
     status: str
@@ -268,6 +272,7 @@ class RunResult:
     pixel_mean_pressure: float
     reference_slope: float
     pressure_history: np.ndarray | None = None
+    pressure_history_displacement: np.ndarray | None = None
 
     @property
     def success(self):
@@ -397,7 +402,9 @@ class _Run:
             fast_distance=self.problem.fast_distance,
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
             reference_slope=self.grad_f0,
-            pressure_history=None if self.pressures is None else self.pressures.pressures())
+            pressure_history=None if self.pressures is None else self.pressures.pressures(),
+            pressure_history_displacement=(None if self.pressures is None
+                                           else self.pressures.displacements()))
 
     # -- set-up --------------------------------------------------------
     def start(self, initial_height):
@@ -456,7 +463,8 @@ class _Run:
         self.snap_p = list(saved.snapshot_pressure)
         self.snap_index = len(self.snap_d)
         if saved.pressure_history is not None:
-            self.pressures = PressureHistory(p, pressures=saved.pressure_history)
+            self.pressures = PressureHistory(p, pressures=saved.pressure_history,
+                                             displacements=saved.pressure_history_displacement)
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
