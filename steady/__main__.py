@@ -81,9 +81,16 @@ def summary_lines(result):
                  f"  (plain pixel value {result.rms_slope_plain:.6g})")
     else:
         slope = f"rms slope        {result.rms_slope:.6g}  (plain pixel value, no error estimate)"
+    if result.reference_slope_error > 0:
+        ref = f"{result.reference_slope:.6g} +- {result.reference_slope_error:.2g}"
+    else:
+        ref = f"{result.reference_slope:.6g}"
+    source = result.reference_slope_source or "disk: 4 pbar / (pi E*) (eq. 12)"
     return [
+        f"face             {result.outline.describe()}, n = {result.n} "
+        f"({result.shape[0]} x {result.shape[1]} pixels)",
         slope,
-        f"grad_f0          {result.reference_slope:.6g}  (4 pbar / (pi E*))",
+        f"grad_f0          {ref}  ({source})",
         f"rms / grad_f0    {result.normalised_rms_slope:.6g}",
         f"fill factors     {fill}",
         f"phase pressures  {pressures} Pa",
@@ -101,7 +108,7 @@ def run(args):
     if scene.ignored_sections:
         print("note: ignoring run-in sections "
               + ", ".join(f"[{name}]" for name in scene.ignored_sections), file=sys.stderr)
-    check_memory(steady_memory(scene.n, slope_error=args.slope_error),
+    check_memory(steady_memory(scene.grid().shape, slope_error=args.slope_error),
                  f"a steady solve at n = {scene.n}", args.memory_limit)
     scene.phase_labels()  # names a phase without a face pixel before the solve
     saved = None

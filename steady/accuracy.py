@@ -46,9 +46,9 @@ import numpy as np
 import scipy.fft
 
 from .grid import face_mask as grid_face_mask
-from .grid import pixel_size
 from .halfspace import pixel_integral_gradient
-from .phases import MIN_GRID, extend_off_face
+from .outline import FaceGrid, as_outline
+from .phases import MIN_GRID, Homogeneous, extend_off_face
 from .pressures import pressure_field
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
@@ -108,8 +108,8 @@ def edge_jumps(pressure_r, face_mask):
 
     Parameters
     ----------
-    pressure_r : ndarray, shape (n, n), Pa
-    face_mask : ndarray of bool, shape (n, n)
+    pressure_r : ndarray, shape (nx, ny), Pa
+    face_mask : ndarray of bool, shape (nx, ny)
         Pixels of the face.
 
     Returns
@@ -162,35 +162,45 @@ def monopole_tail(force, centroid, box, E_star):
 class _BoxGradient:
     """Gradient on an output box from sources on a (coarser) pixel grid.
 
-    Sources occupy pixel indices ``[0, ns)`` on both axes with spacing
-    ``H``; outputs are the pixel centres ``[lo, lo + m)`` of the same
-    lattice.  Aperiodic linear convolution by FFT of the smallest fast size.
+    Sources occupy pixel indices ``[0, ns_a)`` along each axis ``a`` with
+    spacing ``H``; outputs are the pixel centres ``[lo_a, lo_a + m_a)`` of
+    the same lattice.  Aperiodic linear convolution by FFT of the smallest
+    fast size.
     """
 
     def __init__(self, ns, lo, m, H, E_star, workers):
-        self.ns, self.lo, self.m, self.workers = ns, lo, m, workers
-        size = scipy.fft.next_fast_len(ns + m - 1, real=True)
+        self.ns, self.lo, self.m, self.workers = tuple(ns), tuple(lo), tuple(m), workers
+        size = tuple(scipy.fft.next_fast_len(a + b - 1, real=True)
+                     for a, b in zip(ns, m, strict=True))
         self.size = size
-        offsets = np.arange(lo - ns + 1, lo + m)
-        dx = pixel_integral_gradient(offsets * H, offsets * H, H) / (np.pi * E_star)
-        index = np.mod(offsets, size)
-        kernel = np.zeros((size, size))
-        kernel[np.ix_(index, index)] = dx
+        ox, oy = (np.arange(l0 - a + 1, l0 + b) for a, l0, b in zip(ns, lo, m, strict=True))
+        ix, iy = np.mod(ox, size[0]), np.mod(oy, size[1])
+        kernel = np.zeros(size)
+        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(ox * H, oy * H, H) / (np.pi * E_star)
         self.gx_q = scipy.fft.rfft2(kernel, workers=workers)
-        kernel[np.ix_(index, index)] = dx.T
+        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(oy * H, ox * H, H).T / (np.pi * E_star)
         self.gy_q = scipy.fft.rfft2(kernel, workers=workers)
-        self.rows = np.mod(np.arange(lo, lo + m), size)
+        self.rows = np.mod(np.arange(lo[0], lo[0] + m[0]), size[0])
+        self.cols = np.mod(np.arange(lo[1], lo[1] + m[1]), size[1])
 
     def __call__(self, sources):
-        """Gradient ``(gx, gy)`` on the output box, each shape (m, m)."""
+        """Gradient ``(gx, gy)`` on the output box, each of shape ``m``."""
         size, w = self.size, self.workers
-        sq = scipy.fft.rfft2(sources, s=(size, size), workers=w)
+        sq = scipy.fft.rfft2(sources, s=size, workers=w)
         out = []
         for kq in (self.gx_q, self.gy_q):
             # Column pass, then the row pass on the output rows only.
             cols = scipy.fft.ifft(sq * kq, axis=0, workers=w, overwrite_x=True)[self.rows]
-            out.append(scipy.fft.irfft(cols, n=size, axis=1, workers=w)[:, self.rows])
+            out.append(scipy.fft.irfft(cols, n=size[1], axis=1, workers=w)[:, self.cols])
         return tuple(out)
+
+
+def _grid_shape(n):
+    """``(nx, ny)`` from an int ``n`` (a square grid) or a pair."""
+    if np.ndim(n) == 0:
+        return int(n), int(n)
+    nx, ny = (int(v) for v in n)
+    return nx, ny
 
 
 class SlopeEnergy:
@@ -200,50 +210,79 @@ class SlopeEnergy:
 
     Parameters
     ----------
-    n : int
-        Pixels across the grid of the face.
+    n : int or (int, int)
+        Pixels across the grid of the face: ``n`` for an ``n x n`` grid, or
+        ``(nx, ny)`` for the rectangular grid of a face's bounding box
+        (:class:`steady.outline.FaceGrid`).
     h : float, m
         Pixel size.
     E_star : float, Pa
     margin : int, optional
-        Fine pixels kept around the grid (default ``max(8, n // 16)``);
+        Fine pixels kept around the grid (default ``max(8, n // 16)``, ``n``
+        the longer side);
         they carry the rim's exterior at the grid's own resolution.
     coarsening : int, optional
         Ratio of coarse to fine pixel size (default 8).
     far_radius : float, optional
         Half-width of the coarse box in units of the grid's half-width
-        (default 8); beyond it the monopole tail is analytic.
+        along its longer side (default 8; the same on both axes); beyond
+        it the monopole tail is analytic.
     workers : int, optional
         Threads for :mod:`scipy.fft`.
     """
 
     def __init__(self, n, h, E_star, *, margin=None, coarsening=8, far_radius=8.0,
                  workers=-1):
-        self.n, self.h, self.E_star = int(n), float(h), float(E_star)
+        self.shape = _grid_shape(n)
+        self.n = max(self.shape)
+        self.h, self.E_star = float(h), float(E_star)
         c = int(coarsening)
         margin = max(8, self.n // 16) if margin is None else int(margin)
-        # The fine box must tile into coarse pixels: round its size up.
+        # The fine box must tile into coarse pixels: round its sides up.
         margin = c * -(-margin // c)
-        fine = self.n + 2 * margin
-        fine = c * -(-fine // c)
+        fine = tuple(c * -(-(a + 2 * margin) // c) for a in self.shape)
         self.c, self.margin, self.fine = c, margin, fine
-        self._fine = _BoxGradient(self.n, -margin, fine, self.h, self.E_star, workers)
-        # Coarse sources are the fine box block-summed; outputs span far_radius.
-        nc = fine // c
-        half = far_radius * self.n / 2  # in fine pixels, from the grid centre
-        extra = max(1, int(np.ceil((half - fine / 2) / c)))
-        self._coarse = _BoxGradient(nc, -extra, nc + 2 * extra, c * self.h, self.E_star, workers)
-        self._coarse_inner = slice(extra, extra + nc)
+        self._fine = _BoxGradient(self.shape, (-margin, -margin), fine, self.h, self.E_star,
+                                  workers)
+        # Coarse sources are the fine box block-summed; outputs reach far_radius
+        # half-widths of the longer side from the grid centre on both axes.
+        nc = tuple(a // c for a in fine)
+        half = far_radius * self.n / 2  # in fine pixels
+        extra = tuple(max(1, int(np.ceil((half - a / 2) / c))) for a in fine)
+        self._coarse = _BoxGradient(nc, tuple(-e for e in extra),
+                                    tuple(a + 2 * e for a, e in zip(nc, extra, strict=True)),
+                                    c * self.h, self.E_star, workers)
+        self._coarse_inner = tuple(slice(e, e + a) for a, e in zip(nc, extra, strict=True))
         self._coarse_extra = extra
+
+    def _boxed(self, field):
+        """``field`` (grid shape) placed in the fine box."""
+        m = self.margin
+        boxed = np.zeros(self.fine)
+        boxed[m:m + self.shape[0], m:m + self.shape[1]] = field
+        return boxed
+
+    def _coarse_sources(self, field):
+        """The fine box block-summed (mean over ``c x c`` blocks)."""
+        c = self.c
+        fx, fy = self.fine
+        return self._boxed(field).reshape(fx // c, c, fy // c, c).mean(axis=(1, 3))
+
+    def _check(self, face_mask):
+        face_mask = np.asarray(face_mask, dtype=bool)
+        if face_mask.shape != self.shape:
+            raise ValueError(f"face_mask must have the estimator's grid shape {self.shape}, got "
+                             f"{face_mask.shape}")
+        return face_mask
 
     def __call__(self, pressure_r, face_mask):
         """Integrals of ``|grad f|^2`` for a pressure on the face.
 
         Parameters
         ----------
-        pressure_r : ndarray, shape (n, n), Pa
+        pressure_r : ndarray, shape (nx, ny), Pa
             Zero off the face.
-        face_mask : ndarray of bool, shape (n, n)
+        face_mask : ndarray of bool, shape (nx, ny)
             Pixels of the face.
 
         Returns
@@ -253,24 +292,21 @@ class SlopeEnergy:
             computed without the Gram matrices (the run-in calls this at
             every step).
         """
-        n, h, m, c = self.n, self.h, self.margin, self.c
+        face_mask = self._check(face_mask)
+        h, c = self.h, self.c
         field = np.where(face_mask, pressure_r, 0.0)
         area = h * h
-        on_face = np.zeros((self.fine, self.fine), dtype=bool)
-        on_face[m:m + n, m:m + n] = face_mask
+        on_face = self._boxed(face_mask).astype(bool)
         gx, gy = self._fine(field)
         square = gx * gx
         square += gy * gy
         face_sum = float(np.sum(square, where=on_face)) * area
         exterior = float(np.sum(square)) * area - face_sum
-        boxed = np.zeros((self.fine, self.fine))
-        boxed[m:m + n, m:m + n] = field
-        coarse = boxed.reshape(self.fine // c, c, self.fine // c, c).mean(axis=(1, 3))
-        gx, gy = self._coarse(coarse)
+        gx, gy = self._coarse(self._coarse_sources(field))
         square = gx * gx
         square += gy * gy
-        inner = self._coarse_inner
-        exterior += (float(np.sum(square)) - float(np.sum(square[inner, inner]))) * (c * h) ** 2
+        exterior += (float(np.sum(square)) - float(np.sum(square[self._coarse_inner])))\
+            * (c * h) ** 2
         force = float(np.sum(field)) * area
         exterior += self._unit_tail() * force * force
         interior, rim = edge_jumps(field, face_mask)
@@ -282,11 +318,15 @@ class SlopeEnergy:
 
     def _unit_tail(self):
         """Far tail of a unit force outside the coarse box (:func:`monopole_tail`), m^2/N^2."""
-        n, h, m, c = self.n, self.h, self.margin, self.c
-        lo = (-n / 2 - m - self._coarse_extra * c) * h
-        hi = lo + (self.fine + 2 * self._coarse_extra * c) * h
-        mid = (lo + hi) / 2
-        return monopole_tail(1.0, (mid, mid), (lo, hi, lo, hi), self.E_star)
+        h, m, c = self.h, self.margin, self.c
+        (ex, ey), (nx, ny) = self._coarse_extra, self.shape
+        (fx, fy) = self.fine
+        x0 = (-nx / 2 - m - ex * c) * h
+        y0 = (-ny / 2 - m - ey * c) * h
+        x1 = x0 + (fx + 2 * ex * c) * h
+        y1 = y0 + (fy + 2 * ey * c) * h
+        return monopole_tail(1.0, ((x0 + x1) / 2, (y0 + y1) / 2), (x0, x1, y0, y1),
+                             self.E_star)
 
     def gram(self, fields, face_mask):
         """Quadratic forms of the slope integrals over a set of pressure fields.
@@ -298,33 +338,29 @@ class SlopeEnergy:
 
         Parameters
         ----------
-        fields : sequence of ndarray, shape (n, n), Pa
+        fields : sequence of ndarray, shape (nx, ny), Pa
             Pressure fields (zero off the face).
-        face_mask : ndarray of bool, shape (n, n)
+        face_mask : ndarray of bool, shape (nx, ny)
             Pixels of the face.
 
         Returns
         -------
         SlopeGram
         """
-        n, h, m, c = self.n, self.h, self.margin, self.c
+        face_mask = self._check(face_mask)
+        h, c = self.h, self.c
         fields = np.asarray([np.where(face_mask, f, 0.0) for f in fields])
         area = h * h
-        on_face = np.zeros((self.fine, self.fine), dtype=bool)
-        on_face[m:m + n, m:m + n] = face_mask
-        inner = np.zeros(self._coarse.m, dtype=bool)
-        inner[self._coarse_inner] = True
-        coarse_outside = ~(inner[:, None] & inner[None, :])
+        on_face = self._boxed(face_mask).astype(bool)
+        coarse_outside = np.ones(self._coarse.m, dtype=bool)
+        coarse_outside[self._coarse_inner] = False
 
         face_rows, ext_rows, coarse_rows = [], [], []
-        boxed = np.zeros((self.fine, self.fine))
         for f in fields:
             gx, gy = self._fine(f)
             face_rows.append(np.concatenate([gx[on_face], gy[on_face]]))
             ext_rows.append(np.concatenate([gx[~on_face], gy[~on_face]]))
-            boxed[m:m + n, m:m + n] = f
-            coarse = boxed.reshape(self.fine // c, c, self.fine // c, c).mean(axis=(1, 3))
-            gx, gy = self._coarse(coarse)
+            gx, gy = self._coarse(self._coarse_sources(f))
             coarse_rows.append(np.concatenate([gx[coarse_outside], gy[coarse_outside]]))
 
         def gram(rows):
@@ -434,40 +470,56 @@ class SlopeEstimate:
     values: tuple
 
 
-def _accepts(geometry, n):
-    """Whether the geometry can be rasterised at grid ``n`` (its ``check_grid``)."""
+def _grid(outline, m):
+    """The grid ``m`` of an outline: the int itself for the unit disk (``outline`` None)."""
+    return m if outline is None else FaceGrid(outline, m)
+
+
+def _accepts(geometry, n, outline=None):
+    """Whether the geometry can be rasterised at grid ``n`` on the outline."""
     try:
-        geometry.check_grid(n)
+        geometry.check_grid(_grid(outline, n))
     except ValueError:
         return False
     return True
 
 
-def _coarsest_grid(geometry):
-    """Coarsest grid the geometry accepts: a multiple of 8 where it can be, else ``min_grid()``.
+def _coarsest_grid(geometry, outline=None):
+    """Coarsest grid the geometry accepts: a multiple of 8 where it can be, else the minimum.
 
     A continuous geometry accepts every grid from ``min_grid()`` on; a pixel
-    map only multiples of its size, the coarsest being the size itself.
-    Returns None if the geometry accepts neither.
+    map (or a mask outline) only multiples of its size, the coarsest being
+    the size itself.  Returns None if the geometry accepts neither.
     """
-    low = geometry.min_grid()
+    low = geometry.min_grid(outline)
+    if outline is not None:
+        low = max(low, outline.min_grid())
     for m in (8 * -(-low // 8), low):
-        if _accepts(geometry, m):
+        if _accepts(geometry, m, outline):
             return m
     return None
 
 
-def grid_ladder(geometry, n):
+def grid_ladder(geometry, n, outline=None):
     """Grids for a discretisation-error estimate at grid ``n``, coarse to fine.
 
     ``n/4, n/2, n`` where the geometry accepts them (``check_grid``: for
-    Voronoi maps two pixels per mean seed spacing); if neither ``n/4`` nor
-    ``n/2`` is accepted, the coarsest accepted grid below ``n`` (a multiple
-    of 8, or for a pixel map its own size); if there is none, ``n, 2n``.
-    Only resolved grids enter the estimate (e.g. 160^2 seeds at
-    ``n = 512``: ``320, 512``).  A pixel map exists only at multiples of
-    its size: at its own size it refines instead.  The geometry accepts
-    every grid of the ladder.
+    Voronoi maps two pixels per mean seed spacing; on a face outline, also
+    the outline's own minimum); if neither ``n/4`` nor ``n/2`` is accepted,
+    the coarsest accepted grid below ``n`` (a multiple of 8, or for a pixel
+    map its own size); if there is none, ``n, 2n``.  Only resolved grids
+    enter the estimate (e.g. 160^2 seeds at ``n = 512``: ``320, 512``).  A
+    pixel map exists only at multiples of its size: at its own size it
+    refines instead.  The geometry accepts every grid of the ladder.
+
+    Parameters
+    ----------
+    geometry : phase geometry
+    n : int
+        Pixels along the longer side of the face's bounding box.
+    outline : outline object, optional
+        The face (:mod:`steady.outline`); default the unit disk, grids
+        given by their size alone.
 
     Examples
     --------
@@ -477,10 +529,12 @@ def grid_ladder(geometry, n):
     >>> grid_ladder(ArrayMap(Rods(((0.0, 0.0),), (0.5,)).labels(20)), 100)
     [20, 100]
     """
-    n = geometry.check_grid(int(n))
-    grids = [n // d for d in (4, 2) if n % d == 0 and _accepts(geometry, n // d)]
+    if isinstance(n, FaceGrid):
+        n = n.n
+    n = geometry.check_grid(_grid(outline, int(n)))
+    grids = [n // d for d in (4, 2) if n % d == 0 and _accepts(geometry, n // d, outline)]
     if not grids:
-        m = _coarsest_grid(geometry)
+        m = _coarsest_grid(geometry, outline)
         grids = [m] if m is not None and m < n else []
     return grids + [n] if grids else [n, 2 * n]
 
@@ -515,20 +569,23 @@ def ladder_error(grids, values):
     return np.max(diffs * factors.reshape((-1,) + (1,) * (v.ndim - 1)), axis=0)
 
 
-def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star, n, *,
+def estimate_rms_slope(geometry, wear_coefficients, normal_force, outline, E_star, n, *,
                        exponent=1.0):
     """Energy-corrected rms slope of the limiting face, with an error estimate.
 
     Parameters
     ----------
     geometry : phase geometry
-        An object of :mod:`steady.phases` (``labels(n)``, ``check_grid(n)``).
+        An object of :mod:`steady.phases` (``labels(grid)``, ``check_grid(grid)``).
     wear_coefficients : array_like, shape (P,), 1/Pa
     normal_force : float, N
-    radius : float, m
+    outline : outline object or float
+        The face (:mod:`steady.outline`); a number is the radius (m) of a
+        circular face.
     E_star : float, Pa
     n : int
-        Grid of the estimate.
+        Grid of the estimate, pixels along the longer side of the face's
+        bounding box.
     exponent : float, optional
         Pressure exponent ``m`` of the wear law (default 1).
 
@@ -540,15 +597,16 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
         :func:`ladder_error` (``max(|S_n - S_n/2|, |S_n/2 - S_n/4| / 2)``
         for the ladder ``n/4, n/2, n``).
     """
-    grids = grid_ladder(geometry, n)
+    outline = as_outline(outline)
+    grids = grid_ladder(geometry, n, outline)
     values = []
     plain = None
     for m in grids:
-        labels = geometry.labels(m)
-        h = pixel_size(m, radius)
-        pressure, _, _ = pressure_field(labels, wear_coefficients, normal_force, h * h,
+        grid = FaceGrid(outline, m)
+        labels = geometry.labels(grid)
+        pressure, _, _ = pressure_field(labels, wear_coefficients, normal_force, grid.pixel_area,
                                         exponent=exponent)
-        integrals = SlopeEnergy(m, h, E_star)(pressure, labels >= 0)
+        integrals = SlopeEnergy(grid.shape, grid.h, E_star)(pressure, labels >= 0)
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)
         logger.debug("n=%d rms slope corrected %.8g plain %.8g", m, values[-1], plain)
@@ -557,8 +615,8 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, radius, E_star
                          grids=tuple(grids), values=tuple(values))
 
 
-def resample_labels(labels, m):
-    """A phase map on the ``m x m`` grid, read off a map given on another grid.
+def resample_labels(labels, m, outline=None):
+    """A phase map on the grid ``m``, read off a map given on another grid.
 
     Each pixel of the new grid takes the label of the pixel of ``labels``
     that contains its centre (for ``m = n/2`` the centre is a corner of four
@@ -570,14 +628,18 @@ def resample_labels(labels, m):
 
     Parameters
     ----------
-    labels : ndarray of int, shape (n, n)
-        Phase index on the face, -1 off it.
+    labels : ndarray of int, shape (nx, ny)
+        Phase index on the face, -1 off it; the grid of ``n = max(nx, ny)``
+        pixels along the longer side of the outline's bounding box.
     m : int
-        New grid size, ``>= 2``.
+        New grid size along the longer side, ``>= 2``.
+    outline : outline object, optional
+        The face (:mod:`steady.outline`); default the unit disk (``n x n``
+        grids).
 
     Returns
     -------
-    ndarray of int, shape (m, m)
+    ndarray of int, shape of the outline's grid ``m`` (``(m, m)`` for a disk)
         -1 off the face of the ``m`` grid.
 
     Examples
@@ -588,13 +650,23 @@ def resample_labels(labels, m):
     (32, 32)
     """
     labels = np.asarray(labels)
-    n = labels.shape[0]
+    nx, ny = labels.shape
+    n = max(nx, ny)
     m = int(m)
     if m < 2:
         raise ValueError(f"grid size m must be at least 2, got {m}")
-    index = np.minimum(np.floor((np.arange(m) + 0.5) * n / m).astype(int), n - 1)
-    picked = extend_off_face(labels)[np.ix_(index, index)]
-    return np.where(grid_face_mask(m), picked, -1)
+    if outline is None:
+        if nx != ny:
+            raise ValueError(f"a map of {nx} x {ny} pixels needs its face outline")
+        shape, mask = (m, m), grid_face_mask(m)
+    else:
+        grid = FaceGrid(outline, m)
+        shape, mask = grid.shape, grid.mask
+    # Centres of the new pixels in old pixels from the old grid's corner.
+    index = [np.clip(np.floor((np.arange(k) + 0.5) * n / m + (old - k * n / m) / 2)
+                     .astype(int), 0, old - 1) for k, old in zip(shape, (nx, ny), strict=True)]
+    picked = extend_off_face(labels)[np.ix_(*index)]
+    return np.where(mask, picked, -1)
 
 
 #: Mean phase chord, in pixels, below which a resampled map is too coarse to
@@ -612,7 +684,7 @@ def mean_chord(labels):
 
     Parameters
     ----------
-    labels : ndarray of int, shape (n, n)
+    labels : ndarray of int, shape (nx, ny)
 
     Returns
     -------
@@ -625,7 +697,7 @@ def mean_chord(labels):
     return 2.0 * float(face.sum()) / edges if edges else float("inf")
 
 
-def estimate_map_rms_slope(labels, wear_coefficients, normal_force, radius, E_star, *,
+def estimate_map_rms_slope(labels, wear_coefficients, normal_force, outline, E_star, *,
                            exponent=1.0, energy=None):
     """Corrected rms slope of the limiting face of a pixel map, with an error estimate.
 
@@ -634,20 +706,23 @@ def estimate_map_rms_slope(labels, wear_coefficients, normal_force, radius, E_st
     (:func:`resample_labels`) at ``n // 4`` and ``n // 2``.  A coarse grid
     enters when the map's mean phase chord (:func:`mean_chord`) spans at
     least :data:`MIN_CHORD_PIXELS` of its pixels (for Voronoi maps about the
-    steady module's two pixels per seed spacing) and every phase survives
-    the resampling; when neither does, the coarsest such grid below ``n``
-    (a multiple of 8) serves, or if there is none ``n // 2``, which then
-    over-estimates the error.  Measured against 1024^2 references of
-    continuous geometries (docs/benchmarks.md, "Run-in history"), the
-    estimate is of the size of the error or larger.
+    steady module's two pixels per seed spacing), the outline accepts it
+    and every phase survives the resampling; when neither does, the
+    coarsest such grid below ``n`` (a multiple of 8) serves, or if there is
+    none ``n // 2``, which then over-estimates the error.  Measured against
+    1024^2 references of continuous geometries (docs/benchmarks.md,
+    "Run-in history"), the estimate is of the size of the error or larger.
 
     Parameters
     ----------
-    labels : ndarray of int, shape (n, n)
-        Phase index ``0..P-1`` on the face, -1 off it.
+    labels : ndarray of int, shape (nx, ny)
+        Phase index ``0..P-1`` on the face, -1 off it, on the outline's
+        grid of ``n = max(nx, ny)``.
     wear_coefficients : array_like, shape (P,), 1/Pa
     normal_force : float, N
-    radius : float, m
+    outline : outline object or float
+        The face (:mod:`steady.outline`); a number is the radius (m) of a
+        circular face.
     E_star : float, Pa
     exponent : float, optional
         Pressure exponent ``m`` of the wear law (default 1).
@@ -661,23 +736,37 @@ def estimate_map_rms_slope(labels, wear_coefficients, normal_force, radius, E_st
         if no coarser grid is usable.
     """
     labels = np.asarray(labels)
-    n = labels.shape[0]
+    outline = as_outline(outline)
+    n = max(labels.shape)
+    grid = FaceGrid(outline, n)
+    if labels.shape != grid.shape:
+        raise ValueError(f"a map of {labels.shape[0]} x {labels.shape[1]} pixels does not fit "
+                         f"the grid of the {outline.describe()} ({grid.shape[0]} x "
+                         f"{grid.shape[1]} pixels at n = {n})")
+
+    def usable(m):
+        return m >= low and _accepts(Homogeneous(), m, outline)
+
     low = max(MIN_GRID, int(np.ceil(MIN_CHORD_PIXELS * n / mean_chord(labels))))
-    coarse = [m for m in (n // 4, n // 2) if m >= low]
+    coarse = [m for m in (n // 4, n // 2) if usable(m)]
     if not coarse:
         m = 8 * -(-low // 8)
         # A map too fine-grained for any admitted grid: n // 2 over-estimates.
-        coarse = [m] if m < n else ([n // 2] if n // 2 >= MIN_GRID else [])
+        if m < n and usable(m):
+            coarse = [m]
+        elif n // 2 >= MIN_GRID and _accepts(Homogeneous(), n // 2, outline):
+            coarse = [n // 2]
     grids, values, plain = [], [], None
     for m in coarse + [n]:
-        lab = labels if m == n else resample_labels(labels, m)
-        h = pixel_size(m, radius)
+        g = grid if m == n else FaceGrid(outline, m)
+        lab = labels if m == n else resample_labels(labels, m, outline)
         try:
-            pressure, _, _ = pressure_field(lab, wear_coefficients, normal_force, h * h,
+            pressure, _, _ = pressure_field(lab, wear_coefficients, normal_force, g.pixel_area,
                                             exponent=exponent)
         except ValueError:
             continue  # a phase vanished on the coarse grid
-        estimator = energy if (m == n and energy is not None) else SlopeEnergy(m, h, E_star)
+        estimator = energy if (m == n and energy is not None) else SlopeEnergy(g.shape, g.h,
+                                                                                E_star)
         integrals = estimator(pressure, lab >= 0)
         grids.append(m)
         values.append(float(integrals.rms_slope))

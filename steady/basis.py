@@ -16,10 +16,10 @@ import dataclasses
 
 import numpy as np
 
-from . import reference
 from .accuracy import SlopeEnergy
-from .grid import pixel_size
 from .halfspace import HalfSpace
+from .normalisation import reference_slope
+from .outline import Circle, as_outline
 from .phases import validate_labels
 from .pressures import phase_pressures
 
@@ -37,7 +37,8 @@ class SweepSlopes:
     rms_slope_plain : ndarray, shape (K,), dimensionless
         Plain pixel rms slope.
     reference_slope : float, dimensionless
-        ``grad_f0 = 4 pbar / (pi E*)``.
+        ``grad_f0``, the homogeneous face's rms slope (``4 pbar / (pi E*)``
+        for a disk; :mod:`steady.normalisation`).
     phase_pressures : ndarray, shape (K, P), Pa
     """
 
@@ -57,14 +58,16 @@ class PhaseBasis:
 
     Parameters
     ----------
-    labels : ndarray, shape (n, n), int
+    labels : ndarray, shape (nx, ny), int
         Phase index on the face, -1 off it (:mod:`steady.phases`).
-    radius : float, m
-        Punch radius ``a``.
+    outline : outline object or float
+        The face's outline (:mod:`steady.outline`), on whose grid of
+        ``max(nx, ny)`` pixels along the longer side ``labels`` lies; a
+        number is the radius ``a`` of a disk (m).
     E_star : float, Pa
     faces : bool, optional
         Also keep the per-phase faces ``K chi_i`` (``P`` arrays of
-        ``n x n``) for :meth:`face`; default True.
+        ``nx x ny``) for :meth:`face`; default True.
 
     Notes
     -----
@@ -72,22 +75,26 @@ class PhaseBasis:
     energy-corrected slope integrals (:meth:`steady.accuracy.SlopeEnergy.gram`).
     """
 
-    def __init__(self, labels, radius, E_star, *, faces=True):
+    def __init__(self, labels, outline, E_star, *, faces=True):
         labels = np.asarray(labels)
-        n = labels.shape[0]
-        if labels.ndim != 2 or labels.shape[1] != n:
-            raise ValueError(f"labels must be a square array, got shape {labels.shape}")
+        if labels.ndim != 2:
+            raise ValueError(f"labels must be a 2-d array, got shape {labels.shape}")
+        self.outline = as_outline(outline)
+        grid = self.outline.grid(max(labels.shape))
+        if grid.shape != labels.shape:
+            raise ValueError(f"labels of shape {labels.shape} do not fit the "
+                             f"{self.outline.describe()}, whose grid is {grid.shape}")
         self.n_phases = int(labels.max()) + 1
         self.counts = validate_labels(labels, self.n_phases)
         self.labels = labels
-        self.radius = float(radius)
+        self.radius = self.outline.radius if isinstance(self.outline, Circle) else None
         self.E_star = float(E_star)
-        self.h = pixel_size(n, self.radius)
+        self.h = grid.h
         indicators = [(labels == i).astype(float) for i in range(self.n_phases)]
-        self._gram = SlopeEnergy(n, self.h, self.E_star).gram(indicators, labels >= 0)
+        self._gram = SlopeEnergy(grid.shape, self.h, self.E_star).gram(indicators, labels >= 0)
         self._faces = None
         if faces:
-            hs = HalfSpace(n, self.h, self.E_star)
+            hs = HalfSpace(grid.shape, self.h, self.E_star)
             self._faces = np.array([hs.displacement(chi) for chi in indicators])
 
     @property
@@ -130,14 +137,13 @@ class PhaseBasis:
         p = np.atleast_2d(self.phase_pressures(wear_coefficients, normal_force,
                                                exponent=exponent))
         integrals = self._gram.integrals(p)
-        g0 = reference.reference_slope(reference.mean_pressure(normal_force, self.radius),
-                                       self.E_star)
+        g0 = reference_slope(self.outline, normal_force, self.E_star).value
         return SweepSlopes(rms_slope=np.atleast_1d(integrals.rms_slope),
                            rms_slope_plain=np.atleast_1d(integrals.rms_slope_plain),
                            reference_slope=g0, phase_pressures=p)
 
     def face(self, wear_coefficients, normal_force, *, exponent=1.0):
-        """Limiting face ``f_inf`` (eq. 9), shape (n, n), m; NaN off the face."""
+        """Limiting face ``f_inf`` (eq. 9), shape (nx, ny), m; NaN off the face."""
         if self._faces is None:
             raise ValueError("this basis was built with faces=False")
         p = self.phase_pressures(wear_coefficients, normal_force, exponent=exponent)

@@ -625,8 +625,11 @@ def steady_memory(n, *, slope_error=True):
 
     Parameters
     ----------
-    n : int
-        Pixels across the grid.
+    n : int or (int, int)
+        Pixels across a square grid, or ``(nx, ny)``: a rectangular grid
+        is counted as the square of the same number of pixels (the arrays
+        scale with ``nx ny``; the margins of the slope estimator, a few per
+        cent, with the sides).
     slope_error : bool, optional
         Whether the corrected rms slope and its error bar are computed
         (default True).
@@ -640,7 +643,7 @@ def steady_memory(n, *, slope_error=True):
     >>> print(format_bytes(steady_memory(1024)), format_bytes(steady_memory(12000)))
     579 MiB 75.2 GiB
     """
-    n = int(n)
+    n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     peak = halfspace_memory(n, gradient=True) + 8 * n * n * _FLOAT
     if slope_error:
         peak += 17 * n * n + sum(slope_estimator_memory(n))

@@ -5,8 +5,9 @@ The geometry of the pillars argument (paper eq. 16-18): circular inclusions
 random sequential addition: radii are drawn first (all equal, or log-normal
 about the mean radius), largest first each is put at a uniformly random
 position that overlaps no inclusion placed before (touching is allowed).
-Centres fill the periodic square ``[-L, L)^2`` with ``L = 1 + r_max``
-(units of ``a``): the placement has no walls, so the inclusions are as
+Centres fill the periodic square ``[-B, B)^2`` with ``B = 1 + r_max``
+(units of the face scale ``L``, which is ``a`` for a disk; every face lies
+in ``[-1, 1]^2``): the placement has no walls, so the inclusions are as
 dense everywhere (also where the rim cuts them), and no periodic image
 reaches the face.
 
@@ -23,8 +24,7 @@ import math
 
 import numpy as np
 
-from .grid import face_mask, pixel_centres
-from .phases import MIN_GRID, _check_grid
+from .phases import MIN_GRID, _check_grid, face_grid
 
 __all__ = ["MAX_FILL", "MAX_INCLUSIONS", "MAX_RADIUS", "Inclusions"]
 
@@ -77,12 +77,15 @@ class Inclusions:
     count : float, optional
         Expected number of inclusion centres on the face instead of
         ``fill_factor`` (exactly one of the two): the fill factor is then
-        ``count * <r^2>`` (the face has area ``pi a^2``).
+        ``count * pi <r^2> / face_area``.
     radius_spread : float, optional
         Relative standard deviation of the radii (default 0: all equal).
         Radii are log-normal with mean ``radius``, truncated at three
         standard deviations of their logarithm; the largest must stay below
         :data:`MAX_RADIUS`.
+    face_area : float, optional
+        Area of the face in units of ``L^2`` (default ``pi``, the unit
+        disk); only ``count`` uses it.
 
     Raises
     ------
@@ -114,10 +117,11 @@ class Inclusions:
     fill_factor: float | None = None
     count: float | None = None
     radius_spread: float = 0.0
+    face_area: float = math.pi
 
     def __post_init__(self):
         """Check the parameters; store them as floats and ints."""
-        radius = _positive(self.radius, "inclusion radius (units of the punch radius)")
+        radius = _positive(self.radius, "inclusion radius (units of the face scale)")
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) \
                 or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
@@ -138,7 +142,9 @@ class Inclusions:
                              f"fill_factor={self.fill_factor!r}, count={self.count!r}")
         if self.count is not None:
             count = _positive(self.count, "count (expected inclusions on the face)")
-            fill = count * self.mean_square_radius
+            face_area = _positive(self.face_area, "face_area (units of L^2)")
+            object.__setattr__(self, "face_area", face_area)
+            fill = count * math.pi * self.mean_square_radius / face_area
             object.__setattr__(self, "count", count)
             what = f"count {count:g} (fill factor {fill:.4g})"
         else:
@@ -166,7 +172,7 @@ class Inclusions:
         """Expected area fraction of the inclusions (``fill_factor``, or from ``count``)."""
         if self.fill_factor is not None:
             return self.fill_factor
-        return self.count * self.mean_square_radius
+        return self.count * math.pi * self.mean_square_radius / self.face_area
 
     @functools.cached_property
     def _log_params(self):
@@ -239,29 +245,32 @@ class Inclusions:
         """Inclusion radii, shape (N,), units of ``a`` (read-only), largest first."""
         return self._placed[1]
 
-    def min_grid(self):
+    def min_grid(self, outline=None):
         """``max(8, ceil(6 / radius))``: three pixels per mean radius."""
         return max(MIN_GRID, math.ceil(6.0 / self.radius - 1e-9))
 
-    def check_grid(self, n):
+    def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(n, self.min_grid(), f"inclusions of radius {self.radius:g} a")
+        return _check_grid(grid, self.min_grid(), f"inclusions of radius {self.radius:g} L")
 
-    def labels(self, n):
-        """Phase 1 inside the inclusions, 0 elsewhere on the face, -1 off it; shape (n, n)."""
-        n = self.check_grid(n)
-        x = pixel_centres(n, 1.0)
-        h = 2.0 / n
-        inside = np.zeros((n, n), dtype=bool)
+    def labels(self, grid):
+        """Phase 1 inside the inclusions, 0 elsewhere on the face, -1 off it; shape of the grid."""
+        self.check_grid(grid)
+        grid = face_grid(grid)
+        nx, ny = grid.shape
+        x, y = grid.unit_x, grid.unit_y
+        bx, by = grid.unit_half_extent
+        h = 2.0 / grid.n
+        inside = np.zeros((nx, ny), dtype=bool)
         for (cx, cy), r in zip(self.centres, self.radii, strict=True):
-            i0, i1 = max(0, int((cx - r + 1) / h)), min(n, int((cx + r + 1) / h) + 1)
-            j0, j1 = max(0, int((cy - r + 1) / h)), min(n, int((cy + r + 1) / h) + 1)
+            i0, i1 = max(0, int((cx - r + bx) / h)), min(nx, int((cx + r + bx) / h) + 1)
+            j0, j1 = max(0, int((cy - r + by) / h)), min(ny, int((cy + r + by) / h) + 1)
             if i0 >= i1 or j0 >= j1:
                 continue
             dx = x[i0:i1, None] - cx
-            dy = x[None, j0:j1] - cy
+            dy = y[None, j0:j1] - cy
             inside[i0:i1, j0:j1] |= dx * dx + dy * dy < r * r
-        return np.where(face_mask(n), inside.astype(np.int64), -1)
+        return np.where(grid.mask, inside.astype(np.int64), -1)
 
 
 def _random_sequential_addition(radii, half_width, cell, rng):

@@ -38,7 +38,7 @@ import numpy as np
 from scipy import ndimage
 
 from .command_line import shorten
-from .grid import face_mask, pixel_centres
+from .outline import Circle, FaceGrid, as_outline
 from .phases import MIN_GRID, _check_grid, _input_file, _png_size, npy_header
 
 __all__ = [
@@ -359,11 +359,11 @@ def read_grey(path):
     return img
 
 
-def _placement(shape, radius, pixel_size, cover, offset, source):
-    """Checked ``(pixel_size, cover, offset)`` of an image of ``shape`` on a face of ``radius``."""
+def _placement(shape, outline, pixel_size, cover, offset, source):
+    """Checked ``(pixel_size, cover, offset)`` of an image of ``shape`` on a face."""
     rows, cols = shape
-    if not _is_number(radius) or not math.isfinite(radius) or radius <= 0:
-        raise ValueError(f"radius must be a positive finite number (m), got {shorten(radius)}")
+    outline = as_outline(outline)
+    half_x, half_y = outline.half_extent
     if cover not in COVERS:
         raise ValueError(f"cover must be one of {list(COVERS)}, got {shorten(cover)}")
     try:
@@ -377,10 +377,11 @@ def _placement(shape, radius, pixel_size, cover, offset, source):
                          f"{shorten(offset)}") from None
     offset = (float(offset[0]), float(offset[1]))
     if pixel_size is None:
-        if rows != cols:
+        if rows != cols or half_x != half_y:
             raise ValueError(f"micrograph {source!r} is {cols} x {rows} pixels: without a "
-                             f"pixel_size it must be square (it then spans the face's diameter)")
-        pixel_size = 2.0 * radius / cols
+                             f"pixel_size it must be square and so must the face's bounding "
+                             f"box (the image then spans it)")
+        pixel_size = 2.0 * half_x / cols
     elif not _is_number(pixel_size) or not math.isfinite(pixel_size) or pixel_size <= 0:
         raise ValueError(f"pixel_size must be a positive finite number (m), got "
                          f"{shorten(pixel_size)}")
@@ -388,12 +389,14 @@ def _placement(shape, radius, pixel_size, cover, offset, source):
     if cover == "crop":
         width, height = cols * pixel_size, rows * pixel_size
         slack = 1.0 + _COVER_SLACK
-        if (abs(offset[0]) + radius > 0.5 * width * slack
-                or abs(offset[1]) + radius > 0.5 * height * slack):
+        if (abs(offset[0]) + half_x > 0.5 * width * slack
+                or abs(offset[1]) + half_y > 0.5 * height * slack):
+            box = ("(diameter 2a)" if isinstance(outline, Circle)
+                   else "(the face's bounding box)")
             raise ValueError(
                 f"micrograph {source!r} covers {_mm(width)} x {_mm(height)} ({cols} x {rows} "
-                f"pixels of {pixel_size:.6g} m) but the face needs {_mm(2 * radius)} x "
-                f"{_mm(2 * radius)} (diameter 2a) around offset ({_mm(offset[0])}, "
+                f"pixels of {pixel_size:.6g} m) but the face needs {_mm(2 * half_x)} x "
+                f"{_mm(2 * half_y)} {box} around offset ({_mm(offset[0])}, "
                 f"{_mm(offset[1])}): use cover = \"tile\", a larger image or a smaller offset")
     return pixel_size, cover, offset
 
@@ -406,16 +409,18 @@ class Micrograph:
     ----------
     segmentation : Segmentation
         The image's phases (see :func:`segment`).
-    radius : float, m
-        Punch radius ``a``.
+    outline : outline object or float
+        The face (:mod:`steady.outline`); a number is the radius ``a`` of a
+        circular face, m.
     pixel_size : float, m, optional
-        Side of one image pixel.  Default: the image must be square and
-        spans the face's diameter, ``2a / cols``.
+        Side of one image pixel.  Default: the image and the face's
+        bounding box must be square, and the image spans it (for a disk
+        the diameter: ``2a / cols``).
     cover : {"crop", "tile"}, optional
         ``"crop"`` (default): the image, centred on the face (shifted by
-        ``offset``), must cover the face's bounding square
-        ``[-a, a]^2``; ``"tile"``: the image is repeated periodically, so
-        any pixel size covers the face.
+        ``offset``), must cover the face's bounding box (``[-a, a]^2`` for
+        a disk); ``"tile"``: the image is repeated periodically, so any
+        pixel size covers the face.
     offset : (float, float), m, optional
         Position ``(x, y)`` of the face centre relative to the image
         centre, ``x`` to the right, ``y`` up (default ``(0, 0)``).
@@ -438,8 +443,8 @@ class Micrograph:
     ``pixel_size = 2a / n0`` and ``n = k n0``, each image pixel becomes
     exactly ``k x k`` grid pixels.  A grid coarser than the image keeps
     one image pixel in every few: features smaller than the grid pixel
-    ``2a / n`` are lost or kept at random, like any nearest-neighbour
-    resampling.
+    (``2a / n`` on a disk) are lost or kept at random, like any
+    nearest-neighbour resampling.
 
     Examples
     --------
@@ -447,13 +452,13 @@ class Micrograph:
     >>> labels = np.zeros((4, 6), dtype=int)
     >>> labels[:, 3:] = 1                    # right half of the image is phase 1
     >>> seg = Segmentation(labels, (0.5,), (0.5, 0.5), 0.0, 0, 0, 0)
-    >>> geometry = Micrograph(seg, radius=1e-3, pixel_size=0.5e-3)   # 3 mm x 2 mm
+    >>> geometry = Micrograph(seg, 1e-3, pixel_size=0.5e-3)   # 3 mm x 2 mm, disk a = 1 mm
     >>> geometry.labels(8)[[0, 7], 4]        # left and right edge of the face, y ~ 0
     array([0, 1])
     """
 
     segmentation: Segmentation
-    radius: float
+    outline: object
     pixel_size: float | None = None
     cover: str = "crop"
     offset: tuple = (0.0, 0.0)
@@ -464,10 +469,11 @@ class Micrograph:
         if not isinstance(self.segmentation, Segmentation):
             raise ValueError(f"segmentation must be a Segmentation, got "
                              f"{shorten(self.segmentation)}")
-        pixel_size, cover, offset = _placement(self.segmentation.shape, self.radius,
+        outline = as_outline(self.outline)
+        pixel_size, cover, offset = _placement(self.segmentation.shape, outline,
                                                self.pixel_size, self.cover, self.offset,
                                                self.source)
-        object.__setattr__(self, "radius", float(self.radius))
+        object.__setattr__(self, "outline", outline)
         object.__setattr__(self, "pixel_size", pixel_size)
         object.__setattr__(self, "offset", offset)
 
@@ -482,58 +488,65 @@ class Micrograph:
         rows, cols = self.segmentation.shape
         return cols * self.pixel_size, rows * self.pixel_size
 
-    def min_grid(self):
+    def min_grid(self, outline=None):
         """Smallest accepted grid, :data:`steady.phases.MIN_GRID`."""
         return MIN_GRID
 
-    def check_grid(self, n):
+    def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(n, self.min_grid(), f"micrograph {self.source!r}")
+        return _check_grid(grid, self.min_grid(), f"micrograph {self.source!r}")
 
-    def image_indices(self, n):
+    def _grid(self, grid):
+        """The face grid of ``grid`` (``n``: this micrograph's own outline)."""
+        return grid if isinstance(grid, FaceGrid) else FaceGrid(self.outline, int(grid))
+
+    def image_indices(self, grid):
         """Image row and column under each grid pixel centre.
 
         Parameters
         ----------
-        n : int
-            Pixels across the diameter.
+        grid : FaceGrid or int
+            A grid of the face, or ``n`` (pixels along the longer side of
+            this micrograph's face).
 
         Returns
         -------
-        rows : ndarray, shape (n,), int
+        rows : ndarray, shape (ny,), int
             Image row under grid column ``j`` (coordinate ``y_j``).
-        cols : ndarray, shape (n,), int
+        cols : ndarray, shape (nx,), int
             Image column under grid row ``i`` (coordinate ``x_i``).
         """
-        n = self.check_grid(n)
+        self.check_grid(grid)
+        grid = self._grid(grid)
         n_rows, n_cols = self.segmentation.shape
         width, height = self.extent
-        x = pixel_centres(n, self.radius)
-        cols = np.floor((x + self.offset[0] + 0.5 * width) / self.pixel_size).astype(np.int64)
-        rows = np.floor((0.5 * height - x - self.offset[1]) / self.pixel_size).astype(np.int64)
+        cols = np.floor((grid.x + self.offset[0] + 0.5 * width)
+                        / self.pixel_size).astype(np.int64)
+        rows = np.floor((0.5 * height - grid.y - self.offset[1])
+                        / self.pixel_size).astype(np.int64)
         if self.cover == "tile":
             return rows % n_rows, cols % n_cols
         # A crop covers the face: only rounding at an exact edge can step outside.
         return np.clip(rows, 0, n_rows - 1), np.clip(cols, 0, n_cols - 1)
 
-    def labels(self, n):
-        """Phase of the image pixel under each face pixel centre, -1 off the face; shape (n, n)."""
-        rows, cols = self.image_indices(n)
+    def labels(self, grid):
+        """Phase of the image pixel under each face pixel centre, -1 off the face."""
+        rows, cols = self.image_indices(grid)
         picked = self.segmentation.labels[rows[None, :], cols[:, None]]
-        return np.where(face_mask(len(rows)), picked, -1)
+        return np.where(self._grid(grid).mask, picked, -1)
 
-    def face_fill_factors(self, n):
-        """Fraction of the face pixels of each phase at grid ``n``, shape (P,).
+    def face_fill_factors(self, grid):
+        """Fraction of the face pixels of each phase on a grid, shape (P,).
 
         Unlike :attr:`Segmentation.fill_factors` (the whole image), these
         are what the model sees.  A phase absent from the face counts 0.
         """
-        labels = self.labels(n)
+        labels = self.labels(grid)
         counts = np.bincount(labels[labels >= 0], minlength=self.n_phases)
         return counts / counts.sum()
 
 
-def load_micrograph(path, radius, n_phases, *, smoothing=0.0, min_speck=0, pixel_size=None,
+def load_micrograph(path, outline, n_phases, *, smoothing=0.0, min_speck=0, pixel_size=None,
                     cover="crop", offset=(0.0, 0.0)):
     """Read, segment and place a micrograph: the map kind ``micrograph`` of scene files.
 
@@ -541,8 +554,9 @@ def load_micrograph(path, radius, n_phases, *, smoothing=0.0, min_speck=0, pixel
     ----------
     path : str or path-like
         ``.png`` or ``.npy`` image (see :func:`read_grey`).
-    radius : float, m
-        Punch radius ``a``.
+    outline : outline object or float
+        The face (:mod:`steady.outline`); a number is the radius ``a`` of a
+        circular face, m.
     n_phases : int
         Number of phases ``P >= 2``.
     smoothing : float, pixels, optional
@@ -550,7 +564,8 @@ def load_micrograph(path, radius, n_phases, *, smoothing=0.0, min_speck=0, pixel
     min_speck : int, pixels, optional
         Patches smaller than this take the surrounding phase (default 0).
     pixel_size : float, m, optional
-        Side of one image pixel (default: a square image spanning ``2a``).
+        Side of one image pixel (default: a square image spanning the
+        face's square bounding box, ``2a`` for a disk).
     cover : {"crop", "tile"}, optional
         Default ``"crop"``; see :class:`Micrograph`.
     offset : (float, float), m, optional
@@ -588,10 +603,10 @@ def load_micrograph(path, radius, n_phases, *, smoothing=0.0, min_speck=0, pixel
     min_speck = _check_min_speck(min_speck)
     _threshold_multiotsu()  # name the missing extra before reading anything
     image = read_grey(path)
-    _placement(image.shape, radius, pixel_size, cover, offset, source)  # before the work
+    _placement(image.shape, outline, pixel_size, cover, offset, source)  # before the work
     try:
         seg = segment(image, n_phases, smoothing=smoothing, min_speck=min_speck)
     except ValueError as err:
         raise ValueError(f"micrograph {source!r}: {err}") from None
     logger.info("micrograph %s: %s", path, seg.summary())
-    return Micrograph(seg, radius, pixel_size, cover, offset, source)
+    return Micrograph(seg, outline, pixel_size, cover, offset, source)

@@ -6,30 +6,44 @@ the layout name and version in the root attributes ``format`` and
 ``format_version``.  (Sweep files, which grow point by point, have their
 own mechanism: :mod:`steady.sweep`.)
 
-Steady result files (layout ``runin.steady``, version 1)::
+Steady result files (layout ``runin.steady``, version 2)::
 
     root attributes
         format            "runin.steady"
-        format_version    1
+        format_version    2
         rms_slope         rms of |grad f_inf| over the face, best  (units: rms_slope_units)
                           estimate (energy-corrected where rms_slope_error is finite)
         rms_slope_error   its estimated discretisation error, NaN if not estimated
         rms_slope_plain   plain pixel rms of the slope dataset
-        rms_slope_ref     grad_f0 = 4 pbar / (pi E*), eq. 12       (rms_slope_ref_units)
+        rms_slope_ref     grad_f0, the homogeneous face's rms     (rms_slope_ref_units)
+                          slope: 4 pbar / (pi E*) for a disk (eq. 12)
+        rms_slope_ref_error   its uncertainty (0: a closed form)
+        rms_slope_ref_source  where it comes from, in words
+        mean_pressure     pbar = F_N / face area, Pa               (mean_pressure_units)
         rms_height        rms of the face about its least-squares  (rms_height_units, m)
                           plane; optional when read (NaN if absent)
         fill_factors      realised area fraction of each phase     (fill_factors_units)
         phase_pressures   steady pressure on each phase, Pa        (phase_pressures_units)
         wear_coefficients k_i, 1/Pa                                (wear_coefficients_units)
         exponent          m of the wear law k p^m                  (exponent_units)
-        normal_force N, radius m, E_star Pa, pixel_size m          (<name>_units)
-        n                 pixels across the diameter
+        normal_force N, E_star Pa, pixel_size m                    (<name>_units)
+        radius            m, the disk's radius (circular faces only)
+        scale             m, the outline's length scale L (the radius of a disk)
+        n                 pixels along the longer side (across the diameter of a disk)
     root datasets, each with a ``units`` attribute
-        phase     (n, n) int8/int16   phase index, -1 off the face   units "1"
-        pressure  (n, n) float64      steady pressure                units "Pa"
-        face      (n, n) float64      limiting face f_inf, NaN off   units "m"
-        slope     (n, n) float64      |grad f_inf|, NaN off the face units "1"
+        phase     (nx, ny) int8/int16 phase index, -1 off the face   units "1"
+        pressure  (nx, ny) float64    steady pressure                units "Pa"
+        face      (nx, ny) float64    limiting face f_inf, NaN off   units "m"
+        slope     (nx, ny) float64    |grad f_inf|, NaN off the face units "1"
         scene     scalar string       the scene TOML (attribute ``source_path``)
+    group ``outline``: the face's outline (:mod:`steady.outline`); attributes
+        kind              "circle", "rectangle", "ellipse", "annulus" or "mask"
+        area              m^2, the exact area (area_units)
+        <its lengths>     e.g. width, length (m, with <name>_units)
+        and for a mask the dataset ``mask`` (mx, my) bool
+
+Version 1 files (disks only, without ``outline``, ``scale``,
+``mean_pressure`` and the reference's error and source) are read too.
     group ``micrograph``, only for a segmented micrograph (map kind "micrograph",
     :mod:`steady.micrograph`); attributes
         source            the image file
@@ -55,13 +69,16 @@ import h5py
 import numpy as np
 
 from .micrograph import Micrograph
+from .outline import OUTLINES, Circle, MaskOutline
 from .solution import SteadyResult
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "atomic_h5", "read_result",
-           "write_result"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "atomic_h5", "read_outline",
+           "read_result", "write_outline", "write_result"]
 
 FORMAT = "runin.steady"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Versions :func:`read_result` reads.
+_READABLE_VERSIONS = (1, 2)
 
 _DATASETS = {"phase": "1", "pressure": "Pa", "face": "m", "slope": "1"}
 _ATTRIBUTES = {
@@ -74,14 +91,14 @@ _ATTRIBUTES = {
     "wear_coefficients": "1/Pa",
     "exponent": "1",
     "normal_force": "N",
-    "radius": "m",
     "E_star": "Pa",
     "pixel_size": "m",
     "n": "1",
 }
 # Attributes written by this version and read when present (files written
 # before they existed still read, with NaN).
-_OPTIONAL_ATTRIBUTES = {"rms_height": "m"}
+_OPTIONAL_ATTRIBUTES = {"rms_height": "m", "rms_slope_ref_error": "1", "mean_pressure": "Pa",
+                        "scale": "m"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -307,15 +324,22 @@ def _write(f, result, scene):
         "wear_coefficients": np.asarray(result.wear_coefficients),
         "exponent": result.exponent,
         "normal_force": result.normal_force,
-        "radius": result.radius,
         "E_star": result.E_star,
         "pixel_size": result.pixel_size,
         "n": result.n,
         "rms_height": result.rms_height,
+        "rms_slope_ref_error": result.reference_slope_error,
+        "mean_pressure": result.mean_pressure,
+        "scale": result.scale,
     }
     for name, unit in {**_ATTRIBUTES, **_OPTIONAL_ATTRIBUTES}.items():
         f.attrs[name] = values[name]
         f.attrs[f"{name}_units"] = unit
+    f.attrs["rms_slope_ref_source"] = result.reference_slope_source
+    if isinstance(result.outline, Circle):
+        f.attrs["radius"] = result.outline.radius
+        f.attrs["radius_units"] = "m"
+    write_outline(f.create_group("outline"), result.outline)
     dtype = np.int8 if result.n_phases < 127 else np.int16
     arrays = {"phase": result.labels.astype(dtype), "pressure": result.pressure,
               "face": result.face, "slope": result.slope}
@@ -328,6 +352,49 @@ def _write(f, result, scene):
         scene.source_path)
     if scene is not None and isinstance(scene.geometry, Micrograph):
         _write_micrograph(f.create_group("micrograph"), scene.geometry)
+
+
+def write_outline(group, outline):
+    """A face outline as the attributes (and for a mask the dataset) of ``group``.
+
+    Parameters
+    ----------
+    group : h5py.Group
+    outline : outline object (:mod:`steady.outline`)
+    """
+    group.attrs["kind"] = outline.kind
+    group.attrs["area"] = outline.area
+    group.attrs["area_units"] = "m^2"
+    for name, (value, unit) in outline.parameters().items():
+        group.attrs[name] = value
+        group.attrs[f"{name}_units"] = unit
+    if isinstance(outline, MaskOutline):
+        ds = group.create_dataset("mask", data=outline.mask)
+        ds.attrs["units"] = "1"
+        group.attrs["source"] = outline.source
+
+
+def read_outline(group):
+    """The outline written by :func:`write_outline`.
+
+    Raises
+    ------
+    ValueError
+        An unknown kind or missing lengths.
+    """
+    kind = group.attrs.get("kind")
+    if isinstance(kind, bytes):
+        kind = kind.decode()
+    if kind not in OUTLINES:
+        raise ValueError(f"unknown outline kind {kind!r} (known: {sorted(OUTLINES)})")
+    if kind == "mask":
+        source = group.attrs.get("source", "stored mask")
+        if isinstance(source, bytes):
+            source = source.decode()
+        return MaskOutline(np.asarray(group["mask"][()], dtype=bool),
+                           float(group.attrs["pixel_size"]), source=str(source))
+    required, _ = OUTLINES[kind].keys
+    return OUTLINES[kind](**{name: float(group.attrs[name]) for name in sorted(required)})
 
 
 def _write_micrograph(group, geometry):
@@ -353,6 +420,11 @@ def _write_micrograph(group, geometry):
     }
     for name, value in values.items():
         group.attrs[name] = value
+
+
+def _text(value):
+    """A string attribute as ``str``."""
+    return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def read_result(path):
@@ -398,20 +470,35 @@ def _read(f, path):
     version = f.attrs.get("format_version")
     if isinstance(version, np.generic):
         version = version.item()
-    if version != FORMAT_VERSION:
+    if version not in _READABLE_VERSIONS:
         raise ValueError(f"result file {str(path)!r} has format_version {version!r}; this "
-                         f"reader supports {FORMAT_VERSION}")
+                         f"reader supports {', '.join(map(str, _READABLE_VERSIONS))}")
     missing = [name for name in (*_DATASETS, "scene") if name not in f]
     missing += [name for name in _ATTRIBUTES if name not in f.attrs]
+    if version >= 2 and "outline" not in f:
+        missing.append("outline")
+    if version < 2 and "radius" not in f.attrs:
+        missing.append("radius")
     if missing:
         raise ValueError(f"result file {str(path)!r} lacks {missing[0]!r}")
     a = {name: f.attrs[name] for name in _ATTRIBUTES}
+    if version >= 2:
+        try:
+            outline = read_outline(f["outline"])
+        except (ValueError, KeyError) as err:
+            raise ValueError(f"result file {str(path)!r}: bad outline: {err}") from None
+    else:
+        outline = Circle(float(f.attrs["radius"]))
     arrays = {name: f[name][()] for name in _DATASETS}
     n = int(a["n"])
-    bad = [name for name, v in arrays.items() if v.shape != (n, n)]
+    try:
+        shape = outline.grid_shape(n)
+    except ValueError as err:
+        raise ValueError(f"result file {str(path)!r}: {err}") from None
+    bad = [name for name, v in arrays.items() if v.shape != shape]
     if bad:
         raise ValueError(f"result file {str(path)!r}: dataset {bad[0]!r} has shape "
-                         f"{arrays[bad[0]].shape}, expected {(n, n)}")
+                         f"{arrays[bad[0]].shape}, expected {shape}")
     scene_text = f["scene"][()]
     if isinstance(scene_text, bytes):
         scene_text = scene_text.decode("utf-8")
@@ -427,10 +514,14 @@ def _read(f, path):
         wear_coefficients=np.atleast_1d(a["wear_coefficients"]).astype(float),
         exponent=float(a["exponent"]),
         normal_force=float(a["normal_force"]),
-        radius=float(a["radius"]),
+        radius=outline.radius if isinstance(outline, Circle) else None,
         E_star=float(a["E_star"]),
         rms_slope_plain=float(a["rms_slope_plain"]),
         rms_slope_error=float(a["rms_slope_error"]),
         rms_height=float(f.attrs.get("rms_height", np.nan)),
+        outline=outline,
+        reference_slope_error=float(f.attrs.get("rms_slope_ref_error", 0.0)),
+        reference_slope_source=_text(f.attrs.get("rms_slope_ref_source",
+                                                 "disk: 4 pbar / (pi E*) (eq. 12)")),
     )
     return result, scene_text

@@ -1,16 +1,20 @@
 """Phase maps of the punch face that can be rasterised at any grid size.
 
 A phase geometry is a continuous description of which phase sits where on
-the face, in units of the punch radius ``a`` (the face is the unit disk).
-Every geometry has
+the face, in units of the face's scale ``L`` (:mod:`steady.outline`: the
+punch radius ``a`` of a disk, else the larger half side of the face's
+bounding box), centred on the face's centre.  Every geometry has
 
 - ``n_phases`` : the number of phases ``P``;
-- ``labels(n)`` : an ``(n, n)`` integer array with the phase index
-  ``0..P-1`` at every face pixel (see :func:`steady.grid.face_mask`) and
-  ``-1`` off the face;
-- ``min_grid()`` : the smallest ``n`` at which the geometry is resolved;
-- ``check_grid(n)`` : raises :class:`ValueError` (naming ``n`` and the
-  minimum) if ``labels(n)`` would refuse ``n``.
+- ``labels(grid)`` : an ``(nx, ny)`` integer array with the phase index
+  ``0..P-1`` at every face pixel of ``grid`` (a
+  :class:`steady.outline.FaceGrid`) and ``-1`` off the face; an integer
+  ``n`` stands for the ``n x n`` grid of the unit disk
+  (:func:`steady.grid.face_mask`);
+- ``min_grid(outline=None)`` : the smallest ``n`` (pixels along the longer
+  side) at which the geometry is resolved on that outline (default: a disk);
+- ``check_grid(grid)`` : raises :class:`ValueError` (naming ``n`` and the
+  minimum) if ``labels(grid)`` would refuse the grid.
 
 Because the geometry is continuous, the same object can be rasterised at
 several ``n`` (for instance to estimate the discretisation error of the
@@ -21,11 +25,13 @@ Resolution rules (``labels`` refuses coarser grids):
 
 - every geometry: ``n >= 8``;
 - :class:`Voronoi`: at least 2 pixels per mean seed spacing.  ``N`` seeds
-  in the square ``[-1, 1]^2`` are ``2 / sqrt(N)`` apart on average and a
-  pixel is ``2 / n`` wide, so ``n >= ceil(2 sqrt(N))``;
+  in the bounding box ``[-bx, bx] x [-by, by]`` (units of ``L``; the square
+  ``[-1, 1]^2`` of a disk) are ``sqrt(4 bx by / N)`` apart on average and a
+  pixel is ``2 / n`` wide, so ``n >= ceil(2 sqrt(N / (bx by)))``;
 - :class:`Rods`: at least 3 pixels per radius of the smallest rod,
-  ``n >= ceil(6 / r_min)`` (``r_min`` in units of ``a``);
-- :class:`ArrayMap`: ``n`` must be a multiple of the map's size;
+  ``n >= ceil(6 / r_min)`` (``r_min`` in units of ``L``);
+- :class:`ArrayMap`: ``n`` must be a multiple of the map's size along its
+  longer side;
 - :class:`~steady.inclusions.Inclusions` (random circular inclusions, in
   :mod:`steady.inclusions`, exported here): at least 3 pixels per mean
   radius, ``n >= ceil(6 / r)``.
@@ -43,9 +49,9 @@ import stat
 import numpy as np
 from scipy import ndimage, spatial
 
-from . import grid
 from .command_line import format_bytes
-from .grid import face_mask, pixel_centres
+from .grid import face_mask as disk_face_mask
+from .outline import Circle, FaceGrid
 
 __all__ = [
     "ArrayMap",
@@ -55,8 +61,10 @@ __all__ = [
     "Rods",
     "Voronoi",
     "extend_off_face",
+    "face_grid",
     "load_phase_map",
     "npy_header",
+    "read_face_mask",
     "read_npy",
     "realised_fill_factors",
     "validate_labels",
@@ -72,7 +80,12 @@ _FILL_SUM_TOL = 1e-9
 
 
 def _check_grid(n, minimum, what):
-    """Raise ``ValueError`` unless ``n`` is an integer ``>= minimum``."""
+    """Raise ``ValueError`` unless ``n`` is an integer ``>= minimum``.
+
+    ``n`` may be a :class:`~steady.outline.FaceGrid` (its ``n`` is checked).
+    """
+    if isinstance(n, FaceGrid):
+        n = n.n
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
         raise ValueError(f"grid size n must be an integer, got {n!r}")
     if n < minimum:
@@ -80,17 +93,47 @@ def _check_grid(n, minimum, what):
     return int(n)
 
 
+#: The outline of grids given by their size alone: the unit disk.
+_UNIT_DISK = Circle(1.0)
+
+
+def face_grid(grid):
+    """The :class:`~steady.outline.FaceGrid` a geometry rasterises on.
+
+    Parameters
+    ----------
+    grid : FaceGrid or int
+        A grid, or ``n`` for the ``n x n`` grid of the unit disk (the
+        cylindrical punch in units of its radius).
+
+    Returns
+    -------
+    FaceGrid
+    """
+    if isinstance(grid, FaceGrid):
+        return grid
+    if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)):
+        raise ValueError(f"grid size n must be an integer, got {grid!r}")
+    return FaceGrid(_UNIT_DISK, int(grid))
+
+
+def _outline_of(grid):
+    """The outline of a grid argument (the unit disk for an integer)."""
+    return grid.outline if isinstance(grid, FaceGrid) else _UNIT_DISK
+
+
 def validate_labels(labels, n_phases, *, face_mask=None):
     """Check a rasterised phase map and count the pixels of each phase.
 
     Parameters
     ----------
-    labels : ndarray, shape (n, n), int
+    labels : ndarray, shape (nx, ny), int
         Phase index on the face, ``-1`` off the face.
     n_phases : int
         Number of phases ``P``.
-    face_mask : ndarray of bool, shape (n, n), optional
-        :func:`steady.grid.face_mask` of ``n``, if the caller has it already.
+    face_mask : ndarray of bool, shape (nx, ny), optional
+        The face's pixels (e.g. :attr:`steady.outline.FaceGrid.mask`), to
+        check the labels against; default: the pixels with ``labels >= 0``.
 
     Returns
     -------
@@ -100,19 +143,23 @@ def validate_labels(labels, n_phases, *, face_mask=None):
     Raises
     ------
     ValueError
-        If the shape is not square, the face pixels (see
-        :func:`steady.grid.face_mask`) do not carry labels ``0..P-1``, a
-        pixel off the face is not ``-1``, or a phase has no pixel.
+        If the array is not 2-d, the face pixels do not carry labels
+        ``0..P-1``, a pixel off the face is not ``-1``, there is no face
+        pixel, or a phase has no pixel.
     """
     labels = np.asarray(labels)
-    if labels.ndim != 2 or labels.shape[0] != labels.shape[1]:
-        raise ValueError(f"phase labels must be a square 2-d array, got shape {labels.shape}")
+    if labels.ndim != 2:
+        raise ValueError(f"phase labels must be a 2-d array, got shape {labels.shape}")
     if not np.issubdtype(labels.dtype, np.integer):
         raise ValueError(f"phase labels must be integers, got dtype {labels.dtype}")
     n_phases = int(n_phases)
     if n_phases < 1:
         raise ValueError(f"n_phases must be at least 1, got {n_phases}")
-    mask = grid.face_mask(labels.shape[0]) if face_mask is None else face_mask
+    mask = labels >= 0 if face_mask is None else np.asarray(face_mask)
+    if mask.shape != labels.shape:
+        raise ValueError(f"face mask of shape {mask.shape} for labels of shape {labels.shape}")
+    if not mask.any():
+        raise ValueError("the phase map has no face pixel")
     face_labels = labels[mask]
     low, high = int(face_labels.min()), int(face_labels.max())
     if low < 0:
@@ -159,29 +206,26 @@ def realised_fill_factors(labels, n_phases):
     return counts / counts.sum()
 
 
-def extend_off_face(values):
+def extend_off_face(values, face_mask=None):
     """Copy of a face field with every pixel off the face set to its nearest face pixel.
 
     Parameters
     ----------
-    values : ndarray, shape (n, n)
-        Field on the pixel grid; values off the face
-        (:func:`steady.grid.face_mask`) are not used.
+    values : ndarray, shape (nx, ny)
+        Field on the pixel grid; values off the face are not used.
+    face_mask : ndarray of bool, shape (nx, ny), optional
+        The face's pixels; default: the disk of :func:`steady.grid.face_mask`
+        (``values`` square).
 
     Returns
     -------
-    ndarray, shape (n, n)
+    ndarray, shape (nx, ny)
         Same dtype; equal to ``values`` on the face.
     """
     values = np.asarray(values)
-    on_face = face_mask(values.shape[0])
+    on_face = disk_face_mask(values.shape[0]) if face_mask is None else face_mask
     _, (ii, jj) = ndimage.distance_transform_edt(~on_face, return_indices=True)
     return values[ii, jj]
-
-
-def _unit_grid(n):
-    """Pixel-centre coordinates in units of the radius, shape (n,)."""
-    return pixel_centres(n, 1.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,18 +237,18 @@ class Homogeneous:
         """Number of phases (1)."""
         return 1
 
-    def min_grid(self):
-        """Smallest accepted grid, :data:`MIN_GRID`."""
+    def min_grid(self, outline=None):
+        """Smallest accepted grid, :data:`MIN_GRID` (the outline sets its own)."""
         return MIN_GRID
 
-    def check_grid(self, n):
+    def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(n, self.min_grid(), "a homogeneous face")
+        return _check_grid(grid, self.min_grid(), "a homogeneous face")
 
-    def labels(self, n):
-        """Phase 0 on the face, -1 off it; shape (n, n)."""
-        n = self.check_grid(n)
-        return np.where(face_mask(n), 0, -1)
+    def labels(self, grid):
+        """Phase 0 on the face, -1 off it; shape of the grid."""
+        self.check_grid(grid)
+        return np.where(face_grid(grid).mask, 0, -1)
 
 
 def _as_fill_factors(fill_factors):
@@ -247,8 +291,9 @@ class Voronoi:
     Parameters
     ----------
     n_seeds : int
-        Seeds, uniform in the square ``[-1, 1]^2`` (units of ``a``).  The
-        paper uses ``20^2, 40^2, 80^2, 160^2``.
+        Seeds, uniform in the face's bounding box (units of ``L``: the
+        square ``[-1, 1]^2`` around a disk).  The paper uses ``20^2, 40^2,
+        80^2, 160^2``.
     fill_factors : sequence of float, shape (P,)
         Target share of the seeds of each phase, each in (0, 1), summing
         to 1.  Exactly ``round(rho_i N)`` seeds (largest remainder) get
@@ -291,10 +336,28 @@ class Voronoi:
         """Number of phases, ``len(fill_factors)``."""
         return len(self.fill_factors)
 
-    @functools.cached_property
-    def _seeds(self):
+    @functools.lru_cache(maxsize=4)  # noqa: B019 -- frozen, hashable; a few boxes at most
+    def seeds(self, box=(1.0, 1.0)):
+        """Seed points, their phases and their k-d tree in a bounding box.
+
+        Parameters
+        ----------
+        box : (float, float), optional
+            Half sides ``(bx, by)`` of the box, units of ``L`` (default the
+            square ``[-1, 1]^2`` around a disk).
+
+        Returns
+        -------
+        points : ndarray, shape (n_seeds, 2), read-only
+        phases : ndarray, shape (n_seeds,), read-only
+        tree : scipy.spatial.cKDTree
+        """
+        bx, by = (float(b) for b in box)
         rng = np.random.default_rng(self.seed)
-        points = rng.uniform(-1.0, 1.0, size=(self.n_seeds, 2))
+        if (bx, by) == (1.0, 1.0):
+            points = rng.uniform(-1.0, 1.0, size=(self.n_seeds, 2))
+        else:
+            points = rng.uniform((-bx, -by), (bx, by), size=(self.n_seeds, 2))
         counts = _apportion(self.fill_factors, self.n_seeds)
         phases = rng.permutation(np.repeat(np.arange(self.n_phases), counts))
         points.flags.writeable = False
@@ -304,24 +367,33 @@ class Voronoi:
     @property
     def seed_phases(self):
         """Phase of each seed, shape (n_seeds,) (read-only)."""
-        return self._seeds[1]
+        return self.seeds()[1]
 
-    def min_grid(self):
-        """``max(8, ceil(2 sqrt(n_seeds)))``: two pixels per mean seed spacing."""
-        return max(MIN_GRID, math.ceil(2.0 * math.sqrt(self.n_seeds)))
+    def min_grid(self, outline=None):
+        """``max(8, ceil(2 sqrt(n_seeds / (bx by))))``: two pixels per mean seed spacing.
 
-    def check_grid(self, n):
+        ``(bx, by)`` is the outline's bounding box in units of its scale
+        (``(1, 1)`` for a disk, the default).
+        """
+        bx, by = (1.0, 1.0) if outline is None else outline.aspect
+        return max(MIN_GRID, math.ceil(2.0 * math.sqrt(self.n_seeds / (bx * by)) - 1e-9))
+
+    def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(n, self.min_grid(), f"{self.n_seeds} Voronoi seeds")
+        return _check_grid(grid, self.min_grid(_outline_of(grid)),
+                           f"{self.n_seeds} Voronoi seeds")
 
-    def labels(self, n):
-        """Nearest-seed phase at every face pixel, -1 off it; shape (n, n)."""
-        n = self.check_grid(n)
-        _, phases, tree = self._seeds
-        x = _unit_grid(n)
-        i, j = np.nonzero(face_mask(n))
-        _, nearest = tree.query(np.column_stack([x[i], x[j]]))
-        out = np.full((n, n), -1, dtype=np.int64)
+    def labels(self, grid):
+        """Nearest-seed phase at every face pixel, -1 off it; shape of the grid.
+
+        The seeds are uniform in the face's bounding box.
+        """
+        self.check_grid(grid)
+        grid = face_grid(grid)
+        _, phases, tree = self.seeds(grid.outline.aspect)
+        i, j = np.nonzero(grid.mask)
+        _, nearest = tree.query(np.column_stack([grid.unit_x[i], grid.unit_y[j]]))
+        out = np.full(grid.shape, -1, dtype=np.int64)
         out[i, j] = phases[nearest]
         return out
 
@@ -333,9 +405,10 @@ class Rods:
     Parameters
     ----------
     centres : sequence of (float, float)
-        Rod centres, units of ``a``.
+        Rod centres, units of the face's scale ``L`` (the radius ``a`` of a
+        disk).
     radii : sequence of float
-        Rod radii, units of ``a``, one per rod.
+        Rod radii, units of ``L``, one per rod.
     matrix_phase : int, optional
         Phase of the face outside the rods (default 0).
     rod_phases : sequence of int, optional
@@ -343,7 +416,8 @@ class Rods:
 
     Notes
     -----
-    Rods must lie inside the face (``|c| + r <= 1``) and must not overlap
+    Rods must lie inside the face (for a disk ``|c| + r <= 1``; checked
+    when they are rasterised, :meth:`check_outline`) and must not overlap
     (touching is allowed).  Every phase ``0..P-1``, with
     ``P = 1 + max(matrix_phase, rod_phases)``, must be used.  A pixel
     belongs to a rod when its centre lies strictly inside the rod.
@@ -388,9 +462,11 @@ class Rods:
         if len(rod_phases) != len(centres):
             raise ValueError(f"{len(centres)} rods but {len(rod_phases)} rod phases")
         for k, ((cx, cy), r) in enumerate(zip(centres, radii, strict=True)):
-            if math.hypot(cx, cy) + r > 1.0 + 1e-12:
-                raise ValueError(f"rod {k} (centre ({cx}, {cy}), radius {r}, units of the punch "
-                                 f"radius) does not lie inside the face")
+            # Every face lies in [-1, 1]^2 (units of its scale); the face
+            # itself is checked when the rods meet it (check_outline).
+            if max(abs(cx), abs(cy)) + r > 1.0 + 1e-12:
+                raise ValueError(f"rod {k} (centre ({cx}, {cy}), radius {r}, units of the face "
+                                 f"scale) does not lie inside the face's bounding square")
         for k in range(len(centres)):
             for m in range(k + 1, len(centres)):
                 d = math.dist(centres[k], centres[m])
@@ -412,21 +488,32 @@ class Rods:
         """Number of phases, ``1 + max(matrix_phase, rod_phases)``."""
         return 1 + max(self.matrix_phase, *self.rod_phases)
 
-    def min_grid(self):
+    def min_grid(self, outline=None):
         """``max(8, ceil(6 / r_min))``: three pixels per radius of the smallest rod."""
         return max(MIN_GRID, math.ceil(6.0 / min(self.radii) - 1e-9))
 
-    def check_grid(self, n):
+    def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(n, self.min_grid(), f"rods of radius {min(self.radii)} a")
+        return _check_grid(grid, self.min_grid(), f"rods of radius {min(self.radii)} L")
 
-    def labels(self, n):
-        """Rod phase inside each rod, matrix phase elsewhere on the face; shape (n, n)."""
-        n = self.check_grid(n)
-        x = _unit_grid(n)
-        out = np.where(face_mask(n), self.matrix_phase, -1)
+    def check_outline(self, outline):
+        """``ValueError`` naming the first rod that does not lie inside the face of ``outline``."""
+        L = outline.scale
+        for k, ((cx, cy), r) in enumerate(zip(self.centres, self.radii, strict=True)):
+            if not outline.encloses_disk((cx * L, cy * L), r * L):
+                raise ValueError(f"rod {k} (centre ({cx}, {cy}), radius {r}, units of the face "
+                                 f"scale {L:.6g} m) does not lie inside the face "
+                                 f"({outline.describe()})")
+
+    def labels(self, grid):
+        """Rod phase inside each rod, matrix phase elsewhere on the face; shape of the grid."""
+        self.check_grid(grid)
+        grid = face_grid(grid)
+        self.check_outline(grid.outline)
+        x, y = grid.unit_x, grid.unit_y
+        out = np.where(grid.mask, self.matrix_phase, -1)
         for (cx, cy), r, phase in zip(self.centres, self.radii, self.rod_phases, strict=True):
-            inside = (x[:, None] - cx) ** 2 + (x[None, :] - cy) ** 2 < r * r
+            inside = (x[:, None] - cx) ** 2 + (y[None, :] - cy) ** 2 < r * r
             out[inside] = phase
         return out
 
@@ -437,36 +524,52 @@ class ArrayMap:
 
     Parameters
     ----------
-    labels : ndarray, shape (n0, n0), int
-        Phase index at each pixel of an ``n0 x n0`` grid over
-        ``[-a, a]^2``.  On the face (:func:`steady.grid.face_mask`) the
-        labels must be ``0..P-1`` with every phase present; off the face any
-        value is ignored (``-1`` is customary).
+    labels : ndarray, shape (mx, my), int
+        Phase index at each pixel of the grid of ``outline`` with
+        ``n0 = max(mx, my)`` pixels along its longer side (for a disk the
+        ``n0 x n0`` grid over ``[-a, a]^2``).  On the face the labels must
+        be ``0..P-1`` with every phase present; off the face any value is
+        ignored (``-1`` is customary).
     source : str, optional
         Where the map came from (for messages).
+    outline : outline object, optional
+        The face the map covers (:mod:`steady.outline`; default: a disk).
+        Only its shape matters: the map is in pixels of its bounding box.
 
     Notes
     -----
-    ``labels(n)`` accepts ``n = k n0`` (pixel replication).  The finer face
-    reaches a little further out at the rim than the coarse one; those
-    pixels take the label of the nearest face pixel of the coarse map.
+    ``labels(grid)`` accepts grids of ``n = k n0`` pixels along the longer
+    side (pixel replication).  The finer face of a curved outline reaches a
+    little further out at the rim than the coarse one; those pixels take
+    the label of the nearest face pixel of the coarse map.
     """
 
     labels_array: np.ndarray
     source: str = "array"
+    outline: object = None
 
     def __post_init__(self):
         """Check the labels; store them read-only with the pixels off the face filled."""
         a = np.asarray(self.labels_array)
-        if a.ndim != 2 or a.shape[0] != a.shape[1]:
+        outline = _UNIT_DISK if self.outline is None else self.outline
+        if a.ndim != 2 or (self.outline is None and a.shape[0] != a.shape[1]):
             raise ValueError(f"phase map {self.source} must be a square 2-d array, "
                              f"got shape {a.shape}")
         if not (a.dtype == bool or np.issubdtype(a.dtype, np.integer)):
             raise ValueError(f"phase map {self.source} must hold integers, got dtype {a.dtype}")
         a = a.astype(np.int64)
-        n0 = a.shape[0]
+        n0 = max(a.shape)
         _check_grid(n0, MIN_GRID, f"phase map {self.source}")
-        on_face = face_mask(n0)
+        try:
+            grid = FaceGrid(outline, n0)
+            expected = grid.shape
+        except ValueError as err:
+            raise ValueError(f"phase map {self.source}: {err}") from None
+        if a.shape != expected:
+            raise ValueError(f"phase map {self.source} has {a.shape[0]} x {a.shape[1]} pixels; "
+                             f"the grid of the {outline.describe()} with {n0} pixels along "
+                             f"its longer side has {expected[0]} x {expected[1]}")
+        on_face = grid.mask
         n_phases = int(a[on_face].max()) + 1
         try:
             validate_labels(np.where(on_face, a, -1), n_phases, face_mask=on_face)
@@ -474,7 +577,7 @@ class ArrayMap:
             raise ValueError(f"phase map {self.source}: {err}") from None
         # Off-face pixels take the label of the nearest face pixel, so that
         # refined grids (whose face reaches further out) are fully labelled.
-        filled = extend_off_face(a)
+        filled = extend_off_face(a, on_face)
         filled.flags.writeable = False
         object.__setattr__(self, "labels_array", filled)
         object.__setattr__(self, "_n_phases", n_phases)
@@ -486,29 +589,37 @@ class ArrayMap:
 
     @property
     def size(self):
-        """Pixels ``n0`` across the map."""
-        return self.labels_array.shape[0]
+        """Pixels ``n0`` along the map's longer side."""
+        return max(self.labels_array.shape)
 
-    def min_grid(self):
+    def min_grid(self, outline=None):
         """The map's own size ``n0``."""
         return self.size
 
-    def check_grid(self, n):
-        """``n`` as an int; ``ValueError`` unless it is a multiple of the map size."""
+    def check_grid(self, grid):
+        """``n`` as an int; ``ValueError`` unless a multiple of the map size on the map's face."""
         n0 = self.size
-        n = _check_grid(n, n0, f"phase map {self.source} of {n0} x {n0} pixels")
+        mx, my = self.labels_array.shape
+        n = _check_grid(grid, n0, f"phase map {self.source} of {mx} x {my} pixels")
         if n % n0:
             raise ValueError(f"grid size n = {n} is not a multiple of the size {n0} of phase "
                              f"map {self.source}")
+        if isinstance(grid, FaceGrid):
+            k = n // n0
+            if grid.shape != (k * mx, k * my):
+                raise ValueError(f"phase map {self.source} of {mx} x {my} pixels does not fit "
+                                 f"the {grid.shape[0]} x {grid.shape[1]} grid of the "
+                                 f"{grid.outline.describe()}")
         return n
 
-    def labels(self, n):
-        """Labels on an ``n x n`` grid, ``n`` a multiple of the map size."""
-        n = self.check_grid(n)
+    def labels(self, grid):
+        """Labels on a grid of ``n = k n0`` pixels along the longer side."""
+        n = self.check_grid(grid)
+        grid = face_grid(grid)
         k = n // self.size
         fine = self.labels_array if k == 1 else np.kron(self.labels_array,
                                                         np.ones((k, k), dtype=np.int64))
-        return np.where(face_mask(n), fine, -1)
+        return np.where(grid.mask, fine, -1)
 
 
 def _input_file(path, what):
@@ -528,7 +639,7 @@ def _input_file(path, what):
     return st.st_size
 
 
-def npy_header(path, *, what="file", shape=None, max_side=None):
+def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
     """Shape and dtype of a ``.npy`` file, read from its header without loading the data.
 
     Parameters
@@ -541,6 +652,9 @@ def npy_header(path, *, what="file", shape=None, max_side=None):
     max_side : int, optional
         Refuse anything but a square 2-d array of at most
         ``max_side x max_side`` values.
+    square : bool, optional
+        With ``max_side``: whether the array must be square (default True);
+        if not, any 2-d array whose longer side is at most ``max_side``.
 
     Returns
     -------
@@ -586,10 +700,11 @@ def npy_header(path, *, what="file", shape=None, max_side=None):
         raise ValueError(f"{what} {str(path)!r} holds an array of shape {found}; "
                          f"{tuple(shape)} is needed")
     if max_side is not None:
-        if len(found) != 2 or found[0] != found[1]:
-            raise ValueError(f"{what} {str(path)!r} must be a square 2-d array, got shape "
+        if len(found) != 2 or (square and found[0] != found[1]):
+            kind = "square 2-d" if square else "2-d"
+            raise ValueError(f"{what} {str(path)!r} must be a {kind} array, got shape "
                              f"{found}")
-        if found[0] > max_side:
+        if max(found) > max_side:
             raise ValueError(f"{what} {str(path)!r} has {found[0]} x {found[1]} pixels, more "
                              f"than the grid's n = {max_side} (n must be a multiple of the "
                              f"map's size)")
@@ -602,8 +717,8 @@ def npy_header(path, *, what="file", shape=None, max_side=None):
     return found, dtype
 
 
-def read_npy(path, *, what="file", max_side=None, shape=None):
-    """Read a square 2-d array from a ``.npy`` file, checking the file before loading it.
+def read_npy(path, *, what="file", max_side=None, shape=None, square=True):
+    """Read a 2-d array (square by default) from a ``.npy`` file, checking the file first.
 
     Parameters
     ----------
@@ -614,10 +729,12 @@ def read_npy(path, *, what="file", max_side=None, shape=None):
         Refuse arrays larger than ``max_side x max_side`` (before loading).
     shape : tuple of int, optional
         Refuse any other shape (before loading).
+    square : bool, optional
+        Refuse arrays that are not square (default True).
 
     Returns
     -------
-    ndarray, shape (m, m)
+    ndarray, shape (m, m), or (mx, my) if not ``square``
 
     Raises
     ------
@@ -637,7 +754,7 @@ def read_npy(path, *, what="file", max_side=None, shape=None):
     phase map 'empty.npy' is empty (0 bytes)
     """
     path = pathlib.Path(path)
-    found, dtype = npy_header(path, what=what, shape=shape,
+    found, dtype = npy_header(path, what=what, shape=shape, square=square,
                               max_side=math.inf if max_side is None else max_side)
     try:
         return np.load(path, allow_pickle=False)
@@ -648,25 +765,29 @@ def read_npy(path, *, what="file", max_side=None, shape=None):
                          f"does not fit in memory") from None
 
 
-def load_phase_map(path, *, max_phases=16, max_size=None):
+def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
     """Read a phase map from a ``.npy`` or ``.png`` file.
 
     Parameters
     ----------
     path : str or path-like
-        ``.npy``: a square 2-d integer array, phase index per pixel (any
-        value off the face, e.g. -1).  ``.png``: a square image; each
-        distinct grey level (or colour) inside the face is one phase,
-        numbered by increasing value (colours compare as ``(R, G, B)``
-        tuples; the alpha channel is ignored).
+        ``.npy``: a 2-d integer array, phase index per pixel (any value off
+        the face, e.g. -1).  ``.png``: an image; each distinct grey level
+        (or colour) inside the face is one phase, numbered by increasing
+        value (colours compare as ``(R, G, B)`` tuples; the alpha channel is
+        ignored).  Array rows (image rows) run along x.  The map covers the
+        face's bounding box: square for a disk, else of the shape of the
+        outline's grid (:class:`ArrayMap`).
     max_phases : int, optional
         Refuse images with more distinct levels on the face than this
         (default 16); an anti-aliased image would otherwise give hundreds
         of phases.
     max_size : int, optional
-        Refuse maps of more than ``max_size x max_size`` pixels, before
-        reading their data (a scene passes its grid size ``n``: the map's
-        size must divide it).
+        Refuse maps of more than ``max_size`` pixels along their longer
+        side, before reading their data (a scene passes its grid size
+        ``n``: the map's size must divide it).
+    outline : outline object, optional
+        The face the map covers (default: a disk).
 
     Returns
     -------
@@ -685,11 +806,66 @@ def load_phase_map(path, *, max_phases=16, max_size=None):
     if suffix not in (".npy", ".png"):
         _input_file(path, what)
         raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
+    square = outline is None or outline.aspect == (1.0, 1.0)
     if suffix == ".npy":
-        a = read_npy(path, what=what, max_side=max_size)
+        a = read_npy(path, what=what, max_side=max_size, square=square)
     else:
-        a = _png_labels(path, max_phases, max_size)
-    return ArrayMap(a, source=repr(str(path)))
+        a = _png_labels(path, max_phases, max_size, outline)
+    return ArrayMap(a, source=repr(str(path)), outline=outline)
+
+
+def read_face_mask(path):
+    """The face of a ``.npy`` or ``.png`` file, as pixels: ``True`` on the face.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``.npy``: a 2-d boolean array (``True`` on the face) or integer
+        array (the face is where it is not -1, e.g. a phase map).
+        ``.png``: an image with an alpha channel; the face is its
+        non-transparent pixels.  Rows run along x, as in phase maps.
+
+    Returns
+    -------
+    ndarray of bool, shape (mx, my)
+
+    Raises
+    ------
+    ValueError
+        Missing, empty, truncated or unreadable file, an unsupported
+        suffix or dtype, a PNG without alpha channel, no face pixel.
+    """
+    path = pathlib.Path(path)
+    what = "face mask"
+    suffix = path.suffix.lower()
+    if suffix not in (".npy", ".png"):
+        _input_file(path, what)
+        raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
+    if suffix == ".npy":
+        a = read_npy(path, what=what, square=False)
+        if a.dtype == bool:
+            mask = a
+        elif np.issubdtype(a.dtype, np.integer):
+            mask = a != -1
+        else:
+            raise ValueError(f"{what} {str(path)!r} must hold booleans (True on the face) or "
+                             f"integers (-1 off the face), got dtype {a.dtype}")
+    else:
+        import matplotlib.image  # deferred: only PNG files need it
+
+        _input_file(path, what)
+        _png_size(path, what)
+        try:
+            img = matplotlib.image.imread(path)
+        except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
+            raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+        if img.ndim != 3 or img.shape[2] not in (2, 4):
+            raise ValueError(f"{what} {str(path)!r} has no alpha channel: the face is the "
+                             f"non-transparent pixels of a PNG (or use a .npy array)")
+        mask = img[..., -1] > 0
+    if mask.ndim != 2 or not mask.any():
+        raise ValueError(f"{what} {str(path)!r} has no face pixel")
+    return np.ascontiguousarray(mask)
 
 
 def _png_size(path, what):
@@ -708,16 +884,17 @@ def _png_size(path, what):
     return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
 
 
-def _png_labels(path, max_phases, max_size=None):
+def _png_labels(path, max_phases, max_size=None, outline=None):
     import matplotlib.image  # deferred: only PNG maps need it
 
     what = "phase map"
     _input_file(path, what)
     size = _png_size(path, what)
-    if size[0] != size[1]:
+    square = outline is None or outline.aspect == (1.0, 1.0)
+    if square and size[0] != size[1]:
         raise ValueError(f"{what} {str(path)!r} must be square, got {size[0]} x {size[1]} "
                          f"pixels")
-    if max_size is not None and size[0] > max_size:
+    if max_size is not None and max(size) > max_size:
         raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more than "
                          f"the grid's n = {max_size} (n must be a multiple of the map's size)")
     try:
@@ -726,25 +903,34 @@ def _png_labels(path, max_phases, max_size=None):
         raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
     if img.ndim == 3:
         img = img[..., :3]  # drop alpha
-    if img.shape[0] != img.shape[1]:
+    if square and img.shape[0] != img.shape[1]:
         raise ValueError(f"phase map {str(path)!r} must be square, got {img.shape[1]} x "
                          f"{img.shape[0]} pixels")
-    n0 = img.shape[0]
+    mx, my = img.shape[:2]
     if np.issubdtype(img.dtype, np.floating):
         img = np.rint(img * 65535).astype(np.int64)  # 8- and 16-bit levels stay distinct
     else:
         img = img.astype(np.int64)
-    pixels = img.reshape(n0 * n0, -1)
-    on_face = face_mask(n0).ravel()
+    pixels = img.reshape(mx * my, -1)
+    outline = _UNIT_DISK if outline is None else outline
+    try:
+        grid = FaceGrid(outline, max(mx, my))
+        if grid.shape != (mx, my):
+            raise ValueError(f"it has {mx} x {my} pixels; the grid of the "
+                             f"{outline.describe()} with {max(mx, my)} pixels along its longer "
+                             f"side has {grid.shape[0]} x {grid.shape[1]}")
+        on_face = grid.mask.ravel()
+    except ValueError as err:
+        raise ValueError(f"phase map {str(path)!r}: {err}") from None
     levels, inverse = np.unique(pixels[on_face], axis=0, return_inverse=True)
     if len(levels) > max_phases:
         raise ValueError(f"phase map {str(path)!r} has {len(levels)} distinct levels on the "
                          f"face, more than max_phases={max_phases} (an anti-aliased image? "
                          f"a micrograph is segmented by the map kind \"micrograph\")")
-    labels = np.full(n0 * n0, -1, dtype=np.int64)
+    labels = np.full(mx * my, -1, dtype=np.int64)
     labels[on_face] = inverse.ravel()
     logger.debug("%s: %d phases from levels %s", path, len(levels), levels.tolist())
-    return labels.reshape(n0, n0)
+    return labels.reshape(mx, my)
 
 
 # Random circular inclusions live in their own module, which builds on the

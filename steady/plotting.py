@@ -42,8 +42,9 @@ def result_figure(stored):
         Axes in mm.
     """
     res = stored.result
-    a_mm = res.radius * 1e3
-    extent = (-a_mm, a_mm, -a_mm, a_mm)
+    nx, ny = res.shape
+    hx_mm, hy_mm = 0.5 * nx * res.pixel_size * 1e3, 0.5 * ny * res.pixel_size * 1e3
+    extent = (-hx_mm, hx_mm, -hy_mm, hy_mm)
     n_phases = res.n_phases
     colours = [_PHASE_COLOURS[i % len(_PHASE_COLOURS)] for i in range(n_phases)]
     cmap = ListedColormap(colours)
@@ -51,7 +52,9 @@ def result_figure(stored):
     norm = BoundaryNorm(np.arange(n_phases + 1) - 0.5, n_phases)
     phase = np.ma.masked_less(res.labels, 0)
 
-    fig = Figure(figsize=(10.5, 4.6), layout="constrained")
+    # Wide faces side by side; tall ones too, at a height that keeps them legible.
+    fig = Figure(figsize=(10.5, 4.6 if nx >= ny else min(9.0, 3.2 + 1.6 * ny / nx)),
+                 layout="constrained")
     FigureCanvasAgg(fig)
     ax_phase, ax_face = fig.subplots(1, 2)
     # Arrays are indexed [x, y]; imshow wants [row = y, column = x].
@@ -76,7 +79,9 @@ def result_figure(stored):
         ax.set_xlabel("x (mm)")
         ax.set_ylabel("y (mm)")
         ax.set_aspect("equal")
-    fig.suptitle(f"a = {a_mm:.3g} mm, F = {res.normal_force:.3g} N, "
+    face = (f"a = {res.radius * 1e3:.3g} mm" if res.radius is not None
+            else res.outline.describe())
+    fig.suptitle(f"{face}, F = {res.normal_force:.3g} N, "
                  f"E* = {res.E_star / 1e6:.3g} MPa, n = {res.n}")
     return fig
 

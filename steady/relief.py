@@ -25,7 +25,7 @@ class PlaneFit:
 
     Parameters
     ----------
-    face_mask : ndarray of bool, shape (n, n)
+    face_mask : ndarray of bool, shape (nx, ny)
         Pixels of the face.
     h : float, m
         Pixel size.
@@ -42,9 +42,10 @@ class PlaneFit:
 
     def __init__(self, face_mask, h):
         face_mask = np.asarray(face_mask, dtype=bool)
-        n = face_mask.shape[0]
-        x = (np.arange(n) - 0.5 * (n - 1)) * float(h)
-        X, Y = np.meshgrid(x, x, indexing="ij")
+        nx, ny = face_mask.shape
+        x = (np.arange(nx) - 0.5 * (nx - 1)) * float(h)
+        y = (np.arange(ny) - 0.5 * (ny - 1)) * float(h)
+        X, Y = np.meshgrid(x, y, indexing="ij")
         design = np.column_stack([np.ones(int(face_mask.sum())), X[face_mask], Y[face_mask]])
         self.basis, _ = np.linalg.qr(design)
         self.face_mask = face_mask

@@ -3,7 +3,7 @@
 Example (every key of the core sections)::
 
     [punch]
-    radius = 0.004                      # m
+    radius = 0.004                      # m (a circular face; see below)
     [load]
     normal_force = 10.0                 # N
     [counterbody]
@@ -15,6 +15,16 @@ Example (every key of the core sections)::
     exponent = 1.0                      # optional, default 1 (Archard)
     [phases]
     map = { kind = "file", path = "phases.npy" }
+
+Face outlines (``[punch]``, :mod:`steady.outline`): ``shape`` is
+``"circle"`` (default; ``radius``), ``"rectangle"`` (``width`` along x,
+``length`` along y), ``"ellipse"`` (``semi_axis_x``, ``semi_axis_y``),
+``"annulus"`` (``inner_radius``, ``outer_radius``) or ``"mask"`` (``path``
+to a ``.npy`` or ``.png`` face mask, ``pixel_size`` in m); lengths in m.
+``[grid] n`` counts pixels along the longer side of the face's bounding
+box (across the diameter of a disk), and phase geometries are in units of
+the outline's scale ``L`` (the radius of a disk; else the larger half side
+of the bounding box).
 
 Map kinds (``[phases] map``):
 
@@ -66,6 +76,7 @@ except ModuleNotFoundError:  # Python 3.10
 from .command_line import one_line, shorten
 from .inclusions import Inclusions
 from .micrograph import load_micrograph
+from .outline import Circle, FaceGrid, outline_from_table
 from .phases import Homogeneous, Rods, Voronoi, load_phase_map, validate_labels
 
 __all__ = ["CORE_SECTIONS", "MAX_SCENE_BYTES", "RUN_IN_SECTIONS", "Scene", "load_scene",
@@ -77,7 +88,7 @@ MAX_SCENE_BYTES = 2 ** 20
 
 #: Sections every scene file has, with their keys (required, optional).
 CORE_SECTIONS = {
-    "punch": ({"radius"}, set()),
+    "punch": (set(), {"shape"}),  # and the keys of the shape (steady.outline)
     "load": ({"normal_force"}, set()),
     "counterbody": ({"E_star"}, set()),
     "grid": ({"n"}, set()),
@@ -107,20 +118,23 @@ class Scene:
 
     Attributes
     ----------
-    radius : float, m
-        Punch radius ``a``.
+    radius : float or None, m
+        Punch radius ``a`` of a circular face; None for other outlines
+        (their lengths are in ``outline``).
     normal_force : float, N
         ``F_N``.
     E_star : float, Pa
         Effective modulus of the counter-body.
     n : int
-        Pixels across the diameter.
+        Pixels along the longer side of the face's bounding box (across the
+        diameter of a disk).
     wear_coefficients : tuple of float, 1/Pa
         ``k_i``, one per phase.
     exponent : float
         ``m`` in the wear law ``dw/ds = k p^m``.
-    geometry : Homogeneous, Voronoi, Rods or ArrayMap
-        Phase geometry in units of ``a`` (see :mod:`steady.phases`).
+    geometry : Homogeneous, Voronoi, Rods, ArrayMap, ...
+        Phase geometry in units of the outline's scale (see
+        :mod:`steady.phases`).
     source_path : pathlib.Path or None
         The scene file, if read from one.
     text : str
@@ -130,9 +144,12 @@ class Scene:
     ignored_sections : tuple of str
         Run-in sections (:data:`RUN_IN_SECTIONS`) present in the file but
         not parsed (no ``extra_sections`` parser for them), sorted.
+    outline : outline object
+        The face's outline (:mod:`steady.outline`); default: the disk of
+        ``radius``.
     """
 
-    radius: float
+    radius: float | None
     normal_force: float
     E_star: float
     n: int
@@ -144,23 +161,45 @@ class Scene:
     extra: types.MappingProxyType = dataclasses.field(
         default_factory=lambda: types.MappingProxyType({}))
     ignored_sections: tuple = ()
+    outline: object = None
+
+    def __post_init__(self):
+        """Complete ``outline`` from ``radius`` (a disk) or ``radius`` from a circular outline."""
+        if self.outline is None:
+            if self.radius is None:
+                raise ValueError("a scene needs a radius or an outline")
+            object.__setattr__(self, "outline", Circle(self.radius))
+        elif isinstance(self.outline, Circle):
+            object.__setattr__(self, "radius", self.outline.radius)
+        elif self.radius is not None:
+            raise ValueError(f"a {self.outline.kind} face has no radius, got radius = "
+                             f"{self.radius!r}")
 
     @property
     def n_phases(self):
         """Number of phases of the geometry."""
         return self.geometry.n_phases
 
+    @property
+    def scale(self):
+        """The outline's length scale ``L``, m (the radius of a disk)."""
+        return self.outline.scale
+
+    def grid(self, n=None):
+        """The :class:`~steady.outline.FaceGrid` of ``n`` pixels (default ``self.n``)."""
+        return FaceGrid(self.outline, self.n if n is None else int(n))
+
     def phase_labels(self, n=None):
-        """The phase map on the ``n x n`` grid, every phase checked to have a face pixel.
+        """The phase map on the grid of ``n``, every phase checked to have a face pixel.
 
         Parameters
         ----------
         n : int, optional
-            Grid size (default ``self.n``).
+            Grid size, pixels along the longer side (default ``self.n``).
 
         Returns
         -------
-        ndarray, shape (n, n), int
+        ndarray, shape (nx, ny), int
             Phase index on the face, -1 off it.
 
         Raises
@@ -170,8 +209,9 @@ class Scene:
             whose seeds all lie off the face or whose cells fall between
             pixel centres); the message names the phase, the seeds and ``n``.
         """
-        n = self.n if n is None else int(n)
-        labels = self.geometry.labels(n)
+        grid = self.grid(n)
+        n = grid.n
+        labels = self.geometry.labels(grid)
         counts = np.bincount(labels[labels >= 0], minlength=self.n_phases)
         empty = np.flatnonzero(counts[:self.n_phases] == 0)
         if empty.size:
@@ -186,7 +226,7 @@ class Scene:
                     f"seed or a finer grid")
             raise ValueError(f"{where}[phases] map: phase {phase} has no pixel on the face at "
                              f"n = {n}")
-        validate_labels(labels, self.n_phases)
+        validate_labels(labels, self.n_phases, face_mask=grid.mask)
         return labels
 
 
@@ -227,7 +267,7 @@ def _check_keys(table, where, required, optional):
         raise ValueError(f"missing key {missing[0]!r} in {where}")
 
 
-def _geometry(spec, radius, base_dir, n):
+def _geometry(spec, outline, base_dir, n):
     where = "[phases] map"
     if not isinstance(spec, dict):
         raise ValueError(f"{where} must be an inline table with a 'kind', got {shorten(spec)}")
@@ -237,6 +277,7 @@ def _geometry(spec, radius, base_dir, n):
                          f"{shorten(kind)}")
     required, optional = _MAP_KEYS[kind]
     _check_keys(spec, f"{where} (kind {kind!r})", required | {"kind"}, optional)
+    scale = outline.scale
     if kind == "homogeneous":
         return Homogeneous()
     if kind == "voronoi":
@@ -253,9 +294,9 @@ def _geometry(spec, radius, base_dir, n):
         for c in _list(spec["centres"], f"{where} centres"):
             if not isinstance(c, list) or len(c) != 2:
                 raise ValueError(f"{where} centres must be [x, y] pairs in m, got {shorten(c)}")
-            centres.append(tuple(_number(v, f"{where} centres", "m", positive=False) / radius
+            centres.append(tuple(_number(v, f"{where} centres", "m", positive=False) / scale
                                  for v in c))
-        radii = [_number(v, f"{where} radii", "m") / radius
+        radii = [_number(v, f"{where} radii", "m") / scale
                  for v in _list(spec["radii"], f"{where} radii")]
         matrix_phase = _integer(spec.get("matrix_phase", 0), f"{where} matrix_phase",
                                 minimum=0)
@@ -264,17 +305,21 @@ def _geometry(spec, radius, base_dir, n):
             rod_phases = tuple(_integer(v, f"{where} rod_phases", minimum=0)
                                for v in _list(rod_phases, f"{where} rod_phases"))
         try:
-            return Rods(tuple(centres), tuple(radii), matrix_phase, rod_phases)
+            rods = Rods(tuple(centres), tuple(radii), matrix_phase, rod_phases)
+            rods.check_outline(outline)
         except ValueError as err:
             raise ValueError(f"{where}: {one_line(err, 300)}") from None
+        return rods
     if kind == "inclusions":
         options = {"seed": _integer(spec["seed"], f"{where} seed", minimum=0),
-                   "radius": _number(spec["radius"], f"{where} radius", "m") / radius}
+                   "radius": _number(spec["radius"], f"{where} radius", "m") / scale}
         for key, unit in (("fill_factor", "dimensionless"), ("count", "dimensionless"),
                           ("radius_spread", "dimensionless")):
             if key in spec:
                 options[key] = _number(spec[key], f"{where} {key}", unit,
                                        positive=key != "radius_spread")
+        if not isinstance(outline, Circle):  # count is per face area (the unit disk's pi)
+            options["face_area"] = outline.area / scale**2
         try:
             return Inclusions(**options)
         except ValueError as err:
@@ -287,11 +332,11 @@ def _geometry(spec, radius, base_dir, n):
         # The keys are load_micrograph's parameters, which check their values.
         options = {key: value for key, value in spec.items() if key not in ("kind", "path")}
         try:
-            return load_micrograph(pathlib.Path(base_dir) / path, radius, **options)
+            return load_micrograph(pathlib.Path(base_dir) / path, outline, **options)
         except ValueError as err:
             raise ValueError(f"{where}: {one_line(err, 300)}") from None
     # The map's size must divide n: a larger one is refused before its data are read.
-    return load_phase_map(pathlib.Path(base_dir) / path, max_size=n)
+    return load_phase_map(pathlib.Path(base_dir) / path, max_size=n, outline=outline)
 
 
 def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
@@ -346,14 +391,24 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     for name, (required, optional) in CORE_SECTIONS.items():
         if name not in doc:
             raise ValueError(f"missing section [{name}]")
-        _check_keys(doc[name], f"[{name}]", required, optional)
+        if name != "punch":  # the outline checks its own keys
+            _check_keys(doc[name], f"[{name}]", required, optional)
 
-    radius = _number(doc["punch"]["radius"], "[punch] radius", "m")
+    try:
+        outline = outline_from_table(doc["punch"], base_dir)
+    except ValueError as err:
+        message = one_line(err, 300)
+        raise ValueError(message if message.startswith("[punch]") or "[punch]" in message
+                         else f"[punch] {message}") from None
     normal_force = _number(doc["load"]["normal_force"], "[load] normal_force", "N")
     E_star = _number(doc["counterbody"]["E_star"], "[counterbody] E_star", "Pa")
     n = _integer(doc["grid"]["n"], "[grid] n", minimum=2)
     exponent = _number(doc["wear"].get("exponent", 1.0), "[wear] exponent", "dimensionless")
-    geometry = _geometry(doc["phases"]["map"], radius, base_dir, n)
+    try:
+        outline.check_grid(n)
+    except ValueError as err:
+        raise ValueError(f"[grid] n: {err}") from None
+    geometry = _geometry(doc["phases"]["map"], outline, base_dir, n)
     coefficients = _list(doc["wear"]["coefficients"], "[wear] coefficients")
     if len(coefficients) != geometry.n_phases:  # counted before any value is looked at
         raise ValueError(f"[wear] coefficients has {len(coefficients)} values "
@@ -361,7 +416,7 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
                          f"phases")
     k = tuple(_number(v, "[wear] coefficients", "1/Pa") for v in coefficients)
     try:
-        geometry.check_grid(n)
+        geometry.check_grid(FaceGrid(outline, n))
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
 
@@ -372,7 +427,8 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
                 extra[name] = parse(doc[name], base_dir)
             except ValueError as err:
                 raise ValueError(f"[{name}]: {err}") from None
-    return Scene(radius=radius, normal_force=normal_force, E_star=E_star, n=n,
+    return Scene(radius=outline.radius if isinstance(outline, Circle) else None,
+                 outline=outline, normal_force=normal_force, E_star=E_star, n=n,
                  wear_coefficients=k, exponent=exponent, geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored)

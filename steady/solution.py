@@ -17,7 +17,11 @@ Normalisation (eq. 12, 15): with ``pbar = F_N / (pi a^2)`` and
 only on the phase geometry, the wear ratios and the exponent.  For a
 homogeneous cylinder the normalised face is ``E(r/a)`` (eq. 10) and the
 normalised rms slope tends to 1 under refinement
-(:func:`steady.reference.cylinder_rms_slope`).
+(:func:`steady.reference.cylinder_rms_slope`).  A face of another outline
+(:mod:`steady.outline`) is normalised the same way by its own homogeneous
+face: ``pbar = F_N / A`` and ``grad_f0`` that face's rms slope
+(:mod:`steady.normalisation`), with lengths in units of the outline's
+scale ``L``.
 """
 
 from __future__ import annotations
@@ -28,10 +32,10 @@ import math
 
 import numpy as np
 
-from . import reference
 from .accuracy import estimate_rms_slope
-from .grid import face_mask, pixel_size
 from .halfspace import HalfSpace
+from .normalisation import reference_slope
+from .outline import Circle
 from .pressures import pressure_field
 from .relief import rms_height
 
@@ -46,23 +50,25 @@ class SteadyResult:
 
     Attributes
     ----------
-    labels : ndarray, shape (n, n), int
+    labels : ndarray, shape (nx, ny), int
         Phase index on the face, -1 off it.
-    pressure : ndarray, shape (n, n), Pa
+    pressure : ndarray, shape (nx, ny), Pa
         Steady pressure, constant on each phase, zero off the face.
     phase_pressures : ndarray, shape (P,), Pa
         Pressure on each phase (eq. 7).
-    face : ndarray, shape (n, n), m
+    face : ndarray, shape (nx, ny), m
         Limiting face ``f_inf = K p`` (eq. 9) at the pixel centres; NaN
         off the face.
-    slope : ndarray, shape (n, n), dimensionless
+    slope : ndarray, shape (nx, ny), dimensionless
         Magnitude of the gradient of ``f_inf``; NaN off the face.
     rms_slope : float, dimensionless
         Best estimate of the rms slope over the face: the energy-corrected
         value of :mod:`steady.accuracy` where ``rms_slope_error`` is set,
         else ``rms_slope_plain``.
     reference_slope : float, dimensionless
-        ``grad_f0 = 4 pbar / (pi E*)`` (eq. 12).
+        ``grad_f0``, the rms slope of the homogeneous face of the same
+        outline under the same load: ``4 pbar / (pi E*)`` for a disk (eq.
+        12); see :mod:`steady.normalisation`.
     fill_factors : ndarray, shape (P,)
         Realised area fractions of the phases (pixel counts, eq. 13).
     wear_coefficients : ndarray, shape (P,), 1/Pa
@@ -70,7 +76,8 @@ class SteadyResult:
     exponent : float
         Pressure exponent ``m`` of the wear law.
     normal_force : float, N
-    radius : float, m
+    radius : float or None, m
+        Punch radius ``a`` of a circular face; None for other outlines.
     E_star : float, Pa
     rms_slope_plain : float, dimensionless
         Root mean square of ``slope`` over the face pixels (plain pixel
@@ -83,6 +90,13 @@ class SteadyResult:
         Rms of ``face`` over the face pixels about its least-squares plane
         (:func:`steady.relief.rms_height`; the asymptote of the run-in's
         ``rms_height``); NaN when not computed.
+    outline : outline object
+        The face's outline (:mod:`steady.outline`); default the disk of
+        ``radius``.
+    reference_slope_error : float, dimensionless
+        Uncertainty of ``reference_slope`` (0 for a closed form).
+    reference_slope_source : str
+        Where ``reference_slope`` comes from, in words.
     """
 
     labels: np.ndarray
@@ -101,11 +115,29 @@ class SteadyResult:
     rms_slope_plain: float = math.nan
     rms_slope_error: float = math.nan
     rms_height: float = math.nan
+    outline: object = None
+    reference_slope_error: float = 0.0
+    reference_slope_source: str = ""
+
+    def __post_init__(self):
+        """Complete ``outline`` from ``radius`` (a disk)."""
+        if self.outline is None:
+            object.__setattr__(self, "outline", Circle(self.radius))
 
     @property
     def n(self):
-        """Pixels across the diameter."""
-        return self.labels.shape[0]
+        """Pixels along the longer side of the grid (across the diameter of a disk)."""
+        return max(self.labels.shape)
+
+    @property
+    def shape(self):
+        """``(nx, ny)`` of the grid."""
+        return self.labels.shape
+
+    @property
+    def scale(self):
+        """The outline's length scale ``L`` (the radius of a disk), m."""
+        return self.outline.scale
 
     @property
     def n_phases(self):
@@ -114,13 +146,15 @@ class SteadyResult:
 
     @property
     def pixel_size(self):
-        """Pixel side ``h = 2a/n``, m."""
-        return pixel_size(self.n, self.radius)
+        """Pixel side ``h = 2L/n``, m."""
+        return 2.0 * self.scale / self.n
 
     @property
     def mean_pressure(self):
-        """``pbar = F_N / (pi a^2)``, Pa."""
-        return reference.mean_pressure(self.normal_force, self.radius)
+        """``pbar = F_N / A`` (``pi a^2`` for a disk), Pa."""
+        if isinstance(self.outline, Circle):
+            return self.normal_force / (math.pi * self.outline.radius**2)
+        return self.normal_force / self.outline.area
 
     @property
     def normalised_rms_slope(self):
@@ -129,17 +163,17 @@ class SteadyResult:
 
     @property
     def normalised_rms_height(self):
-        """``rms_height / (grad_f0 a)``, dimensionless (0.15499 for eq. 10)."""
-        return self.rms_height / (self.reference_slope * self.radius)
+        """``rms_height / (grad_f0 L)``, dimensionless (0.15499 for eq. 10)."""
+        return self.rms_height / (self.reference_slope * self.scale)
 
     @property
     def normalised_face(self):
-        """``f_inf / (grad_f0 a)``, shape (n, n), dimensionless; NaN off the face.
+        """``f_inf / (grad_f0 L)``, shape (nx, ny), dimensionless; NaN off the face.
 
         Eq. 15 divided by ``a``; equals ``E(r/a)`` for a homogeneous
         cylinder (eq. 10).
         """
-        return self.face / (self.reference_slope * self.radius)
+        return self.face / (self.reference_slope * self.scale)
 
 
 def _positive_finite(value, name, unit):
@@ -164,17 +198,17 @@ def _wear_coefficients(wear_coefficients, n_phases):
     return k
 
 
-def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
+def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0, outline=None):
     """Limiting worn face of a multi-phase punch (eq. 7, 9).
 
     Parameters
     ----------
     halfspace : HalfSpace
-        Operator of the ``n x n`` grid over ``[-a, a]^2``; carries ``n``,
-        the pixel size ``h = 2a/n`` and ``E*``.
-    labels : ndarray, shape (n, n), int
-        Phase index ``0..P-1`` on the face (:func:`steady.grid.face_mask`),
-        -1 off it; every phase present.
+        Operator of the grid over the face's bounding box; carries its
+        shape ``(nx, ny)``, the pixel size ``h`` and ``E*``.
+    labels : ndarray, shape (nx, ny), int
+        Phase index ``0..P-1`` on the face, -1 off it (the face is where
+        ``labels >= 0``); every phase present.
     wear_coefficients : array_like, shape (P,), 1/Pa
         ``k_i = k_wear,i / sigma_0,i``, positive and finite.
     normal_force : float, N
@@ -182,6 +216,9 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
     exponent : float, optional
         Pressure exponent ``m`` of the local wear law ``dw/ds = k p^m``
         (default 1, Archard).  Positive and finite.
+    outline : outline object, optional
+        The face's outline (:mod:`steady.outline`), for the normalisation;
+        default: the disk of radius ``a = n h / 2`` on a square grid.
 
     Returns
     -------
@@ -194,9 +231,9 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
 
     Notes
     -----
-    The punch radius is ``a = n h / 2``.  One forward transform of the
-    pressure feeds the three products (face and two slope components), so a
-    solve costs one forward and three inverse transforms.
+    One forward transform of the pressure feeds the three products (face
+    and two slope components), so a solve costs one forward and three
+    inverse transforms.
 
     Examples
     --------
@@ -217,9 +254,9 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
     if not isinstance(halfspace, HalfSpace):
         raise ValueError(f"halfspace must be a HalfSpace, got {type(halfspace).__name__}")
     labels = np.asarray(labels)
-    n = halfspace.n
-    if labels.shape != (n, n):
-        raise ValueError(f"labels must have shape {(n, n)} to match the half-space grid, "
+    shape = tuple(halfspace.shape)
+    if labels.shape != shape:
+        raise ValueError(f"labels must have shape {shape} to match the half-space grid, "
                          f"got {labels.shape}")
     normal_force = _positive_finite(normal_force, "normal_force", "N")
     exponent = _positive_finite(exponent, "exponent", "dimensionless")
@@ -227,9 +264,13 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
         raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
     n_phases = int(labels.max()) + 1
     k = _wear_coefficients(wear_coefficients, n_phases)
-    on_face = face_mask(n)
+    on_face = labels >= 0
     h = halfspace.h
-    radius = 0.5 * n * h
+    if outline is None:
+        if shape[0] != shape[1]:
+            raise ValueError(f"a {shape[0]} x {shape[1]} grid needs its outline (the default "
+                             f"is a disk on a square grid)")
+        outline = Circle(0.5 * shape[0] * h)
     pressure, p_phase, counts = pressure_field(labels, k, normal_force, h * h,
                                                exponent=exponent, face_mask=on_face)
 
@@ -247,9 +288,9 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
     if not math.isfinite(rms):
         raise ValueError(f"steady solve produced a non-finite rms slope ({rms}); "
                          f"phase pressures {p_phase.tolist()} Pa")
-    grad_f0 = reference.reference_slope(reference.mean_pressure(normal_force, radius),
-                                        halfspace.E_star)
-    logger.debug("steady n=%d P=%d rms slope %.6g (%.6g grad_f0)", n, n_phases, rms,
+    ref = reference_slope(outline, normal_force, halfspace.E_star)
+    grad_f0 = ref.value
+    logger.debug("steady %s P=%d rms slope %.6g (%.6g grad_f0)", shape, n_phases, rms,
                  rms / grad_f0)
     return SteadyResult(
         labels=labels,
@@ -263,10 +304,13 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0):
         wear_coefficients=k,
         exponent=exponent,
         normal_force=normal_force,
-        radius=radius,
+        radius=outline.radius if isinstance(outline, Circle) else None,
         E_star=halfspace.E_star,
         rms_slope_plain=rms,
         rms_height=height,
+        outline=outline,
+        reference_slope_error=ref.error,
+        reference_slope_source=ref.source,
     )
 
 
@@ -277,8 +321,8 @@ def solve_scene(scene, *, n=None, slope_error=True):
     ----------
     scene : Scene
     n : int, optional
-        Grid size; default ``scene.n``.  The geometry is rasterised at this
-        size.
+        Grid size, pixels along the longer side; default ``scene.n``.  The
+        geometry is rasterised at this size.
     slope_error : bool, optional
         Replace the plain pixel rms slope by the energy-corrected one with
         its error estimate (:func:`steady.accuracy.estimate_rms_slope`,
@@ -302,14 +346,14 @@ def solve_scene(scene, *, n=None, slope_error=True):
     ...       f"plain {result.rms_slope_plain / result.reference_slope:.3f}")
     0.998 +- 0.012 grad_f0, plain 0.965
     """
-    n = scene.n if n is None else n
-    labels = scene.geometry.labels(n)
-    halfspace = HalfSpace(n, pixel_size(n, scene.radius), scene.E_star)
+    grid = scene.grid(n)
+    labels = scene.geometry.labels(grid)
+    halfspace = HalfSpace(grid.shape, grid.h, scene.E_star)
     result = solve(halfspace, labels, scene.wear_coefficients, scene.normal_force,
-                   exponent=scene.exponent)
+                   exponent=scene.exponent, outline=scene.outline)
     if not slope_error:
         return result
     estimate = estimate_rms_slope(scene.geometry, scene.wear_coefficients, scene.normal_force,
-                                  scene.radius, scene.E_star, n, exponent=scene.exponent)
+                                  scene.outline, scene.E_star, grid.n, exponent=scene.exponent)
     return dataclasses.replace(result, rms_slope=estimate.rms_slope,
                                rms_slope_error=estimate.error)

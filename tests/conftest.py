@@ -19,6 +19,7 @@ import pytest
 
 from steady.grid import pixel_size
 from steady.halfspace import HalfSpace
+from steady.outline import Annulus, Circle, Ellipse, Rectangle
 from steady.phases import Homogeneous, Rods, Voronoi
 from transient.problem import WearProblem
 
@@ -43,6 +44,15 @@ GEOMETRIES = {
     # 400 seeds for the fine-grid cases.
     "voronoi_fine": Voronoi(400, (0.7, 0.3), 2029),
     "rods": RODS,
+}
+
+#: Named face outlines besides the paper's disk, at the scale of the epoxy
+#: cylinder (a tread block of aspect 1:3, a seal ring, an elliptic pad).
+OUTLINES = {
+    "circle": Circle(RADIUS),
+    "rectangle": Rectangle(2 * RADIUS / 3, 2 * RADIUS),
+    "annulus": Annulus(0.5 * RADIUS, RADIUS),
+    "ellipse": Ellipse(RADIUS, 0.5 * RADIUS),
 }
 
 
@@ -116,17 +126,21 @@ def scene_text(name="runin", *, extra="", **overrides):
         ``map`` (``"homogeneous"``, ``"voronoi"`` with ``n_seeds``,
         ``fill_factors`` and ``seed``, ``"rods"`` with ``centres`` and
         ``radii`` in metres, or ``"file"`` with ``path``), ``transient`` and
-        ``initial_face`` (dicts, or None to drop).
+        ``initial_face`` (dicts, or None to drop), ``punch`` (a dict of
+        ``[punch]`` keys, e.g. ``shape`` and its lengths, replacing
+        ``radius``).
     """
     spec = dict(radius=0.004, normal_force=10.0, E_star=1.3e6, exponent=None,
-                map="voronoi", transient=None, initial_face=None)
+                map="voronoi", transient=None, initial_face=None, punch=None)
     spec.update(SCENES[name])
     spec.update(overrides)
     phase_map = _MAPS[spec["map"]].format(
         n_seeds=spec.get("n_seeds"), fill_factors=_toml(spec.get("fill_factors", ())),
         seed=spec.get("seed"), centres=_toml(spec.get("centres", ())),
         radii=_toml(spec.get("radii", ())), path=_toml(spec.get("path", "")))
-    lines = ["[punch]", f"radius = {spec['radius']!r}",
+    punch = ([f"radius = {spec['radius']!r}"] if spec["punch"] is None
+             else [f"{key} = {_toml(value)}" for key, value in spec["punch"].items()])
+    lines = ["[punch]", *punch,
              "[load]", f"normal_force = {spec['normal_force']!r}",
              "[counterbody]", f"E_star = {spec['E_star']!r}",
              "[grid]", f"n = {spec['n']}",

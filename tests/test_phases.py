@@ -176,7 +176,10 @@ def test_labels_validation():
     inside = labels.copy()
     inside[16, 16] = -1
     with pytest.raises(ValueError, match="label -1 found on the face"):
-        validate_labels(inside, 2)
+        validate_labels(inside, 2, face_mask=face_mask(32))
+    # Without a mask the face is where the labels say: the hole is off it.
+    assert validate_labels(inside, 2).sum() == (labels >= 0).sum() - 1, \
+        "without a mask the labels define the face"
     counts = validate_labels(labels, 2, face_mask=face_mask(32))
     assert counts.tolist() == np.bincount(labels[labels >= 0]).tolist(), \
         f"counts with the caller's mask: {counts}"
