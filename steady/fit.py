@@ -11,7 +11,9 @@ face is fitted by linear least squares,
 with ``F_i = K chi_i`` the face under unit pressure on phase ``i``
 (:class:`FaceModel`, the per-phase faces of :class:`steady.basis.PhaseBasis`),
 a free offset ``c_0`` and tilt ``(c_1, c_2)``, and ``s`` the position of the
-punch axis in the map (zero, given, or searched).  The pressures are free:
+face's centre (the origin of its outline, :mod:`steady.outline`) in the map
+(zero, given, or searched).  The face may have any outline: a disk, a
+rectangle, an ellipse, an annulus or a pixel mask.  The pressures are free:
 the load ``sum_i A_i p_i = F_N`` is not imposed, so the ratios do not depend
 on ``E*`` or ``F_N``, which only scale the relief; the fitted load
 ``sum_i A_i p_i`` over ``F_N`` (:attr:`FitResult.load_scale`) is reported as
@@ -28,6 +30,13 @@ quantile.  Ratio intervals are Fieller's intervals for ``p_ref / p_i``
 is not distinguished from zero), raised to the power ``m``.  See
 ``docs/model.md``, "Wear ratios from a measured face".
 
+Distance to the rim (``rim_margin``, and the part of the face that every
+trial shift of the search sees): closed forms for the disk, the rectangle
+and the annulus; for other outlines (ellipse, mask) the Euclidean distance
+transform of the face on the model grid, interpolated linearly, which is
+within about half a model pixel of the true distance
+(:meth:`FaceModel.rim_distance`).
+
 Command line (``runin-fit``, or ``python -m steady.fit``)::
 
     runin-fit SCENE.toml MEASURED -o FIT.h5 [--pixel-size DX [DY]] [--height-scale S]
@@ -38,6 +47,7 @@ Command line (``runin-fit``, or ``python -m steady.fit``)::
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 import pathlib
@@ -55,8 +65,8 @@ from .command_line import (
     run_command,
 )
 from .fit_files import MeasuredFace, plot_fit, read_measured, write_fit
-from .grid import pixel_size
 from .halfspace import HalfSpace
+from .outline import Annulus, Circle, Rectangle, as_outline
 from .phases import extend_off_face, validate_labels
 from .scene import load_scene
 
@@ -72,13 +82,20 @@ DEFAULT_MIN_PHASE_PIXELS = 10
 #: angle to their span) is below this is not determined by the data.
 _COLLINEAR_TOL = 1e-6
 
-#: Default search radius of the lateral shift, in units of the punch radius.
+#: Default search radius of the lateral shift, in units of the outline's scale
+#: ``L`` (the radius of a disk, else the larger half side of the bounding box).
 _DEFAULT_MAX_SHIFT = 0.05
+
+#: Pixels of the model grid computed beyond the face's bounding box on every
+#: side, so that the cubic splines of the per-phase faces see ``K chi_i`` (not
+#: an extrapolation) out to the box's edge: the spline prefilter's boundary
+#: error decays by ``2 - sqrt(3) = 0.27`` per pixel, to 5e-3 at the box.
+_MODEL_PAD = 4
 
 #: Pixels on which the grid stage of the shift search runs (at most).
 _SEARCH_PIXELS = 8000
 
-#: Fewest measured pixels across the fitted disk.
+#: Fewest measured pixels across the narrowest part of the fitted face.
 _MIN_PIXELS_ACROSS = 8
 
 
@@ -113,11 +130,12 @@ class FitResult:
         Their standard errors.
     pressure_covariance : ndarray, shape (P, P), Pa^2
     offset : float, m
-        Fitted height of the plane at the punch axis.
+        Fitted height of the plane at the face's centre.
     tilt : tuple of float, dimensionless
         ``(dz/dx, dz/dy)`` of the fitted plane.
     shift : tuple of float, m
-        Position of the punch axis from the map's centre (given or found).
+        Position of the face's centre (the origin of its outline) from the
+        map's centre (given or found).
     residual_rms : float, m
         Rms of measured minus fitted over the fitted pixels.
     relief : float, m
@@ -147,9 +165,11 @@ class FitResult:
         ``m`` of the wear law.
     normal_force : float, N
     E_star : float, Pa
-    radius : float, m
+    outline : outline object
+        The face's outline (:mod:`steady.outline`).
     n : int
-        Pixels across the diameter of the model grid.
+        Pixels along the longer side of the model grid (across the diameter
+        of a disk).
     success : bool
         All fitted phase pressures are positive.
     message : str
@@ -161,7 +181,8 @@ class FitResult:
     residual : ndarray, shape (nx, ny), m
         Measured minus fitted on the fitted pixels; NaN elsewhere.
     fit_mask : ndarray of bool, shape (nx, ny)
-        The fitted pixels: finite, within ``a - rim_margin`` of the axis.
+        The fitted pixels: finite, on the face and farther than
+        ``rim_margin`` (plus the shift search radius) from its rim.
     phase : ndarray, shape (nx, ny), int
         Phase at each measured pixel, -1 off the face.
     scene_ratios : ndarray, shape (P,), or None
@@ -192,7 +213,7 @@ class FitResult:
     exponent: float
     normal_force: float
     E_star: float
-    radius: float
+    outline: object
     n: int
     success: bool
     message: str
@@ -207,6 +228,11 @@ class FitResult:
     def n_phases(self):
         """Number of phases ``P``."""
         return self.phase_pressures.shape[0]
+
+    @property
+    def radius(self):
+        """The disk's radius ``a``, m; None for other outlines."""
+        return self.outline.radius if isinstance(self.outline, Circle) else None
 
     def summary_lines(self):
         """Short human-readable summary, a list of lines."""
@@ -234,6 +260,7 @@ class FitResult:
             f"{self.implied_E_star:.4g} Pa at {self.normal_force:.4g} N)",
             f"offset, tilt     {self.offset:.4g} m, ({self.tilt[0]:.3g}, {self.tilt[1]:.3g})",
             f"shift            ({self.shift[0]:.4g}, {self.shift[1]:.4g}) m",
+            f"face             {self.outline.describe()}, model grid n = {self.n}",
         ]
         if self.message:
             lines.append(("note             " if self.success else "fit failed       ")
@@ -405,20 +432,47 @@ class _Covariance:
         return (s1 + s1[::-1, ::-1] - s2) / self._pairs
 
 
+@functools.singledispatch
+def _closed_form_rim_distance(outline, x, y):
+    """Distance (m) from points inside ``outline`` to its rim; None without a closed form."""
+    return None
+
+
+@_closed_form_rim_distance.register
+def _(outline: Circle, x, y):
+    return outline.radius - np.hypot(x, y)
+
+
+@_closed_form_rim_distance.register
+def _(outline: Rectangle, x, y):
+    bx, by = outline.half_extent
+    return np.minimum(bx - np.abs(x), by - np.abs(y))
+
+
+@_closed_form_rim_distance.register
+def _(outline: Annulus, x, y):
+    r = np.hypot(x, y)
+    return np.minimum(outline.outer_radius - r, r - outline.inner_radius)
+
+
 class FaceModel:
     """Per-phase faces of a phase map, sampled anywhere on the face.
 
     The operator of the fit: the faces ``F_i = K chi_i`` under unit pressure
-    on each phase (m/Pa) are computed once on the model grid, then sampled
-    at the measured pixels by cubic-spline interpolation (the faces are
-    continuous; only their slope is log-singular at phase boundaries).
+    on each phase (m/Pa) are computed once on the model grid (the
+    outline's :class:`~steady.outline.FaceGrid`), then sampled at the
+    measured pixels by cubic-spline interpolation (the faces are continuous;
+    only their slope is log-singular at phase boundaries and at the rim).
 
     Parameters
     ----------
-    labels : ndarray, shape (n, n), int
-        Phase index on the face, -1 off it (:mod:`steady.phases`).
-    radius : float, m
-        Punch radius ``a``; the grid covers ``[-a, a]^2``.
+    labels : ndarray, shape (nx, ny), int
+        Phase index on the face, -1 off it (:mod:`steady.phases`), on the
+        outline's grid of ``max(nx, ny)`` pixels along the longer side
+        (e.g. ``geometry.labels(outline.grid(n))``).
+    outline : outline object or float
+        The face's outline (:mod:`steady.outline`); a number is the radius
+        ``a`` of a disk (m), whose grid covers ``[-a, a]^2``.
     E_star : float, Pa
     normal_force : float, N
         Only enters the consistency figure :attr:`FitResult.load_scale`.
@@ -427,28 +481,68 @@ class FaceModel:
     wear_coefficients : array_like, shape (P,), optional
         The scene's ``k_i``, reported beside the fit (not used by it).
 
+    Attributes
+    ----------
+    outline : outline object
+    grid : steady.outline.FaceGrid
+        The model grid; ``n`` pixels along the longer side, pixel ``h``.
+    faces : ndarray, shape (P, nx, ny), m/Pa
+        ``F_i = K chi_i`` on the model grid (read-only).
+    areas : ndarray, shape (P,), m^2
+        Face area of each phase (pixel counts times ``h^2``).
+    inradius : float, m
+        The largest distance from a face pixel centre of the model grid to
+        the rim (:meth:`rim_distance`): the rim margin and the shift search
+        radius together must stay below it.
+
     Notes
     -----
-    Cost: ``P`` half-space products on the ``n x n`` grid.  Build one model
-    and call :meth:`fit` for many measured faces.
+    Cost: ``P`` half-space products on the grid of ``(nx + 8) x (ny + 8)``
+    pixels (the faces are computed four pixels beyond the bounding box, so
+    that the splines interpolate ``K chi_i`` up to the box's edge).  Build
+    one model and call :meth:`fit` for many measured faces.
+
+    Examples
+    --------
+    A rectangular face of aspect 1:3 with a Voronoi map; the measured face
+    is the forward model's with ``k_1 / k_0 = 3``, on the model's pixels:
+
+    >>> import numpy as np
+    >>> from steady import MeasuredFace, Voronoi
+    >>> from steady.outline import Rectangle
+    >>> outline = Rectangle(4e-3, 12e-3)
+    >>> grid = outline.grid(48)
+    >>> model = FaceModel(Voronoi(64, (0.6, 0.4), 2029).labels(grid), outline, 1.3e6, 10.0)
+    >>> model.grid.shape, model.faces.shape
+    ((16, 48), (2, 16, 48))
+    >>> face = np.tensordot([3e4, 1e4], model.faces, axes=1)     # p_0 / p_1 = k_1 / k_0 = 3
+    >>> fit = model.fit(MeasuredFace(face, grid.h))
+    >>> print(f"k1/k0 = {fit.ratios[1]:.6f}, {fit.samples} pixels")
+    k1/k0 = 3.000000, 768 pixels
     """
 
-    def __init__(self, labels, radius, E_star, normal_force, *, exponent=1.0,
+    def __init__(self, labels, outline, E_star, normal_force, *, exponent=1.0,
                  wear_coefficients=None):
         labels = np.asarray(labels)
-        if labels.ndim != 2 or labels.shape[0] != labels.shape[1]:
-            raise ValueError(f"labels must be a square array, got shape {labels.shape}")
+        if labels.ndim != 2:
+            raise ValueError(f"labels must be a 2-d array, got shape {labels.shape}")
         if not np.issubdtype(labels.dtype, np.integer):
             raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
-        self.radius = _positive(radius, "radius", "m")
+        self.outline = as_outline(outline)
+        grid = self.outline.grid(max(labels.shape))
+        if grid.shape != labels.shape:
+            raise ValueError(f"labels of shape {labels.shape} do not fit the "
+                             f"{self.outline.describe()}, whose grid of n = {grid.n} is "
+                             f"{grid.shape[0]} x {grid.shape[1]} pixels")
         self.E_star = _positive(E_star, "E_star", "Pa")
         self.normal_force = _positive(normal_force, "normal_force", "N")
         self.exponent = _positive(exponent, "exponent", "dimensionless")
-        self.n = labels.shape[0]
+        self.grid = grid
+        self.n = grid.n
+        self.h = grid.h
         self.n_phases = int(labels.max()) + 1
-        self.counts = validate_labels(labels, self.n_phases)
+        self.counts = validate_labels(labels, self.n_phases, face_mask=grid.mask)
         self.labels = labels
-        self.h = pixel_size(self.n, self.radius)
         self.areas = self.counts * self.h**2
         self.wear_coefficients = None
         if wear_coefficients is not None:
@@ -456,24 +550,52 @@ class FaceModel:
             if k.shape != (self.n_phases,):
                 raise ValueError(f"need {self.n_phases} wear coefficients, got {k.tolist()}")
             self.wear_coefficients = k
-        hs = HalfSpace(self.n, self.h, self.E_star)
-        faces = np.array([hs.displacement((labels == i).astype(float))
-                          for i in range(self.n_phases)])
+        pad = _MODEL_PAD
+        padded = np.pad(labels, pad, constant_values=-1)
+        hs = HalfSpace(padded.shape, self.h, self.E_star)
+        faces_padded = np.array([hs.displacement((padded == i).astype(float))
+                                 for i in range(self.n_phases)])
+        faces = faces_padded[:, pad:-pad, pad:-pad].copy()
         faces.flags.writeable = False
-        #: ``F_i = K chi_i`` on the model grid, shape (P, n, n), m/Pa.
+        #: ``F_i = K chi_i`` on the model grid, shape (P, nx, ny), m/Pa.
         self.faces = faces
-        self._splines = [ndimage.spline_filter(f, order=3, mode="nearest") for f in faces]
-        self._filled = extend_off_face(labels)
+        self._splines = [ndimage.spline_filter(f, order=3, mode="nearest")
+                         for f in faces_padded]
+        self._origin = np.array([grid.x[0], grid.y[0]]) - pad * self.h
+        self._filled = extend_off_face(labels, grid.mask)
+        self._transform = None
+        inside = grid.mask
+        X, Y = np.meshgrid(grid.x, grid.y, indexing="ij")
+        # Rim distance at the model's face pixel centres, m (for the fitted part's box).
+        self._pixel_rim_distance = np.where(inside, self.rim_distance(X, Y), -np.inf)
+        self.inradius = float(self._pixel_rim_distance.max())
 
     @classmethod
     def from_scene(cls, scene, *, n=None):
-        """The model of a :class:`steady.scene.Scene`, rasterised at ``n`` (default ``scene.n``)."""
-        n = scene.n if n is None else n
-        return cls(scene.geometry.labels(n), scene.radius, scene.E_star, scene.normal_force,
+        """The model of a :class:`steady.scene.Scene` on its grid of ``n`` (default ``scene.n``).
+
+        The phase map is rasterised on ``scene.grid(n)``
+        (:meth:`steady.scene.Scene.phase_labels`, which names a phase with no
+        pixel on the face).
+        """
+        labels = scene.phase_labels(n)
+        return cls(labels, scene.outline, scene.E_star, scene.normal_force,
                    exponent=scene.exponent, wear_coefficients=scene.wear_coefficients)
 
-    def _index(self, x):
-        return (np.asarray(x, dtype=float) + self.radius) / self.h - 0.5
+    @property
+    def radius(self):
+        """The disk's radius ``a``, m; None for other outlines."""
+        return self.outline.radius if isinstance(self.outline, Circle) else None
+
+    @property
+    def shape(self):
+        """``(nx, ny)`` of the model grid."""
+        return self.grid.shape
+
+    def _index(self, x, y):
+        """Fractional indices of points in the padded model grid, shape (2, N)."""
+        return np.array([(np.asarray(x, dtype=float) - self._origin[0]) / self.h,
+                         (np.asarray(y, dtype=float) - self._origin[1]) / self.h])
 
     def faces_at(self, x, y):
         """Per-phase faces at points (cubic-spline interpolation).
@@ -481,35 +603,149 @@ class FaceModel:
         Parameters
         ----------
         x, y : ndarray, shape (N,), m
-            Coordinates from the punch axis.
+            Coordinates from the face's centre.
 
         Returns
         -------
         ndarray, shape (P, N), m/Pa
         """
-        coords = np.array([self._index(x), self._index(y)])
+        coords = self._index(x, y)
         return np.array([ndimage.map_coordinates(s, coords, order=3, mode="nearest",
                                                  prefilter=False) for s in self._splines])
 
     def phases_at(self, x, y):
-        """Phase at points: the nearest model pixel's, -1 off the disk of radius ``a``.
+        """Phase at points: the nearest model face pixel's, -1 off the face of the outline.
 
         Parameters
         ----------
         x, y : ndarray, shape (N,), m
+            Coordinates from the face's centre.
 
         Returns
         -------
         ndarray, shape (N,), int
         """
-        i = np.clip(np.rint(self._index(x)).astype(int), 0, self.n - 1)
-        j = np.clip(np.rint(self._index(y)).astype(int), 0, self.n - 1)
-        return np.where(np.hypot(x, y) < self.radius, self._filled[i, j], -1)
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        nx, ny = self.shape
+        i = np.clip(np.rint((x - self.grid.x[0]) / self.h).astype(int), 0, nx - 1)
+        j = np.clip(np.rint((y - self.grid.y[0]) / self.h).astype(int), 0, ny - 1)
+        return np.where(self.outline.contains(x, y), self._filled[i, j], -1)
+
+    def rim_distance(self, x, y, *, closed_form=True):
+        """Distance from points of the face to the outline's rim.
+
+        Closed forms for the disk, the rectangle and the annulus; for other
+        outlines the Euclidean distance transform of the face on the model
+        grid (centre to centre, less half a pixel, signed: negative off the
+        face), interpolated linearly: within about ``h / 2`` of the true
+        distance.
+
+        Parameters
+        ----------
+        x, y : ndarray, m
+            Coordinates from the face's centre.
+        closed_form : bool, optional
+            Use the outline's closed form where it has one (default True);
+            False: the distance transform whatever the outline.
+
+        Returns
+        -------
+        ndarray, m
+            Meaningful on the face (positive there, up to the transform's
+            error near the rim).
+        """
+        if closed_form:
+            exact = _closed_form_rim_distance(self.outline, np.asarray(x, dtype=float),
+                                              np.asarray(y, dtype=float))
+            if exact is not None:
+                return exact
+        if self._transform is None:
+            # Padded like the faces: off-face pixels around the box, so that a
+            # face touching the box's edge has its rim there.
+            inside = np.pad(self.grid.mask, _MODEL_PAD, constant_values=False)
+            d_in = ndimage.distance_transform_edt(inside)
+            d_out = ndimage.distance_transform_edt(~inside)
+            self._transform = self.h * np.where(inside, d_in - 0.5, 0.5 - d_out)
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        coords = self._index(x.ravel(), y.ravel())
+        return ndimage.map_coordinates(self._transform, coords, order=1,
+                                       mode="nearest").reshape(x.shape)
+
+    def fitted_region(self, x, y, erosion=0.0):
+        """Points of the face at least ``erosion`` from its rim (strictly inside for 0).
+
+        Parameters
+        ----------
+        x, y : ndarray, m
+            Coordinates from the face's centre.
+        erosion : float, m, optional
+            Rim margin, plus the shift search radius when a shift is searched.
+
+        Returns
+        -------
+        ndarray of bool
+        """
+        inside = np.asarray(self.outline.contains(x, y), dtype=bool)
+        if erosion > 0 and inside.any():
+            x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+            inside[inside] = self.rim_distance(x[inside], y[inside]) > erosion
+        return inside
+
+    def region_box(self, erosion=0.0):
+        """Bounding box of the face less ``erosion`` at the rim, from the face's centre.
+
+        The model's face pixels farther than ``erosion`` from the rim, each
+        with its square, clipped to the outline's bounding box shrunk by
+        ``erosion``: the face's own box for ``erosion = 0`` (exactly, for
+        outlines whose rim lies on pixel edges along the box).
+
+        Returns
+        -------
+        lower, upper : ndarray, shape (2,), m
+            ``(x, y)`` of the box's corners.
+        """
+        keep = (self.grid.mask if erosion <= 0
+                else self._pixel_rim_distance > erosion)
+        i, j = np.nonzero(keep)
+        half = 0.5 * self.h
+        box = np.array(self.outline.half_extent) - erosion
+        lower = np.maximum([self.grid.x[i.min()] - half, self.grid.y[j.min()] - half], -box)
+        upper = np.minimum([self.grid.x[i.max()] + half, self.grid.y[j.max()] + half], box)
+        return lower, upper
 
     def _design(self, x, y, shift):
         """Design columns ``F_0 .. F_{P-1}, 1, x - s_x, y - s_y``, shape (N, P + 3)."""
         u, v = x - shift[0], y - shift[1]
         return np.column_stack([*self.faces_at(u, v), np.ones_like(u), u, v])
+
+    def _check_coverage(self, measured, start, erosion, partial):
+        """Raise ``ValueError`` naming both sizes unless the map covers the part to fit.
+
+        The part to fit, the face less ``erosion`` at the rim about ``start``,
+        must lie within the map's extent (to half a measured pixel).
+        """
+        lower, upper = self.region_box(erosion)
+        lower, upper = lower + start, upper + start
+        half = 0.5 * np.array(measured.extent)
+        slack = 0.5 * np.array(measured.pixel_size) * (1 + 1e-9)
+        if np.all(lower >= -half - slack) and np.all(upper <= half + slack):
+            return
+        (nx, ny), (dx, dy) = measured.shape, measured.pixel_size
+        face_lower, face_upper = self.region_box(0.0)
+        width, length = (face_upper - face_lower) * 1e3
+        extra = ""
+        if partial or np.any(start):
+            w, h = (upper - lower) * 1e3
+            extra = (f"; the part fitted (after the rim margin and the shift search), "
+                     f"{w:.4g} x {h:.4g} mm, spans x {lower[0] * 1e3:.4g} to "
+                     f"{upper[0] * 1e3:.4g} mm and y {lower[1] * 1e3:.4g} to "
+                     f"{upper[1] * 1e3:.4g} mm from the map's centre")
+        raise ValueError(
+            f"measured map {measured.source} of {nx} x {ny} pixels of {dx * 1e3:.4g} x "
+            f"{dy * 1e3:.4g} mm ({2 * half[0] * 1e3:.4g} x {2 * half[1] * 1e3:.4g} mm) "
+            f"cannot cover the {self.outline.describe()} of {width:.4g} x {length:.4g} mm"
+            f"{extra}; check the pixel size, or crop the map to the face with its centre at "
+            f"the map's centre")
 
     def _check_determined(self, columns, phases, min_pixels):
         """Raise ``ValueError`` naming a phase the fitted pixels cannot determine."""
@@ -578,12 +814,11 @@ class FaceModel:
         """Fit the wear ratios to a measured face; see :func:`fit_face`."""
         if not isinstance(measured, MeasuredFace):
             raise ValueError(f"measured must be a MeasuredFace, got {type(measured).__name__}")
-        a = self.radius
         start = np.asarray(shift, dtype=float)
         if start.shape != (2,) or not np.all(np.isfinite(start)):
             raise ValueError(f"shift must be two finite lengths (m), got {shift!r}")
         rim_margin = _positive(rim_margin, "rim_margin", "m", zero=True)
-        max_shift = (_DEFAULT_MAX_SHIFT * a if max_shift is None
+        max_shift = (_DEFAULT_MAX_SHIFT * self.outline.scale if max_shift is None
                      else _positive(max_shift, "max_shift", "m", zero=True))
         confidence = float(confidence)
         if not 0 < confidence < 1:
@@ -593,31 +828,30 @@ class FaceModel:
                 or not 0 <= reference_phase < self.n_phases):
             raise ValueError(f"reference_phase must be a phase index 0..{self.n_phases - 1}, "
                              f"got {reference_phase!r}")
-        reach = a - rim_margin - (max_shift if search_shift else 0.0)
+        # Every trial shift within max_shift of the start sees the same pixels:
+        # those at least rim_margin + max_shift from the rim at the start.
+        erosion = rim_margin + (max_shift if search_shift else 0.0)
+        reach = self.inradius - erosion
         if reach <= 0:
             raise ValueError(f"nothing left to fit: the rim margin {rim_margin:.4g} m "
-                             f"(and the shift search radius) cover the face of radius {a:.4g} m")
+                             f"(and the shift search radius) cover the "
+                             f"{self.outline.describe()}, no point of which is farther than "
+                             f"{self.inradius:.4g} m from its rim")
+        self._check_coverage(measured, start, erosion, rim_margin or search_shift)
         dx, dy = measured.pixel_size
-        nx, ny = measured.shape
-        half = 0.5 * np.array(measured.extent)
-        need = np.abs(start) + reach
-        if np.any(need > half + 0.5 * np.array([dx, dy]) * (1 + 1e-9)):
-            extra = "" if not (np.any(start) or rim_margin or search_shift) else (
-                f" (fitted disk of radius {reach * 1e3:.4g} mm about the axis at "
-                f"({start[0] * 1e3:.4g}, {start[1] * 1e3:.4g}) mm)")
-            raise ValueError(
-                f"measured map {measured.source} of {nx} x {ny} pixels of {dx * 1e3:.4g} x "
-                f"{dy * 1e3:.4g} mm ({2 * half[0] * 1e3:.4g} x {2 * half[1] * 1e3:.4g} mm) "
-                f"cannot cover the face of diameter {2 * a * 1e3:.4g} mm{extra}; check the "
-                f"pixel size, or crop the map to the face with the axis at its centre")
         if 2 * reach < _MIN_PIXELS_ACROSS * max(dx, dy):
             raise ValueError(f"measured map {measured.source}: pixels of {max(dx, dy):.4g} m "
-                             f"give fewer than {_MIN_PIXELS_ACROSS} pixels across the fitted "
-                             f"disk of diameter {2 * reach:.4g} m")
+                             f"give fewer than {_MIN_PIXELS_ACROSS} pixels across the "
+                             f"narrowest part of the fitted face, {2 * reach:.4g} m wide")
         xs, ys = measured.coordinates()
         X, Y = np.meshgrid(xs, ys, indexing="ij")
         heights = measured.heights
-        mask = np.isfinite(heights) & (np.hypot(X - start[0], Y - start[1]) < reach)
+        region = self.fitted_region(X - start[0], Y - start[1], erosion)
+        mask = np.isfinite(heights) & region
+        # The covariance window: half the radius of the disk of the fitted
+        # part's area (half the fitted radius for a disk; the inradius would
+        # cut the correlation of a narrow face, a ring or a long rectangle).
+        window = 0.5 * math.sqrt(region.sum() * dx * dy / math.pi)
         x, y, z = X[mask], Y[mask], heights[mask]
         k = self.n_phases + 3
         self._check_determined(self._design(x, y, start),
@@ -634,7 +868,7 @@ class FaceModel:
 
         residual_map = np.full(measured.shape, np.nan)
         residual_map[mask] = residual
-        covariance = _Covariance(residual_map, mask, measured.pixel_size, 0.5 * reach, scaled)
+        covariance = _Covariance(residual_map, mask, measured.pixel_size, window, scaled)
         n_fit = int(mask.sum())
         n_eff = n_fit / covariance.correlation_area
         dof = max(n_eff - k, 1.0)
@@ -676,7 +910,7 @@ class FaceModel:
                          f"{covariance.iterations} iterations: the intervals are approximate")
         if covariance.window_limited:
             notes.append("the residual stays correlated out to the covariance window "
-                         f"({0.5 * reach:.3g} m): the intervals may be too narrow")
+                         f"({window:.3g} m): the intervals may be too narrow")
 
         load = float(self.areas @ p)
         load_sd = math.sqrt(max(float(self.areas @ v @ self.areas), 0.0))
@@ -684,7 +918,7 @@ class FaceModel:
         load_interval = ((load - t * load_sd) / self.normal_force,
                          (load + t * load_sd) / self.normal_force)
 
-        on_face = np.hypot(X - start[0], Y - start[1]) < a
+        on_face = self.outline.contains(X - start[0], Y - start[1])
         fitted = np.full(measured.shape, np.nan)
         fitted[on_face] = self._design(X[on_face], Y[on_face], start) @ beta
         phase = np.full(measured.shape, -1, dtype=np.int64)
@@ -720,7 +954,7 @@ class FaceModel:
             exponent=m,
             normal_force=self.normal_force,
             E_star=self.E_star,
-            radius=a,
+            outline=self.outline,
             n=self.n,
             success=not failures,
             message=message,
@@ -733,7 +967,7 @@ class FaceModel:
         )
 
 
-def fit_face(measured, labels, radius, E_star, normal_force, *, exponent=1.0, **options):
+def fit_face(measured, labels, outline, E_star, normal_force, *, exponent=1.0, **options):
     """Wear ratios that best explain a measured worn face (inverse of eq. 7, 9).
 
     Least squares over the phase pressures, a height offset and a tilt
@@ -745,11 +979,16 @@ def fit_face(measured, labels, radius, E_star, normal_force, *, exponent=1.0, **
     ----------
     measured : MeasuredFace
         Height map (m, larger = protruding, NaN where missing) with its
-        pixel size; its centre is the punch axis unless ``shift`` says
-        otherwise.  It must cover the face.
-    labels : ndarray, shape (n, n), int
-        The phase map on the model grid over ``[-a, a]^2`` (-1 off the face).
-    radius : float, m
+        pixel size; its centre is the face's centre (the origin of the
+        outline) unless ``shift`` says otherwise.  It must cover the face's
+        bounding box.
+    labels : ndarray, shape (nx, ny), int
+        The phase map on the outline's grid (-1 off the face), e.g.
+        ``geometry.labels(outline.grid(n))``; for a disk the ``n x n`` grid
+        over ``[-a, a]^2``.
+    outline : outline object or float
+        The face's outline (:mod:`steady.outline`), or the radius ``a`` of a
+        disk (m).
     E_star : float, Pa
         Scales the relief only: the ratios do not depend on it.
     normal_force : float, N
@@ -759,15 +998,17 @@ def fit_face(measured, labels, radius, E_star, normal_force, *, exponent=1.0, **
     **options
         Keywords of the fit:
 
-        - ``shift`` : (float, float), m -- position of the punch axis from
-          the map's centre (default ``(0, 0)``); the start of a search;
+        - ``shift`` : (float, float), m -- position of the face's centre
+          from the map's centre (default ``(0, 0)``); the start of a search;
         - ``search_shift`` : bool -- search the shift that minimises the
           residual within ``max_shift`` of ``shift`` (default False);
-        - ``max_shift`` : float, m -- search radius (default ``0.05 a``);
-          the fitted disk shrinks by it so that every shift sees the same
-          pixels;
-        - ``rim_margin`` : float, m -- leave out a ring of this width at the
-          rim (default 0);
+        - ``max_shift`` : float, m -- search radius (default ``0.05 L``,
+          ``L`` the outline's scale: the radius of a disk, else the larger
+          half side of the bounding box); the fitted part of the face
+          shrinks by it at the rim so that every shift sees the same pixels;
+        - ``rim_margin`` : float, m -- leave out the points within this
+          distance of the face's rim (default 0; see
+          :meth:`FaceModel.rim_distance`);
         - ``reference_phase`` : int -- the phase the ratios refer to
           (default 0);
         - ``confidence`` : float -- level of the intervals (default 0.95);
@@ -783,7 +1024,8 @@ def fit_face(measured, labels, radius, E_star, normal_force, *, exponent=1.0, **
     Raises
     ------
     ValueError
-        The map cannot cover the face (names both sizes), bad options, or
+        The map cannot cover the face (names both sizes), the rim margin
+        leaves nothing to fit, bad options, or
         the fit is not determined: a phase covers too few fitted pixels, or
         its face is a combination of the other columns (names the phase).
 
@@ -815,7 +1057,7 @@ def fit_face(measured, labels, radius, E_star, normal_force, *, exponent=1.0, **
     >>> print(f"load scale {fit.load_scale:.3f}, success {fit.success}")
     load scale 1.000, success True
     """
-    model = FaceModel(labels, radius, E_star, normal_force, exponent=exponent)
+    model = FaceModel(labels, outline, E_star, normal_force, exponent=exponent)
     return model.fit(measured, **options)
 
 
@@ -825,11 +1067,12 @@ def fit_scene(scene, measured, *, n=None, **options):
     Parameters
     ----------
     scene : Scene
-        Phase map, radius, ``E*``, load and exponent (its wear coefficients
-        are reported beside the fit, not used).
+        Phase map, outline, ``E*``, load and exponent (its wear
+        coefficients are reported beside the fit, not used).
     measured : MeasuredFace
     n : int, optional
-        Model grid (default ``scene.n``).
+        Model grid, pixels along the longer side of the face's bounding box
+        (default ``scene.n``).
     **options
         As :func:`fit_face`.
 
@@ -847,7 +1090,7 @@ def build_parser():
         description="Wear-coefficient ratios that best explain a measured worn face "
                     "(least squares over the phase pressures of the steady face, eq. 7, 9).")
     parser.add_argument("scene", type=pathlib.Path,
-                        help="scene file (.toml): phase map, radius, E*, load, exponent")
+                        help="scene file (.toml): face outline, phase map, E*, load, exponent")
     parser.add_argument("measured", type=pathlib.Path,
                         help="measured height map: .npy, text grid (.txt .csv .dat .asc) or a "
                              "profilometer file (needs runin[surface])")
@@ -864,10 +1107,12 @@ def build_parser():
     parser.add_argument("--shift", action="store_true",
                         help="search the lateral shift of the phase map that fits best")
     parser.add_argument("--max-shift", type=float, metavar="M",
-                        help="search radius of --shift, m (default 5 %% of the radius)")
+                        help="search radius of --shift, m (default 5 %% of the face's scale: the "
+                             "radius of a disk, else half the longer side of its bounding box)")
     parser.add_argument("--rim-margin", type=float, default=0.0, metavar="M",
-                        help="leave out a ring of this width at the rim, m (default 0)")
-    parser.add_argument("--n", type=int, help="model grid (default: the scene's n)")
+                        help="leave out the points within M of the face's rim, m (default 0)")
+    parser.add_argument("--n", type=int, help="model grid, pixels along the longer side of "
+                                              "the face's box (default: the scene's n)")
     parser.add_argument("--reference-phase", type=int, default=0, metavar="I",
                         help="the phase the ratios refer to (default 0)")
     parser.add_argument("--confidence", type=float, default=0.95,

@@ -20,7 +20,7 @@ given.  A height is the face's elevation towards the counter-body (larger =
 protruding), as a profilometer sees the worn face turned upwards: the sign
 of the steady face ``f_inf = K p``.  NaN marks a missing pixel.
 
-Fit result files (layout ``runin.fit``, version 1), written by
+Fit result files (layout ``runin.fit``, version 2), written by
 :func:`write_fit` through :func:`steady.output.atomic_h5`::
 
     root attributes (unit of attribute x in x_units)
@@ -31,9 +31,10 @@ Fit result files (layout ``runin.fit``, version 1), written by
         phase_pressures        fitted steady pressure of each phase, Pa
         phase_pressure_errors  their standard errors, Pa
         pressure_covariance    (P, P) covariance of the phase pressures, Pa^2
-        offset                 fitted height at the punch axis, m
+        offset                 fitted height at the face's centre, m
         tilt                   fitted slopes dz/dx, dz/dy of the plane, 1
-        shift                  position of the punch axis in the map (from its centre), m
+        shift                  position of the face's centre in the map (from the map's
+                               centre), m
         residual_rms           rms of the residual over the fitted pixels, m
         relief                 max - min of the fitted face without the plane, m
         samples                pixels in the fit
@@ -45,9 +46,12 @@ Fit result files (layout ``runin.fit``, version 1), written by
         implied_normal_force   load implied by the relief at the scene's E*, N
         implied_E_star         modulus implied by the relief at the scene's load, Pa
         success, message       all phase pressures positive; notes
-        exponent, normal_force, E_star, radius, n, scene_ratios
-                               the scene (n: the model grid; scene_ratios: the
-                               ratios written in the scene, not used by the fit)
+        exponent, normal_force, E_star, scale, n, scene_ratios
+                               the scene (scale: the outline's length L, m; n: the
+                               model grid's pixels along the longer side;
+                               scene_ratios: the ratios written in the scene, not
+                               used by the fit)
+        radius                 m, the disk's radius (circular faces only)
         pixel_size             (dx, dy) of the measured map, m
         measured_source        the measured file
     root datasets, each with a units attribute
@@ -57,6 +61,12 @@ Fit result files (layout ``runin.fit``, version 1), written by
         fit_mask  (nx, ny)  1 for the pixels of the fit                1
         phase     (nx, ny)  phase index at each pixel, -1 off the face 1
         scene     string    the scene TOML (attribute source_path)
+    group ``outline``: the face's outline (:func:`steady.output.write_outline`):
+        attributes kind, area (m^2) and its lengths (m, with <name>_units);
+        for a mask the dataset ``mask`` (mx, my)
+
+Version 1 files (disks only: ``radius``, no ``outline`` or ``scale``) are
+read too.
 
 :func:`plot_fit` draws the measured, fitted and residual faces side by
 side from such a file (matplotlib without pyplot, imported on demand).
@@ -72,7 +82,8 @@ import pathlib
 import h5py
 import numpy as np
 
-from .output import atomic_h5
+from .outline import Circle
+from .output import atomic_h5, read_outline, write_outline
 
 __all__ = [
     "FIT_FORMAT",
@@ -90,7 +101,9 @@ __all__ = [
 logger = logging.getLogger(__name__)
 
 FIT_FORMAT = "runin.fit"
-FIT_FORMAT_VERSION = 1
+FIT_FORMAT_VERSION = 2
+#: Versions :func:`read_fit` reads (1: disks only, without the ``outline`` group).
+_READABLE_VERSIONS = (1, 2)
 
 #: Suffixes read as plain text grids (anything else but ``.npy`` goes to
 #: SurfaceTopography).
@@ -128,8 +141,9 @@ class MeasuredFace:
 
     Notes
     -----
-    The map's centre, the middle of its pixel array, is taken as the punch
-    axis unless the fit is given or searches a shift.
+    The map's centre, the middle of its pixel array, is taken as the face's
+    centre (the origin of its outline, the axis of a disk) unless the fit is
+    given or searches a shift.
     """
 
     heights: np.ndarray
@@ -316,7 +330,7 @@ _ATTRIBUTES = {
     "exponent": "1",
     "normal_force": "N",
     "E_star": "Pa",
-    "radius": "m",
+    "scale": "m",
     "n": "1",
     "scene_ratios": "1",
     "pixel_size": "m",
@@ -331,18 +345,27 @@ class StoredFit:
     ----------
     attrs : dict
         The attributes of the layout (see the module notes), plus
-        ``success`` (bool), ``message`` and ``measured_source`` (str).
+        ``success`` (bool), ``message`` and ``measured_source`` (str);
+        ``radius`` (m) is None for a face other than a disk, and ``scale``
+        is the radius for a version 1 file.
     arrays : dict of str to ndarray
         ``measured``, ``fitted``, ``residual`` (m), ``fit_mask`` (bool),
         ``phase`` (int), each of shape ``(nx, ny)``.
     scene_text : str
     path : pathlib.Path
+    outline : outline object
+        The face's outline (:mod:`steady.outline`; a disk for a version 1
+        file).
+    version : int
+        The file's layout version.
     """
 
     attrs: dict
     arrays: dict
     scene_text: str
     path: pathlib.Path
+    outline: object
+    version: int = FIT_FORMAT_VERSION
 
 
 def write_fit(path, result, scene=None, *, force=False):
@@ -394,7 +417,7 @@ def write_fit(path, result, scene=None, *, force=False):
         "exponent": result.exponent,
         "normal_force": result.normal_force,
         "E_star": result.E_star,
-        "radius": result.radius,
+        "scale": result.outline.scale,
         "n": result.n,
         "scene_ratios": (np.full(result.n_phases, np.nan) if result.scene_ratios is None
                          else np.asarray(result.scene_ratios)),
@@ -411,12 +434,16 @@ def write_fit(path, result, scene=None, *, force=False):
         for name, unit in _ATTRIBUTES.items():
             f.attrs[name] = values[name]
             f.attrs[f"{name}_units"] = unit
+        if isinstance(result.outline, Circle):
+            f.attrs["radius"] = result.outline.radius
+            f.attrs["radius_units"] = "m"
         f.attrs["success"] = bool(result.success)
         f.attrs["message"] = result.message
         f.attrs["measured_source"] = result.measured.source
         for name, unit in _DATASETS.items():
             ds = f.create_dataset(name, data=arrays[name])
             ds.attrs["units"] = unit
+        write_outline(f.create_group("outline"), result.outline)
         ds = f.create_dataset("scene", data="" if scene is None else scene.text,
                               dtype=h5py.string_dtype())
         ds.attrs["source_path"] = ("" if scene is None or scene.source_path is None
@@ -429,7 +456,7 @@ def _text(value):
 
 
 def read_fit(path):
-    """Read and check a file written by :func:`write_fit`.
+    """Read and check a file written by :func:`write_fit` (this version or version 1).
 
     Parameters
     ----------
@@ -442,8 +469,8 @@ def read_fit(path):
     Raises
     ------
     ValueError
-        Missing file, not HDF5, another layout or version, or incomplete
-        (the message names the path and the problem).
+        Missing file, not HDF5, another layout or version, incomplete or a
+        bad outline (the message names the path and the problem).
     """
     path = pathlib.Path(path)
     if not path.is_file():
@@ -453,14 +480,29 @@ def read_fit(path):
     with h5py.File(path, "r") as f:
         fmt = _text(f.attrs.get("format", ""))
         version = f.attrs.get("format_version")
-        if fmt != FIT_FORMAT or version is None or int(version) != FIT_FORMAT_VERSION:
-            raise ValueError(f"{str(path)!r} is not a {FIT_FORMAT} file of version "
-                             f"{FIT_FORMAT_VERSION} (format {fmt!r}, version {version!r})")
+        version = None if version is None else int(version)
+        if fmt != FIT_FORMAT or version not in _READABLE_VERSIONS:
+            readable = " or ".join(map(str, _READABLE_VERSIONS))
+            raise ValueError(f"{str(path)!r} is not a {FIT_FORMAT} file of version {readable} "
+                             f"(format {fmt!r}, version {version!r})")
+        # Version 1 (disks only) has the radius, not the scale or the outline.
+        names = [name if version >= 2 or name != "scale" else "radius" for name in _ATTRIBUTES]
         missing = [name for name in (*_DATASETS, "scene") if name not in f]
-        missing += [name for name in (*_ATTRIBUTES, "success", "message") if name not in f.attrs]
+        missing += [name for name in (*names, "success", "message") if name not in f.attrs]
+        if version >= 2 and "outline" not in f:
+            missing.append("outline")
         if missing:
             raise ValueError(f"fit file {str(path)!r} lacks {missing[0]!r}")
-        attrs = {name: f.attrs[name] for name in _ATTRIBUTES}
+        attrs = {name: f.attrs[name] for name in names}
+        if version >= 2:
+            try:
+                outline = read_outline(f["outline"])
+            except (ValueError, KeyError, TypeError) as err:
+                raise ValueError(f"fit file {str(path)!r}: bad outline: {err}") from None
+        else:
+            outline = Circle(float(attrs["radius"]))
+        attrs["scale"] = outline.scale
+        attrs["radius"] = outline.radius if isinstance(outline, Circle) else None
         attrs["success"] = bool(f.attrs["success"])
         attrs["message"] = _text(f.attrs["message"])
         attrs["measured_source"] = _text(f.attrs.get("measured_source", ""))
@@ -468,7 +510,8 @@ def read_fit(path):
         scene_text = _text(f["scene"][()])
     arrays["fit_mask"] = arrays["fit_mask"].astype(bool)
     arrays["phase"] = arrays["phase"].astype(np.int64)
-    return StoredFit(attrs=attrs, arrays=arrays, scene_text=scene_text, path=path)
+    return StoredFit(attrs=attrs, arrays=arrays, scene_text=scene_text, path=path,
+                     outline=outline, version=version)
 
 
 def _plane(stored):
@@ -485,8 +528,25 @@ def _interval(lo, hi):
     return f"[{lo:.4g}, {upper}]"
 
 
+def _layout(half_extent):
+    """Panels side by side, or stacked for a face more than twice as wide as tall.
+
+    Returns ``(rows, columns, figsize)``; each panel's box keeps the
+    face's aspect (``set_aspect("equal")``) at a legible size.
+    """
+    lx, ly = half_extent
+    aspect = ly / lx
+    if aspect >= 0.5:
+        width = 3.4
+        height = min(max(width * aspect, 2.6), 8.0)
+        return 1, 3, (3 * (width + 1.0), height + 1.6)
+    width = 8.0
+    height = min(max(width * aspect, 1.6), 4.0)
+    return 3, 1, (width + 1.8, 3 * (height + 0.8) + 1.0)
+
+
 def fit_figure(stored):
-    """Measured, fitted and residual faces side by side.
+    """Measured, fitted and residual faces, on the face's bounding box.
 
     Parameters
     ----------
@@ -496,15 +556,18 @@ def fit_figure(stored):
     Returns
     -------
     matplotlib.figure.Figure
-        Left: the measured face less the fitted plane (offset and tilt);
-        middle: the fitted face ``sum_i p_i K chi_i`` on the same colour
-        scale; right: the residual with the phase boundaries.  Heights in
-        micrometres, axes in mm from the map's centre.
+        First: the measured face less the fitted plane (offset and tilt);
+        second: the fitted face ``sum_i p_i K chi_i`` on the same colour
+        scale; third: the residual with the phase boundaries.  Each panel
+        shows the outline's bounding box about the fitted centre with equal
+        aspect (side by side, or stacked for a face more than twice as wide
+        as tall), the face's rim in grey.  Heights in micrometres, axes in
+        mm from the map's centre.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    a, arr = stored.attrs, stored.arrays
+    a, arr, outline = stored.attrs, stored.arrays, stored.outline
     plane = _plane(stored)
     measured = (arr["measured"] - plane) * 1e6
     fitted = (arr["fitted"] - plane) * 1e6
@@ -514,29 +577,40 @@ def fit_figure(stored):
     nx, ny = measured.shape
     dx, dy = a["pixel_size"]
     extent = (-0.5e3 * nx * dx, 0.5e3 * nx * dx, -0.5e3 * ny * dy, 0.5e3 * ny * dy)
+    lx, ly = outline.half_extent
+    sx, sy = a["shift"]
+    view = ((sx - lx) * 1e3, (sx + lx) * 1e3, (sy - ly) * 1e3, (sy + ly) * 1e3)
     values = np.concatenate([measured[np.isfinite(measured)], fitted[np.isfinite(fitted)]])
     vmin, vmax = np.percentile(values, [0.5, 99.5]) if values.size else (0.0, 1.0)
     finite = residual[np.isfinite(residual)]
     rmax = float(np.percentile(np.abs(finite), 99.5)) if finite.size else 1.0
 
-    fig = Figure(figsize=(13.0, 4.4), layout="constrained")
+    rows, columns, figsize = _layout(outline.half_extent)
+    fig = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(fig)
-    axes = fig.subplots(1, 3, sharex=True, sharey=True)
+    axes = fig.subplots(rows, columns, sharex=True, sharey=True).ravel()
     panels = [(measured, "measured face, plane removed", "viridis", (vmin, vmax)),
               (fitted, r"fitted $\sum_i p_i K\chi_i$", "viridis", (vmin, vmax)),
               (residual, f"residual, rms {a['residual_rms'] * 1e6:.3g} µm", "RdBu_r",
                (-rmax, rmax))]
+    x = np.linspace(extent[0], extent[1], nx, endpoint=False) + 0.5e3 * dx
+    y = np.linspace(extent[2], extent[3], ny, endpoint=False) + 0.5e3 * dy
+    rim = on_face.T.astype(float)
     for ax, (field, title, cmap, (lo, hi)) in zip(axes, panels, strict=True):
         # Arrays are indexed [x, y]; imshow wants [row = y, column = x].
         im = ax.imshow(field.T, origin="lower", extent=extent, cmap=cmap, vmin=lo, vmax=hi,
                        interpolation="nearest")
         fig.colorbar(im, ax=ax, shrink=0.85).set_label("height (µm)")
+        if 0 < rim.sum() < rim.size:
+            ax.contour(x, y, rim, levels=[0.5], colors="0.5", linewidths=0.6)
         ax.set_title(title, fontsize=10)
-        ax.set_xlabel("x (mm)")
         ax.set_aspect("equal")
-    axes[0].set_ylabel("y (mm)")
-    x = np.linspace(extent[0], extent[1], nx, endpoint=False) + 0.5e3 * dx
-    y = np.linspace(extent[2], extent[3], ny, endpoint=False) + 0.5e3 * dy
+        ax.set_xlim(view[0], view[1])
+        ax.set_ylim(view[2], view[3])
+    for ax in axes[-columns:]:
+        ax.set_xlabel("x (mm)")
+    for ax in axes[::columns]:
+        ax.set_ylabel("y (mm)")
     n_phases = len(a["ratios"])
     if n_phases > 1:
         axes[2].contour(x, y, arr["phase"].T.astype(float), levels=np.arange(n_phases) + 0.5,
@@ -549,8 +623,8 @@ def fit_figure(stored):
     level = f"{100 * a['confidence']:.0f} %"
     shift = a["shift"] * 1e3
     title = (f"{ratios or 'one phase'} ({level} intervals); load scale {a['load_scale']:.4g} "
-             f"{_interval(a['load_scale_lower'], a['load_scale_upper'])}; "
-             f"shift ({shift[0]:.3g}, {shift[1]:.3g}) mm")
+             f"{_interval(a['load_scale_lower'], a['load_scale_upper'])}\n"
+             f"{outline.describe()}, centre at ({shift[0]:.3g}, {shift[1]:.3g}) mm")
     if not a["success"]:
         title += f"\nfit failed: {a['message']}"
     fig.suptitle(title, fontsize=10)
