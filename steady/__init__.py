@@ -1,9 +1,13 @@
-"""Limiting worn face of a multi-phase cylindrical punch on an elastic half-space.
+"""Limiting worn face of a multi-phase punch on an elastic half-space.
 
 The steady state of run-in wear has a closed form (paper eq. 7, 9): constant
-pressure on each phase and the half-space displacement under it.  Modules:
+pressure on each phase and the half-space displacement under it.  The face
+is a disk (the paper's cylinder) or any other outline.  Modules:
 
-- :mod:`steady.grid` -- the pixel grid over the face;
+- :mod:`steady.grid` -- the pixel grid over a circular face;
+- :mod:`steady.outline` -- face outlines (disk, rectangle, ellipse, annulus,
+  pixel mask) and the grid over each one's bounding box;
+- :mod:`steady.normalisation` -- the reference slope of each outline;
 - :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
 - :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
 - :mod:`steady.phases` -- phase geometries rasterised at any grid size;
@@ -38,6 +42,8 @@ from .grid import face_mask, pixel_centres, pixel_size, polar
 from .halfspace import HalfSpace
 from .inclusions import Inclusions
 from .micrograph import Micrograph, Segmentation, load_micrograph, segment
+from .normalisation import ReferenceSlope, reference_slope
+from .outline import Annulus, Circle, Ellipse, FaceGrid, MaskOutline, Rectangle, as_outline
 from .output import StoredResult, atomic_h5, read_result, write_result
 from .phases import (
     ArrayMap,
@@ -54,15 +60,22 @@ from .scene import Scene, load_scene, parse_scene
 from .solution import SteadyResult, solve, solve_scene
 
 __all__ = [
+    "Annulus",
     "ArrayMap",
+    "Circle",
+    "Ellipse",
+    "FaceGrid",
     "FaceModel",
     "FitResult",
     "HalfSpace",
     "Homogeneous",
     "Inclusions",
+    "MaskOutline",
     "MeasuredFace",
     "Micrograph",
     "PhaseBasis",
+    "Rectangle",
+    "ReferenceSlope",
     "Rods",
     "Scene",
     "Segmentation",
@@ -72,6 +85,7 @@ __all__ = [
     "StoredResult",
     "SweepSlopes",
     "Voronoi",
+    "as_outline",
     "atomic_h5",
     "cross_section",
     "differential_profile",
@@ -93,6 +107,7 @@ __all__ = [
     "read_result",
     "realised_fill_factors",
     "reference",
+    "reference_slope",
     "ring_average",
     "segment",
     "solve",

@@ -41,9 +41,6 @@ Steady result files (layout ``runin.steady``, version 2)::
         area              m^2, the exact area (area_units)
         <its lengths>     e.g. width, length (m, with <name>_units)
         and for a mask the dataset ``mask`` (mx, my) bool
-
-Version 1 files (disks only, without ``outline``, ``scale``,
-``mean_pressure`` and the reference's error and source) are read too.
     group ``micrograph``, only for a segmented micrograph (map kind "micrograph",
     :mod:`steady.micrograph`); attributes
         source            the image file
@@ -54,7 +51,9 @@ Version 1 files (disks only, without ``outline``, ``scale``,
         pixel_size m, cover "crop" or "tile", offset (x, y) m
 
 An attribute cannot carry attributes, so the unit of attribute ``x`` is the
-string attribute ``x_units``.
+string attribute ``x_units``.  Version 1 files (disks only, without
+``outline``, ``scale``, ``mean_pressure`` and the reference's error and
+source) are read too.
 """
 
 from __future__ import annotations

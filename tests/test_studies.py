@@ -16,7 +16,8 @@ import pytest
 STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
 SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways",
-          "three_phases", "wear_exponent", "random_inclusions", "runin_distance"]
+          "three_phases", "wear_exponent", "random_inclusions", "runin_distance",
+          "face_outlines"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
             "design_table", "runin_history", "runin_convergence"]
 
@@ -184,6 +185,26 @@ def test_runin_distance_quick(runs):
     for key, value in s1.items():
         low = a[key + "_low"]
         assert 0 < low <= value < 10, f"{key}: {value} (low {low})"
+
+
+def test_face_outlines_quick(runs):
+    """Each face normalised by its own homogeneous closed form; the biphasic face is rougher."""
+    from steady import reference
+
+    a = attrs_of(runs["face_outlines"][1])
+    assert a["disk_reference_factor"] == pytest.approx(4 / np.pi, rel=1e-15)
+    assert a["tread_reference_factor"] == pytest.approx(reference.rectangle_rms_slope(1 / 3),
+                                                        rel=1e-15)
+    assert a["seal_reference_factor"] == pytest.approx(reference.annulus_rms_slope(0.625),
+                                                       rel=1e-15)
+    with h5py.File(runs["face_outlines"][1], "r") as f:
+        for name in ("disk", "tread", "seal"):
+            value, error = f[f"{name}/rms_slope"][()], f[f"{name}/rms_slope_error"][()]
+            # k_2/k_1 = 10 at fill 0.5: 1.5-1.7 reference slopes in the quick run.
+            assert np.all(value - error > 1.0), f"{name}: {value} +- {error}"
+            assert np.all(error < 0.05 * value), f"{name}: error bars {error}"
+            face, labels = f[f"{name}/face"][()], f[f"{name}/labels"][()]
+            assert np.array_equal(np.isfinite(face), labels >= 0), f"{name}: face off its map"
 
 
 def test_fig4_map_is_symmetric_in_the_mean(runs):
