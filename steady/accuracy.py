@@ -17,9 +17,20 @@ whose right-hand side is exact on the grid.  Hence the mean-square slope on
 the face is the total minus the *exterior* integral, and the exterior field
 is smooth everywhere except next to the rim: the log singularities along
 internal phase boundaries drop out.  The exterior integral is computed by
-pixel quadrature on a fine box around the face, on a coarse box
-(block-summed sources) out to ``far_radius`` radii, and analytically
-(monopole about the box centre) beyond.
+pixel quadrature on a fine box around the face, on a coarse box out to
+``far_radius`` radii, and analytically beyond (monopole and second moment
+about the box centre, :func:`monopole_tail`, :func:`second_moment_tail`).
+The coarse box's sources are the fine pixels summed over blocks, each block
+a uniform coarse pixel shifted to its centre of pressure (the block's first
+moments enter through the derivatives of the pixel kernel); without the
+shift a block that the rim crosses sits up to half a coarse pixel off its
+load.  Where the two boxes meet (and at the coarse box's outer side) the
+midpoint rule's first error term, ``(H^2 / 24)`` times the flux of the
+gradient of ``|grad u|^2`` through the side (Euler-Maclaurin, ``H`` the
+pixel), is added, the flux read off the fine box's outer pixels.  Both
+matter where the rim runs along the fine box, as a rectangle's does: there
+they would otherwise leave an error of a few 1e-3 at ``n <= 128`` that
+does not shrink with the grid (docs/benchmarks.md, "Other face outlines").
 
 The remaining error comes from the rim, where the pixel quadrature misses
 about the same amount inside and outside (the log singularity of a pressure
@@ -53,7 +64,8 @@ from .pressures import pressure_field
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
            "estimate_map_rms_slope", "estimate_rms_slope", "grid_ladder", "ladder_error",
-           "MIN_CHORD_PIXELS", "mean_chord", "monopole_tail", "resample_labels"]
+           "MIN_CHORD_PIXELS", "mean_chord", "monopole_tail", "resample_labels",
+           "second_moment_tail"]
 
 logger = logging.getLogger(__name__)
 
@@ -159,38 +171,143 @@ def monopole_tail(force, centroid, box, E_star):
     return (force / (np.pi * E_star)) ** 2 * integral
 
 
+def second_moment_tail(force, second_moment, centre, box, E_star):
+    """Next term of :func:`monopole_tail`: the load's spread about the centre, m^2.
+
+    About a centre ``O``, the displacement of a load of total force ``F``
+    and second moment ``S2 = integral p |x - O|^2 dA`` is, far away and
+    averaged over directions, ``(F / r + S2 / (4 r^3)) / (pi E*)``; hence
+    ``|grad u|^2 = (F^2 / r^4 + 3 F S2 / (2 r^6)) / (pi E*)^2`` plus terms
+    odd in the direction (the dipole's cross term), terms in ``cos 2 phi``
+    (the anisotropic quadrupole; they cancel over a square box) and terms
+    of order ``r^-6`` in the dipole squared (``F^2 |c - O|^2``, ``c`` the
+    centroid) and ``r^-8``.
+
+    Parameters
+    ----------
+    force : float, N
+    second_moment : float, N m^2
+        ``S2`` about ``centre``.
+    centre : (float, float), m
+        ``O``, inside the box.
+    box : (x0, x1, y0, y1), m
+    E_star : float, Pa
+
+    Returns
+    -------
+    float
+        ``3 F S2 / (2 (pi E*)^2)`` times the integral outside the box of
+        ``r^-6 dA`` (``int cos^4(phi) / (4 d^4) dphi`` side by side).
+
+    Examples
+    --------
+    A uniform disk of radius ``a`` has ``S2 = F a^2 / 2``; outside a box of
+    half side ``8 a`` the term is 0.5 % of the monopole's:
+
+    >>> box = (-8.0, 8.0, -8.0, 8.0)
+    >>> mono = monopole_tail(1.0, (0.0, 0.0), box, 1.0)
+    >>> print(f"{second_moment_tail(1.0, 0.5, (0.0, 0.0), box, 1.0) / mono:.4f}")
+    0.0050
+    """
+    cx, cy = centre
+    x0, x1, y0, y1 = box
+    sides = [(x1 - cx, cy - y0, y1 - cy), (cx - x0, cy - y0, y1 - cy),
+             (y1 - cy, cx - x0, x1 - cx), (cy - y0, cx - x0, x1 - cx)]
+    integral = 0.0
+    for d, lo, hi in sides:
+        for t in (lo, hi):
+            phi = np.arctan2(t, d)
+            integral += (3 * phi / 8 + np.sin(2 * phi) / 4 + np.sin(4 * phi) / 32) / (4 * d**4)
+    return 1.5 * force * second_moment / (np.pi * E_star) ** 2 * integral
+
+
+def _corner_sum(ox, oy, H, antiderivative):
+    """Corner sum of ``antiderivative(X, Y)`` over the pixel of side ``H`` (offsets 1-D)."""
+    xm, xp = ox[:, None] - H / 2, ox[:, None] + H / 2
+    ym, yp = oy[None, :] - H / 2, oy[None, :] + H / 2
+    return (antiderivative(xp, yp) - antiderivative(xm, yp) - antiderivative(xp, ym)
+            + antiderivative(xm, ym))
+
+
+def _border_weights(shape):
+    """Flat indices and weights of the midpoint rule's end correction on a box.
+
+    ``sum(weights * f.ravel()[indices])`` is the flux of ``grad f`` into the
+    box through its four sides times the pixel side: per side, the inward
+    derivative at the side from the three outermost pixel rows
+    (``(-2 f_1 + 3 f_2 - f_3) / H``, the quadratic through their centres)
+    summed along it.  Pixels in two sides' rows carry both weights.
+    """
+    nx, ny = shape
+    weights = np.zeros(shape)
+    for k, w in enumerate((-2.0, 3.0, -1.0)):
+        weights[k, :] += w
+        weights[nx - 1 - k, :] += w
+        weights[:, k] += w
+        weights[:, ny - 1 - k] += w
+    indices = np.flatnonzero(weights)
+    return indices, weights.ravel()[indices]
+
+
 class _BoxGradient:
     """Gradient on an output box from sources on a (coarser) pixel grid.
 
     Sources occupy pixel indices ``[0, ns_a)`` along each axis ``a`` with
     spacing ``H``; outputs are the pixel centres ``[lo_a, lo_a + m_a)`` of
     the same lattice.  Aperiodic linear convolution by FFT of the smallest
-    fast size.
+    fast size.  With ``dipoles``, each source pixel also carries first
+    moments ``(mx, my)`` (Pa m: the mean of ``p (x - x_c)`` over the pixel),
+    and its load is shifted to its centre of pressure to first order
+    (``-mx d/dx - my d/dy`` of the pixel's kernel).
     """
 
-    def __init__(self, ns, lo, m, H, E_star, workers):
+    def __init__(self, ns, lo, m, H, E_star, workers, *, dipoles=False):
         self.ns, self.lo, self.m, self.workers = tuple(ns), tuple(lo), tuple(m), workers
         size = tuple(scipy.fft.next_fast_len(a + b - 1, real=True)
                      for a, b in zip(ns, m, strict=True))
         self.size = size
         ox, oy = (np.arange(l0 - a + 1, l0 + b) for a, l0, b in zip(ns, lo, m, strict=True))
         ix, iy = np.mod(ox, size[0]), np.mod(oy, size[1])
+        scale = 1.0 / (np.pi * E_star)
         kernel = np.zeros(size)
-        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(ox * H, oy * H, H) / (np.pi * E_star)
+        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(ox * H, oy * H, H) * scale
         self.gx_q = scipy.fft.rfft2(kernel, workers=workers)
-        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(oy * H, ox * H, H).T / (np.pi * E_star)
+        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(oy * H, ox * H, H).T * scale
         self.gy_q = scipy.fft.rfft2(kernel, workers=workers)
+        self.dipoles = dipoles
+        if dipoles:
+            # Minus the derivatives of the gradient kernels with respect to the
+            # observation point: d/dX asinh(Y/|X|) = -Y / (X R), d/dY of it
+            # 1 / R, d/dY asinh(X/|Y|) = -X / (Y R).  No corner lies on an axis.
+            hessian = [lambda X, Y: Y / (X * np.hypot(X, Y)),
+                       lambda X, Y: -1.0 / np.hypot(X, Y),
+                       lambda X, Y: X / (Y * np.hypot(X, Y))]
+            self.hessian_q = []
+            for antiderivative in hessian:
+                kernel[np.ix_(ix, iy)] = _corner_sum(ox * H, oy * H, H, antiderivative) * scale
+                self.hessian_q.append(scipy.fft.rfft2(kernel, workers=workers))
         self.rows = np.mod(np.arange(lo[0], lo[0] + m[0]), size[0])
         self.cols = np.mod(np.arange(lo[1], lo[1] + m[1]), size[1])
 
     def __call__(self, sources):
-        """Gradient ``(gx, gy)`` on the output box, each of shape ``m``."""
+        """Gradient ``(gx, gy)`` on the output box, each of shape ``m``.
+
+        ``sources`` is the pressure of the source pixels, shape ``ns``; with
+        ``dipoles``, the stack ``(p, mx, my)`` of shape ``(3,) + ns``.
+        """
         size, w = self.size, self.workers
-        sq = scipy.fft.rfft2(sources, s=size, workers=w)
+        if self.dipoles:
+            sq, mxq, myq = scipy.fft.rfft2(sources, s=size, workers=w)
+            xx, xy, yy = self.hessian_q
+            products = (sq * self.gx_q + mxq * xx + myq * xy,
+                        sq * self.gy_q + mxq * xy + myq * yy)
+        else:
+            sq = scipy.fft.rfft2(sources, s=size, workers=w)
+            products = (sq * self.gx_q, sq * self.gy_q)
         out = []
-        for kq in (self.gx_q, self.gy_q):
+        for product in products:
             # Column pass, then the row pass on the output rows only.
-            cols = scipy.fft.ifft(sq * kq, axis=0, workers=w, overwrite_x=True)[self.rows]
+            cols = scipy.fft.ifft(product, axis=0, workers=w, overwrite_x=True)[self.rows]
             out.append(scipy.fft.irfft(cols, n=size[1], axis=1, workers=w)[:, self.cols])
         return tuple(out)
 
@@ -219,14 +336,17 @@ class SlopeEnergy:
     E_star : float, Pa
     margin : int, optional
         Fine pixels kept around the grid (default ``max(8, n // 16)``, ``n``
-        the longer side);
+        the longer side; at least 3, rounded up to whole coarse pixels);
         they carry the rim's exterior at the grid's own resolution.
     coarsening : int, optional
-        Ratio of coarse to fine pixel size (default 8).
+        Ratio of coarse to fine pixel size (default 8).  Coarse pixels carry
+        their blocks' first moments, and the midpoint rule's end correction
+        is applied where the boxes meet (module notes), so that the result
+        hardly depends on ``margin`` and ``coarsening``.
     far_radius : float, optional
         Half-width of the coarse box in units of the grid's half-width
         along its longer side (default 8; the same on both axes); beyond
-        it the monopole tail is analytic.
+        it the tail is analytic (monopole and second moment).
     workers : int, optional
         Threads for :mod:`scipy.fft`.
     """
@@ -238,8 +358,9 @@ class SlopeEnergy:
         self.h, self.E_star = float(h), float(E_star)
         c = int(coarsening)
         margin = max(8, self.n // 16) if margin is None else int(margin)
-        # The fine box must tile into coarse pixels: round its sides up.
-        margin = c * -(-margin // c)
+        # The fine box must tile into coarse pixels: round its sides up.  The
+        # end correction reads the fine box's three outer rows: off the face.
+        margin = c * -(-max(margin, 3) // c)
         fine = tuple(c * -(-(a + 2 * margin) // c) for a in self.shape)
         self.c, self.margin, self.fine = c, margin, fine
         self._fine = _BoxGradient(self.shape, (-margin, -margin), fine, self.h, self.E_star,
@@ -249,11 +370,25 @@ class SlopeEnergy:
         nc = tuple(a // c for a in fine)
         half = far_radius * self.n / 2  # in fine pixels
         extra = tuple(max(1, int(np.ceil((half - a / 2) / c))) for a in fine)
-        self._coarse = _BoxGradient(nc, tuple(-e for e in extra),
-                                    tuple(a + 2 * e for a, e in zip(nc, extra, strict=True)),
-                                    c * self.h, self.E_star, workers)
+        coarse_out = tuple(a + 2 * e for a, e in zip(nc, extra, strict=True))
+        self._coarse = _BoxGradient(nc, tuple(-e for e in extra), coarse_out, c * self.h,
+                                    self.E_star, workers, dipoles=True)
         self._coarse_inner = tuple(slice(e, e + a) for a, e in zip(nc, extra, strict=True))
         self._coarse_extra = extra
+        # Midpoint rule's end correction, (H^2 / 24) times the flux of grad |grad u|^2
+        # out of each region: where the boxes meet (read off the fine box, for the
+        # coarse region and the fine one's outer pixels) and at the coarse box's
+        # outer side.
+        H = c * self.h
+        index, weight = _border_weights(fine)
+        self._fine_border = index, weight * (H * H - self.h * self.h) / 24.0
+        index, weight = _border_weights(coarse_out)
+        self._coarse_border = index, weight * (-H * H / 24.0)
+        # Pixel offsets from the box centre (the tail's expansion point), m.
+        centre, self._box = self._tail_box()
+        self._offsets = tuple((np.arange(a) + 0.5 - a / 2) * self.h - o
+                              for a, o in zip(self.shape, centre, strict=True))
+        self._tail_centre = centre
 
     def _boxed(self, field):
         """``field`` (grid shape) placed in the fine box."""
@@ -263,10 +398,23 @@ class SlopeEnergy:
         return boxed
 
     def _coarse_sources(self, field):
-        """The fine box block-summed (mean over ``c x c`` blocks)."""
+        """The fine box in ``c x c`` blocks: mean and first moments, shape (3, fx/c, fy/c).
+
+        The moments are the means of ``p (x - x_c)`` and ``p (y - y_c)``
+        over each block (Pa m), ``(x_c, y_c)`` its centre.
+        """
         c = self.c
         fx, fy = self.fine
-        return self._boxed(field).reshape(fx // c, c, fy // c, c).mean(axis=(1, 3))
+        blocks = self._boxed(field).reshape(fx // c, c, fy // c, c)
+        offsets = (np.arange(c) - (c - 1) / 2) * (self.h / (c * c))
+        return np.stack([blocks.mean(axis=(1, 3)),
+                         np.einsum("icjd,c->ij", blocks, offsets),
+                         np.einsum("icjd,d->ij", blocks, offsets)])
+
+    def _second_moment(self, field):
+        """``sum p |x - O|^2 h^2`` about the tail's centre ``O``, N m^2."""
+        ox, oy = self._offsets
+        return float(ox**2 @ field.sum(axis=1) + oy**2 @ field.sum(axis=0)) * self.h**2
 
     def _check(self, face_mask):
         face_mask = np.asarray(face_mask, dtype=bool)
@@ -302,13 +450,18 @@ class SlopeEnergy:
         square += gy * gy
         face_sum = float(np.sum(square, where=on_face)) * area
         exterior = float(np.sum(square)) * area - face_sum
+        index, weight = self._fine_border
+        exterior += float(weight @ square.ravel()[index])
         gx, gy = self._coarse(self._coarse_sources(field))
         square = gx * gx
         square += gy * gy
         exterior += (float(np.sum(square)) - float(np.sum(square[self._coarse_inner])))\
             * (c * h) ** 2
+        index, weight = self._coarse_border
+        exterior += float(weight @ square.ravel()[index])
         force = float(np.sum(field)) * area
         exterior += self._unit_tail() * force * force
+        exterior += self._moment_tail() * force * self._second_moment(field)
         interior, rim = edge_jumps(field, face_mask)
         jumps = interior + rim
         return SlopeIntegrals(face_area=float(face_mask.sum()) * area,
@@ -316,8 +469,8 @@ class SlopeEnergy:
                               face_sum=face_sum, exterior=exterior,
                               rim_share=rim / jumps if jumps > 0 else 1.0)
 
-    def _unit_tail(self):
-        """Far tail of a unit force outside the coarse box (:func:`monopole_tail`), m^2/N^2."""
+    def _tail_box(self):
+        """``(centre, (x0, x1, y0, y1))`` of the coarse box, m from the grid's centre."""
         h, m, c = self.h, self.margin, self.c
         (ex, ey), (nx, ny) = self._coarse_extra, self.shape
         (fx, fy) = self.fine
@@ -325,8 +478,15 @@ class SlopeEnergy:
         y0 = (-ny / 2 - m - ey * c) * h
         x1 = x0 + (fx + 2 * ex * c) * h
         y1 = y0 + (fy + 2 * ey * c) * h
-        return monopole_tail(1.0, ((x0 + x1) / 2, (y0 + y1) / 2), (x0, x1, y0, y1),
-                             self.E_star)
+        return ((x0 + x1) / 2, (y0 + y1) / 2), (x0, x1, y0, y1)
+
+    def _unit_tail(self):
+        """Far tail of a unit force outside the coarse box (:func:`monopole_tail`), m^2/N^2."""
+        return monopole_tail(1.0, self._tail_centre, self._box, self.E_star)
+
+    def _moment_tail(self):
+        """:func:`second_moment_tail` per unit force and second moment, 1/N^2."""
+        return second_moment_tail(1.0, 1.0, self._tail_centre, self._box, self.E_star)
 
     def gram(self, fields, face_mask):
         """Quadratic forms of the slope integrals over a set of pressure fields.
@@ -355,24 +515,33 @@ class SlopeEnergy:
         coarse_outside = np.ones(self._coarse.m, dtype=bool)
         coarse_outside[self._coarse_inner] = False
 
-        face_rows, ext_rows, coarse_rows = [], [], []
+        fine_index, fine_weight = self._fine_border
+        coarse_index, coarse_weight = self._coarse_border
+        border_weight = np.concatenate([fine_weight, fine_weight, coarse_weight, coarse_weight])
+        face_rows, ext_rows, coarse_rows, border_rows = [], [], [], []
         for f in fields:
             gx, gy = self._fine(f)
             face_rows.append(np.concatenate([gx[on_face], gy[on_face]]))
             ext_rows.append(np.concatenate([gx[~on_face], gy[~on_face]]))
+            border = [gx.ravel()[fine_index], gy.ravel()[fine_index]]
             gx, gy = self._coarse(self._coarse_sources(f))
             coarse_rows.append(np.concatenate([gx[coarse_outside], gy[coarse_outside]]))
+            border_rows.append(np.concatenate(border + [gx.ravel()[coarse_index],
+                                                        gy.ravel()[coarse_index]]))
 
-        def gram(rows):
+        def gram(rows, weight=None):
             a = np.asarray(rows)
-            return a @ a.T
+            return (a if weight is None else a * weight) @ a.T
 
         forces = fields.reshape(len(fields), -1).sum(axis=1) * area
+        moments = np.array([self._second_moment(f) for f in fields])
         # About the box centre the monopole-dipole cross term integrates to
         # zero; what is left, dipole^2 / L^2, is below 1e-6 of the total.
-        tail = self._unit_tail()
+        spread = np.outer(forces, moments)
         exterior = (gram(ext_rows) * area + gram(coarse_rows) * (c * h) ** 2
-                    + tail * np.outer(forces, forces))
+                    + gram(border_rows, border_weight)
+                    + self._unit_tail() * np.outer(forces, forces)
+                    + self._moment_tail() * 0.5 * (spread + spread.T))
         flat = fields.reshape(len(fields), -1)
         total = 4.0 / self.E_star**2 * (flat @ flat.T) * area
         interior, rim = _edge_differences(fields, face_mask)
@@ -665,7 +834,9 @@ def resample_labels(labels, m, outline=None):
     # Centres of the new pixels in old pixels from the old grid's corner.
     index = [np.clip(np.floor((np.arange(k) + 0.5) * n / m + (old - k * n / m) / 2)
                      .astype(int), 0, old - 1) for k, old in zip(shape, (nx, ny), strict=True)]
-    picked = extend_off_face(labels)[np.ix_(*index)]
+    # Off-face pixels take the nearest face pixel's label (the map's own face:
+    # the disk of the n x n grid by default).
+    picked = extend_off_face(labels, None if outline is None else labels >= 0)[np.ix_(*index)]
     return np.where(mask, picked, -1)
 
 

@@ -580,8 +580,10 @@ def slope_estimator_memory(n):
     Returns
     -------
     kept : int
-        Two gradient spectra per box, complex ``S x (S/2+1)``:
-        ``16 S^2 + 16 S_c^2`` bytes, about 100 per pixel.
+        Two gradient spectra on the fine box and five on the coarse one
+        (the gradient's and the three second derivatives' that carry the
+        blocks' first moments), complex ``S x (S/2+1)``:
+        ``16 S^2 + 40 S_c^2`` bytes, about 130 per pixel.
     applied : int
         The transforms of one application on the fine box (source
         spectrum, product, column and row passes): ``32 S^2`` bytes, about
@@ -595,7 +597,7 @@ def slope_estimator_memory(n):
     coarse_out = nc + 2 * extra
     size = scipy.fft.next_fast_len(n + fine - 1, real=True)
     coarse = scipy.fft.next_fast_len(nc + coarse_out - 1, real=True)
-    return 16 * size ** 2 + 16 * coarse ** 2, 32 * size ** 2
+    return 16 * size ** 2 + 40 * coarse ** 2, 32 * size ** 2
 
 
 def steady_memory(n, *, slope_error=True):

@@ -344,7 +344,7 @@ def solve_scene(scene, *, n=None, slope_error=True):
     >>> print(f"{result.normalised_rms_slope:.3f} "
     ...       f"+- {result.rms_slope_error / result.reference_slope:.3f} grad_f0, "
     ...       f"plain {result.rms_slope_plain / result.reference_slope:.3f}")
-    0.998 +- 0.012 grad_f0, plain 0.965
+    0.997 +- 0.012 grad_f0, plain 0.965
     """
     grid = scene.grid(n)
     labels = scene.geometry.labels(grid)
