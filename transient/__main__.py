@@ -10,7 +10,10 @@ Usage (``runin-transient`` once installed, or ``python -m transient``)::
 Starts from the scene's initial face (``[initial_face]``, flat by default),
 wears it until the wear rates equalise (``[transient]`` options, overridden
 by the flags), compares the final face with the closed-form steady face
-(eq. 9), prints the agreement and stores everything in ``RUN.h5``.  A
+(eq. 9), prints the agreement and stores everything in ``RUN.h5``.  The
+face may have any outline of the scene's ``[punch]`` (:mod:`steady.outline`);
+the summary names it and the reference slope ``grad_f0`` the rms slopes are
+normalised by (the homogeneous face's: eq. 12 for a disk), with its source.  A
 progress bar is drawn when stderr is a terminal.
 
 Before the run starts everything that can be checked is: the scene, the
@@ -159,7 +162,9 @@ def run_in_memory(n, snapshots=0):
     """Estimated peak memory of a run-in at grid ``n``, bytes.
 
     Counted from the arrays the run allocates, in bytes per pixel of the
-    ``n x n`` grid (8 per float):
+    ``n x n`` grid (8 per float; a rectangular ``nx x ny`` grid is counted
+    as the square of as many pixels, as :func:`steady.command_line.steady_memory`
+    does):
 
     - the half-space operator with its gradient spectra
       (:func:`steady.command_line.halfspace_memory`, 128) and the aliased
@@ -197,8 +202,8 @@ def run_in_memory(n, snapshots=0):
 
     Parameters
     ----------
-    n : int
-        Pixels across the grid.
+    n : int or (int, int)
+        Pixels across a square grid, or ``(nx, ny)``.
     snapshots : int, optional
         Snapshots the run stores (default 0).
 
@@ -212,7 +217,7 @@ def run_in_memory(n, snapshots=0):
     >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
     384 MiB 163 GiB
     """
-    n = int(n)
+    n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     pixels = n * n
     kept, applied = slope_estimator_memory(n)
     peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 176) * pixels + kept
@@ -221,9 +226,12 @@ def run_in_memory(n, snapshots=0):
     return int(1.25 * peak) + 16 * 2 ** 20
 
 
-def _run_in_text(n, snapshots):
+def _run_in_text(grid, snapshots):
     """The run-in, as a memory refusal names it."""
-    return f"a run-in at n = {n}" + (f" with {snapshots} snapshots" if snapshots else "")
+    nx, ny = grid.shape
+    pixels = "" if nx == ny else f" ({nx} x {ny} pixels)"
+    return (f"a run-in at n = {grid.n}{pixels}"
+            + (f" with {snapshots} snapshots" if snapshots else ""))
 
 
 def _options(settings, args):
@@ -242,17 +250,35 @@ def _settings(options, contact_rtol):
 
 
 def _inputs(scene, problem):
-    """Root attributes and datasets that identify the run's inputs."""
+    """Root attributes and datasets that identify the run's inputs.
+
+    The outline goes into the run file with the result (its group
+    ``outline``; ``radius`` for a disk), from ``problem.outline``.
+    """
     attrs = {"scene": scene.text, "scene_path": str(scene.source_path or ""),
-             "n": problem.n, "radius": scene.radius, "normal_force": scene.normal_force,
+             "n": problem.n, "normal_force": scene.normal_force,
              "E_star": scene.E_star, "exponent": scene.exponent,
              "wear_coefficients": problem.wear_coefficients}
     return attrs, {"phase": problem.labels}
 
 
-def _check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0):
-    """Refuse to resume a run of another problem (grid, load, phases, wear law, initial face)."""
-    for key in ("n", "radius", "normal_force", "E_star", "exponent"):
+def _same_outline(a, b):
+    """Whether two outlines are the same face (masks compared pixel by pixel)."""
+    if a is None or b is None or a.kind != b.kind:
+        return False
+    if a.kind == "mask":
+        return (a.pixel_size == b.pixel_size and a.mask.shape == b.mask.shape
+                and bool(np.array_equal(a.mask, b.mask)))
+    return a.parameters() == b.parameters()
+
+
+def _check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, outline):
+    """Refuse to resume a run of another problem (face, grid, load, phases, wear law, start)."""
+    if not _same_outline(stored.outline, outline):
+        was = "an unknown face" if stored.outline is None else stored.outline.describe()
+        raise ValueError(f"{str(path)!r} was run on {was}, the scene has the "
+                         f"{outline.describe()}; use --force to start over")
+    for key in ("n", "normal_force", "E_star", "exponent"):
         if stored_attrs.get(key) != attrs[key]:
             raise ValueError(f"{str(path)!r} was run with {key} = "
                              f"{shorten(stored_attrs.get(key))}, the scene has {attrs[key]!r}; "
@@ -497,9 +523,19 @@ def _report(result, comparison):
     lines = [f"{result.status}: {result.message}",
              f"scheme {result.scheme}: {result.steps} steps ({result.rejected} rejected, "
              f"{result.failures} failed), {result.solves} contact solves, "
-             f"{result.iterations} solver iterations, {result.wall_time:.3g} s",
-             f"scales: f* = {result.depth_scale:.4g} m, s* = {result.run_in_distance:.4g} m, "
-             f"fastest relaxation h/(k_max E*) = {result.fast_distance:.4g} m"]
+             f"{result.iterations} solver iterations, {result.wall_time:.3g} s"]
+    if result.outline is not None:
+        nx, ny = result.shape
+        lines.append(f"face: {result.outline.describe()}, n = {max(nx, ny)} ({nx} x {ny} "
+                     f"pixels)")
+    if result.reference_slope_error > 0:
+        ref = f"{result.reference_slope:.6g} +- {result.reference_slope_error:.2g}"
+    else:
+        ref = f"{result.reference_slope:.6g}"
+    source = result.reference_slope_source or "unknown"
+    lines += [f"grad_f0 = {ref} ({source}): the unit of the normalised rms slopes",
+              f"scales: f* = {result.depth_scale:.4g} m, s* = {result.run_in_distance:.4g} m, "
+              f"fastest relaxation h/(k_max E*) = {result.fast_distance:.4g} m"]
     if comparison is not None:
         lines += ["agreement with the steady face (eq. 9):", comparison.summary()]
     return lines
@@ -539,13 +575,14 @@ def _prepare(args, lock, scene, settings, initial, options):
                          f"{str(backup_path(out))!r} does: rename it to {str(out)!r} to "
                          f"continue from it, or use --force to start over")
     problem = WearProblem.from_scene(scene)
-    h0 = initial.height(problem.n, scene.radius)
+    h0 = initial.height(problem.grid)
     attrs, arrays = _inputs(scene, problem)
     run_file = _RunFile(out, attrs, arrays, _settings(options, settings.contact_rtol), options)
     resume = None
     if args.resume and out.exists():
         resume, stored_attrs, stored_arrays = _read_resume(out)
-        _check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0)
+        _check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
+                           problem.outline)
         if "sha256" not in stored_attrs:
             _note(f"{str(out)!r} carries no checksums; resumed without verification")
         if resume.status == "steady":
@@ -555,8 +592,8 @@ def _prepare(args, lock, scene, settings, initial, options):
             for text in notes:
                 _note(text)
             options = dataclasses.replace(options, snapshots=snapshots)
-            check_memory(run_in_memory(scene.n, len(snapshots)),
-                         _run_in_text(scene.n, len(snapshots)), args.memory_limit)
+            check_memory(run_in_memory(problem.shape, len(snapshots)),
+                         _run_in_text(problem.grid, len(snapshots)), args.memory_limit)
     else:
         if args.resume:
             _note(f"{str(out)!r} does not exist; starting a new run")
@@ -570,9 +607,9 @@ def _companion_grid(scene, initial, n):
     """The grid of ``--spatial-error``'s companion run; refused before the run if none exists."""
     from .spatial_error import companion_grid
 
-    m = companion_grid(scene.geometry, n)  # ValueError names the minimum grid
+    m = companion_grid(scene.geometry, n, scene.outline)  # ValueError names the minimum grid
     try:
-        initial.height(m, scene.radius)
+        initial.height(m, scene.outline)
     except ValueError as err:
         raise ValueError(f"--spatial-error needs the initial face on the companion grid "
                          f"n = {m}: {err}") from None
@@ -588,8 +625,9 @@ def run(args):
     scene, settings, initial = load_transient_scene(args.scene)
     options = _options(settings, args)
     _check_outputs(args)
-    check_memory(run_in_memory(scene.n, len(options.snapshots)),
-                 _run_in_text(scene.n, len(options.snapshots)), args.memory_limit)
+    grid = scene.grid()  # load_scene has checked n against the outline
+    check_memory(run_in_memory(grid.shape, len(options.snapshots)),
+                 _run_in_text(grid, len(options.snapshots)), args.memory_limit)
     scene.phase_labels()  # names a phase without a face pixel before the run
 
     with RunLock(out) as lock:

@@ -132,7 +132,7 @@ def compare_with_steady(result, steady, problem):
         steady_rms, steady_error = float(steady.rms_slope), float(steady.rms_slope_error)
     else:
         estimate = estimate_map_rms_slope(steady.labels, steady.wear_coefficients,
-                                          steady.normal_force, steady.radius, steady.E_star,
+                                          steady.normal_force, steady.outline, steady.E_star,
                                           exponent=steady.exponent, energy=estimator.energy)
         steady_rms, steady_error = estimate.rms_slope, estimate.error
     rms, error = final["rms_slope"], final["rms_slope_error"]

@@ -19,7 +19,7 @@ The solver is the constrained conjugate gradient of Polonsky & Keer
 changes:
 
 - a preconditioner: by default the inverse Fourier symbol of the operator
-  (``~ E* |q| / 2``), aliased to the ``n x n`` grid and restricted to the
+  (``~ E* |q| / 2``), aliased to the ``nx x ny`` grid and restricted to the
   active set (after Vollebregt, J. Comput. Phys. 257 (2014) 333-351,
   doi:10.1016/j.jcp.2013.10.005), with one symbol per level of a
   non-uniform shift, stitched by the shift map.  The iteration count then
@@ -54,7 +54,7 @@ __all__ = ["ContactResult", "solve_contact"]
 logger = logging.getLogger(__name__)
 
 # Pixels entering or leaving the active set up to this count have their
-# displacement change summed directly (one n x n gather each, a few per cent
+# displacement change summed directly (one nx x ny gather each, a few per cent
 # of an FFT pair); more trigger a full FFT recomputation.
 _DIRECT_UPDATE_PIXELS = 8
 # Incremental displacement updates between full recomputations; each adds
@@ -74,15 +74,15 @@ class ContactResult:
 
     Attributes
     ----------
-    pressure : ndarray, shape (n, n), Pa
+    pressure : ndarray, shape (nx, ny), Pa
         Contact pressure, non-negative, zero off the face.
     approach : float, m
         Rigid approach ``d``: ``u = d - h`` where ``p > 0``.
-    displacement : ndarray, shape (n, n), m
+    displacement : ndarray, shape (nx, ny), m
         ``(K + diag(shift)) p`` on the whole grid, consistent with
         ``pressure`` to round-off (updated with each step and recomputed
         by FFT at least every 50 iterations).
-    elastic_displacement : ndarray, shape (n, n), m
+    elastic_displacement : ndarray, shape (nx, ny), m
         ``K p``, the half-space's part of ``displacement`` (the same
         without ``shift * p``), on the whole grid, with the round-off of
         ``K p`` alone.
@@ -180,24 +180,24 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
-        The elastic half-space operator on the ``n x n`` grid.
-    face_mask : ndarray of bool, shape (n, n)
+        The elastic half-space operator on the ``nx x ny`` grid.
+    face_mask : ndarray of bool, shape (nx, ny)
         Pixels of the face, which can carry pressure; at least one.
-    height : ndarray, shape (n, n), m
+    height : ndarray, shape (nx, ny), m
         Height of the face, larger = farther from the counter-body (worn
         depth plus initial shape).  Must be finite on the face; values off
         the face are ignored.  Only differences matter.
     normal_force : float, N
         Total normal force, finite and non-negative.
-    shift : ndarray, shape (n, n), m/Pa, optional
+    shift : ndarray, shape (nx, ny), m/Pa, optional
         Non-negative diagonal added to the operator: ``K + diag(shift)``
         (an implicit Euler wear step uses ``shift = ds * k``).  Default: none.
-    x0 : ndarray, shape (n, n), Pa, optional
+    x0 : ndarray, shape (nx, ny), Pa, optional
         Warm start.  Negative values and values off the face are dropped
         and the rest is scaled to the load.  Default (or an ``x0`` that is
         zero on the face): uniform on a flat face, else a Hertz-like
         pressure on the region a rigid estimate puts in contact.
-    x0_displacement : ndarray, shape (n, n), m, optional
+    x0_displacement : ndarray, shape (nx, ny), m, optional
         ``K x0`` (the half-space's displacement, without the shift), when
         the caller knows it: it saves the first operator product.  Used
         only if ``x0`` is zero off the face and non-negative on it (else
@@ -206,10 +206,10 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         Relative (dimensionless, default 1e-8) and absolute (m, default 0)
         tolerances of the stopping rule below.
     maxiter : int, optional
-        Maximum number of iterations (default ``max(200, 10 n)``).
+        Maximum number of iterations (default ``max(200, 10 max(nx, ny))``).
     preconditioner : {"auto", "fourier", "fourier-padded", "jacobi", "amg", "none"}, optional
         ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
-        ``K + shift`` aliased to the ``n x n`` grid (one unpadded FFT pair
+        ``K + shift`` aliased to the ``nx x ny`` grid (one unpadded FFT pair
         per iteration, about a third of a padded one; ``"fourier-padded"``
         applies it on the padded grid); a non-uniform shift is split into
         levels, one symbol and one FFT pair each, stitched by the shift map

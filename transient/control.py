@@ -37,8 +37,8 @@ MIN_ACCEPT_FACTOR = 0.2
 FAILURE_FACTOR = 0.25
 #: Explicit Euler steps stay below this fraction of their stability limit.
 EXPLICIT_SAFETY = 0.9
-#: First adaptive step, ``INITIAL_STEP_FACTOR sqrt(tol) (h / a) s*``: the fast
-#: scale on which the flat punch's edge relaxes.
+#: First adaptive step, ``INITIAL_STEP_FACTOR sqrt(tol) (h / L) s*``: the fast
+#: scale on which the flat punch's edge relaxes (``L`` the outline's scale).
 INITIAL_STEP_FACTOR = 0.01
 #: A face relief (shape rms) above this many ``f*`` is a divergence.
 DIVERGENCE_RELIEF = 1e6
@@ -65,14 +65,14 @@ class StepController:
         self.s_star = s_star
         self.fixed = options.step is not None
 
-    def first_step(self, h, radius):
-        """Length of the first attempt, m (``h`` the pixel size, ``radius`` a, m)."""
+    def first_step(self, h, scale):
+        """Length of the first attempt, m (``h`` the pixel size, ``scale`` L, a disk's radius)."""
         o = self.options
         if o.step is not None:
             return o.step * self.s_star
         if o.initial_step is not None:
             return o.initial_step * self.s_star
-        return INITIAL_STEP_FACTOR * math.sqrt(o.tol) * h / radius * self.s_star
+        return INITIAL_STEP_FACTOR * math.sqrt(o.tol) * h / scale * self.s_star
 
     def explicit_limit(self, ds, stable_step):
         """Clip an explicit step to ``EXPLICIT_SAFETY`` times its stability limit (m).

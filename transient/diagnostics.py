@@ -27,14 +27,14 @@ def masked_gradient(field, face_mask, h):
 
     Parameters
     ----------
-    field : ndarray, shape (n, n)
-    face_mask : ndarray of bool, shape (n, n)
+    field : ndarray, shape (nx, ny)
+    face_mask : ndarray of bool, shape (nx, ny)
     h : float, m
         Pixel size.
 
     Returns
     -------
-    gx, gy : ndarray, shape (n, n)
+    gx, gy : ndarray, shape (nx, ny)
         Central differences where both neighbours are on the face, one-sided
         where one is, zero where none is and off the face.
     """
@@ -80,9 +80,9 @@ def face_rms_slope(halfspace, face_mask, height, pressure, approach, *, gradient
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
-    face_mask : ndarray of bool, shape (n, n)
-    height : ndarray, shape (n, n), m
-    pressure : ndarray, shape (n, n), Pa
+    face_mask : ndarray of bool, shape (nx, ny)
+    height : ndarray, shape (nx, ny), m
+    pressure : ndarray, shape (nx, ny), Pa
         Contact pressure of ``height``.
     approach : float, m
     gradient : tuple of ndarray, optional
@@ -114,7 +114,7 @@ def wear_rate_spread(problem, pressure):
     Parameters
     ----------
     problem : transient.problem.WearProblem
-    pressure : ndarray, shape (n, n), Pa
+    pressure : ndarray, shape (nx, ny), Pa
 
     Returns
     -------

@@ -1,18 +1,27 @@
 """Initial height fields of the punch face.
 
 Every function returns the height ``h(x)`` of the face at the pixel centres
-of the ``n x n`` grid covering ``[-a, a]^2`` (:mod:`steady.grid`), in
+of the grid of a face outline (:class:`steady.outline.FaceGrid`: ``n``
+pixels along the longer side of its bounding box; for a disk of radius
+``a`` the ``n x n`` grid over ``[-a, a]^2`` of :mod:`steady.grid`), in
 metres, with the convention of :func:`transient.contact.solve_contact`:
 larger = farther from the counter-body (recessed).  Only differences
 matter to the contact problem; the fields below are zero at the first
 point of the ideal (continuum) face to touch.
 
+A face is given as ``(n, outline)``: ``n`` the grid size (or a
+:class:`~steady.outline.FaceGrid`, which carries its outline), ``outline``
+an outline object of :mod:`steady.outline` or a number, the radius (m) of
+a circular face.  ``flat(64, 4e-3)`` is the flat disk of radius 4 mm on
+the 64 x 64 grid, ``flat(96, Rectangle(4e-3, 12e-3))`` the flat tread
+block on its 32 x 96 grid.
+
 Every shape is registered by the kind the scene section ``[initial_face]``
 names (:data:`INITIAL_FACES`, :func:`register_initial_face`), with the
 parameters it takes; :func:`initial_height` builds one by kind.  A kind may
 also give the exact rms slope and rms height of its continuous face over the
-disk (:func:`exact_statistics`), the values the run-in history starts from
-(docs/model.md, "The run-in history").
+outline (:func:`exact_statistics`), the values the run-in history starts
+from (docs/model.md, "The run-in history").
 """
 
 from __future__ import annotations
@@ -24,19 +33,22 @@ import os
 import numpy as np
 import scipy.integrate
 
-from steady.grid import face_mask, pixel_centres
+from steady.outline import Annulus, Circle, Ellipse, FaceGrid, MaskOutline, Rectangle, as_outline
 
 __all__ = [
     "INITIAL_FACES",
     "ExactStatistics",
     "InitialFaceKind",
+    "circumradius",
     "crowned",
     "exact_statistics",
+    "face_grid",
     "flat",
     "from_array",
     "from_file",
     "initial_height",
     "register_initial_face",
+    "support",
     "tilted",
 ]
 
@@ -50,12 +62,15 @@ class InitialFaceKind:
     kind : str
         Its name in ``[initial_face] kind``.
     build : callable
-        ``build(n, radius, **parameters)``, returns the height, shape (n, n), m.
+        ``build(grid, outline, **parameters)``, returns the height on the
+        grid, shape ``grid.shape``, m (``grid`` a
+        :class:`~steady.outline.FaceGrid`, ``outline`` its outline).
     required, optional : tuple of str
         Its parameters (``path`` is a file name; every other one a number).
     statistics : callable or None
-        ``statistics(radius, **parameters)``, the :class:`ExactStatistics` of
-        the continuous face over the disk; None when there is no closed form.
+        ``statistics(outline, **parameters)``, the :class:`ExactStatistics` of
+        the continuous face over the outline, or None when there is no
+        closed form for that outline; None when there is none at all.
     """
 
     kind: str
@@ -67,14 +82,14 @@ class InitialFaceKind:
 
 @dataclasses.dataclass(frozen=True)
 class ExactStatistics:
-    """Rms slope and rms height of a continuous initial face over the disk.
+    """Rms slope and rms height of a continuous initial face over its outline.
 
     Attributes
     ----------
     rms_slope : float
-        Rms of ``|grad h|`` over the disk (dimensionless).
+        Rms of ``|grad h|`` over the face (dimensionless).
     rms_height : float, m
-        Rms of ``h`` about its least-squares plane over the disk.
+        Rms of ``h`` about its least-squares plane over the face.
     """
 
     rms_slope: float
@@ -86,10 +101,12 @@ INITIAL_FACES = {}
 
 
 def register_initial_face(kind, *, required=(), optional=(), statistics=None):
-    """Register ``build(n, radius, **parameters)`` as the initial face ``kind`` (a decorator).
+    """Register ``build(n, outline, **parameters)`` as the initial face ``kind`` (a decorator).
 
-    ``statistics(radius, **parameters)``, if given, returns the face's
-    :class:`ExactStatistics`.
+    ``build`` is called with the :class:`~steady.outline.FaceGrid` and its
+    outline.  ``statistics(outline, **parameters)``, if given, returns the
+    face's :class:`ExactStatistics` (or None for an outline without a
+    closed form).
     """
     def decorate(build):
         INITIAL_FACES[kind] = InitialFaceKind(kind, build, tuple(required), tuple(optional),
@@ -98,22 +115,24 @@ def register_initial_face(kind, *, required=(), optional=(), statistics=None):
     return decorate
 
 
-def exact_statistics(kind, radius, **parameters):
-    """Exact rms slope and rms height over the disk of a registered initial face.
+def exact_statistics(kind, outline, **parameters):
+    """Exact rms slope and rms height over the face of a registered initial face.
 
     Parameters
     ----------
     kind : str
         A key of :data:`INITIAL_FACES`.
-    radius : float, m
+    outline : outline object or float
+        The face (:mod:`steady.outline`); a number is a disk's radius (m).
     **parameters
         The kind's parameters.
 
     Returns
     -------
     ExactStatistics or None
-        None for a kind without a closed form (``"file"``: the run-in then
-        measures its pixel heights, :func:`transient.history.face_statistics`).
+        None for a kind without a closed form (``"file"``; ``"crowned"`` on
+        a face other than a disk): the run-in then measures its pixel
+        heights (:func:`transient.history.face_statistics`).
 
     Examples
     --------
@@ -130,93 +149,206 @@ def exact_statistics(kind, radius, **parameters):
                          f"got {kind!r}") from None
     if spec.statistics is None:
         return None
-    return spec.statistics(float(radius), **parameters)
+    return spec.statistics(as_outline(outline), **parameters)
 
 
-def initial_height(kind, n, radius, **parameters):
+def face_grid(n, outline=None):
+    """The :class:`~steady.outline.FaceGrid` of a grid size and an outline, checked.
+
+    Parameters
+    ----------
+    n : int or FaceGrid
+        Pixels along the longer side of the outline's bounding box (across
+        the diameter of a disk), or the grid itself.
+    outline : outline object or float, optional
+        The face; a number is a disk's radius (m).  Needed with an ``int``
+        ``n``; with a grid, it must be the grid's outline if given.
+
+    Returns
+    -------
+    FaceGrid
+
+    Raises
+    ------
+    ValueError
+        A grid size that is not an integer, a bad outline or radius, or a
+        grid too coarse for the outline (naming ``n`` and the minimum).
+
+    Examples
+    --------
+    >>> face_grid(16, 4e-3).shape
+    (16, 16)
+    """
+    if isinstance(n, FaceGrid):
+        if outline is not None and as_outline(outline) != n.outline:
+            raise ValueError(f"the grid is of the {n.outline.describe()}, not of the "
+                             f"{as_outline(outline).describe()}")
+        return n
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, float, np.number)) \
+            or int(n) != n:
+        raise ValueError(f"grid size n must be an integer, got {n!r}")
+    if outline is None:
+        raise ValueError("an initial face needs the face's outline (or a disk's radius)")
+    return FaceGrid(as_outline(outline), int(n))
+
+
+def initial_height(kind, n, outline=None, **parameters):
     """Initial face height of a registered kind, checked.
 
     Parameters
     ----------
     kind : str
         A key of :data:`INITIAL_FACES`.
-    n : int
-        Pixels across the diameter.
-    radius : float, m
+    n : int or FaceGrid
+        Pixels along the longer side of the face's bounding box (across the
+        diameter of a disk), or the grid (then ``outline`` may be left out).
+    outline : outline object or float
+        The face (:mod:`steady.outline`); a number is a disk's radius (m).
     **parameters
         The kind's parameters.
 
     Returns
     -------
-    ndarray, shape (n, n), m
+    ndarray, shape of the grid (``(n, n)`` for a disk), m
 
     Examples
     --------
     >>> h = initial_height("tilted", 16, 4e-3, angle=1e-3)
     >>> h.shape, float(h.min()) >= 0.0
     ((16, 16), True)
+    >>> from steady.outline import Rectangle
+    >>> initial_height("flat", 48, Rectangle(4e-3, 12e-3)).shape
+    (16, 48)
     """
     try:
         spec = INITIAL_FACES[kind]
     except KeyError:
         raise ValueError(f"initial face kind must be one of {sorted(INITIAL_FACES)}, "
                          f"got {kind!r}") from None
-    h = np.asarray(spec.build(n, radius, **parameters), dtype=float)
-    if h.shape != (n, n):
-        raise ValueError(f"initial face has shape {h.shape}, expected {(n, n)}")
+    grid = face_grid(n, outline)
+    h = np.asarray(spec.build(grid, grid.outline, **parameters), dtype=float)
+    if h.shape != grid.shape:
+        raise ValueError(f"initial face has shape {h.shape}, expected {grid.shape}")
     return h
 
 
-def _check_grid(n, radius):
-    if isinstance(n, bool) or int(n) != n or n < 2:
-        raise ValueError(f"grid size n must be an integer >= 2, got {n!r}")
-    if not (np.isfinite(radius) and radius > 0):
-        raise ValueError(f"radius must be positive and finite, got {radius!r} m")
-    return int(n), float(radius)
+def _coordinates(grid):
+    return np.meshgrid(grid.x, grid.y, indexing="ij")
 
 
-def _coordinates(n, radius):
-    x = pixel_centres(n, radius)
-    return np.meshgrid(x, x, indexing="ij")
+def support(outline, direction):
+    """``max (x, y) . direction`` over the face, m: how far it reaches along a unit vector.
+
+    Exact for the disk, the annulus, the rectangle and the ellipse, and
+    for a mask (its pixels' corners); otherwise the largest value over the
+    pixel corners of a fine grid's face.
+
+    Parameters
+    ----------
+    outline : outline object
+    direction : (float, float)
+        A unit vector.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from steady.outline import Rectangle
+    >>> print(f"{support(Rectangle(4e-3, 12e-3), (0.6, 0.8)) * 1e3:.3f} mm")
+    6.000 mm
+    """
+    ux, uy = (float(v) for v in direction)
+    if isinstance(outline, Circle):
+        return outline.radius
+    if isinstance(outline, Annulus):
+        return outline.outer_radius
+    lx, ly = outline.half_extent
+    if isinstance(outline, Rectangle):
+        return lx * abs(ux) + ly * abs(uy)
+    if isinstance(outline, Ellipse):
+        return math.hypot(lx * ux, ly * uy)
+    if isinstance(outline, MaskOutline):
+        i, j = np.nonzero(outline.mask)
+        ps = outline.pixel_size
+        x0, y0 = -lx + i * ps, -ly + j * ps
+        return float(np.max(np.maximum(x0 * ux, (x0 + ps) * ux)
+                            + np.maximum(y0 * uy, (y0 + ps) * uy)))
+    grid = FaceGrid(outline, max(512, outline.min_grid()))
+    i, j = np.nonzero(grid.mask)
+    half = 0.5 * grid.h
+    return float(np.max(grid.x[i] * ux + half * abs(ux) + grid.y[j] * uy + half * abs(uy)))
 
 
-def _flat_statistics(radius):
+def circumradius(outline):
+    """Largest distance of the face from its centre, m (the radius of a disk).
+
+    Exact for the disk, the annulus, the rectangle and the ellipse, and
+    for a mask (its pixels' corners); otherwise over the pixel corners of a
+    fine grid's face.
+    """
+    if isinstance(outline, Circle):
+        return outline.radius
+    if isinstance(outline, Annulus):
+        return outline.outer_radius
+    lx, ly = outline.half_extent
+    if isinstance(outline, Rectangle):
+        return math.hypot(lx, ly)
+    if isinstance(outline, Ellipse):
+        return max(lx, ly)
+    if isinstance(outline, MaskOutline):
+        i, j = np.nonzero(outline.mask)
+        ps = outline.pixel_size
+        x0, y0 = -lx + i * ps, -ly + j * ps
+        return float(np.sqrt(np.max(np.maximum(x0**2, (x0 + ps) ** 2)
+                                    + np.maximum(y0**2, (y0 + ps) ** 2))))
+    grid = FaceGrid(outline, max(512, outline.min_grid()))
+    i, j = np.nonzero(grid.mask)
+    half = 0.5 * grid.h
+    return float(np.sqrt(np.max((np.abs(grid.x[i]) + half) ** 2
+                                + (np.abs(grid.y[j]) + half) ** 2)))
+
+
+def _flat_statistics(outline):
     return ExactStatistics(rms_slope=0.0, rms_height=0.0)
 
 
 @register_initial_face("flat", statistics=_flat_statistics)
-def flat(n, radius):
+def flat(n, outline=None):
     """Flat face.
 
     Parameters
     ----------
-    n : int
-        Pixels across the diameter.
-    radius : float, m
-        Punch radius ``a``.
+    n : int or FaceGrid
+        Pixels along the longer side of the face's bounding box (across the
+        diameter of a disk), or the grid.
+    outline : outline object or float
+        The face; a number is the punch radius ``a`` (m) of a disk.
 
     Returns
     -------
-    ndarray, shape (n, n), m
+    ndarray, shape of the grid (``(n, n)`` for a disk), m
         Zeros.
     """
-    n, radius = _check_grid(n, radius)
-    return np.zeros((n, n))
+    grid = face_grid(n, outline)
+    return np.zeros(grid.shape)
 
 
-def _tilted_statistics(radius, angle, azimuth=0.0):
+def _tilted_statistics(outline, angle, azimuth=0.0):
     return ExactStatistics(rms_slope=float(np.tan(angle)), rms_height=0.0)
 
 
 @register_initial_face("tilted", required=("angle",), optional=("azimuth",),
                        statistics=_tilted_statistics)
-def tilted(n, radius, angle, azimuth=0.0):
+def tilted(n, outline=None, angle=None, azimuth=0.0):
     """Flat face tilted by ``angle`` so that it recedes towards ``azimuth``.
 
     Parameters
     ----------
-    n : int
-    radius : float, m
+    n : int or FaceGrid
+    outline : outline object or float
+        The face; a number is the punch radius ``a`` (m) of a disk.
     angle : float, rad
         Tilt, ``0 <= angle < pi/2``.
     azimuth : float, rad, optional
@@ -224,25 +356,27 @@ def tilted(n, radius, angle, azimuth=0.0):
 
     Returns
     -------
-    ndarray, shape (n, n), m
-        ``tan(angle) * (x cos(azimuth) + y sin(azimuth) + a)``: zero at the
-        rim point opposite ``azimuth``, ``2 a tan(angle)`` at the other
-        end.  Under load a rigid flat punch tilted this way (with no
-        rotation allowed) stays in full contact while
-        ``tan(angle) < F / (4 a^2 E*)``; above that the recessed side lifts
-        off.
+    ndarray, shape of the grid, m
+        ``tan(angle) * (x cos(azimuth) + y sin(azimuth) + d)``, ``d`` how
+        far the face reaches opposite the azimuth (:func:`support`; ``a``
+        for a disk): zero at the face's point that leads, largest at the
+        other end (``2 a tan(angle)`` for a disk).  Under load a rigid flat
+        disk tilted this way (with no rotation allowed) stays in full
+        contact while ``tan(angle) < F / (4 a^2 E*)``; above that the
+        recessed side lifts off.
     """
-    n, radius = _check_grid(n, radius)
-    if not (np.isfinite(angle) and 0 <= angle < np.pi / 2):
+    grid = face_grid(n, outline)
+    if angle is None or not (np.isfinite(angle) and 0 <= angle < np.pi / 2):
         raise ValueError(f"angle must lie in [0, pi/2), got {angle!r} rad")
     if not np.isfinite(azimuth):
         raise ValueError(f"azimuth must be finite, got {azimuth!r} rad")
-    X, Y = _coordinates(n, radius)
-    return np.tan(angle) * (X * np.cos(azimuth) + Y * np.sin(azimuth) + radius)
+    c, s = np.cos(azimuth), np.sin(azimuth)
+    X, Y = _coordinates(grid)
+    return np.tan(angle) * (X * c + Y * s + support(grid.outline, (-c, -s)))
 
 
-def _crowned_statistics(radius, sphere_radius):
-    """Sphere cap ``R - sqrt(R^2 - r^2)`` over the disk ``r < a``.
+def _crowned_statistics(outline, sphere_radius):
+    """Sphere cap ``R - sqrt(R^2 - r^2)`` over the disk ``r < a``; None for other outlines.
 
     Mean-square slope ``(2/a^2) int_0^a r^3 / (R^2 - r^2) dr
     = (R/a)^2 (-ln(1 - x) - x)``, ``x = (a/R)^2`` (infinite for ``R = a``);
@@ -250,7 +384,9 @@ def _crowned_statistics(radius, sphere_radius):
     adaptive quadrature of the cap, written ``r^2 / (R + sqrt(R^2 - r^2))``
     to avoid cancellation.
     """
-    a, big = float(radius), float(sphere_radius)
+    if not isinstance(outline, Circle):
+        return None
+    a, big = outline.radius, float(sphere_radius)
     x = (a / big) ** 2
     mean_square = (-math.log1p(-x) - x) / x if x < 1 else math.inf
 
@@ -267,86 +403,97 @@ def _crowned_statistics(radius, sphere_radius):
 
 
 @register_initial_face("crowned", required=("sphere_radius",), statistics=_crowned_statistics)
-def crowned(n, radius, sphere_radius):
+def crowned(n, outline=None, sphere_radius=None):
     """Spherical cap: the face crowned to a sphere of radius ``sphere_radius``.
 
     Parameters
     ----------
-    n : int
-    radius : float, m
+    n : int or FaceGrid
+    outline : outline object or float
+        The face; a number is the punch radius ``a`` (m) of a disk.
     sphere_radius : float, m
-        Radius of the sphere, at least the punch radius.
+        Radius of the sphere, centred over the face's centre; at least the
+        punch radius (for other outlines, the largest distance of the face
+        from its centre, :func:`circumradius`).
 
     Returns
     -------
-    ndarray, shape (n, n), m
+    ndarray, shape of the grid, m
         ``R - sqrt(R^2 - r^2)`` (exact sphere; Hertz theory uses its
         paraboloid ``r^2 / (2 R)``, which differs by ``r^4 / (8 R^3)``).
-        Off the disk the paraboloid continues it.
+        Off the sphere's footprint (``r >= R``, off the face) the
+        paraboloid continues it.
     """
-    n, radius = _check_grid(n, radius)
-    if not (np.isfinite(sphere_radius) and sphere_radius >= radius):
-        raise ValueError(
-            f"sphere_radius must be finite and at least the punch radius {radius!r} m, "
-            f"got {sphere_radius!r} m")
-    X, Y = _coordinates(n, radius)
+    grid = face_grid(n, outline)
+    outline = grid.outline
+    reach = circumradius(outline)
+    if sphere_radius is None or not (np.isfinite(sphere_radius) and sphere_radius >= reach):
+        what = (f"the punch radius {outline.radius!r} m" if isinstance(outline, Circle) else
+                f"the largest distance {reach:.6g} m of the {outline.describe()} from its "
+                f"centre")
+        raise ValueError(f"sphere_radius must be finite and at least {what}, got "
+                         f"{sphere_radius!r} m")
+    X, Y = _coordinates(grid)
     r2 = X**2 + Y**2
     inside = r2 < sphere_radius**2
     cap = sphere_radius - np.sqrt(np.where(inside, sphere_radius**2 - r2, 0.0))
     return np.where(inside, cap, r2 / (2 * sphere_radius))
 
 
-def from_array(values, n):
+def from_array(values, n, outline=None):
     """Height field given pixel by pixel.
 
     Parameters
     ----------
-    values : array_like, shape (n, n), m
+    values : array_like, shape of the grid, m
         Heights at the pixel centres; finite on the face (values off the
         face are kept as given and ignored by the contact solver).
-    n : int
-        Expected grid size.
+    n : int or FaceGrid
+        Expected grid size (or the grid).
+    outline : outline object or float, optional
+        The face (default: a disk, ``n x n`` pixels).
 
     Returns
     -------
-    ndarray, shape (n, n), m
+    ndarray, shape of the grid (``(n, n)`` for a disk), m
         A float copy.
     """
-    if isinstance(n, bool) or int(n) != n or n < 2:
-        raise ValueError(f"grid size n must be an integer >= 2, got {n!r}")
-    n = int(n)
+    grid = face_grid(n, 1.0 if outline is None and not isinstance(n, FaceGrid) else outline)
     values = np.array(values, dtype=float)
-    if values.shape != (n, n):
-        raise ValueError(f"height field must have shape {(n, n)}, got {values.shape}")
-    bad = ~np.isfinite(values[face_mask(n)])
+    if values.shape != grid.shape:
+        raise ValueError(f"height field must have shape {grid.shape}, got {values.shape}")
+    bad = ~np.isfinite(values[grid.mask])
     if bad.any():
         raise ValueError(f"height field must be finite on the face, got {int(bad.sum())} "
                          "non-finite values")
     return values
 
 
-def from_file(path, n):
+def from_file(path, n, outline=None):
     """Height field (m) read from a ``.npy`` file; see :func:`from_array`.
 
     Parameters
     ----------
     path : str or os.PathLike
-        A ``.npy`` file holding an ``(n, n)`` float array, metres.
-    n : int
-        Expected grid size.
+        A ``.npy`` file holding a float array of the grid's shape
+        (``(n, n)`` for a disk), metres.
+    n : int or FaceGrid
+        Expected grid size (or the grid).
+    outline : outline object or float, optional
+        The face (default: a disk).
 
     Returns
     -------
-    ndarray, shape (n, n), m
+    ndarray, shape of the grid, m
     """
     path = os.fspath(path)
     if not path.endswith(".npy"):
         raise ValueError(f"height file must be a .npy file, got {path!r}")
     values = np.load(path, allow_pickle=False)
-    return from_array(values, n)
+    return from_array(values, n, outline)
 
 
 @register_initial_face("file", required=("path",))
-def _file(n, radius, path):
+def _file(n, outline, path):
     """Height field of a ``.npy`` file (the scene's ``kind = "file"``)."""
-    return from_file(path, n)
+    return from_file(path, n, outline)

@@ -16,16 +16,28 @@ Layout (root group)::
                   fast_distance (m), pixel_mean_pressure (Pa),
                   reference_slope, previous_step (m, NaN if none),
                   next_step (m, NaN if none); the unit of attribute ``x``
-                  in ``x_units``; the caller's input attributes (scene...)
-    worn_depth    (n, n) m, NaN off the face
-    pressure      (n, n) Pa
+                  in ``x_units``; the caller's input attributes (scene...;
+                  an attribute given as None is left out)
+                  with the face's outline known (every run of this version):
+                  reference_slope_error, reference_slope_source (where
+                  grad_f0 comes from, in words), scale (m, the outline's
+                  L), pixel_size (m) and, for a disk only, radius (m)
+    worn_depth    (nx, ny) m, NaN off the face
+    pressure      (nx, ny) Pa
     <arrays>      the caller's input datasets (e.g. ``phase``)
     state/        height, initial_height, previous_height, previous_rate
     history/      one dataset per :data:`transient.runin.HISTORY_UNITS` name
-    snapshots/    distance (k,) m, height (k, n, n) m, pressure (k, n, n) Pa
+    snapshots/    distance (k,) m, height (k, nx, ny) m, pressure (k, nx, ny) Pa
     comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
+    outline/      the face's outline, as :func:`steady.output.write_outline`
+                  writes it (kind, area, its lengths; a mask's ``mask``)
 
-Every dataset carries a ``units`` attribute.
+Every dataset carries a ``units`` attribute.  Arrays are ``(nx, ny)``, the
+grid of the outline (:class:`steady.outline.FaceGrid`; ``n x n`` for a disk).
+Files written before the face outlines (disks only) lack the group
+``outline`` and the reference slope's error and source: :func:`read_run`
+reads their outline as the disk of their ``radius`` attribute (None without
+it) and the source as eq. 12's.
 
 Checksums
 ---------
@@ -63,7 +75,8 @@ import types
 import h5py
 import numpy as np
 
-from steady.output import atomic_h5
+from steady.outline import Circle
+from steady.output import atomic_h5, read_outline, write_outline
 
 from .runin import HISTORY_UNITS, RunResult
 
@@ -98,6 +111,9 @@ _SCALARS = {
     "fast_distance": "m", "pixel_mean_pressure": "Pa", "reference_slope": "1",
 }
 _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
+# Written with the outline; files of disks written before outlines lack them.
+_REFERENCE_UNITS = {"reference_slope_error": "1", "scale": "m", "pixel_size": "m"}
+_DISK_SOURCE = "disk: 4 pbar / (pi E*) (eq. 12)"
 _INTEGERS = ("steps", "rejected", "failures", "solves", "iterations")
 _STRINGS = ("status", "message", "scheme")
 _STATE_UNITS = {"height": "m", "initial_height": "m", "previous_height": "m",
@@ -212,7 +228,8 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     path : str or path-like
     result : transient.runin.RunResult
     attrs : mapping, optional
-        Extra root attributes (scene text, parameters).
+        Extra root attributes (scene text, parameters); those whose value is
+        None are left out.
     arrays : mapping of str to ndarray, optional
         Extra root datasets (e.g. ``phase``).
     comparison : transient.comparison.SteadyComparison, optional
@@ -236,8 +253,11 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
             value = getattr(result, name)
             f.attrs[name] = np.nan if value is None else value
             f.attrs[f"{name}_units"] = unit
+        if result.outline is not None:
+            _write_outline(f, result)
         for name, value in (attrs or {}).items():
-            f.attrs[name] = value
+            if value is not None:
+                f.attrs[name] = value
         _put(f, "worn_depth", result.worn_depth, "m")
         _put(f, "pressure", result.pressure, "Pa")
         for name, value in (arrays or {}).items():
@@ -264,6 +284,59 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
                 else:
                     g.attrs[fld.name] = value
         _seal_groups(f)
+
+
+def _write_outline(f, result):
+    """The outline group and the reference slope's attributes; ``radius`` for a disk."""
+    outline = result.outline
+    values = {"reference_slope_error": result.reference_slope_error,
+              "scale": outline.scale, "pixel_size": result.pixel_size}
+    for name, unit in _REFERENCE_UNITS.items():
+        f.attrs[name] = values[name]
+        f.attrs[f"{name}_units"] = unit
+    f.attrs["reference_slope_source"] = result.reference_slope_source
+    if isinstance(outline, Circle):
+        f.attrs["radius"] = outline.radius
+        f.attrs["radius_units"] = "m"
+    group = f.create_group("outline")
+    write_outline(group, outline)
+    for ds in group.values():  # a mask's pixels: checksummed like every dataset
+        ds.attrs[_CHECKSUM] = _dataset_digest(ds[()], dict(ds.attrs))
+
+
+def _read_outline(path, datasets, groups, root):
+    """The outline of a run file: its group, else the disk of ``radius``, else None."""
+    if "outline" not in groups:
+        radius = _plain(root.get("radius"))
+        if isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0:
+            return Circle(float(radius))
+        return None
+    # read_outline reads an h5py group: give it a view of what was loaded.
+    mask = datasets.get("outline/mask")
+    try:
+        return read_outline(_LoadedGroup(groups["outline"],
+                                         {} if mask is None else {"mask": mask[0]}))
+    except (KeyError, TypeError, ValueError) as err:
+        raise DamagedRunFileError(path, f"its outline cannot be read ({err})") from None
+
+
+class _LoadedGroup:
+    """A loaded group's attributes and datasets, as :func:`steady.output.read_outline` reads."""
+
+    def __init__(self, attrs, datasets):
+        self.attrs = attrs
+        self._datasets = datasets
+
+    def __getitem__(self, name):
+        return _LoadedDataset(self._datasets[name])
+
+
+class _LoadedDataset:
+    def __init__(self, value):
+        self._value = value
+
+    def __getitem__(self, key):
+        return self._value[key]
 
 
 # -- reading ----------------------------------------------------------------
@@ -358,11 +431,12 @@ def read_run(path):
             raise DamagedRunFileError(path, f"cannot be read ({str(err)[:200]})") from None
     if _CHECKSUM in groups[""]:
         _verify(path, datasets, groups)
-    return _result(path, datasets, groups[""])
+    return _result(path, datasets, groups)
 
 
-def _result(path, datasets, root):
+def _result(path, datasets, groups):
     """The :class:`RunResult` of a run file's contents."""
+    root = groups[""]
     needed = ["pressure", "history/distance", "snapshots/distance", "snapshots/height",
               "snapshots/pressure"] + [f"state/{name}" for name in _REQUIRED_STATE]
     missing = [name for name in needed if name not in datasets]
@@ -385,12 +459,33 @@ def _result(path, datasets, root):
              for name in _STATE_UNITS}
     history = {name[len("history/"):]: value for name, (value, _) in datasets.items()
                if name.startswith("history/")}
+    outline = _read_outline(path, datasets, groups, root)
+    shape = np.shape(datasets["pressure"][0])
+    if outline is not None:
+        try:
+            expected = outline.grid_shape(max(shape)) if len(shape) == 2 else None
+        except ValueError:
+            expected = None
+        if expected != shape:
+            raise DamagedRunFileError(path, f"its pressure of shape {shape} is not on a grid of "
+                                            f"its {outline.describe()}")
+    try:
+        ref_error = float(attrs.get("reference_slope_error", 0.0))
+    except (TypeError, ValueError) as err:
+        raise DamagedRunFileError(path, f"a root attribute is malformed ({err})") from None
+    source = attrs.get("reference_slope_source")
+    if isinstance(source, bytes):
+        source = source.decode("utf-8", "replace")
+    if source is None:
+        source = _DISK_SOURCE if isinstance(outline, Circle) else ""
     result = RunResult(
         **kw, **state, pressure=datasets["pressure"][0],
         history=types.MappingProxyType(history),
         snapshot_distance=datasets["snapshots/distance"][0],
         snapshot_height=datasets["snapshots/height"][0],
-        snapshot_pressure=datasets["snapshots/pressure"][0])
+        snapshot_pressure=datasets["snapshots/pressure"][0],
+        outline=outline, reference_slope_error=ref_error,
+        reference_slope_source=str(source))
     arrays = {name: value for name, (value, _) in datasets.items()
               if "/" not in name and name not in ("worn_depth", "pressure")}
     return result, attrs, arrays

@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 
 from .output import read_run
 
-__all__ = ["draw_rms_slope_history", "plot_run", "run_figure"]
+__all__ = ["draw_rms_slope_history", "extent", "plot_run", "run_figure"]
 
 
 def _error_band(history, reference):
@@ -116,7 +116,8 @@ def run_figure(result, attrs, comparison=None):
     ----------
     result : transient.runin.RunResult
     attrs : mapping
-        Root attributes of the run file (``radius``, ``steady_rms_slope``).
+        Root attributes of the run file (``steady_rms_slope``; ``radius``
+        when the result carries no outline).
     comparison : mapping, optional
         The run file's ``comparison`` attributes
         (:class:`transient.comparison.SteadyComparison`): the steady face's
@@ -129,7 +130,8 @@ def run_figure(result, attrs, comparison=None):
         plain pixel value faint, the steady value as the asymptote), the rms
         height, and the convergence measures against the sliding distance;
         bottom: final face (in ``f*``) and pressure (in the mean pressure),
-        axes in mm.
+        axes in mm (in pixels when the run's outline is unknown); a face
+        longer along y than along x is drawn lying, y horizontal.
     """
     comparison = comparison or {}
     h = result.history
@@ -154,15 +156,18 @@ def run_figure(result, attrs, comparison=None):
                        fontsize=10)
     s = h["distance"] / result.run_in_distance
     pos = (s > 0) & (s < 1e6)
+    outline = _outline(result, attrs)
+    scale = np.nan if outline is None else outline.scale
+    length = "a" if outline is None or outline.kind == "circle" else "L"
     if "normalised_rms_height" in h:
         ax_height.semilogx(s[pos], h["normalised_rms_height"][pos], "-", color="C2",
                            label="worn face")
         if "steady_rms_height" in comparison:
-            ax_height.axhline(comparison["steady_rms_height"] / (g0 * float(
-                attrs.get("radius", np.nan))), color="k", ls="--", lw=0.8, label="steady face")
+            ax_height.axhline(comparison["steady_rms_height"] / (g0 * scale), color="k",
+                              ls="--", lw=0.8, label="steady face")
         ax_height.legend(fontsize=8, loc="lower right")
     ax_height.set_xlabel("sliding distance / s*")
-    ax_height.set_ylabel("rms height / (grad_f0 a), best plane removed")
+    ax_height.set_ylabel(f"rms height / (grad_f0 {length}), best plane removed")
     a = ax_conv
     a.loglog(s[pos], np.maximum(h["spread"][pos], 1e-17), ".-", ms=2, label="wear-rate spread")
     a.loglog(s[pos], np.maximum(h["shape_rate"][pos], 1e-17), ".-", ms=2,
@@ -170,23 +175,74 @@ def run_figure(result, attrs, comparison=None):
     a.set_xlabel("sliding distance / s*")
     a.legend(fontsize=8)
     a.set_title(f"status: {result.status}", fontsize=10)
-    n = result.height.shape[0]
-    radius = float(attrs.get("radius", 1.0))
-    ext = [-radius * 1e3, radius * 1e3, -radius * 1e3, radius * 1e3]
+    nx, ny = result.height.shape
+    ext, unit = extent(result.height.shape, outline)
+    # Arrays are indexed [x, y]; imshow wants [row, column]: x along the
+    # horizontal axis, unless the face is taller than wide (ny > nx), which
+    # is drawn lying down, its long side y horizontal, to fill the panel.
+    lying = ny > nx
+    if lying:
+        ext = ext[2:] + ext[:2]
+
+    def show(ax, field):
+        return ax.imshow(field if lying else field.T, origin="lower", extent=ext)
+
+    # A wide image gets a colour bar of its own height (the default spans the axes).
+    ratio = (ext[3] - ext[2]) / (ext[1] - ext[0])
+    bar = {"fraction": 0.046 * ratio, "pad": 0.04} if ratio < 0.9 else {}
+
     face = result.face - np.nanmin(result.face)
-    # Arrays are indexed [x, y]; imshow wants [row = y, column = x].
-    im = ax_face.imshow((face / result.depth_scale).T, origin="lower", extent=ext)
-    fig.colorbar(im, ax=ax_face, label="face height / f*")
-    ax_face.set_title(f"final face (n = {n})", fontsize=10)
+    im = show(ax_face, face / result.depth_scale)
+    fig.colorbar(im, ax=ax_face, label="face height / f*", **bar)
+    grid = f"n = {nx}" if nx == ny else f"n = {max(nx, ny)}, {nx} x {ny} pixels"
+    described = "" if outline is None else f"{outline.describe()}, "
+    ax_face.set_title(f"final face ({described}{grid})", fontsize=10)
     pr = np.where(result.face_mask, result.pressure / result.pixel_mean_pressure, np.nan)
-    im = ax_pressure.imshow(pr.T, origin="lower", extent=ext)
-    fig.colorbar(im, ax=ax_pressure, label="pressure / pbar")
+    im = show(ax_pressure, pr)
+    fig.colorbar(im, ax=ax_pressure, label="pressure / pbar", **bar)
     ax_pressure.set_title("final pressure", fontsize=10)
     for a in (ax_face, ax_pressure):
-        a.set_xlabel("x (mm)")
-        a.set_ylabel("y (mm)")
+        a.set_xlabel(f"{'y' if lying else 'x'} ({unit})")
+        a.set_ylabel(f"{'x' if lying else 'y'} ({unit})")
     fig.tight_layout()
     return fig
+
+
+def _outline(result, attrs):
+    """The run's outline: the result's, else the disk of the file's ``radius``, else None."""
+    if result.outline is not None:
+        return result.outline
+    radius = attrs.get("radius")
+    if isinstance(radius, (int, float, np.number)) and np.isfinite(radius) and radius > 0:
+        from steady.outline import Circle
+
+        return Circle(float(radius))
+    return None
+
+
+def extent(shape, outline):
+    """``imshow`` extent of a grid and its unit: the bounding box in mm, else pixels.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(nx, ny)`` of the grid.
+    outline : outline object or None
+        The grid's outline (:mod:`steady.outline`), which sets the pixel
+        size ``h = 2 L / n`` (``n`` the longer side); None: pixel units.
+
+    Returns
+    -------
+    extent : list of float
+        ``[x0, x1, y0, y1]``: the grid's box centred on the origin.
+    unit : str
+        ``"mm"`` or ``"pixels"``.
+    """
+    nx, ny = shape
+    if outline is None:
+        return [-0.5 * nx, 0.5 * nx, -0.5 * ny, 0.5 * ny], "pixels"
+    h_mm = 2e3 * outline.scale / max(nx, ny)
+    return [-0.5 * nx * h_mm, 0.5 * nx * h_mm, -0.5 * ny * h_mm, 0.5 * ny * h_mm], "mm"
 
 
 def plot_run(run_path, png_path):

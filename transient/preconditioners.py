@@ -11,7 +11,7 @@ needs.
 
 - :class:`FourierPreconditioner`: the inverse symbol of the circulant
   embedding of ``K + s`` (``~ E* |q| / 2`` at low wavenumber), on the
-  padded ``2n x 2n`` grid or aliased to the ``n x n`` grid (cheaper); for
+  padded ``2nx x 2ny`` grid or aliased to the ``nx x ny`` grid (cheaper); for
   a non-uniform shift one symbol per level of the shift, stitched by the
   shift map (:func:`shift_levels`).
 - :class:`JacobiPreconditioner`: ``1 / diag(A)``.  Free; exact in the
@@ -73,7 +73,8 @@ def register_preconditioner(name):
     """Register a preconditioner factory under ``name`` (a decorator).
 
     The factory is called as ``factory(halfspace, face_mask, shift)`` with
-    ``shift`` an ``(n, n)`` array in m/Pa or None, and returns a callable
+    ``shift`` an array of the grid's shape ``(nx, ny)`` in m/Pa or None, and
+    returns a callable
     ``z = precondition(residual, active)``.
     """
     def decorate(factory):
@@ -104,7 +105,7 @@ class JacobiPreconditioner:
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
-    shift : ndarray, shape (n, n), m/Pa, or None
+    shift : ndarray, shape (nx, ny), m/Pa, or None
     """
 
     def __init__(self, halfspace, shift=None):
@@ -118,9 +119,9 @@ class JacobiPreconditioner:
 class FourierPreconditioner:
     """Inverse symbol of the influence operator, shift-aware.
 
-    ``padded=True``: the inverse of the ``2n x 2n`` circulant embedding
+    ``padded=True``: the inverse of the ``2nx x 2ny`` circulant embedding
     ``C`` of ``K`` (one padded FFT pair per level and application).
-    ``padded=False`` (default): the inverse of its ``n``-periodic
+    ``padded=False`` (default): the inverse of its ``(nx, ny)``-periodic
     aliasing, whose symbol is ``C``'s at the even wavenumbers (so it is
     positive too); one unpadded FFT pair per level, about a third of the
     cost, for a few more iterations (docs/benchmarks.md).
@@ -144,11 +145,11 @@ class FourierPreconditioner:
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
-    shift : ndarray, shape (n, n), m/Pa, or None
-    face_mask : ndarray of bool, shape (n, n), optional
+    shift : ndarray, shape (nx, ny), m/Pa, or None
+    face_mask : ndarray of bool, shape (nx, ny), optional
         Pixels over which the shift's levels are taken (default: all).
     padded : bool, optional
-        Apply on the zero-padded ``2n x 2n`` grid (default False).
+        Apply on the zero-padded ``2nx x 2ny`` grid (default False).
     max_levels : int, optional
         Most levels of a non-uniform shift (default 4).
     """
@@ -176,8 +177,7 @@ class FourierPreconditioner:
         hs = self.halfspace
         if self.padded:
             return hs.inverse(spectrum, overwrite=True)
-        return scipy.fft.irfft2(spectrum, s=(hs.n, hs.n), workers=hs.workers,
-                                overwrite_x=True)
+        return scipy.fft.irfft2(spectrum, s=hs.shape, workers=hs.workers, overwrite_x=True)
 
     def __call__(self, residual, active):
         """Apply to a residual (m), zero off the active set; returns Pa."""
@@ -207,8 +207,8 @@ def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
 
     Parameters
     ----------
-    shift : ndarray, shape (n, n), m/Pa, or None
-    face_mask : ndarray of bool, shape (n, n), or None
+    shift : ndarray, shape (nx, ny), m/Pa, or None
+    face_mask : ndarray of bool, shape (nx, ny), or None
         Pixels whose shift counts (default: all).
     scale : float, m/Pa
         Smallest eigenvalue scale of the operator (the symbol's minimum):
@@ -220,7 +220,7 @@ def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
     -------
     levels : list of float, m/Pa
         ``sigma_j``, increasing; one value for a uniform shift.
-    weights : list of ndarray, shape (n, n), or None
+    weights : list of ndarray, shape (nx, ny), or None
         ``phi_j``, non-negative, summing to one on every pixel; None for a
         uniform shift.
     """
@@ -257,8 +257,8 @@ class AMGPreconditioner:
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
-    face_mask : ndarray of bool, shape (n, n)
-    shift : ndarray, shape (n, n), m/Pa, or None
+    face_mask : ndarray of bool, shape (nx, ny)
+    shift : ndarray, shape (nx, ny), m/Pa, or None
     radius : int, optional
         Truncation radius of the kernel, pixels (default 2).
     """
@@ -270,10 +270,10 @@ class AMGPreconditioner:
             raise ValueError("the 'amg' preconditioner needs pyamg: install the optional "
                              "extra with pip install 'runin[amg]'") from None
 
-        n = halfspace.n
+        nx, ny = halfspace.shape
         radius = int(radius)
         quadrant = halfspace.influence_quadrant[: radius + 1, : radius + 1]
-        index = -np.ones((n, n), dtype=np.int64)
+        index = -np.ones((nx, ny), dtype=np.int64)
         ii, jj = np.nonzero(face_mask)
         index[ii, jj] = np.arange(ii.size)
         rows, cols, vals = [], [], []
@@ -282,7 +282,7 @@ class AMGPreconditioner:
                 if di * di + dj * dj > radius * radius:
                     continue
                 i2, j2 = ii + di, jj + dj
-                ok = (i2 >= 0) & (i2 < n) & (j2 >= 0) & (j2 < n)
+                ok = (i2 >= 0) & (i2 < nx) & (j2 >= 0) & (j2 < ny)
                 ok[ok] &= face_mask[i2[ok], j2[ok]]
                 rows.append(index[ii[ok], jj[ok]])
                 cols.append(index[i2[ok], j2[ok]])
@@ -300,7 +300,7 @@ class AMGPreconditioner:
         self._solver = pyamg.smoothed_aggregation_solver(matrix / self._scale,
                                                          symmetry="symmetric")
         self._index = (ii, jj)
-        self._shape = (n, n)
+        self._shape = (nx, ny)
         logger.debug("AMG hierarchy: %d levels for %d face pixels",
                      len(self._solver.levels), ii.size)
 

@@ -16,8 +16,9 @@ import dataclasses
 
 import numpy as np
 
-from steady.grid import pixel_size
 from steady.halfspace import HalfSpace
+from steady.normalisation import reference_slope
+from steady.outline import Circle, FaceGrid, as_outline
 from steady.phases import validate_labels
 from steady.pressures import phase_pressures
 from steady.solution import solve
@@ -46,8 +47,10 @@ class WearProblem:
     Parameters
     ----------
     halfspace : steady.halfspace.HalfSpace
-        Elastic half-space operator of the grid (n pixels, pixel size h).
-    labels : ndarray of int, shape (n, n)
+        Elastic half-space operator of the outline's grid
+        (:class:`steady.outline.FaceGrid`: shape ``(nx, ny)``, ``n`` pixels
+        along the longer side, pixel size ``h = 2 L / n``).
+    labels : ndarray of int, shape (nx, ny)
         Phase index ``0..P-1`` of each face pixel, -1 off the face; every
         phase present on the face.
     wear_coefficients : array_like, shape (P,), 1/Pa
@@ -55,8 +58,10 @@ class WearProblem:
         ``m != 1``).
     normal_force : float, N
         Prescribed normal force ``F_N``.
-    radius : float, m
-        Punch radius ``a`` (sets the natural scales).
+    outline : outline object or float
+        The face's outline (:mod:`steady.outline`); a number is the radius
+        ``a`` (m) of a circular face.  Its scale ``L`` (``a`` for a disk)
+        sets the natural scales, its homogeneous face the reference slope.
     exponent : float, optional
         Wear exponent ``m`` (default 1, Archard).
     contact_rtol : float, optional
@@ -74,9 +79,22 @@ class WearProblem:
 
     Attributes
     ----------
-    face_mask : ndarray of bool, shape (n, n)
+    outline : outline object
+        The face's outline.
+    grid : steady.outline.FaceGrid
+        Its grid: ``shape``, ``n``, ``h``, pixel centres.
+    shape : (int, int)
+        ``(nx, ny)``.
+    n : int
+        Pixels along the longer side of the grid (across the diameter of a
+        disk).
+    scale : float, m
+        ``L``, the outline's length scale (the radius of a disk).
+    radius : float or None, m
+        The radius ``a`` of a circular face; None for other outlines.
+    face_mask : ndarray of bool, shape (nx, ny)
         Pixels of the punch face (``labels >= 0``).
-    coefficient_field : ndarray, shape (n, n), 1/Pa
+    coefficient_field : ndarray, shape (nx, ny), 1/Pa
         Wear coefficient of each pixel's phase, zero off the face.
     solves : int
         Contact solves done so far (counter, for work accounting).
@@ -95,13 +113,15 @@ class WearProblem:
     (2, 1e-13)
     """
 
-    def __init__(self, halfspace, labels, wear_coefficients, normal_force, radius, *,
+    def __init__(self, halfspace, labels, wear_coefficients, normal_force, outline, *,
                  exponent=1.0, contact_rtol=1e-10, contact_maxiter=None, newton_rtol=1e-9,
                  newton_maxiter=30, pressure_floor=1e-6):
-        n = halfspace.n
+        shape = tuple(halfspace.shape)
+        outline = as_outline(outline)
+        grid = _matching_grid(outline, halfspace)
         labels = np.asarray(labels)
-        if labels.shape != (n, n):
-            raise ValueError(f"labels must have shape {(n, n)} to match the half-space grid, "
+        if labels.shape != shape:
+            raise ValueError(f"labels must have shape {shape} to match the half-space grid, "
                              f"got {labels.shape}")
         if not np.issubdtype(labels.dtype, np.integer):
             raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
@@ -119,18 +139,18 @@ class WearProblem:
         self.counts = validate_labels(labels, n_phases)
         if not (np.isfinite(normal_force) and normal_force > 0):
             raise ValueError(f"normal_force must be positive, got {normal_force!r} N")
-        if not (np.isfinite(radius) and radius > 0):
-            raise ValueError(f"radius must be positive, got {radius!r} m")
         if not (np.isfinite(exponent) and exponent > 0):
             raise ValueError(f"wear exponent must be positive, got {exponent!r}")
         self.halfspace = halfspace
-        self.n = n
+        self.outline = outline
+        self.grid = grid
+        self.shape = shape
+        self.n = grid.n
         self.labels = labels
         self.wear_coefficients = k
         self.face_mask = face_mask
         self.coefficient_field = np.where(face_mask, k[np.maximum(labels, 0)], 0.0)
         self.normal_force = float(normal_force)
-        self.radius = float(radius)
         self.exponent = float(exponent)
         self.contact_rtol = float(contact_rtol)
         self.contact_maxiter = contact_maxiter
@@ -142,6 +162,7 @@ class WearProblem:
         self.iterations = 0
         # (x0, K x0) of the warm start implicit() predicted, for the next solve.
         self._predicted = None
+        self._reference = None
 
     @classmethod
     def from_scene(cls, scene, *, n=None, **options):
@@ -163,6 +184,13 @@ class WearProblem:
         Returns
         -------
         WearProblem
+            On the grid ``scene.grid(n)`` of the scene's outline.
+
+        Raises
+        ------
+        ValueError
+            A grid too coarse for the outline or the phase geometry (the
+            message names ``n`` and the minimum).
 
         Examples
         --------
@@ -173,18 +201,48 @@ class WearProblem:
         >>> problem.n, problem.n_phases
         (40, 2)
         """
-        n = scene.n if n is None else int(n)
+        grid = scene.grid(n)
         settings = scene.extra.get("transient")
         if settings is not None:
             options.setdefault("contact_rtol", settings.contact_rtol)
-        halfspace = HalfSpace(n, pixel_size(n, scene.radius), scene.E_star)
-        return cls(halfspace, scene.geometry.labels(n), scene.wear_coefficients,
-                   scene.normal_force, scene.radius, exponent=scene.exponent, **options)
+        halfspace = HalfSpace(grid.shape, grid.h, scene.E_star)
+        return cls(halfspace, scene.geometry.labels(grid), scene.wear_coefficients,
+                   scene.normal_force, scene.outline, exponent=scene.exponent, **options)
 
     @property
     def n_phases(self):
         """Number of phases ``P``."""
         return self.wear_coefficients.size
+
+    @property
+    def scale(self):
+        """``L``, the outline's length scale, m (the radius ``a`` of a disk)."""
+        return self.outline.scale
+
+    @property
+    def radius(self):
+        """The radius ``a`` of a circular face, m; None for other outlines."""
+        return self.outline.radius if isinstance(self.outline, Circle) else None
+
+    @property
+    def reference(self):
+        """The outline's reference slope under the load (a ``ReferenceSlope``).
+
+        From :func:`steady.normalisation.reference_slope`: ``value`` is
+        ``grad_f0`` (``4 pbar / (pi E*)`` for a disk, eq. 12; the homogeneous
+        face's rms slope for other outlines), with its ``error``,
+        ``mean_pressure`` ``F_N / A`` (``A`` the outline's exact area) and
+        ``source`` in words.  Computed once.
+        """
+        if self._reference is None:
+            self._reference = reference_slope(self.outline, self.normal_force,
+                                              self.halfspace.E_star)
+        return self._reference
+
+    @property
+    def reference_slope(self):
+        """``grad_f0``, the normalisation of rms slopes (see :attr:`reference`)."""
+        return self.reference.value
 
     # -- natural scales (docs/model.md, "Natural scales") -----------------
     @property
@@ -194,17 +252,17 @@ class WearProblem:
 
     @property
     def depth_scale(self):
-        """``f* = pbar a / E*``, m (``pbar`` the pixel mean pressure)."""
-        return self.pixel_mean_pressure * self.radius / self.halfspace.E_star
+        """``f* = pbar L / E*``, m (``pbar`` the pixel mean pressure, ``L`` the scale)."""
+        return self.pixel_mean_pressure * self.scale / self.halfspace.E_star
 
     @property
     def run_in_distance(self):
-        """``s* = a / (k_min E*)``, m: the slow (run-in) sliding distance.
+        """``s* = L / (k_min E*)``, m: the slow (run-in) sliding distance (``L = a``, a disk).
 
         For ``m != 1`` the rate constant is ``k m pbar^(m-1)``.
         """
-        return self.radius / (self._rate_constant(self.wear_coefficients.min())
-                              * self.halfspace.E_star)
+        return self.scale / (self._rate_constant(self.wear_coefficients.min())
+                             * self.halfspace.E_star)
 
     @property
     def fast_distance(self):
@@ -217,7 +275,7 @@ class WearProblem:
         return k * m * self.pixel_mean_pressure ** (m - 1.0)
 
     def steady_pressure(self):
-        """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (n, n).
+        """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (nx, ny).
 
         The limit of an implicit Euler step as ``ds -> infinity``: the warm
         start of a jump.
@@ -235,11 +293,11 @@ class WearProblem:
             Plain pixel rms slope, no error estimate.
         """
         return solve(self.halfspace, self.labels, self.wear_coefficients, self.normal_force,
-                     exponent=self.exponent)
+                     exponent=self.exponent, outline=self.outline)
 
     # -- the right-hand side -------------------------------------------
     def rate(self, pressure):
-        """Wear rate ``k p^m``, m/m (dimensionless), shape (n, n); zero off the face."""
+        """Wear rate ``k p^m``, m/m (dimensionless), shape (nx, ny); zero off the face."""
         p = np.maximum(pressure, 0.0)
         if self.exponent == 1.0:
             return self.coefficient_field * p
@@ -270,11 +328,11 @@ class WearProblem:
 
         Parameters
         ----------
-        height : ndarray, shape (n, n), m
-        shift : ndarray, shape (n, n), m/Pa, optional
-        x0 : ndarray, shape (n, n), Pa, optional
+        height : ndarray, shape (nx, ny), m
+        shift : ndarray, shape (nx, ny), m/Pa, optional
+        x0 : ndarray, shape (nx, ny), Pa, optional
             Warm start.
-        x0_displacement : ndarray, shape (n, n), m, optional
+        x0_displacement : ndarray, shape (nx, ny), m, optional
             ``K x0``, if known (see :func:`transient.contact.solve_contact`);
             default: the one :meth:`implicit` predicted along with ``x0``.
 
@@ -335,10 +393,10 @@ class WearProblem:
 
         Parameters
         ----------
-        height : ndarray, shape (n, n), m
+        height : ndarray, shape (nx, ny), m
         c : float, m
             Sliding distance multiplying the implicit rate (``ds``, ``gamma ds``...).
-        x0 : ndarray, shape (n, n), Pa
+        x0 : ndarray, shape (nx, ny), Pa
             Pressure guess (warm start and first linearisation point), used
             when ``history`` holds no pressure.
         history : PressureHistory, optional
@@ -348,7 +406,7 @@ class WearProblem:
 
         Returns
         -------
-        w : ndarray, shape (n, n), m
+        w : ndarray, shape (nx, ny), m
         result : ContactResult
             The contact of the face ``w`` (its pressure is ``P(w)``).
 
@@ -410,9 +468,9 @@ class PressureHistory:
     problem : WearProblem
     size : int, optional
         Pressures kept (default 6).
-    pressures : ndarray, shape (k, n, n), Pa, optional
+    pressures : ndarray, shape (k, nx, ny), Pa, optional
         Initial content, newest first (a checkpoint's).
-    displacements : ndarray, shape (k, n, n), m, optional
+    displacements : ndarray, shape (k, nx, ny), m, optional
         ``K`` times each of ``pressures`` (default: computed by FFT).
     """
 
@@ -439,7 +497,7 @@ class PressureHistory:
         return len(self._values)
 
     def push(self, pressure, displacement=None):
-        """Add a pressure (Pa, shape (n, n)) and its ``K p`` (m; computed if None)."""
+        """Add a pressure (Pa, shape (nx, ny)) and its ``K p`` (m; computed if None)."""
         pressure = np.where(self.problem.face_mask, pressure, 0.0)
         if displacement is None:
             displacement = self.problem.halfspace.displacement(pressure)
@@ -448,38 +506,36 @@ class PressureHistory:
         del self._values[self.size:], self._products[self.size:]
 
     def newest(self):
-        """The newest pressure, Pa, shape (n, n)."""
-        return self._values[0].reshape(self.problem.n, -1).copy()
+        """The newest pressure, Pa, shape (nx, ny)."""
+        return self._values[0].reshape(self.problem.shape).copy()
 
     def pressures(self):
-        """The pressures held, newest first, Pa, shape (k, n, n)."""
-        n = self.problem.n
-        return np.array(self._values).reshape(-1, n, n)
+        """The pressures held, newest first, Pa, shape (k, nx, ny)."""
+        return np.array(self._values).reshape(-1, *self.problem.shape)
 
     def displacements(self):
-        """Their elastic displacements ``K p``, newest first, m, shape (k, n, n)."""
-        n = self.problem.n
-        return np.array(self._products).reshape(-1, n, n)
+        """Their elastic displacements ``K p``, newest first, m, shape (k, nx, ny)."""
+        return np.array(self._products).reshape(-1, *self.problem.shape)
 
     def predict(self, height, shift=None):
         """Warm start of the contact problem ``(K + diag(shift)) p = d - height``.
 
         Parameters
         ----------
-        height : ndarray, shape (n, n), m
-        shift : ndarray, shape (n, n), m/Pa, optional
+        height : ndarray, shape (nx, ny), m
+        shift : ndarray, shape (nx, ny), m/Pa, optional
 
         Returns
         -------
-        pressure : ndarray, shape (n, n), Pa
+        pressure : ndarray, shape (nx, ny), Pa
             The energy-minimising combination of the pressures held (see the
             class docstring); negative values are left to the solver, which
             drops them.
-        displacement : ndarray, shape (n, n), m
+        displacement : ndarray, shape (nx, ny), m
             ``K`` times it on the whole grid (the same combination of the
             stored products).
         """
-        n = self.problem.n
+        shape = self.problem.shape
         v0, kv0 = self._values[0], self._products[0]
         beta = None
         if len(self) > 1:
@@ -509,6 +565,27 @@ class PressureHistory:
             if keep.any():
                 beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
         if beta is None:
-            return v0.reshape(n, n).copy(), kv0.reshape(n, n).copy()
-        return ((v0 + np.einsum("i,ij->j", beta, diff)).reshape(n, n),
-                (kv0 + np.einsum("i,ij->j", beta, kdiff)).reshape(n, n))
+            return v0.reshape(shape).copy(), kv0.reshape(shape).copy()
+        return ((v0 + np.einsum("i,ij->j", beta, diff)).reshape(shape),
+                (kv0 + np.einsum("i,ij->j", beta, kdiff)).reshape(shape))
+
+
+def _matching_grid(outline, halfspace):
+    """The outline's :class:`~steady.outline.FaceGrid` of the half-space's grid, checked.
+
+    Raises
+    ------
+    ValueError
+        The grid is too coarse for the outline (naming ``n`` and the
+        minimum), or its shape or pixel size is not the outline's.
+    """
+    shape = tuple(halfspace.shape)
+    grid = FaceGrid(outline, max(shape))  # ValueError names n and the minimum
+    if grid.shape != shape:
+        raise ValueError(f"the half-space grid is {shape[0]} x {shape[1]} pixels; the grid of the "
+                         f"{outline.describe()} with n = {grid.n} has {grid.shape[0]} x "
+                         f"{grid.shape[1]}")
+    if abs(halfspace.h - grid.h) > 1e-9 * grid.h:
+        raise ValueError(f"the half-space's pixel size {halfspace.h:.6g} m is not the "
+                         f"{outline.describe()}'s at n = {grid.n}, 2 L / n = {grid.h:.6g} m")
+    return grid

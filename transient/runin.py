@@ -14,7 +14,8 @@ Step control
 The local error estimate of a step is measured on the *shape*: its mean
 over the face is removed (the rigid offset is irrelevant and integrated
 exactly) and its rms over the face is compared with ``tol * f*``
-(``f* = pbar a / E*``, docs/model.md "Natural scales").  Accepted steps grow
+(``f* = pbar L / E*``, ``L`` the face outline's scale: the radius ``a`` of
+a disk; docs/model.md "Natural scales").  Accepted steps grow
 by at most the scheme's ``max_growth``; rejected or failed steps shrink.
 Steps land exactly on the snapshot distances.  Explicit Euler is further
 limited to a fraction of its stability limit.
@@ -27,7 +28,7 @@ The run stops when both
   ``k p^m`` over the pixels with ``p > 0`` (or over the whole face when
   some pixel is out of contact: then the spread is 1), is below
   ``spread_tol``, and
-- the rms change of the shape per run-in distance ``s* = a / (k_min E*)``,
+- the rms change of the shape per run-in distance ``s* = L / (k_min E*)``,
   in units of ``f*``, is below ``shape_tol``.
 
 Jump to the steady state
@@ -61,8 +62,6 @@ import types
 
 import numpy as np
 
-from steady import reference
-
 from .control import DIVERGENCE_RELIEF, StepController, StopTests
 from .diagnostics import shape_rms, wear_rate_spread
 from .history import HistoryEstimator
@@ -94,7 +93,8 @@ HISTORY_UNITS = {
     "rim_layer_pixels": "1 (width k E* s of the slowest-wearing rim phase's worn layer, in "
                         "pixels)",
     "rms_height": "m (rms of the face about its least-squares plane)",
-    "normalised_rms_height": "1 (rms_height / (grad_f0 a))",
+    "normalised_rms_height": "1 (rms_height / (grad_f0 L), L the outline's scale: a for a "
+                             "disk)",
     "spread": "1 ((max - min) / mean of k p^m over the contact)",
     "shape_rate": "1 (rms shape change / f* per s*)",
     "peak_pressure": "Pa",
@@ -107,7 +107,7 @@ HISTORY_UNITS = {
 
 @dataclasses.dataclass(frozen=True)
 class RunOptions:
-    """Options of :func:`run_in`; distances in units of ``s* = a / (k_min E*)``.
+    """Options of :func:`run_in`; distances in units of ``s* = L / (k_min E*)`` (``L = a``, a disk).
 
     Attributes
     ----------
@@ -122,7 +122,7 @@ class RunOptions:
     step : float or None
         Fixed step in s* (no adaptivity, no jump); default None (adaptive).
     initial_step : float or None
-        First adaptive step in s*; default ``0.01 * sqrt(tol) * h/a``
+        First adaptive step in s*; default ``0.01 * sqrt(tol) * h/L``
         (the fast scale, where the flat punch's edge relaxes).
     spread_tol : float
         Steady when the wear-rate spread is below this (default 1e-6) ...
@@ -207,16 +207,16 @@ class RunResult:
     solves, iterations : int
         Contact solves and contact-solver iterations.
     wall_time : float, s
-    height : ndarray, shape (n, n), m
+    height : ndarray, shape (nx, ny), m
         Face height (worn depth + initial shape) minus ``offset``.
     offset : float, m
         Constant removed from ``height`` (the rigid part of the wear).
-    pressure : ndarray, shape (n, n), Pa
+    pressure : ndarray, shape (nx, ny), Pa
         Contact pressure of the face.
     approach : float, m
         Rigid approach, in the frame of ``height``.
-    initial_height : ndarray, shape (n, n), m
-    previous_height, previous_rate : ndarray, shape (n, n), or None
+    initial_height : ndarray, shape (nx, ny), m
+    previous_height, previous_rate : ndarray, shape (nx, ny), or None
         State of the previous accepted point (for resuming).
     previous_step, next_step : float or None, m
     history : mapping of str to ndarray, shape (steps + 1,)
@@ -227,20 +227,29 @@ class RunResult:
         ``rms_slope_spatial_error`` is empty (shape (0,)) unless
         :meth:`transient.spatial_error.SpatialError.attach` filled it.
     snapshot_distance : ndarray, shape (k,), m
-    snapshot_height : ndarray, shape (k, n, n), m
+    snapshot_height : ndarray, shape (k, nx, ny), m
         ``worn depth + initial shape`` at the snapshots (NaN off the face).
-    snapshot_pressure : ndarray, shape (k, n, n), Pa
+    snapshot_pressure : ndarray, shape (k, nx, ny), Pa
     depth_scale, run_in_distance, fast_distance, pixel_mean_pressure,
     reference_slope : float
         ``f*`` (m), ``s*`` (m), ``h / (k_max E*)`` (m), ``F`` over the
-        face's pixel area (Pa), ``grad_f0`` (eq. 12).
-    pressure_history : ndarray, shape (k, n, n), Pa, or None
+        face's pixel area (Pa), ``grad_f0`` (the homogeneous face's rms
+        slope: ``4 pbar / (pi E*)`` for a disk, eq. 12;
+        :func:`steady.normalisation.reference_slope`).
+    pressure_history : ndarray, shape (k, nx, ny), Pa, or None
         The last contact pressures, newest first: the warm start of the
         next implicit stages (:class:`transient.problem.PressureHistory`).
-    pressure_history_displacement : ndarray, shape (k, n, n), m, or None
+    pressure_history_displacement : ndarray, shape (k, nx, ny), m, or None
         Their elastic displacements ``K p`` as the run holds them (the
         solver's own, which a resumed run needs to repeat the run bit for
         bit).
+    outline : outline object or None
+        The face's outline (:mod:`steady.outline`); None when unknown (a
+        run file written without it).
+    reference_slope_error : float
+        Uncertainty of ``reference_slope`` (0: a closed form).
+    reference_slope_source : str
+        Where ``reference_slope`` comes from, in words ("" when unknown).
     """
 
     status: str
@@ -273,6 +282,9 @@ class RunResult:
     reference_slope: float
     pressure_history: np.ndarray | None = None
     pressure_history_displacement: np.ndarray | None = None
+    outline: object = None
+    reference_slope_error: float = 0.0
+    reference_slope_source: str = ""
 
     @property
     def success(self):
@@ -280,13 +292,25 @@ class RunResult:
         return self.status == "steady"
 
     @property
+    def shape(self):
+        """``(nx, ny)`` of the grid."""
+        return self.height.shape
+
+    @property
+    def pixel_size(self):
+        """Pixel side ``h = 2 L / n``, m (``n`` the longer side); NaN without the outline."""
+        if self.outline is None:
+            return math.nan
+        return 2.0 * self.outline.scale / max(self.shape)
+
+    @property
     def face_mask(self):
-        """Pixels of the punch face, shape (n, n), bool."""
+        """Pixels of the punch face, shape (nx, ny), bool."""
         return np.isfinite(self.worn_depth)
 
     @property
     def worn_depth(self):
-        """Depth worn off since the start, m, shape (n, n); NaN off the face."""
+        """Depth worn off since the start, m, shape (nx, ny); NaN off the face."""
         return self.height + self.offset - self.initial_height
 
     @property
@@ -309,9 +333,8 @@ class _Run:
         self.f_star = problem.depth_scale
         self.controller = StepController(options, self.s_star)
         self.stop = StopTests(options, self.s_star)
-        self.grad_f0 = reference.reference_slope(
-            reference.mean_pressure(problem.normal_force, problem.radius),
-            problem.halfspace.E_star)
+        self.reference = problem.reference
+        self.grad_f0 = self.reference.value
         self.history = {name: [] for name in HISTORY_UNITS}
         self.snap_d, self.snap_h, self.snap_p = [], [], []
         self.pressures = None
@@ -359,7 +382,7 @@ class _Run:
                     hist[name][index] = figures[name]
             hist["normalised_rms_slope"][index] = figures["rms_slope"] / self.grad_f0
             hist["normalised_rms_height"][index] = figures["rms_height"] / (
-                self.grad_f0 * self.problem.radius)
+                self.grad_f0 * self.problem.scale)
 
     def close(self):
         """Stop the worker thread (figures not collected are dropped)."""
@@ -378,7 +401,7 @@ class _Run:
     def result(self, status, message):
         """The run so far as a :class:`RunResult`."""
         self.collect()
-        n = self.problem.n
+        shape = self.problem.shape
         k = len(self.snap_d)
         face_mask = self.problem.face_mask
         return RunResult(
@@ -396,15 +419,17 @@ class _Run:
                                                          else np.int64)
                                             for k_, v in self.history.items()}),
             snapshot_distance=np.array(self.snap_d, dtype=float),
-            snapshot_height=np.array(self.snap_h).reshape(k, n, n),
-            snapshot_pressure=np.array(self.snap_p).reshape(k, n, n),
+            snapshot_height=np.array(self.snap_h).reshape(k, *shape),
+            snapshot_pressure=np.array(self.snap_p).reshape(k, *shape),
             depth_scale=self.f_star, run_in_distance=self.s_star,
             fast_distance=self.problem.fast_distance,
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
             reference_slope=self.grad_f0,
             pressure_history=None if self.pressures is None else self.pressures.pressures(),
             pressure_history_displacement=(None if self.pressures is None
-                                           else self.pressures.displacements()))
+                                           else self.pressures.displacements()),
+            outline=self.problem.outline, reference_slope_error=self.reference.error,
+            reference_slope_source=self.reference.source)
 
     # -- set-up --------------------------------------------------------
     def start(self, initial_height):
@@ -412,8 +437,8 @@ class _Run:
         p = self.problem
         face_mask = p.face_mask
         h0 = np.where(face_mask, np.asarray(initial_height, dtype=float), 0.0)
-        if h0.shape != (p.n, p.n):
-            raise ValueError(f"initial_height must have shape {(p.n, p.n)}, got {h0.shape}")
+        if h0.shape != p.shape:
+            raise ValueError(f"initial_height must have shape {p.shape}, got {h0.shape}")
         if not np.all(np.isfinite(h0[face_mask])):
             raise ValueError("initial_height must be finite on the face")
         self.initial_height = h0
@@ -428,7 +453,7 @@ class _Run:
         self.wall_time = 0.0
         self.prev_height = self.prev_rate = None
         self.prev_step = None
-        self.next_step = self.controller.first_step(p.halfspace.h, p.radius)
+        self.next_step = self.controller.first_step(p.halfspace.h, p.scale)
         self.record(0.0, math.inf)
         self.snap_index = 0
         self._take_due_snapshots()
@@ -437,9 +462,9 @@ class _Run:
         """Continue from a checkpoint (a :class:`RunResult`)."""
         p = self.problem
         face_mask = p.face_mask
-        if saved.height.shape != (p.n, p.n):
+        if saved.height.shape != p.shape:
             raise ValueError(f"checkpoint grid {saved.height.shape} does not match the "
-                             f"problem's {(p.n, p.n)}")
+                             f"problem's {p.shape}")
 
         def clean(a):
             return None if a is None else np.where(face_mask, a, 0.0)
@@ -593,8 +618,9 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     Parameters
     ----------
     problem : transient.problem.WearProblem
-    initial_height : ndarray, shape (n, n), m
-        Initial face (larger = recessed); see :mod:`transient.initial_face`.
+    initial_height : ndarray, shape (nx, ny), m
+        Initial face (larger = recessed) on the problem's grid; see
+        :mod:`transient.initial_face`.
     options : RunOptions, optional
     resume : RunResult, optional
         A checkpoint (or a stopped run) to continue from; ``initial_height``
@@ -635,7 +661,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     'steady'
     >>> slope = result.history["normalised_rms_slope"]
     >>> print(f"rms slope {slope[0]:.3f} -> {slope[1]:.3f} -> {slope[-1]:.3f} grad_f0")
-    rms slope 0.000 -> 0.863 -> 1.352 grad_f0
+    rms slope 0.000 -> 0.86 -> 1.35 grad_f0
     >>> comparison = compare_with_steady(result, problem.solve_steady(), problem)
     >>> bool(comparison.face_error < 1e-6)
     True

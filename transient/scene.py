@@ -23,10 +23,12 @@ They are registered with :func:`steady.scene.load_scene` through its
     angle = 1e-3                # rad (tilted)
     azimuth = 0.0               # rad (tilted, optional)
     # sphere_radius = 0.5       # m (crowned)
-    # path = "face.npy"         # (file) (n, n) height in m, beside the scene file
+    # path = "face.npy"         # (file) height in m on the grid (n x n for a disk),
+                                # beside the scene file
 
-Distances are in units of the run-in distance ``s* = a / (k_min E*)``
-(docs/model.md, "Natural scales").  Every key is optional and checked; unknown
+Distances are in units of the run-in distance ``s* = L / (k_min E*)``, ``L``
+the face outline's scale (the radius ``a`` of a disk; docs/model.md,
+"Natural scales").  Every key is optional and checked; unknown
 keys are errors.  The initial face kinds and their keys are those registered
 in :mod:`transient.initial_face`.
 """
@@ -42,7 +44,7 @@ from steady.command_line import one_line, shorten
 from steady.phases import npy_header
 from steady.scene import load_scene
 
-from .initial_face import INITIAL_FACES, initial_height
+from .initial_face import INITIAL_FACES, face_grid, initial_height
 from .runin import RunOptions
 
 __all__ = [
@@ -91,25 +93,36 @@ class InitialFace:
     parameters: types.MappingProxyType = dataclasses.field(
         default_factory=lambda: types.MappingProxyType({}))
 
-    def height(self, n, radius):
-        """Initial height on the ``n x n`` grid of a punch of radius ``radius`` (m).
+    def height(self, n, outline=None):
+        """Initial height on the grid of ``n`` pixels of a face outline.
+
+        Parameters
+        ----------
+        n : int or steady.outline.FaceGrid
+            Pixels along the longer side of the outline's bounding box
+            (across the diameter of a disk), or the grid itself.
+        outline : outline object or float
+            The face (``scene.outline``); a number is a disk's radius (m)
+            (``scene.radius``).
 
         Returns
         -------
-        ndarray, shape (n, n), m
+        ndarray, shape of the grid (``(n, n)`` for a disk), m
             Larger = recessed.
 
         Raises
         ------
         ValueError
-            A parameter out of range for this grid and punch, named.
+            A parameter out of range for this grid and face, or a grid too
+            coarse for the outline, named.
         """
         path = self.parameters.get("path")
         try:
+            grid = face_grid(n, outline)
             if path is not None:
                 # The header first: a wrong shape is refused before the data are read.
-                npy_header(path, what="initial face file", shape=(n, n))
-            return initial_height(self.kind, n, radius, **self.parameters)
+                npy_header(path, what="initial face file", shape=grid.shape)
+            return initial_height(self.kind, grid, **self.parameters)
         except (OSError, EOFError) as err:  # the file changed since the scene was read
             raise ValueError(f"[initial_face]: cannot read {str(path)!r}: {err}") from None
         except ValueError as err:

@@ -22,6 +22,7 @@ import types
 import numpy as np
 
 from steady.accuracy import ladder_error
+from steady.outline import Circle, FaceGrid
 
 from .problem import WearProblem
 from .runin import run_in
@@ -78,15 +79,18 @@ class SpatialError:
         return dataclasses.replace(result, history=types.MappingProxyType(history))
 
 
-def companion_grid(geometry, n):
-    """Grid of the companion run: ``n // 2`` if the geometry accepts it, else the coarsest above.
+def companion_grid(geometry, n, outline=None):
+    """Grid of the companion run: ``n // 2`` if admissible, else the coarsest above.
 
     Parameters
     ----------
     geometry : phase geometry
-        ``check_grid(n)`` raises ``ValueError`` for inadmissible grids.
+        ``check_grid(grid)`` raises ``ValueError`` for inadmissible grids.
     n : int
-        The main run's grid.
+        The main run's grid (pixels along the longer side).
+    outline : outline object, optional
+        The face (:mod:`steady.outline`), whose grid must resolve it too
+        (``outline.check_grid``); default a disk.
 
     Returns
     -------
@@ -96,7 +100,8 @@ def companion_grid(geometry, n):
     ------
     ValueError
         No grid below ``n`` is admissible (e.g. a pixel map at its own
-        size).
+        size, or an outline that needs ``n`` pixels); the message names
+        the minimum.
 
     Examples
     --------
@@ -107,12 +112,17 @@ def companion_grid(geometry, n):
     """
     for m in range(max(n // 2, 2), n):
         try:
-            geometry.check_grid(m)
+            geometry.check_grid(m if outline is None else FaceGrid(outline, m))
         except ValueError:
             continue
         return m
-    raise ValueError(f"no grid coarser than n = {n} is admissible for this phase map "
-                     f"(minimum {geometry.min_grid()}): no companion run")
+    if outline is None:
+        minimum = geometry.min_grid()
+    else:
+        minimum = max(geometry.min_grid(outline), outline.min_grid())
+    what = "this phase map" if outline is None else f"this phase map on the {outline.describe()}"
+    raise ValueError(f"no grid coarser than n = {n} is admissible for {what} "
+                     f"(minimum {minimum}): no companion run")
 
 
 def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
@@ -125,9 +135,10 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
         The scene of the main run (its phase geometry is rasterised at the
         companion's grid).
     initial : transient.scene.InitialFace or callable
-        The initial face: an object with ``height(n, radius)`` (the scene's
-        ``[initial_face]``), or ``initial(n, radius) -> ndarray``.  It must
-        exist on the companion's grid: a height file of the main grid
+        The initial face: an object with ``height(n, outline)`` (the
+        scene's ``[initial_face]``), or ``initial(n, outline) -> ndarray``
+        (``outline`` the scene's radius for a disk, else its outline).  It
+        must exist on the companion's grid: a height file of the main grid
         (``kind = "file"``) does not, and raises ``ValueError``.
     options : transient.runin.RunOptions
         The main run's options (the same distances, tolerance, scheme).
@@ -159,14 +170,16 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
     >>> companion.grid, result.history["rms_slope_spatial_error"].shape == (result.steps + 1,)
     (40, True)
     """
-    n = result.height.shape[0]
-    m = companion_grid(scene.geometry, n) if grid is None else int(grid)
+    n = max(result.height.shape)
+    outline = scene.outline
+    m = companion_grid(scene.geometry, n, outline) if grid is None else int(grid)
     if not 2 <= m < n:
         raise ValueError(f"companion grid must lie in [2, {n}), got {m}")
     build = initial.height if hasattr(initial, "height") else initial
     problem = WearProblem.from_scene(scene, n=m, **problem_options)
     logger.info("companion run on n = %d (main run n = %d)", m, n)
-    coarse = run_in(problem, build(m, scene.radius), options, on_step=on_step)
+    face = outline.radius if isinstance(outline, Circle) else outline
+    coarse = run_in(problem, build(m, face), options, on_step=on_step)
     if not coarse.success:
         logger.warning("companion run %s: %s", coarse.status, coarse.message)
     values = _at(coarse.history["distance"], coarse.history["rms_slope"],

@@ -4,7 +4,7 @@ The discretised run-in is the system (docs/model.md, "Wear and time integration"
 
     dw/ds = k p^m,        p = P(w),
 
-where ``w`` (m, shape (n, n)) is the height of the punch face -- worn depth
+where ``w`` (m, shape (nx, ny)) is the height of the punch face -- worn depth
 plus initial shape, larger = recessed, defined up to a constant (the run
 keeps its face mean in a separate offset) --, ``k`` the wear coefficient of
 each pixel's phase (1/Pa for ``m = 1``, Pa^-m in general), ``m`` the wear
@@ -115,15 +115,15 @@ class StepState:
 
     Attributes
     ----------
-    height : ndarray, shape (n, n), m
+    height : ndarray, shape (nx, ny), m
         Face height ``w`` (worn depth + initial shape, up to a constant).
-    pressure : ndarray, shape (n, n), Pa
+    pressure : ndarray, shape (nx, ny), Pa
         ``P(w)``, the contact pressure of that face.
     approach : float, m
         Rigid approach of that contact (same constant as ``height``).
-    previous_height : ndarray, shape (n, n), m, or None
+    previous_height : ndarray, shape (nx, ny), m, or None
         Face at the previous accepted point (multistep schemes, shape-change test).
-    previous_rate : ndarray, shape (n, n), or None
+    previous_rate : ndarray, shape (nx, ny), or None
         ``k p^m`` there.
     previous_step : float, m, or None
         The step that led from there to here.
@@ -148,13 +148,13 @@ class Trial:
 
     Attributes
     ----------
-    height : ndarray, shape (n, n), m
+    height : ndarray, shape (nx, ny), m
         New face ``w+``.
-    pressure : ndarray, shape (n, n), Pa
+    pressure : ndarray, shape (nx, ny), Pa
         ``P(w+)``.
     approach : float, m
     contact_fraction : float
-    error : ndarray, shape (n, n), m
+    error : ndarray, shape (nx, ny), m
         Local error estimate of ``w+``.
     """
 
