@@ -643,7 +643,7 @@ def steady_memory(n, *, slope_error=True):
     Examples
     --------
     >>> print(format_bytes(steady_memory(1024)), format_bytes(steady_memory(12000)))
-    579 MiB 75.2 GiB
+    620 MiB 80.6 GiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     peak = halfspace_memory(n, gradient=True) + 8 * n * n * _FLOAT
