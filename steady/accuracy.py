@@ -158,17 +158,27 @@ def monopole_tail(force, centroid, box, E_star):
         side by side over the angular sectors each side subtends
         (``int cos^2(phi) / (2 d^2) dphi``).
     """
-    cx, cy = centroid
+    integral = sum((phi / 2 + np.sin(2 * phi) / 4) / (2 * d * d)
+                   for d, phi in _side_sectors(centroid, box))
+    return (force / (np.pi * E_star)) ** 2 * integral
+
+
+def _side_sectors(centre, box):
+    """``(d, phi)`` of the eight half-sides of a box seen from a point inside it.
+
+    ``d`` is the distance to a side and ``phi`` the angle, from the foot of
+    the perpendicular, that the side's part on one side of the foot
+    subtends; an integral outside the box of a radial power is the sum of
+    its angular antiderivative over the eight pairs.
+    """
+    cx, cy = centre
     x0, x1, y0, y1 = box
     # (distance to the side, the side's tangential extent on either side of the foot)
     sides = [(x1 - cx, cy - y0, y1 - cy), (cx - x0, cy - y0, y1 - cy),
              (y1 - cy, cx - x0, x1 - cx), (cy - y0, cx - x0, x1 - cx)]
-    integral = 0.0
     for d, lo, hi in sides:
         for t in (lo, hi):
-            phi = np.arctan2(t, d)
-            integral += (phi / 2 + np.sin(2 * phi) / 4) / (2 * d * d)
-    return (force / (np.pi * E_star)) ** 2 * integral
+            yield d, np.arctan2(t, d)
 
 
 def second_moment_tail(force, second_moment, centre, box, E_star):
@@ -209,15 +219,8 @@ def second_moment_tail(force, second_moment, centre, box, E_star):
     >>> print(f"{second_moment_tail(1.0, 0.5, (0.0, 0.0), box, 1.0) / mono:.4f}")
     0.0050
     """
-    cx, cy = centre
-    x0, x1, y0, y1 = box
-    sides = [(x1 - cx, cy - y0, y1 - cy), (cx - x0, cy - y0, y1 - cy),
-             (y1 - cy, cx - x0, x1 - cx), (cy - y0, cx - x0, x1 - cx)]
-    integral = 0.0
-    for d, lo, hi in sides:
-        for t in (lo, hi):
-            phi = np.arctan2(t, d)
-            integral += (3 * phi / 8 + np.sin(2 * phi) / 4 + np.sin(4 * phi) / 32) / (4 * d**4)
+    integral = sum((3 * phi / 8 + np.sin(2 * phi) / 4 + np.sin(4 * phi) / 32) / (4 * d**4)
+                   for d, phi in _side_sectors(centre, box))
     return 1.5 * force * second_moment / (np.pi * E_star) ** 2 * integral
 
 
