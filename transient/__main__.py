@@ -188,16 +188,19 @@ def run_in_memory(n, snapshots=0):
       applied (about 150);
     - one history record computed on the worker thread beside the step:
       the face and pressure it copies (16) and the estimator applied;
+    - every checkpoint's pressure history (six pressures and their
+      displacements, copied into the result, 96, and again into the file
+      image, built in memory and copied to disk,
+      :func:`steady.output.atomic_h5`, 96): 192;
     - each snapshot: face and pressure kept (16), their copies in every
-      checkpoint (16), and the checkpoint's file image, built in memory and
-      copied to disk (:func:`steady.output.atomic_h5`, 32): 64.
+      checkpoint (16), and the checkpoint's file image (32): 64.
 
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
     The closing steady solve of the comparison needs less than one step.
     Measured against the peak resident memory of a run (the process's
     high-water mark) at ``n = 256`` and 512 with 0 to 10 snapshots,
-    the estimate is an upper bound by a factor of 1.22 to 1.38
+    the estimate is an upper bound by a factor of 1.12 to 1.33
     (``tests/test_memory.py``).
 
     Parameters
@@ -215,12 +218,12 @@ def run_in_memory(n, snapshots=0):
     --------
     >>> from steady.command_line import format_bytes
     >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
-    384 MiB 163 GiB
+    455 MiB 201 GiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     pixels = n * n
     kept, applied = slope_estimator_memory(n)
-    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 176) * pixels + kept
+    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 176 + 192) * pixels + kept
             + max(352 * pixels, applied) + 16 * pixels + applied
             + 64 * pixels * int(snapshots))
     return int(1.25 * peak) + 16 * 2 ** 20

@@ -23,8 +23,11 @@ __all__ = [
     "MIN_ACCEPT_FACTOR",
     "MIN_REJECT_FACTOR",
     "SAFETY",
+    "SOLVE_ERROR_SHARE",
+    "SOLVE_SPREAD_SHARE",
     "StepController",
     "StopTests",
+    "contact_tolerance",
 ]
 
 #: Fraction of the step the error estimate calls optimal that is proposed.
@@ -48,6 +51,49 @@ MAX_JUMPS = 5
 LANDING_SLACK = 1e-9
 #: Relative slack of the distance limit (round-off of the summed steps).
 _DISTANCE_SLACK = 1e-12
+#: Share of a step's error tolerance ``tol f*`` left to its contact solves.
+SOLVE_ERROR_SHARE = 1e-3
+#: Share of the last wear-rate spread that a solve may move the pressure by.
+SOLVE_SPREAD_SHARE = 1e-2
+
+
+def contact_tolerance(tol, depth_scale, spread, compliance_floor, mean_pressure):
+    """Absolute tolerance (m) of the contact solves of one regular step.
+
+    A solve that stops at a residual ``r`` (m, rms over the face) moves the
+    stage's face by at most ``r`` (the stage's increment is ``c k p`` with
+    ``(K + c k) dp = r``, and ``c k (K + c k)^-1`` has norm below 1) and its
+    pressure by at most ``r / lambda`` (``lambda`` the compliance floor,
+    :attr:`transient.problem.WearProblem.compliance_floor`).  The tolerance
+    is the smaller of ``SOLVE_ERROR_SHARE`` of the step's error tolerance
+    ``tol f*`` and the residual that moves the pressure by
+    ``SOLVE_SPREAD_SHARE`` of the last wear-rate spread: far from the steady
+    state it sits far above ``contact_rtol`` times the displacement, and it
+    tightens as the spread falls, so the spread test sees pressures that are
+    exact to its own precision.  Jumps, fixed steps and power-law steps
+    keep 0 (``contact_rtol`` alone).
+
+    Parameters
+    ----------
+    tol : float
+        The run's step tolerance (relative to ``f*``).
+    depth_scale : float, m
+        ``f*``.
+    spread : float
+        Last recorded wear-rate spread (``(max - min) / mean``, 1 with
+        pixels out of contact).
+    compliance_floor : float, m/Pa
+    mean_pressure : float, Pa
+        The face's mean pressure.
+
+    Returns
+    -------
+    float, m
+    """
+    if not math.isfinite(spread):
+        spread = 1.0
+    return min(SOLVE_ERROR_SHARE * tol * depth_scale,
+               SOLVE_SPREAD_SHARE * spread * compliance_floor * mean_pressure)
 
 
 class StepController:

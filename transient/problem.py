@@ -303,6 +303,16 @@ class WearProblem:
             return self.coefficient_field * p
         return self.coefficient_field * p ** self.exponent
 
+    @property
+    def compliance_floor(self):
+        """Lower bound of the eigenvalues of ``K`` on any contact set, m/Pa.
+
+        The minimum of the zero-padded circulant's symbol, which bounds every
+        principal submatrix of ``K`` from below: a displacement residual
+        ``r`` moves the pressure by at most ``|r| / compliance_floor``.
+        """
+        return float(np.min(self.halfspace.influence_symbol))
+
     def stable_step(self, pressure):
         """Largest stable explicit-Euler step at ``pressure``, m.
 
@@ -311,7 +321,7 @@ class WearProblem:
         circulant's symbol, which bounds every principal submatrix (any contact
         set) from below.
         """
-        lam_min = float(np.min(self.halfspace.influence_symbol))
+        lam_min = self.compliance_floor
         m = self.exponent
         k = self.coefficient_field[self.face_mask]
         if m == 1.0:
@@ -323,7 +333,7 @@ class WearProblem:
         return 2.0 * lam_min / slope
 
     # -- contact solves ------------------------------------------------
-    def contact(self, height, *, shift=None, x0=None, x0_displacement=None):
+    def contact(self, height, *, shift=None, x0=None, x0_displacement=None, atol=0.0):
         """One contact solve, counted; raises :class:`StepFailure` on failure.
 
         Parameters
@@ -335,6 +345,10 @@ class WearProblem:
         x0_displacement : ndarray, shape (nx, ny), m, optional
             ``K x0``, if known (see :func:`transient.contact.solve_contact`);
             default: the one :meth:`implicit` predicted along with ``x0``.
+        atol : float, m, optional
+            Absolute tolerance of the solve beside ``contact_rtol`` (default
+            0: ``contact_rtol`` alone; see
+            :func:`transient.control.contact_tolerance`).
 
         Returns
         -------
@@ -347,7 +361,7 @@ class WearProblem:
             x0_displacement = predicted[1]
         res = solve_contact(self.halfspace, self.face_mask, height, self.normal_force,
                             shift=shift, x0=x0, x0_displacement=x0_displacement,
-                            rtol=self.contact_rtol, maxiter=self.contact_maxiter)
+                            rtol=self.contact_rtol, atol=atol, maxiter=self.contact_maxiter)
         self.solves += 1
         self.iterations += int(res.nit)
         if not res.success:
@@ -388,7 +402,7 @@ class WearProblem:
         h_lin = height + c * self.coefficient_field * (1.0 - m) * pl ** m
         return shift, h_lin
 
-    def implicit(self, height, c, x0, *, history=None):
+    def implicit(self, height, c, x0, *, history=None, atol=0.0):
         """Solve ``w = height + c k P(w)^m`` for ``w``.
 
         Parameters
@@ -403,6 +417,11 @@ class WearProblem:
             Recent pressures of the run: the warm start is their Galerkin
             combination (:meth:`PressureHistory.predict`), and the stage's
             pressure joins them.
+        atol : float, m, optional
+            Absolute tolerance of the contact solve (default 0; see
+            :meth:`contact`).  Each solve of a power-law Newton iteration
+            takes it too: its test compares successive pressures to
+            ``newton_rtol``, so the caller keeps it 0 there.
 
         Returns
         -------
@@ -417,7 +436,7 @@ class WearProblem:
             if history is not None and len(history):
                 x0, kx0 = history.predict(height, shift)
                 self._predicted = (x0, kx0)
-            res = self.contact(height, shift=shift, x0=x0)
+            res = self.contact(height, shift=shift, x0=x0, atol=atol)
         else:
             pbar = self.pixel_mean_pressure
             p0 = np.asarray(x0, dtype=float)
@@ -429,7 +448,7 @@ class WearProblem:
                 self._predicted = (p0, kx0)
             for _ in range(self.newton_maxiter):
                 shift, h_lin = self._linearisation(height, c, p0)
-                res = self.contact(h_lin, shift=shift, x0=p0)
+                res = self.contact(h_lin, shift=shift, x0=p0, atol=atol)
                 change = float(np.max(np.abs(res.pressure - p0))) / pbar
                 p0 = res.pressure
                 if change <= self.newton_rtol:

@@ -39,9 +39,22 @@ gives ``k p -> C``: the steady pressure (eq. 7) with an error of order
 pending, the run takes implicit Euler steps of ``jump_step`` s* (default
 ``1e8``) until the criteria hold; a single such step is normally enough.
 The face after an implicit stage is rebuilt from its pressure,
-``w = d - K p`` on the contact (``K p`` recomputed by one FFT product), so
+``w = d - K p`` on the contact (with the solver's own ``K p``), so
 that the solver's residual, which scales with the shifted operator, does
 not enter the face.
+
+Contact tolerance
+-----------------
+The contact solves of a regular step stop at the absolute residual
+:func:`transient.control.contact_tolerance` leaves them, or at
+``contact_rtol`` times the displacement, whichever is larger: a thousandth
+of the step's error tolerance ``tol f*``, and no more than moves the
+pressure by a hundredth of the last wear-rate spread.  Far from the steady
+state that is several orders above ``contact_rtol`` and the warm start
+often meets it as it stands; near it the spread's share takes over, so the
+pressures the spread test sees are exact to its precision.  Jumps,
+fixed steps (no error control to leave a share) and power-law steps
+solve to ``contact_rtol``.
 
 Reproducibility
 ---------------
@@ -62,7 +75,7 @@ import types
 
 import numpy as np
 
-from .control import DIVERGENCE_RELIEF, StepController, StopTests
+from .control import DIVERGENCE_RELIEF, StepController, StopTests, contact_tolerance
 from .diagnostics import shape_rms, wear_rate_spread
 from .history import HistoryEstimator
 from .problem import PressureHistory, StepFailure
@@ -523,10 +536,15 @@ class _Run:
         if self.pressures is None:
             self.pressures = PressureHistory(p, pressures=self.pressure[None])
         # A jump starts from the closed-form steady pressure, its limit; every
-        # other stage from the Galerkin combination of the recent pressures.
+        # other stage from the Galerkin combination of the recent pressures,
+        # and solves to what the step's error and the spread need.
+        atol = 0.0
+        if not (jump or self.controller.fixed) and p.exponent == 1.0:
+            atol = contact_tolerance(self.options.tol, self.f_star, self.history["spread"][-1],
+                                     p.compliance_floor, p.pixel_mean_pressure)
         state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
                           self.approach, self.prev_height, self.prev_rate, self.prev_step,
-                          history=None if jump else self.pressures)
+                          history=None if jump else self.pressures, contact_atol=atol)
         trial = scheme.step(p, state, ds)
         err = shape_rms(trial.error, face_mask) / (self.options.tol * self.f_star)
         if not (math.isfinite(err) and np.all(np.isfinite(trial.height[face_mask]))):

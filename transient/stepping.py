@@ -131,6 +131,13 @@ class StepState:
         Recent pressures of the run, the warm start of every implicit stage
         (:meth:`transient.problem.WearProblem.implicit`); None: each stage
         starts from the pressure before it.
+    contact_atol : float, m
+        Absolute tolerance of the step's contact solves (their ``atol``, see
+        :func:`transient.contact.solve_contact`; the problem's
+        ``contact_rtol`` holds beside it): what the step's error control and
+        the wear-rate spread leave to the solves
+        (:func:`transient.control.contact_tolerance`).  Default 0: every
+        solve to ``contact_rtol``.
     """
 
     height: np.ndarray
@@ -140,6 +147,7 @@ class StepState:
     previous_rate: np.ndarray | None = None
     previous_step: float | None = None
     history: object = None
+    contact_atol: float = 0.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -246,7 +254,7 @@ class ExplicitEuler(Scheme):
                              f"{limit:.6g} m (2 lambda_min(K) / max k m p^(m-1))")
         f0 = problem.rate(state.pressure)
         height = state.height + ds * f0
-        res = problem.contact(height, x0=state.pressure)
+        res = problem.contact(height, x0=state.pressure, atol=state.contact_atol)
         error = 0.5 * ds * (problem.rate(res.pressure) - f0)
         return _trial(height, res, error)
 
@@ -265,7 +273,8 @@ class ImplicitEuler(Scheme):
         The error estimate is ``ds/2`` times the change of the rate over the step.
         """
         f0 = problem.rate(state.pressure)
-        height, res = problem.implicit(state.height, ds, state.pressure, history=state.history)
+        height, res = problem.implicit(state.height, ds, state.pressure, history=state.history,
+                                       atol=state.contact_atol)
         error = 0.5 * ds * (problem.rate(res.pressure) - f0)
         return _trial(height, res, error)
 
@@ -298,7 +307,8 @@ class BDF2(Scheme):
         base = ((1 + omega) ** 2 * state.height
                 - omega ** 2 * state.previous_height) / (1 + 2 * omega)
         beta = (1 + omega) / (1 + 2 * omega)
-        height, res = problem.implicit(base, beta * ds, state.pressure, history=state.history)
+        height, res = problem.implicit(base, beta * ds, state.pressure, history=state.history,
+                                       atol=state.contact_atol)
         predictor = state.height + ds * ((1 + 0.5 * omega) * f0
                                          - 0.5 * omega * state.previous_rate)
         error = (8.0 / 23.0) * (height - predictor)
@@ -323,10 +333,12 @@ class SDIRK2(Scheme):
     def step(self, problem, state, ds):
         """One SDIRK2 step, two shifted contact solves (see :meth:`Scheme.step`)."""
         g = self.gamma
-        _, res1 = problem.implicit(state.height, g * ds, state.pressure, history=state.history)
+        _, res1 = problem.implicit(state.height, g * ds, state.pressure, history=state.history,
+                                   atol=state.contact_atol)
         f1 = problem.rate(res1.pressure)
         base = state.height + (1 - g) * ds * f1
-        height, res2 = problem.implicit(base, g * ds, res1.pressure, history=state.history)
+        height, res2 = problem.implicit(base, g * ds, res1.pressure, history=state.history,
+                                        atol=state.contact_atol)
         error = g * ds * (problem.rate(res2.pressure) - f1)
         return _trial(height, res2, error)
 
@@ -382,7 +394,8 @@ class ESDIRK3(Scheme):
         x0 = state.pressure
         for i in range(1, 4):
             base = state.height + ds * sum(self.a[i, j] * rates[j] for j in range(i))
-            height, res = problem.implicit(base, self.gamma * ds, x0, history=state.history)
+            height, res = problem.implicit(base, self.gamma * ds, x0, history=state.history,
+                                           atol=state.contact_atol)
             rates.append(problem.rate(res.pressure))
             x0 = res.pressure
         weights = self.b - self.b_hat

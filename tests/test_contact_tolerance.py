@@ -1,0 +1,96 @@
+"""The contact tolerance of a run's regular steps (transient.control.contact_tolerance).
+
+The solves of a regular step stop at a residual the step's error control
+and the wear-rate spread leave them.  Checked here: the two bounds behind
+it (a residual ``r`` moves a stage's face by at most ``r`` and its pressure
+by at most ``r / lambda``), and that a run with it keeps the history of a
+run that solves everything to ``contact_rtol``.  Measured on the Voronoi
+map at n = 64, ``k_2/k_1 = 10``, ``tol = 1e-4``: the same 29 steps and 86
+solves, 202 solver iterations against 460, snapshot faces within 1.6e-7
+``f*`` of each other (the bound, solves x share x tol, is 8.6e-6), the
+history's rms slope within 1.1e-6, the final faces equal.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import wear_problem
+
+import transient.control as control
+from transient.contact import solve_contact
+from transient.control import SOLVE_ERROR_SHARE, SOLVE_SPREAD_SHARE, contact_tolerance
+from transient.diagnostics import shape_rms
+from transient.runin import RunOptions, run_in
+
+
+def test_tolerance_is_the_smaller_share():
+    tol, f_star, lam, pbar = 1e-4, 2e-3, 3e-10, 2e5
+    step_share = SOLVE_ERROR_SHARE * tol * f_star
+    assert contact_tolerance(tol, f_star, 1.0, lam, pbar) == pytest.approx(
+        min(step_share, SOLVE_SPREAD_SHARE * lam * pbar), rel=1e-15)
+    # Near the steady state the spread's share takes over and tightens with it.
+    small = contact_tolerance(tol, f_star, 1e-7, lam, pbar)
+    assert small == pytest.approx(SOLVE_SPREAD_SHARE * 1e-7 * lam * pbar, rel=1e-15)
+    assert small < step_share
+    assert contact_tolerance(tol, f_star, 0.0, lam, pbar) == 0.0
+    # A spread that could not be measured counts as 1 (pixels out of contact).
+    assert contact_tolerance(tol, f_star, math.nan, lam, pbar) == contact_tolerance(
+        tol, f_star, 1.0, lam, pbar)
+
+
+@pytest.mark.parametrize("c_over_s_star", [1e-3, 0.3])
+def test_a_residual_moves_face_and_pressure_within_the_bounds(c_over_s_star):
+    n = 64
+    problem = wear_problem("voronoi", (1.0, 10.0), n)
+    hs, face = problem.halfspace, problem.face_mask
+    rng = np.random.default_rng(7)
+    height = np.where(face, 0.05 * problem.depth_scale * rng.standard_normal((n, n)), 0.0)
+    c = c_over_s_star * problem.run_in_distance
+    shift = c * problem.coefficient_field
+    lam = problem.compliance_floor
+    # A loose tolerance, about what a regular step leaves its solves.
+    atol = 1e-7 * problem.depth_scale
+    tight = solve_contact(hs, face, height, problem.normal_force, shift=shift, rtol=1e-13)
+    loose = solve_contact(hs, face, height, problem.normal_force, shift=shift, rtol=1e-13,
+                          atol=atol, x0=np.where(face, problem.pixel_mean_pressure, 0.0))
+    assert tight.success and loose.success
+    assert loose.nit < tight.nit
+    assert loose.residual <= atol
+    dp = loose.pressure - tight.pressure
+    rms_dp = float(np.sqrt(np.mean(dp[face] ** 2)))
+    assert rms_dp <= loose.residual / lam, \
+        f"pressure moved {rms_dp:.3g} Pa, bound {loose.residual / lam:.3g} Pa"
+    # The stage's increment c k p (the face's change), without its mean.
+    d_increment = shape_rms(np.where(face, shift * dp, 0.0), face)
+    assert d_increment <= loose.residual, \
+        f"increment moved {d_increment:.3g} m, residual {loose.residual:.3g} m"
+
+
+def test_run_keeps_the_history_of_tight_solves(monkeypatch):
+    n = 64
+    options = RunOptions(tol=1e-4, snapshots=(0.01, 0.1, 1.0))
+
+    def run():
+        problem = wear_problem("voronoi", (1.0, 10.0), n)
+        return problem, run_in(problem, np.zeros((n, n)), options)
+
+    problem, loose = run()
+    monkeypatch.setattr(control, "SOLVE_ERROR_SHARE", 0.0)
+    monkeypatch.setattr(control, "SOLVE_SPREAD_SHARE", 0.0)
+    _, tight = run()
+    assert loose.status == tight.status == "steady", (loose.message, tight.message)
+    assert loose.iterations < 0.6 * tight.iterations, (loose.iterations, tight.iterations)
+    face, f_star = problem.face_mask, loose.depth_scale
+    bound = loose.solves * SOLVE_ERROR_SHARE * options.tol
+    assert np.array_equal(loose.snapshot_distance, tight.snapshot_distance)
+    for a, b, s in zip(loose.snapshot_height, tight.snapshot_height, loose.snapshot_distance,
+                       strict=True):
+        diff = shape_rms(np.where(face, a - b, 0.0), face) / f_star
+        assert diff < bound, f"faces at {s / loose.run_in_distance:g} s* differ by {diff:.3g} f*"
+    final = shape_rms(np.where(face, loose.height - tight.height, 0.0), face) / f_star
+    assert final < 1e-9, f"final faces differ by {final:.3g} f*"
+    assert loose.history["spread"][-1] < options.spread_tol
+    if loose.steps == tight.steps:
+        a, b = loose.history["rms_slope"][1:], tight.history["rms_slope"][1:]
+        assert np.max(np.abs(a / b - 1)) < 1e-5
