@@ -126,7 +126,7 @@ def compare_with_steady(result, steady, problem):
     height = np.where(face_mask, result.height, 0.0)
     plain = face_rms_slope(problem.halfspace, face_mask, height, result.pressure,
                            result.approach)
-    estimator = HistoryEstimator(problem, np.where(face_mask, result.initial_height, 0.0))
+    estimator = HistoryEstimator.of(problem, np.where(face_mask, result.initial_height, 0.0))
     final = estimator.figures(result.distance, height, result.pressure, result.approach)
     if math.isfinite(steady.rms_slope_error):
         steady_rms, steady_error = float(steady.rms_slope), float(steady.rms_slope_error)

@@ -352,6 +352,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     u = np.empty(shape)
     g = np.empty(shape)
     r = np.empty(shape)
+    work = np.empty(shape)
     history = []
     gz_old = 1.0
     restart = True
@@ -385,7 +386,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
             open_violation *= off_f
             violation += _dot(open_violation, open_violation)
         residual = float(np.sqrt(violation / n_face))
-        scale = float(np.sqrt(_dot(u * u, active_f) / n_active))
+        scale = float(np.sqrt(_dot3(u, u, active_f) / n_active))
         tolerance = max(rtol * scale, atol)
         if not np.isfinite(residual):
             message = f"non-finite residual at iteration {it}"
@@ -416,7 +417,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         # Preconditioned residual, projected to zero mean on the active set
         # (the load constraint).
         z = r.copy() if precondition is None else precondition(r, active)
-        z -= (_dot(z, active_f) / n_active) * active_f
+        z -= np.multiply(active_f, _dot(z, active_f) / n_active, out=work)
         gz = _dot(r, z)
         if restart or gz_old == 0:
             t = z
@@ -430,13 +431,13 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         q = operator(t)               # K t; A t = K t + shift t
         tq = _dot(t, q)
         if shift is not None:
-            tq += _dot(t * t, shift)
+            tq += _dot3(t, t, shift)
         if not tq > 0:
             message = f"breakdown at iteration {it}: non-positive curvature {tq!r}"
             break
         tau = _dot(r, t) / tq
-        p -= tau * t
-        v -= tau * q
+        p -= np.multiply(t, tau, out=work)
+        v -= np.multiply(q, tau, out=work)
         since_full += 1
 
         # Pixels leaving (negative pressure) and entering (penetrating) the set.
@@ -503,6 +504,11 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         success=success,
         message=message,
     )
+
+
+def _dot3(a, b, c):
+    """Sum of the elementwise product of three arrays of the same shape (no temporary)."""
+    return float(np.einsum("ij,ij,ij->", a, b, c))
 
 
 def _dot(a, b):

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 __all__ = [
+    "CHECKPOINT_SHARE",
     "DIVERGENCE_RELIEF",
     "EXPLICIT_SAFETY",
     "FAILURE_FACTOR",
@@ -27,6 +28,7 @@ __all__ = [
     "SOLVE_SPREAD_SHARE",
     "StepController",
     "StopTests",
+    "checkpoint_due",
     "contact_tolerance",
 ]
 
@@ -51,10 +53,27 @@ MAX_JUMPS = 5
 LANDING_SLACK = 1e-9
 #: Relative slack of the distance limit (round-off of the summed steps).
 _DISTANCE_SLACK = 1e-12
+#: Most of a run's wall time its checkpoints may take (see :func:`checkpoint_due`).
+CHECKPOINT_SHARE = 0.05
 #: Share of a step's error tolerance ``tol f*`` left to its contact solves.
 SOLVE_ERROR_SHARE = 1e-3
 #: Share of the last wear-rate spread that a solve may move the pressure by.
 SOLVE_SPREAD_SHARE = 1e-2
+
+
+def checkpoint_due(elapsed, interval, last_cost):
+    """Whether a checkpoint is due, ``elapsed`` s after the last one, which took ``last_cost`` s.
+
+    Due once ``interval`` seconds have passed (the run's
+    ``checkpoint_interval``; 0: after every step) and, unless the interval
+    is 0, the run has worked long enough since that writing checkpoints
+    takes at most ``CHECKPOINT_SHARE`` of its time: on a fine grid, whose
+    checkpoints take a second or more, they come further apart than
+    ``interval``.
+    """
+    if interval == 0:
+        return True
+    return elapsed >= max(interval, last_cost * (1.0 - CHECKPOINT_SHARE) / CHECKPOINT_SHARE)
 
 
 def contact_tolerance(tol, depth_scale, spread, compliance_floor, mean_pressure):

@@ -162,6 +162,7 @@ class FourierPreconditioner:
         levels, weights = shift_levels(shift, face_mask, float(symbol.min()), max_levels)
         self.levels = levels
         self.weights = weights
+        self._field = self._spectrum = None  # work buffers of the stitched form
         if weights is None:
             self.inverse_symbol = 1.0 / (symbol + levels[0])
         else:
@@ -187,15 +188,21 @@ class FourierPreconditioner:
             z = self._inverse(spectrum)
         else:
             # B^T r: one transform per level, summed in Fourier space ...
+            # (the weighted residual and each level's spectrum go through work
+            # buffers: fresh arrays of this size cost as much as a transform)
+            if self._field is None:
+                self._field = np.empty(residual.shape)
             total = None
             for phi, root in zip(self.weights, self.inverse_root, strict=True):
-                spectrum = self._forward(phi * residual)
+                spectrum = self._forward(np.multiply(phi, residual, out=self._field))
                 spectrum *= root
                 total = spectrum if total is None else total.__iadd__(spectrum)
             # ... then B: one inverse transform per level.
+            if self._spectrum is None:
+                self._spectrum = np.empty_like(total)
             z = None
             for phi, root in zip(self.weights, self.inverse_root, strict=True):
-                part = self._inverse(total * root)
+                part = self._inverse(np.multiply(total, root, out=self._spectrum))
                 part *= phi
                 z = part if z is None else z.__iadd__(part)
         z *= active

@@ -565,14 +565,15 @@ class PressureHistory:
             # pressures vanish off the face, so the sums run over the face.
             k = len(self) - 1
             if self._work is None:
-                self._work = np.empty((2, self.size - 1, v0.size))
+                self._work = np.empty((3, self.size - 1, v0.size))
             diff, kdiff = self._work[0, :k], self._work[1, :k]
             for i in range(k):  # in place: no temporaries of k full fields
                 np.subtract(self._values[i + 1], v0, out=diff[i])
                 np.subtract(self._products[i + 1], kv0, out=kdiff[i])
             applied = kdiff
             if shift is not None:
-                applied = kdiff + s * diff
+                applied = np.multiply(diff, s, out=self._work[2, :k])
+                applied += kdiff
             # einsum rather than BLAS: a threaded BLAS call on a loaded
             # machine can cost more than an FFT pair.
             gram = np.einsum("ij,kj->ik", diff, applied)

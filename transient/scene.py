@@ -15,8 +15,8 @@ They are registered with :func:`steady.scene.load_scene` through its
     step = 0.01                 # s*, optional: fixed steps, no adaptivity
     initial_step = 1e-5         # s*, optional: first adaptive step
     snapshots = [0.1, 1.0, 3.0] # s*, face and pressure stored there
-    contact_rtol = 1e-10        # relative tolerance of every contact solve
-    checkpoint_interval = 10.0  # s of wall clock between checkpoints
+    contact_rtol = 1e-10        # relative tolerance of every contact solve (floor)
+    checkpoint_interval = 10.0  # least s of wall clock between checkpoints
 
     [initial_face]
     kind = "tilted"             # "flat" (default), "tilted", "crowned" or "file"
