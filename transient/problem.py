@@ -13,6 +13,7 @@ map, never a per-pixel coefficient field built by hand.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -303,7 +304,7 @@ class WearProblem:
             return self.coefficient_field * p
         return self.coefficient_field * p ** self.exponent
 
-    @property
+    @functools.cached_property
     def compliance_floor(self):
         """Lower bound of the eigenvalues of ``K`` on any contact set, m/Pa.
 
