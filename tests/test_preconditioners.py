@@ -71,6 +71,23 @@ def test_phase_wise_shift_gives_one_level_per_phase():
     assert np.array_equal(sum(weights)[face], np.ones(face.sum())), "weights must sum to one"
 
 
+def test_phase_wise_shift_without_face_mask_counts_every_pixel():
+    # face_mask=None means "all pixels": the same levels as an all-true mask.
+    n = 32
+    hs = halfspace(n)
+    labels = GEOMETRIES["voronoi"].labels(n)
+    shift = two_phase_shift(labels, hs, 3.0)
+    levels, weights = shift_levels(shift, None, hs.self_influence)
+    expected, expected_weights = shift_levels(shift, np.ones((n, n), bool), hs.self_influence)
+    assert levels == expected == sorted({float(v) for v in shift.ravel()}), f"levels {levels}"
+    for phi, expected_phi in zip(weights, expected_weights, strict=True):
+        assert np.array_equal(phi, expected_phi), "weights must not depend on the default mask"
+    r = np.random.default_rng(3).standard_normal((n, n))
+    face = np.ones((n, n), bool)
+    assert np.array_equal(FourierPreconditioner(hs, shift)(r, face),
+                          FourierPreconditioner(hs, shift, face_mask=face)(r, face))
+
+
 def test_continuous_shift_is_interpolated_between_nodes():
     n = 24
     hs = halfspace(n)

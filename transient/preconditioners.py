@@ -233,7 +233,7 @@ def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
     """
     if shift is None:
         return [0.0], None
-    values = shift if face_mask is None else shift[face_mask]
+    values = np.ravel(shift) if face_mask is None else shift[face_mask]
     s_min, s_max = float(values.min()), float(values.max())
     # A spread below 1 % of the smallest (scale + shift) changes the operator's
     # eigenvalues by less than 1 %: one level (the minimum) is as good.
