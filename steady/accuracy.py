@@ -299,13 +299,17 @@ class _BoxGradient:
         ``dipoles``, the stack ``(p, mx, my)`` of shape ``(3,) + ns``.
         """
         size, w = self.size, self.workers
+        # Row transforms of the source rows only (the padding rows' are zero),
+        # then the column transforms of the zero-padded result.
+        rows = scipy.fft.rfft(sources, n=size[1], axis=-1, workers=w)
+        spectrum = scipy.fft.fft(rows, n=size[0], axis=-2, workers=w)
         if self.dipoles:
-            sq, mxq, myq = scipy.fft.rfft2(sources, s=size, workers=w)
+            sq, mxq, myq = spectrum
             xx, xy, yy = self.hessian_q
             products = (sq * self.gx_q + mxq * xx + myq * xy,
                         sq * self.gy_q + mxq * xy + myq * yy)
         else:
-            sq = scipy.fft.rfft2(sources, s=size, workers=w)
+            sq = spectrum
             products = (sq * self.gx_q, sq * self.gy_q)
         out = []
         for product in products:
@@ -392,6 +396,15 @@ class SlopeEnergy:
         self._offsets = tuple((np.arange(a) + 0.5 - a / 2) * self.h - o
                               for a, o in zip(self.shape, centre, strict=True))
         self._tail_centre = centre
+
+    @property
+    def workers(self):
+        """Threads of its transforms (:mod:`scipy.fft`'s ``workers``); may be reset."""
+        return self._fine.workers
+
+    @workers.setter
+    def workers(self, value):
+        self._fine.workers = self._coarse.workers = value
 
     def _boxed(self, field):
         """``field`` (grid shape) placed in the fine box."""

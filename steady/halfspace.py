@@ -223,9 +223,11 @@ class HalfSpace:
         self._influence_q = self._even_spectrum(self.influence_quadrant)
         self._influence_q.flags.writeable = False
         self._gradient_q = None
-        # Work buffers, reused by every product: the zero padding is written
-        # once, and the products need no fresh allocation.
-        self._padded = np.zeros(self.padded_shape)
+        # Work buffers, reused by every product: the zero padding of the rows
+        # is written once, and the padded spectrum of a product needs no
+        # fresh allocation (at n = 1024 it is 34 MB, which the allocator
+        # would map and fault in page by page at every call).
+        self._rows = np.zeros((nx, 2 * ny))
         self._work = np.empty((2 * nx, ny + 1), dtype=complex)
 
     @property
@@ -307,12 +309,26 @@ class HalfSpace:
         -------
         ndarray, shape (2nx, ny + 1), complex
         """
+        return self._padded_spectrum(field_r, np.empty((2 * self.shape[0], self.shape[1] + 1),
+                                                       dtype=complex))
+
+    def _padded_spectrum(self, field_r, out):
+        """:meth:`forward` into ``out`` (shape (2nx, ny + 1), complex), which it returns.
+
+        The row transforms run on the grid's ``nx`` rows only (the padding
+        rows are zero, and so are their transforms), then the column
+        transforms in place: a quarter fewer operations than a transform of
+        the whole padded array.
+        """
         field_r = np.asarray(field_r)
         if field_r.shape != self.shape:
             raise ValueError(f"field must have shape {self.shape}, got {field_r.shape}")
         nx, ny = self.shape
-        self._padded[:nx, :ny] = field_r
-        return scipy.fft.rfft2(self._padded, workers=self.workers)
+        self._rows[:, :ny] = field_r
+        out[:nx] = scipy.fft.rfft(self._rows, axis=1, workers=self.workers)
+        out[nx:] = 0.0
+        # A complex, contiguous input with overwrite_x is transformed in place.
+        return scipy.fft.fft(out, axis=0, workers=self.workers, overwrite_x=True)
 
     def inverse(self, spectrum_q, *, overwrite=False):
         """Real field on the grid from a padded half spectrum.
@@ -350,7 +366,7 @@ class HalfSpace:
         -------
         ndarray, shape (nx, ny), m
         """
-        return self._product(self.forward(pressure_r), self._influence_q)
+        return self._product(self._padded_spectrum(pressure_r, self._work), self._influence_q)
 
     def displacement_q(self, pressure_q):
         """Displacement from an already transformed pressure (see :meth:`forward`)."""

@@ -311,6 +311,22 @@ class HistoryEstimator:
                               **kw).pressure[self.rim]
         return (start / flat) ** 2
 
+    @property
+    def workers(self):
+        """Threads of its transforms (:mod:`scipy.fft`'s ``workers``); may be reset.
+
+        :func:`transient.runin.run_in` sets 1 while the figures run on their
+        own thread beside the solver's transforms, so that the two do not
+        ask for more threads than the machine has cores.
+        """
+        return self.energy.workers
+
+    @workers.setter
+    def workers(self, value):
+        self.energy.workers = value
+        if self._own_halfspace is not None:
+            self._own_halfspace.workers = value
+
     def _halfspace(self):
         """A half-space operator of this estimator's own.
 
@@ -321,7 +337,7 @@ class HistoryEstimator:
         """
         if self._own_halfspace is None:
             hs = self.problem.halfspace
-            self._own_halfspace = HalfSpace(hs.shape, hs.h, hs.E_star, workers=hs.workers)
+            self._own_halfspace = HalfSpace(hs.shape, hs.h, hs.E_star, workers=self.workers)
         return self._own_halfspace
 
     def rim_layer_pixels(self, distance):

@@ -369,6 +369,8 @@ class _Run:
         if self._worker is None:
             self._worker = concurrent.futures.ThreadPoolExecutor(
                 max_workers=1, thread_name_prefix="runin-history")
+            # One thread for the figures' transforms: the solver's use the cores.
+            self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
         index = len(hist["distance"])
         self._pending.append((index, self._worker.submit(
             self.estimator.figures, self.s, self.height.copy(), self.pressure.copy(),
@@ -404,6 +406,7 @@ class _Run:
         if self._worker is not None:
             self._worker.shutdown(wait=True, cancel_futures=True)
             self._worker = None
+            self.estimator.workers = self._estimator_workers
         self._pending = []
 
     def snapshot(self):
