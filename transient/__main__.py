@@ -178,8 +178,8 @@ def run_in_memory(n, snapshots=0):
       :func:`steady.command_line.slope_estimator_memory`);
     - the pressure history of the warm starts
       (:class:`transient.problem.PressureHistory`: six pressures and their
-      products, 96, the differences of five of each and the shifted
-      differences, 120): 216;
+      products, 96, and the differences of five consecutive ones of each,
+      80): 176;
     - the larger of one step and the slope estimator's work: a step of
       ESDIRK3, the largest, has three stages, each a contact solve
       (pressure, gap, preconditioned residual, direction, its product,
@@ -220,12 +220,12 @@ def run_in_memory(n, snapshots=0):
     --------
     >>> from steady.command_line import format_bytes
     >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
-    467 MiB 207 GiB
+    455 MiB 201 GiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     pixels = n * n
     kept, applied = slope_estimator_memory(n)
-    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 216 + 192) * pixels + kept
+    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 176 + 192) * pixels + kept
             + max(352 * pixels, applied) + 16 * pixels + applied
             + 64 * pixels * int(snapshots))
     return int(1.25 * peak) + 16 * 2 ** 20

@@ -435,7 +435,7 @@ class WearProblem:
         if m == 1.0:
             shift = c * self.coefficient_field
             if history is not None and len(history):
-                x0, kx0 = history.predict(height, shift)
+                x0, kx0 = history.predict(height, shift_scale=c)
                 self._predicted = (x0, kx0)
             res = self.contact(height, shift=shift, x0=x0, atol=atol)
         else:
@@ -501,7 +501,16 @@ class PressureHistory:
         self.size = int(size)
         self._values = []
         self._products = []
-        self._work = None  # differences from the newest pressure and their products
+        # Differences of consecutive pressures d_i = v_i - v_(i+1) and their
+        # products, newest first (rows 0 .. len - 2): they span the same affine
+        # set as the differences from the newest, but stay the same when a
+        # pressure is added, and so do their Gram matrices, which are kept:
+        # <d_i, K d_j> (exact K symmetric: computed once per pair) and
+        # <d_i, k d_j> with the wear coefficients k (filled when first asked).
+        self._diffs = self._kdiffs = None
+        self._gram = np.zeros((self.size - 1, self.size - 1))
+        self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
+        self._weights = None  # k on the face, flattened
         if pressures is not None:
             pressures = np.asarray(pressures, dtype=float)
             if displacements is None:
@@ -521,8 +530,27 @@ class PressureHistory:
         pressure = np.where(self.problem.face_mask, pressure, 0.0)
         if displacement is None:
             displacement = self.problem.halfspace.displacement(pressure)
-        self._values.insert(0, pressure.ravel())
-        self._products.insert(0, np.array(displacement, dtype=float).ravel())
+        value = pressure.ravel()
+        product = np.array(displacement, dtype=float).ravel()
+        if self._values and self.size > 1:
+            if self._diffs is None:
+                self._diffs = np.empty((self.size - 1, value.size))
+                self._kdiffs = np.empty((self.size - 1, value.size))
+            k = min(len(self), self.size - 1)  # differences held after this one
+            for stack in (self._diffs, self._kdiffs):
+                stack[1:k] = stack[:k - 1]
+            np.subtract(value, self._values[0], out=self._diffs[0])
+            np.subtract(product, self._products[0], out=self._kdiffs[0])
+            for gram in (self._gram, self._gram_k):
+                gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
+            d = self._diffs[0]
+            # One product per pair, newest with older: the same numbers whatever
+            # the order of the pushes and predictions that led here.
+            row = [float(np.einsum("j,j->", d, self._kdiffs[j])) for j in range(k)]
+            self._gram[0, :k] = self._gram[:k, 0] = row
+            self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
+        self._values.insert(0, value)
+        self._products.insert(0, product)
         del self._values[self.size:], self._products[self.size:]
 
     def newest(self):
@@ -537,13 +565,32 @@ class PressureHistory:
         """Their elastic displacements ``K p``, newest first, m, shape (k, nx, ny)."""
         return np.array(self._products).reshape(-1, *self.problem.shape)
 
-    def predict(self, height, shift=None):
+    def _coefficient_gram(self, k):
+        """``<d_i, k d_j>`` for the ``k`` differences held, the missing entries filled."""
+        gram = self._gram_k
+        if self._weights is None:
+            self._weights = np.where(self.problem.face_mask, self.problem.coefficient_field,
+                                     0.0).ravel()
+        for i in range(k):
+            missing = np.isnan(gram[i, i:k])
+            if missing.any():
+                weighted = self._weights * self._diffs[i]
+                for j in np.flatnonzero(missing) + i:
+                    gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, self._diffs[j]))
+        return gram[:k, :k]
+
+    def predict(self, height, shift=None, *, shift_scale=None):
         """Warm start of the contact problem ``(K + diag(shift)) p = d - height``.
 
         Parameters
         ----------
         height : ndarray, shape (nx, ny), m
         shift : ndarray, shape (nx, ny), m/Pa, optional
+        shift_scale : float, m, optional
+            The shift is ``shift_scale`` times the wear coefficients
+            (:attr:`WearProblem.coefficient_field`), the linear wear law's
+            stage: the Gram matrix of that part is then kept from one call to
+            the next instead of summed again.  Not with ``shift``.
 
         Returns
         -------
@@ -555,33 +602,32 @@ class PressureHistory:
             ``K`` times it on the whole grid (the same combination of the
             stored products).
         """
+        if shift is not None and shift_scale is not None:
+            raise ValueError("give the shift either as an array or as shift_scale, not both")
         shape = self.problem.shape
         v0, kv0 = self._values[0], self._products[0]
         beta = None
-        if len(self) > 1:
+        k = len(self) - 1
+        if k:
             face = self.problem.face_mask.ravel()
-            s = 0.0 if shift is None else np.where(face, shift.ravel(), 0.0)
-            # Differences from the newest pressure: x = v0 + D^T beta keeps the
-            # load, and the small Gram matrix free of cancellation.  The
-            # pressures vanish off the face, so the sums run over the face.
-            k = len(self) - 1
-            if self._work is None:
-                self._work = np.empty((3, self.size - 1, v0.size))
-            diff, kdiff = self._work[0, :k], self._work[1, :k]
-            for i in range(k):  # in place: no temporaries of k full fields
-                np.subtract(self._values[i + 1], v0, out=diff[i])
-                np.subtract(self._products[i + 1], kv0, out=kdiff[i])
-            applied = kdiff
-            if shift is not None:
-                applied = np.multiply(diff, s, out=self._work[2, :k])
-                applied += kdiff
-            # einsum rather than BLAS: a threaded BLAS call on a loaded
-            # machine can cost more than an FFT pair.
-            gram = np.einsum("ij,kj->ik", diff, applied)
-            gram = 0.5 * (gram + gram.T)
+            diff, kdiff = self._diffs[:k], self._kdiffs[:k]
+            # x = v0 + D^T beta keeps the load, with the consecutive differences
+            # D (a small Gram matrix free of cancellation); the pressures
+            # vanish off the face, so the sums run over the face.
+            gram = self._gram[:k, :k].copy()
+            if shift_scale is not None:
+                s = shift_scale * self.problem.coefficient_field.ravel()
+                gram += shift_scale * self._coefficient_gram(k)
+            elif shift is not None:
+                s = np.where(face, shift.ravel(), 0.0)
+                # einsum rather than BLAS: a threaded BLAS call on a loaded
+                # machine can cost more than an FFT pair.
+                gram += np.einsum("ij,kj->ik", diff, diff * s)
+            else:
+                s = 0.0
             gradient = kv0 + s * v0 + height.ravel()
             rhs = np.einsum("ij,j->i", diff, gradient - gradient[face].mean())
-            w, q = np.linalg.eigh(gram)
+            w, q = np.linalg.eigh(0.5 * (gram + gram.T))
             keep = w > _GRAM_CUTOFF * max(float(w[-1]), 0.0)
             if keep.any():
                 beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
