@@ -83,6 +83,7 @@ from steady.command_line import (
     configure_logging,
     describe_os_error,
     halfspace_memory,
+    keep_freed_memory,
     prepare_output,
     program_name,
     run_command,
@@ -746,6 +747,8 @@ def main(argv=None):
     # The summary and the error line say how a run ended: library warnings (a failed
     # contact solve, retried) show with -v.
     configure_logging(args.verbose)
+    # Large work arrays are allocated at every step: keep them in the heap.
+    keep_freed_memory()
     return run_command(run, args, verbose=args.verbose)
 
 
