@@ -269,16 +269,8 @@ def support(outline, direction):
         return lx * abs(ux) + ly * abs(uy)
     if isinstance(outline, Ellipse):
         return math.hypot(lx * ux, ly * uy)
-    if isinstance(outline, MaskOutline):
-        i, j = np.nonzero(outline.mask)
-        ps = outline.pixel_size
-        x0, y0 = -lx + i * ps, -ly + j * ps
-        return float(np.max(np.maximum(x0 * ux, (x0 + ps) * ux)
-                            + np.maximum(y0 * uy, (y0 + ps) * uy)))
-    grid = FaceGrid(outline, max(512, outline.min_grid()))
-    i, j = np.nonzero(grid.mask)
-    half = 0.5 * grid.h
-    return float(np.max(grid.x[i] * ux + half * abs(ux) + grid.y[j] * uy + half * abs(uy)))
+    x0, x1, y0, y1 = _pixel_edges(outline)
+    return float(np.max(np.maximum(x0 * ux, x1 * ux) + np.maximum(y0 * uy, y1 * uy)))
 
 
 def circumradius(outline):
@@ -297,17 +289,27 @@ def circumradius(outline):
         return math.hypot(lx, ly)
     if isinstance(outline, Ellipse):
         return max(lx, ly)
+    x0, x1, y0, y1 = _pixel_edges(outline)
+    return float(np.sqrt(np.max(np.maximum(x0**2, x1**2) + np.maximum(y0**2, y1**2))))
+
+
+def _pixel_edges(outline):
+    """Lower and upper x and y edges of the face's pixels, m (one entry per pixel).
+
+    A mask's own pixels; for another outline, those of its face on a grid
+    of at least 512 pixels.
+    """
     if isinstance(outline, MaskOutline):
+        lx, ly = outline.half_extent
         i, j = np.nonzero(outline.mask)
         ps = outline.pixel_size
         x0, y0 = -lx + i * ps, -ly + j * ps
-        return float(np.sqrt(np.max(np.maximum(x0**2, (x0 + ps) ** 2)
-                                    + np.maximum(y0**2, (y0 + ps) ** 2))))
+        return x0, x0 + ps, y0, y0 + ps
     grid = FaceGrid(outline, max(512, outline.min_grid()))
     i, j = np.nonzero(grid.mask)
     half = 0.5 * grid.h
-    return float(np.sqrt(np.max((np.abs(grid.x[i]) + half) ** 2
-                                + (np.abs(grid.y[j]) + half) ** 2)))
+    x, y = grid.x[i], grid.y[j]
+    return x - half, x + half, y - half, y + half
 
 
 def _flat_statistics(outline):

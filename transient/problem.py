@@ -510,7 +510,6 @@ class PressureHistory:
         self._diffs = self._kdiffs = None
         self._gram = np.zeros((self.size - 1, self.size - 1))
         self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
-        self._weights = None  # k on the face, flattened
         if pressures is not None:
             pressures = np.asarray(pressures, dtype=float)
             if displacements is None:
@@ -568,13 +567,11 @@ class PressureHistory:
     def _coefficient_gram(self, k):
         """``<d_i, k d_j>`` for the ``k`` differences held, the missing entries filled."""
         gram = self._gram_k
-        if self._weights is None:
-            self._weights = np.where(self.problem.face_mask, self.problem.coefficient_field,
-                                     0.0).ravel()
+        coefficients = self.problem.coefficient_field.ravel()  # zero off the face
         for i in range(k):
             missing = np.isnan(gram[i, i:k])
             if missing.any():
-                weighted = self._weights * self._diffs[i]
+                weighted = coefficients * self._diffs[i]
                 for j in np.flatnonzero(missing) + i:
                     gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, self._diffs[j]))
         return gram[:k, :k]
