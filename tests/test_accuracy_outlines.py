@@ -184,19 +184,26 @@ def test_far_tail_of_a_uniform_disk(half_side, tol):
     assert abs(both / exact - 1) < abs(mono / exact - 1) / 20, "the second moment must help"
 
 
-def test_two_phase_square_within_its_error_bar():
-    """Voronoi cells (100 seeds, k_2/k_1 = 10) meeting a square's sides and corners.
-
-    Against the corrected value at n = 1024 (its error bar 4.3e-4): measured change
-    +1.26e-3 at n = 128 with an error bar of 2.82e-3; plain -5.6e-2.
-    """
+@pytest.mark.parametrize("n, n_ref, tol, beats_plain", [
+    # Against n = 1024 (its error bar 4.3e-4): measured change +1.26e-3 with an
+    # error bar of 2.82e-3; plain -5.6e-2.
+    (128, 1024, 2.5e-3, True),
+    # Against n = 2048 (docs/benchmarks.md): measured change +6.36e-4, error bar
+    # 5.27e-4, the reference's 2.2e-4: the staircase phase boundaries meeting
+    # straight sides leave a first-order residual that the bar only about
+    # matches (see the benchmark's verdict).
+    pytest.param(512, 2048, 1e-3, False, marks=pytest.mark.slow),
+], ids=["128", "512"])
+def test_two_phase_square_within_its_error_bar(n, n_ref, tol, beats_plain):
+    """Voronoi cells (100 seeds, k_2/k_1 = 10) meeting a square's sides and corners."""
     geometry = Voronoi(100, (0.5, 0.5), 4321)
-    ref = estimate_rms_slope(geometry, [1.0, 10.0], FORCE, SQUARE, E_STAR, 1024)
-    est = estimate_rms_slope(geometry, [1.0, 10.0], FORCE, SQUARE, E_STAR, 128)
+    ref = estimate_rms_slope(geometry, [1.0, 10.0], FORCE, SQUARE, E_STAR, n_ref)
+    est = estimate_rms_slope(geometry, [1.0, 10.0], FORCE, SQUARE, E_STAR, n)
     change = abs(est.rms_slope - ref.rms_slope)
-    assert change < 2.5e-3 * ref.rms_slope, f"changed by {change / ref.rms_slope:.2e}"
-    assert change <= est.error + ref.error, f"{change:.2e} outside {est.error:.2e}"
-    assert change < abs(est.rms_slope_plain - ref.rms_slope) / 10, "corrected vs plain"
+    assert change < tol * ref.rms_slope, f"changed by {change / ref.rms_slope:.2e}"
+    assert change <= est.error + ref.error, f"{change:.2e} outside {est.error + ref.error:.2e}"
+    if beats_plain:
+        assert change < abs(est.rms_slope_plain - ref.rms_slope) / 10, "corrected vs plain"
 
 
 @pytest.mark.slow
@@ -217,22 +224,6 @@ def test_homogeneous_outline_on_fine_grids(outline, n, tol):
     assert abs(err) < tol, f"{outline.describe()}, n={n}: corrected off by {err:+.2e}"
     assert abs(err) <= bar, f"n={n}: error {err:+.2e} outside the error bar {bar:.2e}"
     assert abs(err) < abs(plain) / 4, f"n={n}: corrected {err:+.2e} vs plain {plain:+.2e}"
-
-
-@pytest.mark.slow
-def test_two_phase_square_on_a_fine_grid():
-    """Voronoi on the square at n = 512 against n = 2048 (docs/benchmarks.md).
-
-    Measured change +6.36e-4, error bar 5.27e-4, the reference's 2.2e-4: the staircase
-    phase boundaries meeting straight sides leave a first-order residual that the bar
-    only about matches (see the benchmark's verdict).
-    """
-    geometry = Voronoi(100, (0.5, 0.5), 4321)
-    ref = estimate_rms_slope(geometry, [1.0, 10.0], FORCE, SQUARE, E_STAR, 2048)
-    est = estimate_rms_slope(geometry, [1.0, 10.0], FORCE, SQUARE, E_STAR, 512)
-    change = abs(est.rms_slope - ref.rms_slope)
-    assert change < 1e-3 * ref.rms_slope, f"changed by {change / ref.rms_slope:.2e}"
-    assert change <= est.error + ref.error, f"{change:.2e} outside {est.error + ref.error:.2e}"
 
 
 def test_benchmark_script_runs(tmp_path):
