@@ -153,6 +153,11 @@ def _write_error(err, tmp, path):
 
 def _keep_backup(path, backup):
     """Make ``backup`` a copy of ``path`` (a hard link where possible), atomically."""
+    if backup.exists() and os.path.samefile(path, backup):
+        # A writer killed between this step and its rename left the backup a
+        # link of the file itself; renaming a third link over it would do
+        # nothing (POSIX) and leave the temporary name behind.
+        return
     fd, tmp = tempfile.mkstemp(dir=backup.parent, prefix=f".{backup.name}.", suffix=".tmp")
     os.close(fd)
     tmp = pathlib.Path(tmp)

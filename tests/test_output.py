@@ -115,6 +115,25 @@ def test_atomic_h5_removes_the_temporary_file_on_error(tmp_path, interrupt):
     assert sorted(os.listdir(tmp_path)) == ["x.h5"], f"left behind: {os.listdir(tmp_path)}"
 
 
+def test_atomic_h5_backup_already_linked_to_the_file(tmp_path):
+    """A backup that is already a hard link of the file: no temporary file left.
+
+    A writer killed between keeping the backup and renaming its new file
+    leaves them so; renaming a third link over the backup does nothing.
+    """
+    path, backup = tmp_path / "x.h5", tmp_path / "x.h5.prev"
+    with atomic_h5(path, format="runin.test", version=1) as f:
+        f["values"] = np.arange(2.0)
+    os.link(path, backup)
+    with atomic_h5(path, format="runin.test", version=2, force=True, backup=backup) as f:
+        f["values"] = np.arange(3.0)
+    assert sorted(os.listdir(tmp_path)) == ["x.h5", "x.h5.prev"], \
+        f"left behind: {sorted(os.listdir(tmp_path))}"
+    with h5py.File(path, "r") as new, h5py.File(backup, "r") as old:
+        assert (new.attrs["format_version"], old.attrs["format_version"]) == (2, 1), \
+            "the new file in place, the old one kept as the backup"
+
+
 def test_atomic_h5_refuses_existing_files_and_directories(tmp_path):
     path = tmp_path / "x.h5"
     path.write_bytes(b"keep me")
