@@ -214,11 +214,18 @@ def test_interrupt_after_checkpoints_then_resume(tmp_path, scene, capsys, monkey
     assert f"interrupted; the checkpoint in {str(out)!r} (step {saved.steps}, s = " in line \
         and line.endswith("can be continued with --resume"), line
     assert saved.steps > 0 and not lock_path(out).exists(), "checkpoint kept, lock released"
+    with h5py.File(out) as f:  # rewritten at every checkpoint: stored plain
+        assert [f[f"snapshots/{name}"].compression for name in ("height", "pressure")] \
+            == [None, None], "a checkpoint's snapshots are not compressed"
     monkeypatch.undo()
     status, _, err = run_cli([scene, "-o", out, "--resume", "--checkpoint-interval", "0"],
                              capsys)
     assert status == 0 and err == "", f"exit {status}: {err!r}"
     assert read_run(out)[0].status == "steady", "the resumed run must finish"
+    with h5py.File(out) as f:
+        filters = [(f[f"snapshots/{name}"].compression, f[f"snapshots/{name}"].shuffle)
+                   for name in ("height", "pressure")]
+        assert filters == [("gzip", True)] * 2, f"a finished run's snapshot filters: {filters}"
 
 
 def test_steady_interrupt(tmp_path, capsys, monkeypatch, scene_file):

@@ -28,6 +28,7 @@ Layout (root group)::
     state/        height, initial_height, previous_height, previous_rate
     history/      one dataset per :data:`transient.runin.HISTORY_UNITS` name
     snapshots/    distance (k,) m, height (k, nx, ny) m, pressure (k, nx, ny) Pa
+                  (byte shuffle and deflate, except in a checkpoint)
     comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
     outline/      the face's outline, as :func:`steady.output.write_outline`
                   writes it (kind, area, its lengths; a mask's ``mask``)
@@ -202,6 +203,12 @@ def _dataset_digest(data, attrs):
     return h.hexdigest()
 
 
+# Snapshots of a finished or stopped run: byte shuffle then deflate (level 1)
+# keeps about 0.59 of a 1024^2 run's snapshots, against 0.69 for deflate
+# (level 4) alone, in about half its time.
+_SNAPSHOT_FILTERS = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
+
+
 def _put(group, name, value, unit, **options):
     """Create a dataset with its ``units`` and ``sha256`` attributes."""
     ds = group.create_dataset(name, data=value, **options)
@@ -273,8 +280,11 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
             _put(hist, name, value, HISTORY_UNITS[name])
         snaps = f.create_group("snapshots")
         _put(snaps, "distance", result.snapshot_distance, "m")
-        _put(snaps, "height", result.snapshot_height, "m", compression="gzip")
-        _put(snaps, "pressure", result.snapshot_pressure, "Pa", compression="gzip")
+        # A checkpoint is rewritten whole every few seconds: compressing its
+        # snapshots each time would cost more than the rest of the file.
+        packed = {} if result.status == "running" else _SNAPSHOT_FILTERS
+        _put(snaps, "height", result.snapshot_height, "m", **packed)
+        _put(snaps, "pressure", result.snapshot_pressure, "Pa", **packed)
         if comparison is not None:
             g = f.create_group("comparison")
             for fld in dataclasses.fields(comparison):
