@@ -537,7 +537,10 @@ class PressureHistory:
                 self._kdiffs = np.empty((self.size - 1, value.size))
             k = min(len(self), self.size - 1)  # differences held after this one
             for stack in (self._diffs, self._kdiffs):
-                stack[1:k] = stack[:k - 1]
+                # Row by row, last first: an overlapping slice assignment
+                # would go through a temporary copy of the whole stack.
+                for i in range(k - 1, 0, -1):
+                    stack[i] = stack[i - 1]
             np.subtract(value, self._values[0], out=self._diffs[0])
             np.subtract(product, self._products[0], out=self._kdiffs[0])
             for gram in (self._gram, self._gram_k):
