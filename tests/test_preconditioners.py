@@ -17,6 +17,8 @@ from transient.contact import solve_contact
 from transient.preconditioners import (
     FourierPreconditioner,
     JacobiPreconditioner,
+    ScaledShift,
+    make_preconditioner,
     shift_levels,
 )
 from transient.problem import PressureHistory
@@ -86,6 +88,43 @@ def test_phase_wise_shift_without_face_mask_counts_every_pixel():
     face = np.ones((n, n), bool)
     assert np.array_equal(FourierPreconditioner(hs, shift)(r, face),
                           FourierPreconditioner(hs, shift, face_mask=face)(r, face))
+
+
+@pytest.mark.parametrize("pattern_kind", ["two phases", "one phase", "many values"])
+def test_scaled_shift_builds_what_auto_builds(pattern_kind):
+    """``ScaledShift(k).preconditioner(c, c k)`` is ``"auto"``'s for ``c k``, bit for bit.
+
+    The factors span every choice: one level (a spread below 1 % of the
+    symbol's floor), the phase levels, and Jacobi (a shift ten times the
+    largest eigenvalue of ``K``).
+    """
+    n = 32
+    hs = halfspace(n)
+    labels = GEOMETRIES["voronoi"].labels(n)
+    face = labels >= 0
+    rng = np.random.default_rng(17)
+    pattern = {"two phases": np.where(labels == 1, 1.0, 0.01),
+               "one phase": np.ones((n, n)),
+               "many values": 10 ** rng.uniform(-2.0, 0.0, (n, n))}[pattern_kind]
+    pattern = np.where(face, pattern, 0.0)
+    floor = float(hs.aliased_symbol.min())
+    top = float(hs.influence_symbol.max())
+    r = np.where(face, rng.standard_normal((n, n)), 0.0)
+    scaled = ScaledShift(hs, face, pattern)
+    kinds = set()
+    for c in (1e-4 * floor, floor, 30 * top, 1e4 * top):
+        shift = c * pattern
+        ours, auto = scaled.preconditioner(c, shift), make_preconditioner("auto", hs, face, shift)
+        assert type(ours) is type(auto), f"c = {c:.3g}: {type(ours)} against {type(auto)}"
+        assert getattr(ours, "levels", None) == getattr(auto, "levels", None), f"c = {c:.3g}"
+        assert np.array_equal(ours(r, face), auto(r, face)), f"c = {c:.3g}: results differ"
+        kinds.add((type(ours).__name__, len(getattr(ours, "levels", []))))
+    expected = {"two phases": {("FourierPreconditioner", 1), ("FourierPreconditioner", 2),
+                               ("JacobiPreconditioner", 0)},
+                "one phase": {("FourierPreconditioner", 1), ("JacobiPreconditioner", 0)},
+                "many values": {("FourierPreconditioner", 1), ("FourierPreconditioner", 4),
+                                ("JacobiPreconditioner", 0)}}[pattern_kind]
+    assert kinds == expected, f"choices made: {sorted(kinds)}"
 
 
 def test_continuous_shift_is_interpolated_between_nodes():

@@ -207,8 +207,9 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         tolerances of the stopping rule below.
     maxiter : int, optional
         Maximum number of iterations (default ``max(200, 10 max(nx, ny))``).
-    preconditioner : {"auto", "fourier", "fourier-padded", "jacobi", "amg", "none"}, optional
-        ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
+    preconditioner : str or callable, optional
+        One of ``"auto"``, ``"fourier"``, ``"fourier-padded"``, ``"jacobi"``,
+        ``"amg"``, ``"none"``.  ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
         ``K + shift`` aliased to the ``nx x ny`` grid (one unpadded FFT pair
         per iteration, about a third of a padded one; ``"fourier-padded"``
         applies it on the padded grid); a non-uniform shift is split into
@@ -219,7 +220,11 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         ``"auto"`` takes ``"jacobi"`` (free).  ``"amg"`` (one
         smoothed-aggregation V-cycle on a truncated kernel) needs
         :mod:`pyamg` and is slower in every case measured
-        (docs/benchmarks.md).
+        (docs/benchmarks.md).  Or a preconditioner already built for this
+        face and shift, called as ``z = preconditioner(residual, active)``
+        (a pressure, Pa, zero off ``active``, from a gap residual, m): a
+        caller that solves many problems of one shift pattern builds them
+        with :class:`transient.preconditioners.ScaledShift`.
     callback : callable, optional
         Called as ``callback(pressure)`` after each iteration with the
         current pressure (read-only view; copy it to keep it).
@@ -315,9 +320,9 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     if int(maxiter) != maxiter or maxiter < 1:
         raise ValueError(f"maxiter must be a positive integer, got {maxiter!r}")
     maxiter = int(maxiter)
-    if preconditioner not in PRECONDITIONERS:
-        raise ValueError(f"preconditioner must be one of {sorted(PRECONDITIONERS)}, "
-                         f"got {preconditioner!r}")
+    if not callable(preconditioner) and preconditioner not in PRECONDITIONERS:
+        raise ValueError(f"preconditioner must be one of {sorted(PRECONDITIONERS)} or a "
+                         f"callable, got {preconditioner!r}")
 
     area = halfspace.h**2
     operator = _Operator(halfspace, shift)
@@ -328,7 +333,10 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         return ContactResult(zero, float(h_face[on_face].min()), zero.copy(), zero.copy(), 0.0,
                              0, 0.0, np.zeros(1), True, "zero load: no pressure")
 
-    precondition = make_preconditioner(preconditioner, halfspace, on_face, shift)
+    if callable(preconditioner):
+        precondition = preconditioner
+    else:
+        precondition = make_preconditioner(preconditioner, halfspace, on_face, shift)
 
     # Initial pressure: the warm start if it carries load, else a rigid estimate.
     p = np.zeros(shape)

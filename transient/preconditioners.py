@@ -45,6 +45,7 @@ __all__ = [
     "FourierPreconditioner",
     "JacobiPreconditioner",
     "PRECONDITIONERS",
+    "ScaledShift",
     "make_preconditioner",
     "register_preconditioner",
     "shift_levels",
@@ -156,10 +157,26 @@ class FourierPreconditioner:
 
     def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False,
                  max_levels=_MAX_LEVELS):
+        symbol = halfspace.influence_symbol if padded else halfspace.aliased_symbol
+        levels, weights = shift_levels(shift, face_mask, float(symbol.min()), max_levels)
+        self._set_levels(halfspace, levels, weights, padded)
+
+    @classmethod
+    def from_levels(cls, halfspace, levels, weights, *, padded=False):
+        """The preconditioner of given levels and weights, as :func:`shift_levels` returns.
+
+        For callers that know the levels of their shift without a pass over
+        it (:class:`ScaledShift`).  ``weights`` are used as they are (not
+        copied).
+        """
+        self = cls.__new__(cls)
+        self._set_levels(halfspace, [float(s) for s in levels], weights, padded)
+        return self
+
+    def _set_levels(self, halfspace, levels, weights, padded):
         self.halfspace = halfspace
         self.padded = bool(padded)
         symbol = halfspace.influence_symbol if self.padded else halfspace.aliased_symbol
-        levels, weights = shift_levels(shift, face_mask, float(symbol.min()), max_levels)
         self.levels = levels
         self.weights = weights
         self._field = self._spectrum = None  # work buffers of the stitched form
@@ -251,6 +268,62 @@ def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
     levels = [float(np.exp(v) - scale) for v in nodes]
     weights = [np.clip(1.0 - np.abs(position - j), 0.0, None) for j in range(max_levels)]
     return levels, weights
+
+
+class ScaledShift:
+    """The ``"auto"`` preconditioner of ``K + c diag(k)`` for any ``c > 0``, ``k`` fixed.
+
+    A run's linear-law stages shift the operator by ``c k``, the wear
+    coefficients times a stage's step: the same pattern at every stage.
+    Its extremes and, for a few distinct values (a phase-wise ``k``), its
+    levels and their indicator weights are found once here; each stage's
+    preconditioner then costs its symbols only.  It is the one
+    :func:`make_preconditioner` builds for ``"auto"`` and the shift
+    ``c k`` (the same choice of Jacobi, one level or the levels of ``k``);
+    a pattern of more than ``max_levels`` values, whose weights depend on
+    ``c``, is built afresh each time.
+
+    Parameters
+    ----------
+    halfspace : steady.halfspace.HalfSpace
+    face_mask : ndarray of bool, shape (nx, ny)
+    pattern : ndarray, shape (nx, ny)
+        ``k``, non-negative and finite on the face (its unit times ``c``'s
+        is m/Pa).
+    """
+
+    def __init__(self, halfspace, face_mask, pattern):
+        self.halfspace = halfspace
+        self.face_mask = face_mask
+        values = pattern[face_mask]
+        self.low, self.high = float(values.min()), float(values.max())
+        distinct = _few_distinct(values, _MAX_LEVELS)
+        self.values = None if distinct is None else [float(v) for v in distinct]
+        self.weights = (None if distinct is None or len(distinct) == 1
+                        else [(pattern == v).astype(float) for v in distinct])
+        self._dominant = _DIAGONAL_DOMINANCE * float(halfspace.influence_symbol.max())
+        self._scale = float(halfspace.aliased_symbol.min())
+
+    def preconditioner(self, c, shift):
+        """The preconditioner of ``K + diag(shift)`` with ``shift = c * pattern``.
+
+        Parameters
+        ----------
+        c : float
+            Positive factor.
+        shift : ndarray, shape (nx, ny), m/Pa
+            ``c * pattern`` (the caller's array, used by Jacobi and by a
+            pattern of many values).
+        """
+        hs = self.halfspace
+        low, high = c * self.low, c * self.high
+        if low >= self._dominant:
+            return JacobiPreconditioner(hs, shift)
+        if high - low <= _UNIFORM_SPREAD * (self._scale + low):
+            return FourierPreconditioner.from_levels(hs, [low], None)
+        if self.weights is None:
+            return FourierPreconditioner(hs, shift, face_mask=self.face_mask)
+        return FourierPreconditioner.from_levels(hs, [c * v for v in self.values], self.weights)
 
 
 class AMGPreconditioner:

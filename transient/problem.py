@@ -25,6 +25,7 @@ from steady.pressures import phase_pressures
 from steady.solution import solve
 
 from .contact import solve_contact
+from .preconditioners import ScaledShift
 
 __all__ = ["PressureHistory", "StepFailure", "WearProblem"]
 
@@ -164,6 +165,7 @@ class WearProblem:
         # (x0, K x0) of the warm start implicit() predicted, for the next solve.
         self._predicted = None
         self._reference = None
+        self._stage_shift = None  # the levels of the linear law's stage shifts c k
 
     @classmethod
     def from_scene(cls, scene, *, n=None, **options):
@@ -334,7 +336,8 @@ class WearProblem:
         return 2.0 * lam_min / slope
 
     # -- contact solves ------------------------------------------------
-    def contact(self, height, *, shift=None, x0=None, x0_displacement=None, atol=0.0):
+    def contact(self, height, *, shift=None, x0=None, x0_displacement=None, atol=0.0,
+                preconditioner="auto"):
         """One contact solve, counted; raises :class:`StepFailure` on failure.
 
         Parameters
@@ -350,6 +353,9 @@ class WearProblem:
             Absolute tolerance of the solve beside ``contact_rtol`` (default
             0: ``contact_rtol`` alone; see
             :func:`transient.control.contact_tolerance`).
+        preconditioner : str or callable, optional
+            As :func:`transient.contact.solve_contact` takes it (default
+            ``"auto"``).
 
         Returns
         -------
@@ -362,7 +368,8 @@ class WearProblem:
             x0_displacement = predicted[1]
         res = solve_contact(self.halfspace, self.face_mask, height, self.normal_force,
                             shift=shift, x0=x0, x0_displacement=x0_displacement,
-                            rtol=self.contact_rtol, atol=atol, maxiter=self.contact_maxiter)
+                            rtol=self.contact_rtol, atol=atol, maxiter=self.contact_maxiter,
+                            preconditioner=preconditioner)
         self.solves += 1
         self.iterations += int(res.nit)
         if not res.success:
@@ -437,7 +444,11 @@ class WearProblem:
             if history is not None and len(history):
                 x0, kx0 = history.predict(height, shift_scale=c)
                 self._predicted = (x0, kx0)
-            res = self.contact(height, shift=shift, x0=x0, atol=atol)
+            if self._stage_shift is None:
+                self._stage_shift = ScaledShift(self.halfspace, self.face_mask,
+                                                self.coefficient_field)
+            res = self.contact(height, shift=shift, x0=x0, atol=atol,
+                               preconditioner=self._stage_shift.preconditioner(c, shift))
         else:
             pbar = self.pixel_mean_pressure
             p0 = np.asarray(x0, dtype=float)
