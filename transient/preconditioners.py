@@ -70,6 +70,30 @@ _MAX_LEVELS = 4
 _UNIFORM_SPREAD = 1e-2
 
 
+def _one_level(s_min, s_max, scale):
+    """Whether a shift between ``s_min`` and ``s_max`` (m/Pa) is one level.
+
+    A spread below ``_UNIFORM_SPREAD`` of the smallest ``scale + shift``
+    (``scale`` the symbol's minimum) changes the operator's eigenvalues by
+    less than that fraction: one level, the minimum, is as good.
+    """
+    return s_max - s_min <= _UNIFORM_SPREAD * (scale + s_min)
+
+
+def _diagonal_floor(halfspace):
+    """Least shift (m/Pa) on every face pixel for which ``"auto"`` takes Jacobi.
+
+    ``_DIAGONAL_DOMINANCE`` times the largest eigenvalue of ``K``, bounded by
+    the largest value of the padded symbol.
+    """
+    return _DIAGONAL_DOMINANCE * float(halfspace.influence_symbol.max())
+
+
+def _symbol(halfspace, padded):
+    """The Fourier symbol a :class:`FourierPreconditioner` inverts."""
+    return halfspace.influence_symbol if padded else halfspace.aliased_symbol
+
+
 def register_preconditioner(name):
     """Register a preconditioner factory under ``name`` (a decorator).
 
@@ -157,8 +181,8 @@ class FourierPreconditioner:
 
     def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False,
                  max_levels=_MAX_LEVELS):
-        symbol = halfspace.influence_symbol if padded else halfspace.aliased_symbol
-        levels, weights = shift_levels(shift, face_mask, float(symbol.min()), max_levels)
+        scale = float(_symbol(halfspace, padded).min())
+        levels, weights = shift_levels(shift, face_mask, scale, max_levels)
         self._set_levels(halfspace, levels, weights, padded)
 
     @classmethod
@@ -176,7 +200,7 @@ class FourierPreconditioner:
     def _set_levels(self, halfspace, levels, weights, padded):
         self.halfspace = halfspace
         self.padded = bool(padded)
-        symbol = halfspace.influence_symbol if self.padded else halfspace.aliased_symbol
+        symbol = _symbol(halfspace, self.padded)
         self.levels = levels
         self.weights = weights
         self._field = self._spectrum = None  # work buffers of the stitched form
@@ -252,9 +276,7 @@ def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
         return [0.0], None
     values = np.ravel(shift) if face_mask is None else shift[face_mask]
     s_min, s_max = float(values.min()), float(values.max())
-    # A spread below 1 % of the smallest (scale + shift) changes the operator's
-    # eigenvalues by less than 1 %: one level (the minimum) is as good.
-    if s_max - s_min <= _UNIFORM_SPREAD * (scale + s_min):
+    if _one_level(s_min, s_max, scale):
         return [s_min], None
     distinct = _few_distinct(values, max_levels)
     if distinct is not None:
@@ -301,8 +323,8 @@ class ScaledShift:
         self.values = None if distinct is None else [float(v) for v in distinct]
         self.weights = (None if distinct is None or len(distinct) == 1
                         else [(pattern == v).astype(float) for v in distinct])
-        self._dominant = _DIAGONAL_DOMINANCE * float(halfspace.influence_symbol.max())
-        self._scale = float(halfspace.aliased_symbol.min())
+        self._diagonal = _diagonal_floor(halfspace)
+        self._scale = float(_symbol(halfspace, False).min())
 
     def preconditioner(self, c, shift):
         """The preconditioner of ``K + diag(shift)`` with ``shift = c * pattern``.
@@ -317,9 +339,9 @@ class ScaledShift:
         """
         hs = self.halfspace
         low, high = c * self.low, c * self.high
-        if low >= self._dominant:
+        if low >= self._diagonal:
             return JacobiPreconditioner(hs, shift)
-        if high - low <= _UNIFORM_SPREAD * (self._scale + low):
+        if _one_level(low, high, self._scale):
             return FourierPreconditioner.from_levels(hs, [low], None)
         if self.weights is None:
             return FourierPreconditioner(hs, shift, face_mask=self.face_mask)
@@ -435,12 +457,10 @@ def _auto(halfspace, face_mask, shift):
     """Fourier (stitched by the shift's levels), unless the shift makes the operator diagonal.
 
     A shift of at least ``_DIAGONAL_DOMINANCE`` times the largest eigenvalue
-    of ``K`` (bounded by the largest value of the padded symbol) on every
-    face pixel leaves ``K + diag(shift)`` within 10 % of its diagonal:
-    Jacobi, which costs nothing, is then as good.
+    of ``K`` (:func:`_diagonal_floor`) on every face pixel leaves
+    ``K + diag(shift)`` within 10 % of its diagonal: Jacobi, which costs
+    nothing, is then as good.
     """
-    if shift is not None:
-        if shift[face_mask].min() >= (_DIAGONAL_DOMINANCE
-                                      * float(halfspace.influence_symbol.max())):
-            return _jacobi(halfspace, face_mask, shift)
+    if shift is not None and shift[face_mask].min() >= _diagonal_floor(halfspace):
+        return _jacobi(halfspace, face_mask, shift)
     return _fourier(halfspace, face_mask, shift)
