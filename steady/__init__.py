@@ -28,15 +28,17 @@ is a disk (the paper's cylinder) or any other outline.  Modules:
 - :mod:`steady.fit` -- wear ratios from a measured worn face (command
   ``runin-fit``); :mod:`steady.fit_files` -- its measured maps, HDF5 files
   and figure;
-- :mod:`steady.command_line` -- what the command lines share.
-
-The command ``runin-steady`` (``python -m steady``, :mod:`steady.__main__`)
-solves a scene file.
+- :mod:`steady.text`, :mod:`steady.memory` -- message text and memory
+  estimates;
+- :mod:`steady.cli` -- the commands ``runin-steady`` (``python -m
+  steady``), ``runin-fit`` and ``runin-design``, and what every command
+  shares.
 """
 
 from . import reference
 from .accuracy import SlopeEnergy, SlopeEstimate, estimate_rms_slope
 from .basis import PhaseBasis, SweepSlopes
+from .fit import FaceModel, FitResult, fit_face, fit_scene
 from .fit_files import MeasuredFace, read_fit, read_measured, write_fit
 from .grid import face_mask, pixel_centres, pixel_size, polar
 from .halfspace import HalfSpace
@@ -116,17 +118,3 @@ __all__ = [
     "write_fit",
     "write_result",
 ]
-
-#: Names of :mod:`steady.fit`, imported on first use rather than here:
-#: ``python -m steady.fit`` runs that module as a script, which must not find
-#: it imported already (runpy warns, and the module would run twice).
-_FIT_NAMES = ("FaceModel", "FitResult", "fit_face", "fit_scene")
-
-
-def __getattr__(name):
-    """The names of :mod:`steady.fit`, on first use."""
-    if name in _FIT_NAMES:
-        from . import fit
-
-        return getattr(fit, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

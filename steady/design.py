@@ -18,7 +18,8 @@ value that depends only on the fill factor ``rho_2`` and the wear ratio
 The fine-grain limit in closed form,
 :func:`steady.reference.fine_grain_rms_slope`, is the check of the table.
 
-Command line (``runin-design``, or ``python -m steady.design``)::
+Command line (``runin-design``, or ``python -m steady.cli.design``;
+:mod:`steady.cli.design`)::
 
     runin-design --pbar-over-estar 0.08 --wear-ratio 1e-2 --target-slope 1.0
     runin-design --pbar-over-estar 0.08 --wear-ratio 1e-2 --fill-factor 0.1
@@ -30,15 +31,13 @@ import dataclasses
 import importlib.resources
 import math
 import pathlib
-import sys
 
 import h5py
 import numpy as np
 from scipy import interpolate, optimize
 
-from .command_line import ArgumentParser, one_line, program_name, run_command, shorten
 from .output import atomic_h5
-from .reference import fine_grain_rms_slope
+from .text import one_line, shorten
 
 __all__ = [
     "DEFAULT_TABLE",
@@ -46,7 +45,6 @@ __all__ = [
     "DesignTable",
     "TABLE_FORMAT",
     "TABLE_VERSION",
-    "main",
 ]
 
 TABLE_FORMAT = "runin.design_table"
@@ -365,70 +363,3 @@ def _reference(pbar_over_estar):
     if not (np.isfinite(pbar_over_estar) and pbar_over_estar > 0):
         raise ValueError(f"pbar/E* must be positive, got {pbar_over_estar!r}")
     return 4.0 * pbar_over_estar / np.pi
-
-
-def main(argv=None):
-    """Command line ``runin-design``: fill factor for a target rms slope, or the reverse.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status: 0; 2 for bad input or an unreadable table (one line
-        ``error: ...`` on stderr); 130 when interrupted.
-    """
-    parser = ArgumentParser(
-        prog=program_name("python -m steady.design"),
-        description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
-                    "rho_2 of phase 2 that gives a target rms slope, or the rms slope of a "
-                    "fill factor.  Phase 2 is the hard phase when the wear ratio is below 1.",
-        epilog="exit status: 0 done, 2 bad input or an unreadable table, 130 interrupted")
-    parser.add_argument("--pbar-over-estar", type=float, required=True,
-                        help="mean pressure over the effective modulus, pbar/E*")
-    parser.add_argument("--wear-ratio", type=float, required=True,
-                        help="k_2/k_1 (below 1: phase 2 wears less)")
-    what = parser.add_mutually_exclusive_group(required=True)
-    what.add_argument("--target-slope", type=float, help="target steady rms slope")
-    what.add_argument("--fill-factor", type=float, help="fill factor rho_2 of phase 2")
-    parser.add_argument("--table", default=None,
-                        help=f"design table (default {DEFAULT_TABLE})")
-    return run_command(_answer, parser.parse_args(argv))
-
-
-def _answer(args):
-    """Print the answer of the design rule for parsed arguments; return the exit status."""
-    table = DesignTable.read(args.table)
-    g0 = _reference(args.pbar_over_estar)
-    source = (f"table: {table.attrs.get('n_seeds', '?')} Voronoi seeds, "
-              f"{table.attrs.get('realisations', '?')} realisations, "
-              f"n = {table.attrs.get('n', '?')}")
-    if args.target_slope is not None:
-        res = table.fill_factor_for(args.pbar_over_estar, args.wear_ratio, args.target_slope)
-        lo, hi = res.fill_factor_range
-        print(f"fill factor rho_2 = {res.fill_factor:.4g} "
-              f"(realisation scatter: {lo:.4g}..{hi:.4g})")
-        if len(res.solutions) > 1:
-            print("other fill factors reaching the target: "
-                  + ", ".join(f"{r:.4g}" for r in res.solutions[:-1]))
-        print(f"target {args.target_slope:.4g} = {res.normalised_target:.4g} grad_f0, "
-              f"grad_f0 = 4 pbar/(pi E*) = {g0:.4g}; reachable "
-              f"{res.reachable[0]:.4g}..{res.reachable[1]:.4g}")
-    else:
-        if not np.isfinite(args.fill_factor):
-            raise ValueError(f"fill factor must be finite, got {args.fill_factor!r}")
-        value, sd = table.rms_slope(args.pbar_over_estar, args.wear_ratio, args.fill_factor)
-        fine = fine_grain_rms_slope([1 - args.fill_factor, args.fill_factor],
-                                    [1.0, args.wear_ratio])
-        print(f"rms slope = {value:.4g} +- {sd:.2g} (realisation scatter); "
-              f"{value / g0:.4g} grad_f0, grad_f0 = {g0:.4g}")
-        print(f"fine-grain closed form: {g0 * fine:.4g} ({fine:.4g} grad_f0)")
-    print(source)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -37,7 +37,7 @@ transform of the face on the model grid, interpolated linearly, which is
 within about half a model pixel of the true distance
 (:meth:`FaceModel.rim_distance`).
 
-Command line (``runin-fit``, or ``python -m steady.fit``)::
+Command line (``runin-fit``, or ``python -m steady.cli.fit``; :mod:`steady.cli.fit`)::
 
     runin-fit SCENE.toml MEASURED -o FIT.h5 [--pixel-size DX [DY]] [--height-scale S]
               [--plot FIT.png] [--shift] [--max-shift M] [--rim-margin M] [--n N]
@@ -50,28 +50,16 @@ import dataclasses
 import functools
 import logging
 import math
-import pathlib
-import sys
 
 import numpy as np
 from scipy import fft, ndimage, optimize, signal, special
 
-from .command_line import (
-    EXIT_FAILED,
-    EXIT_OK,
-    ArgumentParser,
-    prepare_output,
-    program_name,
-    run_command,
-)
-from .fit_files import MeasuredFace, plot_fit, read_measured, write_fit
+from .fit_files import MeasuredFace
 from .halfspace import HalfSpace
 from .outline import Annulus, Circle, Rectangle, as_outline
 from .phases import extend_off_face, validate_labels
-from .scene import load_scene
 
-__all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceModel", "FitResult", "build_parser", "fit_face",
-           "fit_scene", "main"]
+__all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceModel", "FitResult", "fit_face", "fit_scene"]
 
 logger = logging.getLogger(__name__)
 
@@ -1081,97 +1069,3 @@ def fit_scene(scene, measured, *, n=None, **options):
     FitResult
     """
     return FaceModel.from_scene(scene, n=n).fit(measured, **options)
-
-
-def build_parser():
-    """The argument parser of ``runin-fit`` (``python -m steady.fit``)."""
-    parser = ArgumentParser(
-        prog=program_name("python -m steady.fit"),
-        description="Wear-coefficient ratios that best explain a measured worn face "
-                    "(least squares over the phase pressures of the steady face, eq. 7, 9).")
-    parser.add_argument("scene", type=pathlib.Path,
-                        help="scene file (.toml): face outline, phase map, E*, load, exponent")
-    parser.add_argument("measured", type=pathlib.Path,
-                        help="measured height map: .npy, text grid (.txt .csv .dat .asc) or a "
-                             "profilometer file (needs runin[surface])")
-    parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
-                        help="HDF5 fit file to write")
-    parser.add_argument("--pixel-size", type=float, nargs="+", metavar="M",
-                        help="pixel size of the map, m (one value, or DX DY); required for "
-                             ".npy and text grids")
-    parser.add_argument("--height-scale", type=float, default=1.0, metavar="S",
-                        help="metres per height unit of a .npy or text grid (default 1; 1e-6 "
-                             "for micrometres)")
-    parser.add_argument("--plot", type=pathlib.Path, metavar="PNG",
-                        help="also draw measured, fitted and residual faces into this PNG")
-    parser.add_argument("--shift", action="store_true",
-                        help="search the lateral shift of the phase map that fits best")
-    parser.add_argument("--max-shift", type=float, metavar="M",
-                        help="search radius of --shift, m (default 5 %% of the face's scale: the "
-                             "radius of a disk, else half the longer side of its bounding box)")
-    parser.add_argument("--rim-margin", type=float, default=0.0, metavar="M",
-                        help="leave out the points within M of the face's rim, m (default 0)")
-    parser.add_argument("--n", type=int, help="model grid, pixels along the longer side of "
-                                              "the face's box (default: the scene's n)")
-    parser.add_argument("--reference-phase", type=int, default=0, metavar="I",
-                        help="the phase the ratios refer to (default 0)")
-    parser.add_argument("--confidence", type=float, default=0.95,
-                        help="level of the intervals (default 0.95)")
-    parser.add_argument("--force", action="store_true", help="overwrite existing output files")
-    parser.add_argument("-v", "--verbose", action="count", default=0,
-                        help="log progress (-v) or details (-vv) to stderr")
-    return parser
-
-
-def run(args):
-    """Do the work for parsed arguments; return the exit status."""
-    if args.plot and args.plot.resolve() == args.output.resolve():
-        raise ValueError(f"--plot and -o name the same file {str(args.output)!r}")
-    prepare_output(args.output, force=args.force)
-    if args.plot:
-        prepare_output(args.plot, force=args.force, what="--plot")
-    if args.pixel_size is not None and len(args.pixel_size) > 2:
-        raise ValueError(f"--pixel-size takes one or two values, got {len(args.pixel_size)}")
-    scene = load_scene(args.scene)
-    if scene.ignored_sections:
-        print("note: ignoring run-in sections "
-              + ", ".join(f"[{name}]" for name in scene.ignored_sections), file=sys.stderr)
-    measured = read_measured(args.measured, pixel_size=args.pixel_size,
-                             height_scale=args.height_scale)
-    result = fit_scene(scene, measured, n=args.n, search_shift=args.shift,
-                       max_shift=args.max_shift, rim_margin=args.rim_margin,
-                       reference_phase=args.reference_phase, confidence=args.confidence)
-    write_fit(args.output, result, scene, force=args.force)
-    lines = result.summary_lines() + [f"result           {args.output}"]
-    if args.plot:
-        plot_fit(args.output, args.plot, force=args.force)
-        lines.append(f"figure           {args.plot}")
-    print("\n".join(lines))
-    return EXIT_OK if result.success else EXIT_FAILED
-
-
-def main(argv=None):
-    """Entry point of ``runin-fit`` and ``python -m steady.fit``.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status (:mod:`steady.command_line`): 0; 1 when a fitted
-        pressure is not positive (the file is written, the reason printed)
-        or the operating system refused a read or write; 2 for bad input,
-        with one line ``error: ...`` on stderr (a map that cannot cover the
-        face, a phase the fit cannot determine, ...).
-    """
-    args = build_parser().parse_args(argv)
-    level = logging.WARNING - 10 * min(args.verbose, 2)
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
-    return run_command(run, args, verbose=args.verbose)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -37,9 +37,9 @@ import pathlib
 import numpy as np
 from scipy import ndimage
 
-from .command_line import shorten
 from .outline import Circle, FaceGrid, as_outline
 from .phases import MIN_GRID, _check_grid, _input_file, _png_size, npy_header
+from .text import shorten
 
 __all__ = [
     "COVERS",

@@ -40,8 +40,8 @@ import math
 
 import numpy as np
 
-from .command_line import shorten
 from .grid import face_mask as disk_face_mask
+from .text import shorten
 
 __all__ = [
     "OUTLINES",

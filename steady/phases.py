@@ -49,9 +49,9 @@ import stat
 import numpy as np
 from scipy import ndimage, spatial
 
-from .command_line import format_bytes
 from .grid import face_mask as disk_face_mask
 from .outline import Circle, FaceGrid
+from .text import format_bytes
 
 __all__ = [
     "ArrayMap",

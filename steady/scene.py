@@ -73,11 +73,11 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from .command_line import one_line, shorten
 from .inclusions import Inclusions
 from .micrograph import load_micrograph
 from .outline import Circle, FaceGrid, outline_from_table
 from .phases import Homogeneous, Rods, Voronoi, load_phase_map, validate_labels
+from .text import one_line, shorten
 
 __all__ = ["CORE_SECTIONS", "MAX_SCENE_BYTES", "RUN_IN_SECTIONS", "Scene", "load_scene",
            "parse_scene"]

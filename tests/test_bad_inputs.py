@@ -15,7 +15,7 @@ import numpy.lib.format as npy_format
 import pytest
 from conftest import scene_text
 
-import steady.__main__ as steady_cli
+import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
 
 PRECIOUS = b"a result someone cares about"

@@ -130,7 +130,7 @@ def test_freed_large_arrays_are_reused_without_page_faults():
     code = """
 import resource
 import numpy as np
-from steady.command_line import keep_freed_memory
+from steady.memory import keep_freed_memory
 assert keep_freed_memory()
 a = np.ones(2**22); del a
 before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt

@@ -13,7 +13,8 @@ import pytest
 import steady
 from steady import reference
 from steady.accuracy import estimate_rms_slope, grid_ladder, ladder_error
-from steady.design import DEFAULT_TABLE, TABLE_FORMAT, DesignTable, main
+from steady.cli.design import main
+from steady.design import DEFAULT_TABLE, TABLE_FORMAT, DesignTable
 from steady.phases import Voronoi
 from steady.reference import fine_grain_rms_slope
 from steady.voronoi_sweep import voronoi_slopes
@@ -201,10 +202,10 @@ def test_command_line(tmp_path, capsys):
 
 
 def test_module_usage_names_the_command_as_typed():
-    proc = subprocess.run([sys.executable, "-m", "steady.design", "--help"],
+    proc = subprocess.run([sys.executable, "-m", "steady.cli.design", "--help"],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
-    assert proc.stdout.startswith("usage: python -m steady.design "), \
+    assert proc.stdout.startswith("usage: python -m steady.cli.design "), \
         f"usage {proc.stdout[:80]!r}"
 
 

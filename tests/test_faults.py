@@ -22,7 +22,7 @@ import h5py
 import numpy as np
 import pytest
 
-import steady.__main__ as steady_cli
+import steady.cli.solve as steady_cli
 import transient.__main__ as cli
 from steady.output import read_result
 from transient.output import RunLock, backup_path, lock_path, read_run

@@ -36,7 +36,7 @@ from steady import (
     solve,
     write_fit,
 )
-from steady.fit import main
+from steady.cli.fit import main
 from steady.fit_files import fit_figure, plot_fit
 from steady.grid import face_mask, polar
 from steady.outline import Circle, MaskOutline, Rectangle
@@ -381,7 +381,7 @@ def test_fit_scene_uses_the_scene(scene_file):
 
 
 def run_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "steady.fit", *map(str, args)], cwd=cwd,
+    return subprocess.run([sys.executable, "-m", "steady.cli.fit", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True, timeout=120)
 
 
@@ -422,7 +422,7 @@ def test_command_line_errors(tmp_path, scene_file, capsys, extra, fragment):
 
 
 def test_module_runs_as_a_command(tmp_path, scene_file):
-    """``python -m steady.fit``: bad input is one line on stderr, exit 2, no traceback."""
+    """``python -m steady.cli.fit``: bad input is one line on stderr, exit 2, no traceback."""
     scene_path = scene_file("steady", n=40)
     np.save(tmp_path / "face.npy", np.zeros((30, 30)))
     proc = run_cli(scene_path, "face.npy", "--pixel-size", "2e-4", "-o", "fit.h5", cwd=tmp_path)

@@ -6,14 +6,9 @@ import sys
 
 import pytest
 
-from steady.command_line import (
-    available_memory,
-    check_memory,
-    format_bytes,
-    halfspace_memory,
-    steady_memory,
-)
-from transient.__main__ import run_in_memory
+from steady.memory import available_memory, check_memory, halfspace_memory, steady_memory
+from steady.text import format_bytes
+from transient.memory import run_in_memory
 
 
 def test_estimates_grow_as_the_pixel_count():

@@ -180,13 +180,13 @@ def test_segmentation_needs_the_extra(monkeypatch, tmp_path):
 
 
 def test_command_line_names_the_missing_extra(monkeypatch, tmp_path, capsys):
-    import steady.__main__
+    import steady.cli.solve
 
     np.save(tmp_path / "grey.npy", np.eye(16))
     (tmp_path / "s.toml").write_text(micrograph_scene('path = "grey.npy", n_phases = 2'))
     monkeypatch.setitem(sys.modules, "skimage", None)
     monkeypatch.setitem(sys.modules, "skimage.filters", None)
-    status = steady.__main__.main([str(tmp_path / "s.toml"), "-o", str(tmp_path / "r.h5")])
+    status = steady.cli.solve.main([str(tmp_path / "s.toml"), "-o", str(tmp_path / "r.h5")])
     err = capsys.readouterr().err
     assert status == 2, f"exit {status}: {err!r}"
     assert err.startswith("error:") and err.count("\n") == 1, f"stderr {err!r}"

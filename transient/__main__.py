@@ -19,7 +19,7 @@ progress bar is drawn when stderr is a terminal.
 Before the run starts everything that can be checked is: the scene, the
 output paths (missing directories are created; a directory, a device, an
 unwritable place or ``--plot`` naming the run file are refused), the
-memory the grid and the snapshots need (:func:`run_in_memory`) and the
+memory the grid and the snapshots need (:func:`transient.memory.run_in_memory`) and the
 run file's lock: one writer at a time (:class:`transient.output.RunLock`),
 a second one is refused at once.
 
@@ -70,7 +70,7 @@ import threading
 
 import numpy as np
 
-from steady.command_line import (
+from steady.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -79,19 +79,19 @@ from steady.command_line import (
     CommandError,
     add_memory_limit,
     check_distinct,
-    check_memory,
     configure_logging,
     describe_os_error,
-    halfspace_memory,
-    keep_freed_memory,
+    note,
     prepare_output,
     program_name,
     run_command,
-    shorten,
-    slope_estimator_memory,
 )
+from steady.memory import check_memory, keep_freed_memory
+from steady.text import shorten
 
-__all__ = ["build_parser", "main", "run_in_memory"]
+from .memory import run_in_memory
+
+__all__ = ["build_parser", "main"]
 
 logger = logging.getLogger(__name__)
 
@@ -158,78 +158,6 @@ def build_parser():
     p.add_argument("-v", "--verbose", action="count", default=0,
                    help="log progress (-v) or details (-vv) to stderr")
     return p
-
-
-def run_in_memory(n, snapshots=0):
-    """Estimated peak memory of a run-in at grid ``n``, bytes.
-
-    Counted from the arrays the run allocates, in bytes per pixel of the
-    ``n x n`` grid (8 per float; a rectangular ``nx x ny`` grid is counted
-    as the square of as many pixels, as :func:`steady.command_line.steady_memory`
-    does):
-
-    - the half-space operator with its gradient spectra
-      (:func:`steady.command_line.halfspace_memory`, 128) and the aliased
-      symbol of the Fourier preconditioner (4);
-    - the problem's fields: labels, face mask, wear coefficient (17);
-    - the run state: face, initial face, pressure, previous face and rate
-      (40);
-    - the history's slope estimator (:class:`transient.history.HistoryEstimator`:
-      :class:`steady.accuracy.SlopeEnergy`), kept (about 100,
-      :func:`steady.command_line.slope_estimator_memory`);
-    - the pressure history of the warm starts
-      (:class:`transient.problem.PressureHistory`: six pressures and their
-      products, 96, and the differences of five consecutive ones of each,
-      80): 176;
-    - the larger of one step and the slope estimator's work: a step of
-      ESDIRK3, the largest, has three stages, each a contact solve
-      (pressure, gap, preconditioned residual, direction, its product,
-      displacement, shift and warm start: 64), the stages' rates, faces
-      and error (64), the transforms of one half-space product (112), the
-      stitched preconditioner's weights, symbols and transforms (48) and
-      the gradient of a partial-contact record (64): 352; the estimator
-      applied (about 150);
-    - one history record computed on the worker thread beside the step:
-      the face and pressure it copies (16) and the estimator applied;
-    - every checkpoint's pressure history (six pressures and their
-      displacements, copied into the result, 96, and again into the file
-      image, built in memory and copied to disk,
-      :func:`steady.output.atomic_h5`, 96): 192;
-    - each snapshot: face and pressure kept (16), their copies in every
-      checkpoint (16), and the checkpoint's file image (32): 64.
-
-    The sum is multiplied by 1.25 (allocator overhead, short-lived copies
-    not listed) and 16 MiB are added for what does not grow with ``n``.
-    The closing steady solve of the comparison needs less than one step.
-    Measured against the peak resident memory of a run (the process's
-    high-water mark) at ``n = 256`` and 512 with 0 to 10 snapshots,
-    the estimate is an upper bound by a factor of 1.12 to 1.33
-    (``tests/test_memory.py``).
-
-    Parameters
-    ----------
-    n : int or (int, int)
-        Pixels across a square grid, or ``(nx, ny)``.
-    snapshots : int, optional
-        Snapshots the run stores (default 0).
-
-    Returns
-    -------
-    int
-
-    Examples
-    --------
-    >>> from steady.command_line import format_bytes
-    >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
-    455 MiB 201 GiB
-    """
-    n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
-    pixels = n * n
-    kept, applied = slope_estimator_memory(n)
-    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 176 + 192) * pixels + kept
-            + max(352 * pixels, applied) + 16 * pixels + applied
-            + 64 * pixels * int(snapshots))
-    return int(1.25 * peak) + 16 * 2 ** 20
 
 
 def _run_in_text(grid, snapshots):
@@ -467,10 +395,6 @@ class _Progress:
         self.bar.close()
 
 
-def _note(text):
-    print(f"note: {text}", file=sys.stderr)
-
-
 def _check_outputs(args):
     """Refuse what the output paths cannot be, before any work; create missing directories."""
     from .output import backup_path, lock_path
@@ -569,7 +493,7 @@ def _prepare(args, lock, scene, settings, initial, options):
 
     out = args.output
     if lock.previous_pid is not None:
-        _note(f"took over the lock of {str(out)!r} left by process {lock.previous_pid}, which "
+        note(f"took over the lock of {str(out)!r} left by process {lock.previous_pid}, which "
               f"has ended")
     for tmp in remove_temporaries(out):
         logger.info("removed %s, left by a killed writer", tmp)
@@ -590,19 +514,19 @@ def _prepare(args, lock, scene, settings, initial, options):
         _check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
                            problem.outline)
         if "sha256" not in stored_attrs:
-            _note(f"{str(out)!r} carries no checksums; resumed without verification")
+            note(f"{str(out)!r} carries no checksums; resumed without verification")
         if resume.status == "steady":
-            _note(f"{str(out)!r} holds a finished run; nothing to continue")
+            note(f"{str(out)!r} holds a finished run; nothing to continue")
         else:
             notes, snapshots = run_file.resume(resume, stored_attrs)
             for text in notes:
-                _note(text)
+                note(text)
             options = dataclasses.replace(options, snapshots=snapshots)
             check_memory(run_in_memory(problem.shape, len(snapshots)),
                          _run_in_text(problem.grid, len(snapshots)), args.memory_limit)
     else:
         if args.resume:
-            _note(f"{str(out)!r} does not exist; starting a new run")
+            note(f"{str(out)!r} does not exist; starting a new run")
         run_file.start()
     grid = _companion_grid(scene, initial, problem.n) if args.spatial_error else None
     return _Job(scene, settings, initial, problem, h0, options, resume, run_file,

@@ -40,9 +40,9 @@ import math
 import pathlib
 import types
 
-from steady.command_line import one_line, shorten
 from steady.phases import npy_header
 from steady.scene import load_scene
+from steady.text import one_line, shorten
 
 from .initial_face import INITIAL_FACES, face_grid, initial_height
 from .runin import RunOptions
