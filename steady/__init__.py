@@ -2,119 +2,120 @@
 
 The steady state of run-in wear has a closed form (paper eq. 7, 9): constant
 pressure on each phase and the half-space displacement under it.  The face
-is a disk (the paper's cylinder) or any other outline.  Modules:
+is a disk (the paper's cylinder) or any other outline.  Modules, from the
+bottom floor up:
 
-- :mod:`steady.grid` -- the pixel grid over a circular face;
+- :mod:`steady.text`, :mod:`steady.memory` -- message text; memory
+  estimates and the memory available;
+- :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
+- :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
+- :mod:`steady.array_files` -- ``.npy`` and PNG inputs, checked before
+  their data are read;
 - :mod:`steady.outline` -- face outlines (disk, rectangle, ellipse, annulus,
   pixel mask) and the grid over each one's bounding box;
-- :mod:`steady.normalisation` -- the reference slope of each outline;
-- :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
+- :mod:`steady.labels` -- rasterised phase maps: checks, fill factors;
+- :mod:`steady.phases`, :mod:`steady.inclusions`, :mod:`steady.micrograph`
+  -- phase geometries rasterised at any grid size (micrographs need the
+  extra ``runin[micrograph]``);
+- :mod:`steady.pressures`, :mod:`steady.wear` -- eq. 7, and the local wear
+  laws;
+- :mod:`steady.problem` -- the one checked problem definition;
 - :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
-- :mod:`steady.phases` -- phase geometries rasterised at any grid size;
-- :mod:`steady.micrograph` -- micrographs segmented into phases and placed
-  on the face (needs the extra ``runin[micrograph]``);
-- :mod:`steady.pressures` -- the steady phase pressures (eq. 7) and their field;
-- :mod:`steady.solution` -- the steady solve;
-- :mod:`steady.accuracy` -- the energy-corrected rms slope and its error bar;
-- :mod:`steady.basis` -- per-phase fields for sweeps over wear coefficients;
-- :mod:`steady.profiles` -- cross sections and differential profiles;
+- :mod:`steady.accuracy` -- the energy-corrected rms slope and its error
+  bar; :mod:`steady.normalisation` -- the reference slope of each outline;
+  :mod:`steady.relief` -- rms heights;
 - :mod:`steady.scene` -- TOML scene files;
+- :mod:`steady.solution` -- the steady solve; :mod:`steady.basis` --
+  per-phase fields for sweeps over wear coefficients;
+  :mod:`steady.profiles` -- cross sections and differential profiles;
 - :mod:`steady.output` -- HDF5 result files and the atomic HDF5 writer;
-- :mod:`steady.plotting` -- figures (imported on demand: it loads matplotlib);
-- :mod:`steady.sweep` -- resumable parameter sweeps on executors;
-- :mod:`steady.voronoi_sweep` -- the sweep over random biphasic Voronoi maps;
-- :mod:`steady.design` -- the design table and the fill factor for a target
-  rms slope (command ``runin-design``);
-- :mod:`steady.fit` -- wear ratios from a measured worn face (command
-  ``runin-fit``); :mod:`steady.fit_files` -- its measured maps, HDF5 files
-  and figure;
-- :mod:`steady.text`, :mod:`steady.memory` -- message text and memory
-  estimates;
+  :mod:`steady.plotting` -- figures;
+- :mod:`steady.sweep`, :mod:`steady.voronoi_sweep` -- resumable parameter
+  sweeps; :mod:`steady.design` -- the design table and the fill factor for
+  a target rms slope; :mod:`steady.fit`, :mod:`steady.fit_files` -- wear
+  ratios from a measured worn face;
 - :mod:`steady.cli` -- the commands ``runin-steady`` (``python -m
   steady``), ``runin-fit`` and ``runin-design``, and what every command
   shares.
+
+The names below are imported from their modules on first use, so that
+``import steady`` is quick and needs neither h5py nor matplotlib until a
+file or a figure is asked for.
 """
 
-from . import reference
-from .accuracy import SlopeEnergy, SlopeEstimate, estimate_rms_slope
-from .basis import PhaseBasis, SweepSlopes
-from .fit import FaceModel, FitResult, fit_face, fit_scene
-from .fit_files import MeasuredFace, read_fit, read_measured, write_fit
-from .grid import face_mask, pixel_centres, pixel_size, polar
-from .halfspace import HalfSpace
-from .inclusions import Inclusions
-from .micrograph import Micrograph, Segmentation, load_micrograph, segment
-from .normalisation import ReferenceSlope, reference_slope
-from .outline import Annulus, Circle, Ellipse, FaceGrid, MaskOutline, Rectangle, as_outline
-from .output import StoredResult, atomic_h5, read_result, write_result
-from .phases import (
-    ArrayMap,
-    Homogeneous,
-    Rods,
-    Voronoi,
-    load_phase_map,
-    realised_fill_factors,
-    validate_labels,
-)
-from .pressures import phase_pressures, pressure_field
-from .profiles import cross_section, differential_profile, ring_average
-from .scene import Scene, load_scene, parse_scene
-from .solution import SteadyResult, solve, solve_scene
+import importlib
 
-__all__ = [
-    "Annulus",
-    "ArrayMap",
-    "Circle",
-    "Ellipse",
-    "FaceGrid",
-    "FaceModel",
-    "FitResult",
-    "HalfSpace",
-    "Homogeneous",
-    "Inclusions",
-    "MaskOutline",
-    "MeasuredFace",
-    "Micrograph",
-    "PhaseBasis",
-    "Rectangle",
-    "ReferenceSlope",
-    "Rods",
-    "Scene",
-    "Segmentation",
-    "SlopeEnergy",
-    "SlopeEstimate",
-    "SteadyResult",
-    "StoredResult",
-    "SweepSlopes",
-    "Voronoi",
-    "as_outline",
-    "atomic_h5",
-    "cross_section",
-    "differential_profile",
-    "estimate_rms_slope",
-    "face_mask",
-    "fit_face",
-    "fit_scene",
-    "load_micrograph",
-    "load_phase_map",
-    "load_scene",
-    "parse_scene",
-    "phase_pressures",
-    "pixel_centres",
-    "pixel_size",
-    "polar",
-    "pressure_field",
-    "read_fit",
-    "read_measured",
-    "read_result",
-    "realised_fill_factors",
-    "reference",
-    "reference_slope",
-    "ring_average",
-    "segment",
-    "solve",
-    "solve_scene",
-    "validate_labels",
-    "write_fit",
-    "write_result",
-]
+#: Public names and the module of each.
+_MODULE_OF = {
+    "Annulus": "outline",
+    "ArrayMap": "phases",
+    "Circle": "outline",
+    "Ellipse": "outline",
+    "FaceGrid": "outline",
+    "FaceModel": "fit",
+    "FacePhases": "problem",
+    "FitResult": "fit",
+    "HalfSpace": "halfspace",
+    "Homogeneous": "phases",
+    "Inclusions": "inclusions",
+    "MaskOutline": "outline",
+    "MeasuredFace": "fit_files",
+    "Micrograph": "micrograph",
+    "PhaseBasis": "basis",
+    "PowerLaw": "wear",
+    "Problem": "problem",
+    "Rectangle": "outline",
+    "ReferenceSlope": "normalisation",
+    "Rods": "phases",
+    "Scene": "scene",
+    "Segmentation": "micrograph",
+    "SlopeEnergy": "accuracy",
+    "SlopeEstimate": "accuracy",
+    "SteadyResult": "solution",
+    "StoredResult": "output",
+    "SweepSlopes": "basis",
+    "Voronoi": "phases",
+    "as_outline": "outline",
+    "atomic_h5": "output",
+    "cross_section": "profiles",
+    "differential_profile": "profiles",
+    "estimate_rms_slope": "accuracy",
+    "fit_face": "fit",
+    "fit_scene": "fit",
+    "load_micrograph": "micrograph",
+    "load_phase_map": "phases",
+    "load_scene": "scene",
+    "parse_scene": "scene",
+    "phase_pressures": "pressures",
+    "pressure_field": "wear",
+    "read_fit": "fit_files",
+    "read_measured": "fit_files",
+    "read_result": "output",
+    "realised_fill_factors": "labels",
+    "reference": None,
+    "reference_slope": "normalisation",
+    "ring_average": "profiles",
+    "segment": "micrograph",
+    "solve": "solution",
+    "solve_scene": "solution",
+    "validate_labels": "labels",
+    "write_fit": "fit_files",
+    "write_result": "output",
+}
+
+__all__ = sorted(_MODULE_OF)
+
+
+def __getattr__(name):
+    """A public name, imported from its module on first use (PEP 562)."""
+    if name not in _MODULE_OF:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module = importlib.import_module(f".{_MODULE_OF[name] or name}", __name__)
+    value = module if _MODULE_OF[name] is None else getattr(module, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    """The module's names, the lazily imported ones included."""
+    return sorted(set(globals()) | set(__all__))

@@ -56,11 +56,11 @@ import logging
 import numpy as np
 import scipy.fft
 
-from .grid import face_mask as grid_face_mask
-from .halfspace import pixel_integral_gradient
-from .outline import FaceGrid, as_outline
-from .phases import MIN_GRID, Homogeneous, extend_off_face
-from .pressures import pressure_field
+from .halfspace import grid_shape, pixel_integral_gradient
+from .labels import extend_off_face
+from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_outline
+from .phases import Homogeneous
+from .wear import pressure_field
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
            "estimate_map_rms_slope", "estimate_rms_slope", "grid_ladder", "ladder_error",
@@ -319,14 +319,6 @@ class _BoxGradient:
         return tuple(out)
 
 
-def _grid_shape(n):
-    """``(nx, ny)`` from an int ``n`` (a square grid) or a pair."""
-    if np.ndim(n) == 0:
-        return int(n), int(n)
-    nx, ny = (int(v) for v in n)
-    return nx, ny
-
-
 class SlopeEnergy:
     """Energy-corrected quadrature of the slope on one grid (see module notes).
 
@@ -360,7 +352,7 @@ class SlopeEnergy:
 
     def __init__(self, n, h, E_star, *, margin=None, coarsening=8, far_radius=8.0,
                  workers=-1):
-        self.shape = _grid_shape(n)
+        self.shape = grid_shape(n)
         self.n = max(self.shape)
         self.h, self.E_star = float(h), float(E_star)
         c = int(coarsening)
@@ -656,8 +648,8 @@ class SlopeEstimate:
 
 
 def _grid(outline, m):
-    """The grid ``m`` of an outline: the int itself for the unit disk (``outline`` None)."""
-    return m if outline is None else FaceGrid(outline, m)
+    """The grid ``m`` of an outline (``None``: the unit disk, the grid of a bare ``m``)."""
+    return FaceGrid(UNIT_DISK if outline is None else outline, m)
 
 
 def _accepts(geometry, n, outline=None):
@@ -754,15 +746,16 @@ def ladder_error(grids, values):
     return np.max(diffs * factors.reshape((-1,) + (1,) * (v.ndim - 1)), axis=0)
 
 
-def estimate_rms_slope(geometry, wear_coefficients, normal_force, outline, E_star, n, *,
-                       exponent=1.0):
+def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n):
     """Energy-corrected rms slope of the limiting face, with an error estimate.
 
     Parameters
     ----------
     geometry : phase geometry
         An object of :mod:`steady.phases` (``labels(grid)``, ``check_grid(grid)``).
-    wear_coefficients : array_like, shape (P,), 1/Pa
+    wear : wear law or array_like, shape (P,)
+        The phases' wear law (:mod:`steady.wear`); coefficients ``k_i``
+        (1/Pa) stand for Archard's law.
     normal_force : float, N
     outline : outline object or float
         The face (:mod:`steady.outline`); a number is the radius (m) of a
@@ -771,8 +764,6 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, outline, E_sta
     n : int
         Grid of the estimate, pixels along the longer side of the face's
         bounding box.
-    exponent : float, optional
-        Pressure exponent ``m`` of the wear law (default 1).
 
     Returns
     -------
@@ -789,8 +780,7 @@ def estimate_rms_slope(geometry, wear_coefficients, normal_force, outline, E_sta
     for m in grids:
         grid = FaceGrid(outline, m)
         labels = geometry.labels(grid)
-        pressure, _, _ = pressure_field(labels, wear_coefficients, normal_force, grid.pixel_area,
-                                        exponent=exponent)
+        pressure, _, _ = pressure_field(labels, wear, normal_force, grid.pixel_area)
         integrals = SlopeEnergy(grid.shape, grid.h, E_star)(pressure, labels >= 0)
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)
@@ -840,19 +830,15 @@ def resample_labels(labels, m, outline=None):
     m = int(m)
     if m < 2:
         raise ValueError(f"grid size m must be at least 2, got {m}")
-    if outline is None:
-        if nx != ny:
-            raise ValueError(f"a map of {nx} x {ny} pixels needs its face outline")
-        shape, mask = (m, m), grid_face_mask(m)
-    else:
-        grid = FaceGrid(outline, m)
-        shape, mask = grid.shape, grid.mask
+    if outline is None and nx != ny:
+        raise ValueError(f"a map of {nx} x {ny} pixels needs its face outline")
+    grid = _grid(outline, m)
+    shape, mask = grid.shape, grid.mask
     # Centres of the new pixels in old pixels from the old grid's corner.
     index = [np.clip(np.floor((np.arange(k) + 0.5) * n / m + (old - k * n / m) / 2)
                      .astype(int), 0, old - 1) for k, old in zip(shape, (nx, ny), strict=True)]
-    # Off-face pixels take the nearest face pixel's label (the map's own face:
-    # the disk of the n x n grid by default).
-    picked = extend_off_face(labels, None if outline is None else labels >= 0)[np.ix_(*index)]
+    # Off-face pixels take the nearest face pixel's label (the map's own face).
+    picked = extend_off_face(labels, labels >= 0)[np.ix_(*index)]
     return np.where(mask, picked, -1)
 
 
@@ -884,8 +870,7 @@ def mean_chord(labels):
     return 2.0 * float(face.sum()) / edges if edges else float("inf")
 
 
-def estimate_map_rms_slope(labels, wear_coefficients, normal_force, outline, E_star, *,
-                           exponent=1.0, energy=None):
+def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energy=None):
     """Corrected rms slope of the limiting face of a pixel map, with an error estimate.
 
     As :func:`estimate_rms_slope`, for a map that exists only on its grid:
@@ -905,14 +890,14 @@ def estimate_map_rms_slope(labels, wear_coefficients, normal_force, outline, E_s
     labels : ndarray of int, shape (nx, ny)
         Phase index ``0..P-1`` on the face, -1 off it, on the outline's
         grid of ``n = max(nx, ny)``.
-    wear_coefficients : array_like, shape (P,), 1/Pa
+    wear : wear law or array_like, shape (P,)
+        The phases' wear law (:mod:`steady.wear`); coefficients ``k_i``
+        (1/Pa) stand for Archard's law.
     normal_force : float, N
     outline : outline object or float
         The face (:mod:`steady.outline`); a number is the radius (m) of a
         circular face.
     E_star : float, Pa
-    exponent : float, optional
-        Pressure exponent ``m`` of the wear law (default 1).
     energy : SlopeEnergy, optional
         The estimator of grid ``n``, if the caller has one.
 
@@ -934,22 +919,21 @@ def estimate_map_rms_slope(labels, wear_coefficients, normal_force, outline, E_s
     def usable(m):
         return m >= low and _accepts(Homogeneous(), m, outline)
 
-    low = max(MIN_GRID, int(np.ceil(MIN_CHORD_PIXELS * n / mean_chord(labels))))
+    low = max(MIN_SIDE_PIXELS, int(np.ceil(MIN_CHORD_PIXELS * n / mean_chord(labels))))
     coarse = [m for m in (n // 4, n // 2) if usable(m)]
     if not coarse:
         m = 8 * -(-low // 8)
         # A map too fine-grained for any admitted grid: n // 2 over-estimates.
         if m < n and usable(m):
             coarse = [m]
-        elif n // 2 >= MIN_GRID and _accepts(Homogeneous(), n // 2, outline):
+        elif n // 2 >= MIN_SIDE_PIXELS and _accepts(Homogeneous(), n // 2, outline):
             coarse = [n // 2]
     grids, values, plain = [], [], None
     for m in coarse + [n]:
         g = grid if m == n else FaceGrid(outline, m)
         lab = labels if m == n else resample_labels(labels, m, outline)
         try:
-            pressure, _, _ = pressure_field(lab, wear_coefficients, normal_force, g.pixel_area,
-                                            exponent=exponent)
+            pressure, _, _ = pressure_field(lab, wear, normal_force, g.pixel_area)
         except ValueError:
             continue  # a phase vanished on the coarse grid
         estimator = energy if (m == n and energy is not None) else SlopeEnergy(g.shape, g.h,

@@ -19,9 +19,8 @@ import numpy as np
 from .accuracy import SlopeEnergy
 from .halfspace import HalfSpace
 from .normalisation import reference_slope
-from .outline import Circle, as_outline
-from .phases import validate_labels
 from .pressures import phase_pressures
+from .problem import FacePhases
 
 __all__ = ["PhaseBasis", "SweepSlopes"]
 
@@ -58,36 +57,42 @@ class PhaseBasis:
 
     Parameters
     ----------
-    labels : ndarray, shape (nx, ny), int
-        Phase index on the face, -1 off it (:mod:`steady.phases`).
-    outline : outline object or float
-        The face's outline (:mod:`steady.outline`), on whose grid of
-        ``max(nx, ny)`` pixels along the longer side ``labels`` lies; a
-        number is the radius ``a`` of a disk (m).
+    phases : steady.problem.FacePhases
+        The phase map on the face's grid (checked there).
     E_star : float, Pa
     faces : bool, optional
         Also keep the per-phase faces ``K chi_i`` (``P`` arrays of
         ``nx x ny``) for :meth:`face`; default True.
 
+    The wear coefficients and the load are arguments of the queries: a
+    sweep varies them over one basis.
+
     Notes
     -----
     Cost: for ``P`` phases, ``P`` transforms of the face and the
     energy-corrected slope integrals (:meth:`steady.accuracy.SlopeEnergy.gram`).
+
+    Examples
+    --------
+    >>> from steady import FacePhases, Voronoi
+    >>> from steady.outline import UNIT_DISK
+    >>> grid = UNIT_DISK.grid(64)
+    >>> basis = PhaseBasis(FacePhases(grid, Voronoi(100, (0.5, 0.5), 2024).labels(grid), 2), 1.0)
+    >>> basis.rms_slopes([[1.0, 1.0], [1.0, 10.0]], 3.0).normalised.shape
+    (2,)
     """
 
-    def __init__(self, labels, outline, E_star, *, faces=True):
-        labels = np.asarray(labels)
-        if labels.ndim != 2:
-            raise ValueError(f"labels must be a 2-d array, got shape {labels.shape}")
-        self.outline = as_outline(outline)
-        grid = self.outline.grid(max(labels.shape))
-        if grid.shape != labels.shape:
-            raise ValueError(f"labels of shape {labels.shape} do not fit the "
-                             f"{self.outline.describe()}, whose grid is {grid.shape}")
-        self.n_phases = int(labels.max()) + 1
-        self.counts = validate_labels(labels, self.n_phases)
+    def __init__(self, phases, E_star, *, faces=True):
+        if not isinstance(phases, FacePhases):
+            raise ValueError(f"phases must be a steady.problem.FacePhases, got "
+                             f"{type(phases).__name__}")
+        grid = phases.grid
+        labels = phases.labels
+        self.phases = phases
+        self.outline = grid.outline
+        self.n_phases = phases.n_phases
+        self.counts = phases.counts
         self.labels = labels
-        self.radius = self.outline.radius if isinstance(self.outline, Circle) else None
         self.E_star = float(E_star)
         self.h = grid.h
         indicators = [(labels == i).astype(float) for i in range(self.n_phases)]

@@ -56,8 +56,10 @@ from scipy import fft, ndimage, optimize, signal, special
 
 from .fit_files import MeasuredFace
 from .halfspace import HalfSpace
-from .outline import Annulus, Circle, Rectangle, as_outline
-from .phases import extend_off_face, validate_labels
+from .labels import extend_off_face
+from .outline import Annulus, Circle, Rectangle
+from .problem import Problem
+from .wear import PowerLaw
 
 __all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceModel", "FitResult", "fit_face", "fit_scene"]
 
@@ -216,11 +218,6 @@ class FitResult:
     def n_phases(self):
         """Number of phases ``P``."""
         return self.phase_pressures.shape[0]
-
-    @property
-    def radius(self):
-        """The disk's radius ``a``, m; None for other outlines."""
-        return self.outline.radius if isinstance(self.outline, Circle) else None
 
     def summary_lines(self):
         """Short human-readable summary, a list of lines."""
@@ -454,20 +451,13 @@ class FaceModel:
 
     Parameters
     ----------
-    labels : ndarray, shape (nx, ny), int
-        Phase index on the face, -1 off it (:mod:`steady.phases`), on the
-        outline's grid of ``max(nx, ny)`` pixels along the longer side
-        (e.g. ``geometry.labels(outline.grid(n))``).
-    outline : outline object or float
-        The face's outline (:mod:`steady.outline`); a number is the radius
-        ``a`` of a disk (m), whose grid covers ``[-a, a]^2``.
-    E_star : float, Pa
-    normal_force : float, N
-        Only enters the consistency figure :attr:`FitResult.load_scale`.
-    exponent : float, optional
-        ``m`` of the wear law (default 1): ``k_i / k_ref = (p_ref / p_i)^m``.
-    wear_coefficients : array_like, shape (P,), optional
-        The scene's ``k_i``, reported beside the fit (not used by it).
+    problem : steady.problem.Problem
+        The phase map on the face's grid (the model grid), ``E*``, the
+        normal force (it only enters the consistency figure
+        :attr:`FitResult.load_scale`) and the wear law, a power law
+        ``k_i p^m``: its exponent relates ratios and pressures,
+        ``k_i / k_ref = (p_ref / p_i)^m``; its coefficients are reported
+        beside the fit (:attr:`FitResult.scene_ratios`), not used by it.
 
     Attributes
     ----------
@@ -496,11 +486,11 @@ class FaceModel:
     is the forward model's with ``k_1 / k_0 = 3``, on the model's pixels:
 
     >>> import numpy as np
-    >>> from steady import MeasuredFace, Voronoi
+    >>> from steady import FacePhases, MeasuredFace, Problem, Voronoi
     >>> from steady.outline import Rectangle
-    >>> outline = Rectangle(4e-3, 12e-3)
-    >>> grid = outline.grid(48)
-    >>> model = FaceModel(Voronoi(64, (0.6, 0.4), 2029).labels(grid), outline, 1.3e6, 10.0)
+    >>> grid = Rectangle(4e-3, 12e-3).grid(48)
+    >>> phases = FacePhases(grid, Voronoi(64, (0.6, 0.4), 2029).labels(grid), 2)
+    >>> model = FaceModel(Problem(phases, [1e-13, 1e-13], 10.0, 1.3e6))
     >>> model.grid.shape, model.faces.shape
     ((16, 48), (2, 16, 48))
     >>> face = np.tensordot([3e4, 1e4], model.faces, axes=1)     # p_0 / p_1 = k_1 / k_0 = 3
@@ -509,35 +499,28 @@ class FaceModel:
     k1/k0 = 3.000000, 768 pixels
     """
 
-    def __init__(self, labels, outline, E_star, normal_force, *, exponent=1.0,
-                 wear_coefficients=None):
-        labels = np.asarray(labels)
-        if labels.ndim != 2:
-            raise ValueError(f"labels must be a 2-d array, got shape {labels.shape}")
-        if not np.issubdtype(labels.dtype, np.integer):
-            raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
-        self.outline = as_outline(outline)
-        grid = self.outline.grid(max(labels.shape))
-        if grid.shape != labels.shape:
-            raise ValueError(f"labels of shape {labels.shape} do not fit the "
-                             f"{self.outline.describe()}, whose grid of n = {grid.n} is "
-                             f"{grid.shape[0]} x {grid.shape[1]} pixels")
-        self.E_star = _positive(E_star, "E_star", "Pa")
-        self.normal_force = _positive(normal_force, "normal_force", "N")
-        self.exponent = _positive(exponent, "exponent", "dimensionless")
+    def __init__(self, problem):
+        if not isinstance(problem, Problem):
+            raise ValueError(f"FaceModel takes a steady.problem.Problem, got "
+                             f"{type(problem).__name__}")
+        if not isinstance(problem.wear, PowerLaw):
+            raise ValueError(f"the fit supports the power law k p^m, not the "
+                             f"{problem.wear.describe()}")
+        grid = problem.grid
+        labels = problem.labels
+        self.problem = problem
+        self.outline = grid.outline
+        self.E_star = problem.E_star
+        self.normal_force = problem.normal_force
+        self.exponent = problem.wear.exponent
         self.grid = grid
         self.n = grid.n
         self.h = grid.h
-        self.n_phases = int(labels.max()) + 1
-        self.counts = validate_labels(labels, self.n_phases, face_mask=grid.mask)
+        self.n_phases = problem.n_phases
+        self.counts = problem.phases.counts
         self.labels = labels
         self.areas = self.counts * self.h**2
-        self.wear_coefficients = None
-        if wear_coefficients is not None:
-            k = np.asarray(wear_coefficients, dtype=float)
-            if k.shape != (self.n_phases,):
-                raise ValueError(f"need {self.n_phases} wear coefficients, got {k.tolist()}")
-            self.wear_coefficients = k
+        self.wear_coefficients = np.asarray(problem.wear.coefficients, dtype=float)
         pad = _MODEL_PAD
         padded = np.pad(labels, pad, constant_values=-1)
         hs = HalfSpace(padded.shape, self.h, self.E_star)
@@ -566,14 +549,7 @@ class FaceModel:
         (:meth:`steady.scene.Scene.phase_labels`, which names a phase with no
         pixel on the face).
         """
-        labels = scene.phase_labels(n)
-        return cls(labels, scene.outline, scene.E_star, scene.normal_force,
-                   exponent=scene.exponent, wear_coefficients=scene.wear_coefficients)
-
-    @property
-    def radius(self):
-        """The disk's radius ``a``, m; None for other outlines."""
-        return self.outline.radius if isinstance(self.outline, Circle) else None
+        return cls(Problem.from_scene(scene, n=n))
 
     @property
     def shape(self):
@@ -800,6 +776,83 @@ class FaceModel:
             rim_margin=0.0, reference_phase=0, confidence=0.95,
             min_phase_pixels=DEFAULT_MIN_PHASE_PIXELS):
         """Fit the wear ratios to a measured face; see :func:`fit_face`."""
+        start, rim_margin, max_shift, confidence, ref = self._fit_options(
+            measured, shift, max_shift, rim_margin, reference_phase, confidence)
+        # Every trial shift within max_shift of the start sees the same pixels:
+        # those at least rim_margin + max_shift from the rim at the start.
+        erosion = rim_margin + (max_shift if search_shift else 0.0)
+        X, Y, mask, window = self._fitted_pixels(measured, start, rim_margin, erosion,
+                                                 rim_margin or search_shift)
+        x, y, z = X[mask], Y[mask], measured.heights[mask]
+        self._check_determined(self._design(x, y, start),
+                               self.phases_at(x - start[0], y - start[1]), min_phase_pixels)
+        at_limit = False
+        if search_shift:
+            start, at_limit = self._search_shift(x, y, z, start, max_shift)
+            self._check_determined(self._design(x, y, start),
+                                   self.phases_at(x - start[0], y - start[1]),
+                                   min_phase_pixels)
+        columns = self._design(x, y, start)
+        beta, scaled, scale = self._solve(columns, z)
+        residual = z - columns @ beta
+        residual_map = np.full(measured.shape, np.nan)
+        residual_map[mask] = residual
+        stats = _ResidualStatistics(residual_map, mask, measured.pixel_size, window, scaled,
+                                    scale, self.n_phases + 3, confidence)
+        P, m = self.n_phases, self.exponent
+        p, v = beta[:P], stats.covariance[:P, :P]
+        ratios, intervals, notes = _ratios(p, v, ref, m, stats.t)
+        failures = _failures(p)
+        if at_limit:
+            notes.append(f"the shift lies at the search limit {max_shift:.4g} m")
+        notes += stats.notes()
+        load = float(self.areas @ p)
+        load_sd = math.sqrt(max(float(self.areas @ v @ self.areas), 0.0))
+        load_scale = load / self.normal_force
+        fitted, phase = self._maps(measured, X, Y, start, beta)
+        logger.info("fit: %d pixels (%.0f effective), residual rms %.3g m, ratios %s",
+                    stats.samples, stats.effective_samples, math.sqrt(np.mean(residual**2)),
+                    ratios.tolist())
+        return FitResult(
+            ratios=ratios,
+            ratio_intervals=intervals,
+            phase_pressures=p,
+            phase_pressure_errors=np.sqrt(np.maximum(np.diag(v), 0.0)),
+            pressure_covariance=v,
+            offset=float(beta[P]),
+            tilt=(float(beta[P + 1]), float(beta[P + 2])),
+            shift=(float(start[0]), float(start[1])),
+            residual_rms=float(math.sqrt(np.mean(residual**2))),
+            relief=float(np.ptp(columns[:, :P] @ p)),
+            samples=stats.samples,
+            effective_samples=float(stats.effective_samples),
+            correlation_length=float(stats.correlation.length),
+            degrees_of_freedom=float(stats.dof),
+            load_scale=load_scale,
+            load_scale_interval=((load - stats.t * load_sd) / self.normal_force,
+                                 (load + stats.t * load_sd) / self.normal_force),
+            implied_normal_force=load,
+            implied_E_star=self.E_star / load_scale if load_scale > 0 else math.nan,
+            confidence=confidence,
+            reference_phase=ref,
+            exponent=m,
+            normal_force=self.normal_force,
+            E_star=self.E_star,
+            outline=self.outline,
+            n=self.n,
+            success=not failures,
+            message="; ".join(failures + notes),
+            measured=measured,
+            fitted=fitted,
+            residual=residual_map,
+            fit_mask=mask,
+            phase=phase,
+            scene_ratios=self.wear_coefficients / self.wear_coefficients[ref],
+        )
+
+    def _fit_options(self, measured, shift, max_shift, rim_margin, reference_phase,
+                     confidence):
+        """The fit's options checked: ``(start, rim_margin, max_shift, confidence, reference)``."""
         if not isinstance(measured, MeasuredFace):
             raise ValueError(f"measured must be a MeasuredFace, got {type(measured).__name__}")
         start = np.asarray(shift, dtype=float)
@@ -816,16 +869,21 @@ class FaceModel:
                 or not 0 <= reference_phase < self.n_phases):
             raise ValueError(f"reference_phase must be a phase index 0..{self.n_phases - 1}, "
                              f"got {reference_phase!r}")
-        # Every trial shift within max_shift of the start sees the same pixels:
-        # those at least rim_margin + max_shift from the rim at the start.
-        erosion = rim_margin + (max_shift if search_shift else 0.0)
+        return start, rim_margin, max_shift, confidence, int(reference_phase)
+
+    def _fitted_pixels(self, measured, start, rim_margin, erosion, partial):
+        """The measured pixels' coordinates ``X, Y`` (m), the fitted ones and the covariance window.
+
+        Raises ``ValueError`` when the erosion leaves nothing to fit, the map
+        does not cover the face, or its pixels are too coarse for it.
+        """
         reach = self.inradius - erosion
         if reach <= 0:
             raise ValueError(f"nothing left to fit: the rim margin {rim_margin:.4g} m "
                              f"(and the shift search radius) cover the "
                              f"{self.outline.describe()}, no point of which is farther than "
                              f"{self.inradius:.4g} m from its rim")
-        self._check_coverage(measured, start, erosion, rim_margin or search_shift)
+        self._check_coverage(measured, start, erosion, partial)
         dx, dy = measured.pixel_size
         if 2 * reach < _MIN_PIXELS_ACROSS * max(dx, dy):
             raise ValueError(f"measured map {measured.source}: pixels of {max(dx, dy):.4g} m "
@@ -833,129 +891,108 @@ class FaceModel:
                              f"narrowest part of the fitted face, {2 * reach:.4g} m wide")
         xs, ys = measured.coordinates()
         X, Y = np.meshgrid(xs, ys, indexing="ij")
-        heights = measured.heights
         region = self.fitted_region(X - start[0], Y - start[1], erosion)
-        mask = np.isfinite(heights) & region
+        mask = np.isfinite(measured.heights) & region
         # The covariance window: half the radius of the disk of the fitted
         # part's area (half the fitted radius for a disk; the inradius would
         # cut the correlation of a narrow face, a ring or a long rectangle).
         window = 0.5 * math.sqrt(region.sum() * dx * dy / math.pi)
-        x, y, z = X[mask], Y[mask], heights[mask]
-        k = self.n_phases + 3
-        self._check_determined(self._design(x, y, start),
-                               self.phases_at(x - start[0], y - start[1]), min_phase_pixels)
-        at_limit = False
-        if search_shift:
-            start, at_limit = self._search_shift(x, y, z, start, max_shift)
-            self._check_determined(self._design(x, y, start),
-                                   self.phases_at(x - start[0], y - start[1]),
-                                   min_phase_pixels)
-        columns = self._design(x, y, start)
-        beta, scaled, scale = self._solve(columns, z)
-        residual = z - columns @ beta
+        return X, Y, mask, window
 
-        residual_map = np.full(measured.shape, np.nan)
-        residual_map[mask] = residual
-        covariance = _Covariance(residual_map, mask, measured.pixel_size, window, scaled)
-        n_fit = int(mask.sum())
-        n_eff = n_fit / covariance.correlation_area
-        dof = max(n_eff - k, 1.0)
-        bread = np.linalg.pinv(scaled.T @ scaled)
-        cov = bread @ covariance.meat @ bread
-        cov /= np.outer(scale, scale)
-        t = float(special.stdtrit(dof, 0.5 + 0.5 * confidence))
-
-        P, ref, m = self.n_phases, int(reference_phase), self.exponent
-        p = beta[:P]
-        v = cov[:P, :P]
-        notes, failures = [], []
-        ratios = np.full(P, np.nan)
-        intervals = np.full((P, 2), np.nan)
-        for i in range(P):
-            if i == ref:
-                ratios[i], intervals[i] = 1.0, (1.0, 1.0)
-                continue
-            if p[ref] > 0 and p[i] > 0:
-                ratios[i] = (p[ref] / p[i]) ** m
-            lo, hi = _fieller(p[ref], p[i], v[ref, ref], v[i, i], v[ref, i], t)
-            intervals[i] = (lo**m, hi**m)
-            if math.isinf(hi):
-                notes.append(f"k{i}/k{ref} is bounded only from below: phase {i}'s pressure is "
-                             f"not distinguished from zero")
-            elif lo == 0.0:
-                notes.append(f"k{i}/k{ref} is bounded only from above: phase {ref}'s pressure "
-                             f"is not distinguished from zero")
-        for i in range(P):
-            if not p[i] > 0:
-                failures.append(f"phase {i}: fitted pressure {p[i]:.4g} Pa is not positive")
-        if failures and np.all(p < 0):
-            failures.append("is the height map upside down? The fit expects the face's "
-                            "elevation, larger = protruding")
-        if at_limit:
-            notes.append(f"the shift lies at the search limit {max_shift:.4g} m")
-        if not covariance.converged:
-            notes.append(f"the estimate of the residual's correlation did not settle in "
-                         f"{covariance.iterations} iterations: the intervals are approximate")
-        if covariance.window_limited:
-            notes.append("the residual stays correlated out to the covariance window "
-                         f"({window:.3g} m): the intervals may be too narrow")
-
-        load = float(self.areas @ p)
-        load_sd = math.sqrt(max(float(self.areas @ v @ self.areas), 0.0))
-        load_scale = load / self.normal_force
-        load_interval = ((load - t * load_sd) / self.normal_force,
-                         (load + t * load_sd) / self.normal_force)
-
+    def _maps(self, measured, X, Y, start, beta):
+        """The fitted face (m, NaN off the face) and the phase map on the measured pixels."""
         on_face = self.outline.contains(X - start[0], Y - start[1])
         fitted = np.full(measured.shape, np.nan)
         fitted[on_face] = self._design(X[on_face], Y[on_face], start) @ beta
         phase = np.full(measured.shape, -1, dtype=np.int64)
         phase[on_face] = self.phases_at(X[on_face] - start[0], Y[on_face] - start[1])
-        relief_values = columns[:, :P] @ p
-        scene_ratios = None
-        if self.wear_coefficients is not None:
-            scene_ratios = self.wear_coefficients / self.wear_coefficients[ref]
-        message = "; ".join(failures + notes)
-        logger.info("fit: %d pixels (%.0f effective), residual rms %.3g m, ratios %s", n_fit,
-                    n_eff, math.sqrt(np.mean(residual**2)), ratios.tolist())
-        return FitResult(
-            ratios=ratios,
-            ratio_intervals=intervals,
-            phase_pressures=p,
-            phase_pressure_errors=np.sqrt(np.maximum(np.diag(v), 0.0)),
-            pressure_covariance=v,
-            offset=float(beta[P]),
-            tilt=(float(beta[P + 1]), float(beta[P + 2])),
-            shift=(float(start[0]), float(start[1])),
-            residual_rms=float(math.sqrt(np.mean(residual**2))),
-            relief=float(np.ptp(relief_values)),
-            samples=n_fit,
-            effective_samples=float(n_eff),
-            correlation_length=float(covariance.length),
-            degrees_of_freedom=float(dof),
-            load_scale=load_scale,
-            load_scale_interval=load_interval,
-            implied_normal_force=load,
-            implied_E_star=self.E_star / load_scale if load_scale > 0 else math.nan,
-            confidence=confidence,
-            reference_phase=ref,
-            exponent=m,
-            normal_force=self.normal_force,
-            E_star=self.E_star,
-            outline=self.outline,
-            n=self.n,
-            success=not failures,
-            message=message,
-            measured=measured,
-            fitted=fitted,
-            residual=residual_map,
-            fit_mask=mask,
-            phase=phase,
-            scene_ratios=scene_ratios,
-        )
+        return fitted, phase
 
 
-def fit_face(measured, labels, outline, E_star, normal_force, *, exponent=1.0, **options):
+class _ResidualStatistics:
+    """The fit's residual as a correlated field: its covariance, effective samples and ``t``.
+
+    Parameters
+    ----------
+    residual_map : ndarray, shape of the measured map, m
+        The residual on the fitted pixels, NaN elsewhere.
+    mask : ndarray of bool
+        The fitted pixels.
+    pixel_size : (float, float), m
+    window : float, m
+        Radius of the covariance estimate.
+    scaled : ndarray, shape (N, K)
+        The design matrix with its columns scaled (:meth:`FaceModel._solve`).
+    scale : ndarray, shape (K,)
+        The column scales.
+    unknowns : int
+        ``K``, the fitted parameters.
+    confidence : float
+        Level of the intervals.
+    """
+
+    def __init__(self, residual_map, mask, pixel_size, window, scaled, scale, unknowns,
+                 confidence):
+        self.window = window
+        self.correlation = _Covariance(residual_map, mask, pixel_size, window, scaled)
+        self.samples = int(mask.sum())
+        self.effective_samples = self.samples / self.correlation.correlation_area
+        self.dof = max(self.effective_samples - unknowns, 1.0)
+        bread = np.linalg.pinv(scaled.T @ scaled)
+        covariance = bread @ self.correlation.meat @ bread
+        covariance /= np.outer(scale, scale)
+        #: Covariance of the fitted parameters (pressures, offset, tilt).
+        self.covariance = covariance
+        #: Student's ``t`` of the intervals.
+        self.t = float(special.stdtrit(self.dof, 0.5 + 0.5 * confidence))
+
+    def notes(self):
+        """What the user should know about the intervals' reliability."""
+        notes = []
+        if not self.correlation.converged:
+            notes.append(f"the estimate of the residual's correlation did not settle in "
+                         f"{self.correlation.iterations} iterations: the intervals are "
+                         f"approximate")
+        if self.correlation.window_limited:
+            notes.append("the residual stays correlated out to the covariance window "
+                         f"({self.window:.3g} m): the intervals may be too narrow")
+        return notes
+
+
+def _ratios(p, v, ref, m, t):
+    """Ratios ``(p_ref / p_i)^m`` with Fieller intervals, and notes on one-sided ones."""
+    P = len(p)
+    notes = []
+    ratios = np.full(P, np.nan)
+    intervals = np.full((P, 2), np.nan)
+    for i in range(P):
+        if i == ref:
+            ratios[i], intervals[i] = 1.0, (1.0, 1.0)
+            continue
+        if p[ref] > 0 and p[i] > 0:
+            ratios[i] = (p[ref] / p[i]) ** m
+        lo, hi = _fieller(p[ref], p[i], v[ref, ref], v[i, i], v[ref, i], t)
+        intervals[i] = (lo**m, hi**m)
+        if math.isinf(hi):
+            notes.append(f"k{i}/k{ref} is bounded only from below: phase {i}'s pressure is "
+                         f"not distinguished from zero")
+        elif lo == 0.0:
+            notes.append(f"k{i}/k{ref} is bounded only from above: phase {ref}'s pressure "
+                         f"is not distinguished from zero")
+    return ratios, intervals, notes
+
+
+def _failures(p):
+    """Why fitted pressures ``p`` (Pa) make no wear law: those that are not positive."""
+    failures = [f"phase {i}: fitted pressure {p[i]:.4g} Pa is not positive"
+                for i in range(len(p)) if not p[i] > 0]
+    if failures and np.all(p < 0):
+        failures.append("is the height map upside down? The fit expects the face's "
+                        "elevation, larger = protruding")
+    return failures
+
+
+def fit_face(measured, problem, **options):
     """Wear ratios that best explain a measured worn face (inverse of eq. 7, 9).
 
     Least squares over the phase pressures, a height offset and a tilt
@@ -970,19 +1007,11 @@ def fit_face(measured, labels, outline, E_star, normal_force, *, exponent=1.0, *
         pixel size; its centre is the face's centre (the origin of the
         outline) unless ``shift`` says otherwise.  It must cover the face's
         bounding box.
-    labels : ndarray, shape (nx, ny), int
-        The phase map on the outline's grid (-1 off the face), e.g.
-        ``geometry.labels(outline.grid(n))``; for a disk the ``n x n`` grid
-        over ``[-a, a]^2``.
-    outline : outline object or float
-        The face's outline (:mod:`steady.outline`), or the radius ``a`` of a
-        disk (m).
-    E_star : float, Pa
-        Scales the relief only: the ratios do not depend on it.
-    normal_force : float, N
-        Enters only the consistency figure ``load_scale``.
-    exponent : float, optional
-        ``m`` of the wear law (default 1).
+    problem : steady.problem.Problem
+        The phase map on the model grid, ``E*`` (it scales the relief only:
+        the ratios do not depend on it), the normal force (it enters only
+        the consistency figure ``load_scale``) and the power law whose
+        exponent relates ratios and pressures (see :class:`FaceModel`).
     **options
         Keywords of the fit:
 
@@ -1029,24 +1058,23 @@ def fit_face(measured, labels, outline, E_star, normal_force, *, exponent=1.0, *
     face's outside as NaN (masked):
 
     >>> import numpy as np
-    >>> from steady import HalfSpace, MeasuredFace, Voronoi, fit_face, pixel_size, solve
-    >>> n, a, E_star, force = 48, 4e-3, 1.3e6, 10.0
-    >>> labels = Voronoi(64, (0.6, 0.4), seed=2029).labels(n)
-    >>> h = pixel_size(n, a)
-    >>> truth = solve(HalfSpace(n, h, E_star), labels, [1e-13, 3e-13], force)
+    >>> from steady import Circle, FacePhases, MeasuredFace, Problem, Voronoi, fit_face, solve
+    >>> n, E_star, force = 48, 1.3e6, 10.0
+    >>> grid = Circle(4e-3).grid(n)
+    >>> phases = FacePhases(grid, Voronoi(64, (0.6, 0.4), seed=2029).labels(grid), 2)
+    >>> problem = Problem(phases, [1e-13, 3e-13], force, E_star)
+    >>> truth = solve(problem)
     >>> relief = np.nanmax(truth.face) - np.nanmin(truth.face)
-    >>> x = (np.arange(n) - (n - 1) / 2) * h
     >>> noise = np.random.default_rng(8191).standard_normal((n, n))
-    >>> heights = truth.face + 2e-5 + 1e-3 * x[:, None] + 0.01 * relief * noise
-    >>> fit = fit_face(MeasuredFace(heights, h), labels, a, E_star, force)
+    >>> heights = truth.face + 2e-5 + 1e-3 * grid.x[:, None] + 0.01 * relief * noise
+    >>> fit = fit_face(MeasuredFace(heights, grid.h), problem)
     >>> lo, hi = fit.ratio_intervals[1]
     >>> print(f"k1/k0 = {fit.ratios[1]:.3f} in [{lo:.3f}, {hi:.3f}], tilt {fit.tilt[0]:.4f}")
     k1/k0 = 3.008 in [2.986, 3.030], tilt 0.0012
     >>> print(f"load scale {fit.load_scale:.3f}, success {fit.success}")
     load scale 1.000, success True
     """
-    model = FaceModel(labels, outline, E_star, normal_force, exponent=exponent)
-    return model.fit(measured, **options)
+    return FaceModel(problem).fit(measured, **options)
 
 
 def fit_scene(scene, measured, *, n=None, **options):

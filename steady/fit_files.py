@@ -653,7 +653,6 @@ def plot_fit(fit_path, png_path, *, force=False, dpi=100):
     ValueError
         Unreadable fit file, or ``png_path`` exists and ``force`` is False.
     """
-    from .plotting import _check_png, save_png  # deferred: matplotlib is slow to import
+    from .plotting import save_png  # deferred: matplotlib is slow to import
 
-    png_path = _check_png(png_path, force)
-    return save_png(fit_figure(read_fit(fit_path)), png_path, dpi=dpi)
+    return save_png(fit_figure(read_fit(fit_path)), png_path, force=force, dpi=dpi)

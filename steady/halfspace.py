@@ -198,10 +198,11 @@ class HalfSpace:
     displacement is ``2 p a / E*``, here up to the staircase of the rim.
 
     >>> import numpy as np
-    >>> from steady.grid import face_mask, pixel_size
+    >>> from steady.outline import Circle
     >>> n, a, E_star, p = 64, 4e-3, 1.3e6, 1e4
-    >>> halfspace = HalfSpace(n, pixel_size(n, a), E_star)
-    >>> u = halfspace.displacement(np.where(face_mask(n), p, 0.0))
+    >>> grid = Circle(a).grid(n)
+    >>> halfspace = HalfSpace(grid.shape, grid.h, E_star)
+    >>> u = halfspace.displacement(np.where(grid.mask, p, 0.0))
     >>> u.shape
     (64, 64)
     >>> print(f"{u[n // 2, n // 2] / (2 * p * a / E_star):.3f}")
@@ -218,7 +219,6 @@ class HalfSpace:
         self.h = float(h)
         self.E_star = float(E_star)
         self.workers = workers
-        self.padded_shape = (2 * nx, 2 * ny)
         self._corners = _corner_asinh(self.shape, self.h)
         self._influence_q = self._even_spectrum(self.influence_quadrant)
         self._influence_q.flags.writeable = False

@@ -24,7 +24,9 @@ import math
 
 import numpy as np
 
-from .phases import MIN_GRID, _check_grid, face_grid
+from .outline import MIN_SIDE_PIXELS, as_grid
+from .phases import PHASE_MAPS, check_resolution
+from .schema import Key
 
 __all__ = ["MAX_FILL", "MAX_INCLUSIONS", "MAX_RADIUS", "Inclusions"]
 
@@ -61,6 +63,17 @@ def _positive(value, name):
     return v
 
 
+@PHASE_MAPS.register("inclusions", (
+    Key("radius", "number", unit="m", low=0.0, required=True, doc="mean inclusion radius"),
+    Key("seed", "integer", low=0, low_open=False, required=True,
+        doc="seed of the random generator"),
+    Key("fill_factor", "number", unit="1", low=0.0,
+        doc="expected area fraction of the inclusions, at most 0.5"),
+    Key("count", "number", unit="1", low=0.0,
+        doc="expected inclusion centres on the face, instead of fill_factor"),
+    Key("radius_spread", "number", unit="1", low=0.0, low_open=False,
+        doc="relative standard deviation of the radii, log-normal (default 0)")),
+    doc="random non-overlapping circular inclusions (phase 1) in a matrix (phase 0)")
 @dataclasses.dataclass(frozen=True)
 class Inclusions:
     """Random non-overlapping circular inclusions (phase 1) in a matrix (phase 0).
@@ -105,7 +118,7 @@ class Inclusions:
 
     Examples
     --------
-    >>> from steady.phases import realised_fill_factors
+    >>> from steady.labels import realised_fill_factors
     >>> geometry = Inclusions(radius=0.05, seed=2718, fill_factor=0.2)
     >>> labels = geometry.labels(256)
     >>> print(f"{realised_fill_factors(labels, 2)[1]:.2f}")
@@ -245,18 +258,30 @@ class Inclusions:
         """Inclusion radii, shape (N,), units of ``a`` (read-only), largest first."""
         return self._placed[1]
 
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[phases] map`` keys (m), in units of the outline's scale.
+
+        ``count`` is per face area: the outline's area in units of ``L^2``.
+        """
+        outline = context.outline
+        options = dict(values, radius=values["radius"] / outline.scale)
+        if outline.kind != "circle":  # the default face_area is the unit disk's pi
+            options["face_area"] = outline.area / outline.scale**2
+        return cls(**options)
+
     def min_grid(self, outline=None):
         """``max(8, ceil(6 / radius))``: three pixels per mean radius."""
-        return max(MIN_GRID, math.ceil(6.0 / self.radius - 1e-9))
+        return max(MIN_SIDE_PIXELS, math.ceil(6.0 / self.radius - 1e-9))
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(grid, self.min_grid(), f"inclusions of radius {self.radius:g} L")
+        return check_resolution(grid, self.min_grid(), f"inclusions of radius {self.radius:g} L")
 
     def labels(self, grid):
         """Phase 1 inside the inclusions, 0 elsewhere on the face, -1 off it; shape of the grid."""
         self.check_grid(grid)
-        grid = face_grid(grid)
+        grid = as_grid(grid)
         nx, ny = grid.shape
         x, y = grid.unit_x, grid.unit_y
         bx, by = grid.unit_half_extent

@@ -214,10 +214,9 @@ def steady_memory(n, *, slope_error=True):
 
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
-    Measured against the peak resident memory of a steady solve (from
-    ``resource.getrusage``), the estimate is an upper bound by a factor of
-    1.7 at ``n = 256`` (where the constant dominates), 1.46 at 512, 1.42 at
-    1024 and 1.39 at 2048 (``tests/test_memory.py``).
+    The estimate is an upper bound of the measured peak within a factor of
+    2 (``tests/test_memory.py``; the measured ratios are in
+    docs/benchmarks.md, "Memory estimates").
 
     Parameters
     ----------

@@ -37,8 +37,10 @@ import pathlib
 import numpy as np
 from scipy import ndimage
 
-from .outline import Circle, FaceGrid, as_outline
-from .phases import MIN_GRID, _check_grid, _input_file, _png_size, npy_header
+from .array_files import input_file_size, npy_header, png_size
+from .outline import MIN_SIDE_PIXELS, Circle, FaceGrid, as_outline
+from .phases import PHASE_MAPS, check_resolution
+from .schema import Key
 from .text import shorten
 
 __all__ = [
@@ -323,7 +325,7 @@ def read_grey(path):
     path = pathlib.Path(path)
     what = "micrograph"
     suffix = path.suffix.lower()
-    _input_file(path, what)
+    input_file_size(path, what)
     if suffix == ".npy":
         shape, dtype = npy_header(path, what=what)
         if len(shape) != 2:
@@ -342,7 +344,7 @@ def read_grey(path):
         raise ValueError(f"{what} {str(path)!r} must be a .png or .npy file")
     import matplotlib.image  # deferred: only PNG micrographs need it
 
-    size = _png_size(path, what)
+    size = png_size(path, what)
     if size[0] * size[1] > MAX_PIXELS:
         raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more than "
                          f"the {MAX_PIXELS} read")
@@ -401,6 +403,19 @@ def _placement(shape, outline, pixel_size, cover, offset, source):
     return pixel_size, cover, offset
 
 
+@PHASE_MAPS.register("micrograph", (
+    Key("path", "path", required=True, doc="grey-level image, .png or .npy"),
+    Key("n_phases", "integer", low=2, low_open=False, required=True,
+        doc="phases, by multi-level Otsu thresholds (phase 0 darkest)"),
+    Key("smoothing", "number", unit="pixels", low=0.0, low_open=False,
+        doc="Gaussian sigma before thresholding (default 0)"),
+    Key("min_speck", "integer", unit="pixels", low=0, low_open=False,
+        doc="patches below this are relabelled to the surrounding phase (default 0)"),
+    Key("pixel_size", "number", unit="m", low=0.0,
+        doc="side of an image pixel (default: a square image spans the face's box)"),
+    Key("cover", "string", choices=COVERS, doc="crop (default) or tile"),
+    Key("offset", "pair", unit="m", doc="face centre relative to the image centre")),
+    doc="a grey-level micrograph segmented into phases and placed on the face")
 @dataclasses.dataclass(frozen=True, eq=False)
 class Micrograph:
     """A segmented micrograph placed on the face: a phase geometry.
@@ -482,6 +497,12 @@ class Micrograph:
         """Number of phases of the segmentation."""
         return self.segmentation.n_phases
 
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[phases] map`` keys: :func:`load_micrograph` on the outline."""
+        options = {key: value for key, value in values.items() if key != "path"}
+        return load_micrograph(values["path"], context.outline, **options)
+
     @property
     def extent(self):
         """``(width, height)`` of the image, m."""
@@ -489,12 +510,12 @@ class Micrograph:
         return cols * self.pixel_size, rows * self.pixel_size
 
     def min_grid(self, outline=None):
-        """Smallest accepted grid, :data:`steady.phases.MIN_GRID`."""
-        return MIN_GRID
+        """Smallest accepted grid, :data:`steady.outline.MIN_SIDE_PIXELS`."""
+        return MIN_SIDE_PIXELS
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(grid, self.min_grid(), f"micrograph {self.source!r}")
+        return check_resolution(grid, self.min_grid(), f"micrograph {self.source!r}")
 
     def _grid(self, grid):
         """The face grid of ``grid`` (``n``: this micrograph's own outline)."""

@@ -30,7 +30,9 @@ import functools
 import math
 
 from . import reference
+from .accuracy import estimate_rms_slope
 from .outline import Annulus, Circle, MaskOutline, Rectangle
+from .phases import Homogeneous
 
 __all__ = ["REFERENCE_GRID", "ReferenceSlope", "reference_slope", "slope_factor"]
 
@@ -108,9 +110,6 @@ def _reference_grid(outline):
 
 def _estimated_factor(outline):
     """``S`` from the corrected estimator on the homogeneous face (no closed form)."""
-    from .accuracy import estimate_rms_slope  # deferred: accuracy imports this module's users
-    from .phases import Homogeneous
-
     n = _reference_grid(outline)
     # Unit load on a unit modulus: the rms slope is S pbar with pbar = 1 / area.
     force = outline.area

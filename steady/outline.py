@@ -11,10 +11,13 @@ any region given as a pixel mask.  Every outline has
   (the radius ``a`` of a disk);
 - ``area`` : the exact area of the region, m^2 (``pbar = F_N / area``);
 - ``contains(x, y)`` : whether points (m) lie strictly inside;
+  ``covers(x, y)`` : inside or on the outline (the closed face);
 - ``grid(n)`` : the :class:`FaceGrid` of ``n`` pixels along the longer
   side of the bounding box;
 - ``min_grid()``, ``check_grid(n)`` : the coarsest grid that resolves it;
 - ``encloses_disk(centre, radius)`` : whether a disk (m) lies in the face;
+- ``support(direction)``, ``circumradius()`` : how far the face reaches
+  along a direction, and from its centre, m;
 - ``parameters()`` : its defining lengths, ``name -> (value, unit)``.
 
 Grid
@@ -25,11 +28,14 @@ Pixels are square, of side ``h = 2 L / n``; the bounding box is covered by
 rectangle whose sides are whole numbers of pixels is covered exactly.  A
 pixel belongs to the face when its centre lies strictly inside the
 outline; areas are pixel counts times ``h^2``.  For a disk this is the
-``n x n`` grid over ``[-a, a]^2`` of :mod:`steady.grid`, pixel for pixel.
+``n x n`` grid over ``[-a, a]^2``, pixel centres ``-a + (i + 1/2) h``.
+:func:`as_grid` turns a bare ``n`` into the grid of the unit disk (the
+coordinates of phase geometries).
 
-Outlines are registered by name (:func:`register_outline`,
-:data:`OUTLINES`); :func:`outline_from_table` builds one from the
-``[punch]`` table of a scene file.
+Outlines are registered in :data:`OUTLINES` (a
+:class:`steady.schema.Registry`) with their ``[punch]`` keys;
+:func:`outline_from_table` builds one from the ``[punch]`` table of a scene
+file.  Outlines compare by value (a mask by its pixels and pixel size).
 """
 
 from __future__ import annotations
@@ -37,45 +43,36 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import pathlib
 
 import numpy as np
 
-from .grid import face_mask as disk_face_mask
+from .array_files import read_face_mask
+from .schema import Context, Key, Registry
 from .text import shorten
 
 __all__ = [
+    "MIN_SIDE_PIXELS",
     "OUTLINES",
+    "UNIT_DISK",
     "Annulus",
     "Circle",
     "Ellipse",
     "FaceGrid",
-    "MIN_SIDE_PIXELS",
     "MaskOutline",
     "Rectangle",
+    "as_grid",
     "as_outline",
+    "grid_size",
     "outline_from_table",
-    "register_outline",
 ]
 
-#: Pixels across the shorter side of the bounding box (and across the ring of
-#: an annulus, in units of three) below which a grid is refused.
+#: Fewest pixels across the shorter side of a grid's box (and across the ring
+#: of an annulus, in units of three), for an outline and for a phase map.
 MIN_SIDE_PIXELS = 8
 
-#: Registered outlines, by ``kind``.
-OUTLINES = {}
-
-
-def register_outline(cls):
-    """Class decorator: register an outline under its ``kind``.
-
-    The class needs ``kind`` and ``keys`` (``(required, optional)`` sets of
-    the ``[punch]`` keys besides ``shape``) and a classmethod
-    ``from_table(table, base_dir)``.
-    """
-    if cls.kind in OUTLINES:
-        raise ValueError(f"outline kind {cls.kind!r} is already registered")
-    OUTLINES[cls.kind] = cls
-    return cls
+#: Registered outlines, by ``shape`` (``[punch] shape``; default ``"circle"``).
+OUTLINES = Registry("face outline", "shape", default="circle")
 
 
 def _length(value, name):
@@ -88,10 +85,37 @@ def _length(value, name):
     return v
 
 
-def _grid_size(n):
+def _length_key(name, doc):
+    """A required ``[punch]`` length, m, positive."""
+    return Key(name, "number", unit="m", low=0.0, required=True, doc=doc)
+
+
+def grid_size(n):
+    """A grid size ``n`` (pixels along the longer side of a box) as an int, checked.
+
+    The one place a grid size given by a user is checked for its type;
+    outlines and phase maps check its range.
+
+    Raises
+    ------
+    ValueError
+        ``n`` is not an integer (a float, a bool, a string).
+
+    Examples
+    --------
+    >>> grid_size(64)
+    64
+    """
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
-        raise ValueError(f"grid size n must be an integer, got {n!r}")
+        raise ValueError(f"grid size n must be an integer, got {shorten(n)}")
     return int(n)
+
+
+def _disk_mask(n):
+    """Pixels of the ``n x n`` grid whose centre lies strictly inside the inscribed disk."""
+    # Integer arithmetic: (2i + 1 - n)^2 + (2j + 1 - n)^2 < n^2 is exact.
+    c = 2 * np.arange(n) + 1 - n
+    return c[:, None] ** 2 + c[None, :] ** 2 < n * n
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -143,8 +167,8 @@ class FaceGrid:
         return self.h * self.h
 
     def _unit_axis(self, m):
-        # -m/n + (i + 1/2) 2/n: for m = n the unit disk's pixel centres of
-        # steady.grid.pixel_centres(n, 1.0), bit for bit.
+        # -m/n + (i + 1/2) 2/n: for m = n the centres -1 + (i + 1/2) h of the
+        # unit disk's grid, the same numbers as _axis gives for L = 1.
         return -(m / self.n) + (np.arange(m) + 0.5) * (2.0 / self.n)
 
     def _axis(self, m):
@@ -194,16 +218,18 @@ class FaceGrid:
         """Face pixels times ``h^2``, m^2."""
         return float(self.mask.sum()) * self.pixel_area
 
-    def coarsened(self, m):
-        """The grid of the same outline with ``m`` pixels along the longer side."""
-        return FaceGrid(self.outline, m)
+    @functools.cached_property
+    def radii(self):
+        """Distance of every pixel centre from the face's centre, m, shape (nx, ny)."""
+        return np.hypot(self.x[:, None], self.y[None, :])
+
+    def polar(self):
+        """Radius (m) and azimuth (rad) of every pixel centre, each shape (nx, ny)."""
+        return self.radii, np.arctan2(self.y[None, :], self.x[:, None])
 
 
 class _Outline:
     """What every outline shares (its subclasses are frozen dataclasses)."""
-
-    kind = ""
-    keys = (set(), set())
 
     @property
     def scale(self):
@@ -219,7 +245,7 @@ class _Outline:
 
     def grid_shape(self, n):
         """``(nx, ny)`` of the grid with ``n`` pixels along the longer side."""
-        n = _grid_size(n)
+        n = grid_size(n)
         ax, ay = self.aspect
         return (n if ax == 1.0 else max(1, math.floor(n * ax + 0.5)),
                 n if ay == 1.0 else max(1, math.floor(n * ay + 0.5)))
@@ -232,13 +258,17 @@ class _Outline:
         """Face pixels of ``grid``: centres strictly inside the outline."""
         return self.contains(grid.x[:, None], grid.y[None, :])
 
+    def covers(self, x, y):
+        """Points inside the outline or on it (the closed face); by default :meth:`contains`."""
+        return self.contains(x, y)
+
     def min_grid(self):
         """Smallest ``n``: :data:`MIN_SIDE_PIXELS` across the shorter side of the box."""
         return max(MIN_SIDE_PIXELS, math.ceil(MIN_SIDE_PIXELS / min(self.aspect) - 1e-9))
 
     def check_grid(self, n):
         """``n`` as an int; ``ValueError`` naming ``n`` and the minimum if too coarse."""
-        n = _grid_size(n)
+        n = grid_size(n)
         low = self.min_grid()
         if n < low:
             raise ValueError(f"grid too coarse for the {self.describe()}: n = {n}, the minimum "
@@ -259,6 +289,49 @@ class _Outline:
         y = np.append(cy + shrink * radius * np.sin(t), cy)
         return bool(np.all(self.contains(x, y)))
 
+    def support(self, direction):
+        """``max (x, y) . direction`` over the face, m: how far it reaches along a unit vector.
+
+        Exact for the disk, the annulus, the rectangle and the ellipse, and
+        for a mask (its pixels' corners); otherwise the largest value over
+        the pixel corners of a fine grid's face.
+
+        Parameters
+        ----------
+        direction : (float, float)
+            A unit vector.
+
+        Returns
+        -------
+        float
+
+        Examples
+        --------
+        >>> print(f"{Rectangle(4e-3, 12e-3).support((0.6, 0.8)) * 1e3:.3f} mm")
+        6.000 mm
+        """
+        ux, uy = (float(v) for v in direction)
+        x0, x1, y0, y1 = self._pixel_edges()
+        return float(np.max(np.maximum(x0 * ux, x1 * ux) + np.maximum(y0 * uy, y1 * uy)))
+
+    def circumradius(self):
+        """Largest distance of the face from its centre, m (the radius of a disk).
+
+        Exact for the disk, the annulus, the rectangle and the ellipse, and
+        for a mask (its pixels' corners); otherwise over the pixel corners
+        of a fine grid's face.
+        """
+        x0, x1, y0, y1 = self._pixel_edges()
+        return float(np.sqrt(np.max(np.maximum(x0**2, x1**2) + np.maximum(y0**2, y1**2))))
+
+    def _pixel_edges(self):
+        """Lower and upper x and y edges of the face's pixels on a fine grid, m."""
+        grid = FaceGrid(self, max(512, self.min_grid()))
+        i, j = np.nonzero(grid.mask)
+        half = 0.5 * grid.h
+        x, y = grid.x[i], grid.y[j]
+        return x - half, x + half, y - half, y + half
+
     def describe(self):
         """The outline in words with its lengths in mm."""
         parts = ", ".join(f"{name} {value * 1e3:.6g} mm"
@@ -267,7 +340,8 @@ class _Outline:
         return f"{self.kind} face ({parts})"
 
 
-@register_outline
+@OUTLINES.register("circle", (_length_key("radius", "the disk's radius a"),),
+                   doc="the disk of radius a: the paper's cylinder")
 @dataclasses.dataclass(frozen=True)
 class Circle(_Outline):
     """A disk of radius ``a``: the paper's cylindrical punch.
@@ -284,17 +358,15 @@ class Circle(_Outline):
     """
 
     radius: float
-    kind = "circle"
-    keys = ({"radius"}, set())
 
     def __post_init__(self):
         """Check the radius."""
         object.__setattr__(self, "radius", _length(self.radius, "radius"))
 
     @classmethod
-    def from_table(cls, table, base_dir=None):
-        """From ``[punch]`` keys (``radius``)."""
-        return cls(_length(table["radius"], "[punch] radius"))
+    def from_values(cls, values, context):
+        """From the checked ``[punch]`` keys."""
+        return cls(values["radius"])
 
     @property
     def half_extent(self):
@@ -310,20 +382,34 @@ class Circle(_Outline):
         """Points strictly inside the disk."""
         return np.asarray(x) ** 2 + np.asarray(y) ** 2 < self.radius**2
 
+    def covers(self, x, y):
+        """Points inside the disk or on its circle."""
+        return np.hypot(x, y) <= self.radius
+
     def grid_mask(self, grid):
-        """:func:`steady.grid.face_mask`: exact in integers."""
-        return disk_face_mask(grid.n)
+        """Pixel centres inside the disk, exact in integers."""
+        return _disk_mask(grid.n)
 
     def encloses_disk(self, centre, radius):
         """``|c| + r <= a`` (to round-off)."""
         return math.hypot(*centre) + radius <= self.radius * (1.0 + 1e-12)
+
+    def support(self, direction):
+        """``a`` in every direction, m."""
+        return self.radius
+
+    def circumradius(self):
+        """``a``, m."""
+        return self.radius
 
     def parameters(self):
         """``{"radius": (a, "m")}``."""
         return {"radius": (self.radius, "m")}
 
 
-@register_outline
+@OUTLINES.register("rectangle", (_length_key("width", "side along x"),
+                                 _length_key("length", "side along y")),
+                   doc="a rectangle, e.g. a tread block")
 @dataclasses.dataclass(frozen=True)
 class Rectangle(_Outline):
     """A rectangle ``width x length``, its width along x: a tread block.
@@ -350,8 +436,6 @@ class Rectangle(_Outline):
 
     width: float
     length: float
-    kind = "rectangle"
-    keys = ({"width", "length"}, set())
 
     def __post_init__(self):
         """Check the sides."""
@@ -359,10 +443,9 @@ class Rectangle(_Outline):
         object.__setattr__(self, "length", _length(self.length, "length"))
 
     @classmethod
-    def from_table(cls, table, base_dir=None):
-        """From ``[punch]`` keys (``width``, ``length``)."""
-        return cls(_length(table["width"], "[punch] width"),
-                   _length(table["length"], "[punch] length"))
+    def from_values(cls, values, context):
+        """From the checked ``[punch]`` keys."""
+        return cls(values["width"], values["length"])
 
     @property
     def half_extent(self):
@@ -379,18 +462,34 @@ class Rectangle(_Outline):
         bx, by = self.half_extent
         return (np.abs(np.asarray(x)) < bx) & (np.abs(np.asarray(y)) < by)
 
+    def covers(self, x, y):
+        """Points inside the rectangle or on its sides."""
+        bx, by = self.half_extent
+        return (np.abs(np.asarray(x)) <= bx) & (np.abs(np.asarray(y)) <= by)
+
     def encloses_disk(self, centre, radius):
         """The disk within both pairs of sides (to round-off)."""
         bx, by = self.half_extent
         slack = 1e-12 * self.scale
         return (abs(centre[0]) + radius <= bx + slack) and (abs(centre[1]) + radius <= by + slack)
 
+    def support(self, direction):
+        """``Lx |ux| + Ly |uy|``, m (a corner)."""
+        lx, ly = self.half_extent
+        return lx * abs(float(direction[0])) + ly * abs(float(direction[1]))
+
+    def circumradius(self):
+        """Half the diagonal, m."""
+        return math.hypot(*self.half_extent)
+
     def parameters(self):
         """``{"width": ..., "length": ...}``, m."""
         return {"width": (self.width, "m"), "length": (self.length, "m")}
 
 
-@register_outline
+@OUTLINES.register("ellipse", (_length_key("semi_axis_x", "semi-axis along x"),
+                               _length_key("semi_axis_y", "semi-axis along y")),
+                   doc="an ellipse")
 @dataclasses.dataclass(frozen=True)
 class Ellipse(_Outline):
     """An ellipse with semi-axes ``semi_axis_x`` along x and ``semi_axis_y`` along y.
@@ -407,8 +506,6 @@ class Ellipse(_Outline):
 
     semi_axis_x: float
     semi_axis_y: float
-    kind = "ellipse"
-    keys = ({"semi_axis_x", "semi_axis_y"}, set())
 
     def __post_init__(self):
         """Check the semi-axes."""
@@ -416,10 +513,9 @@ class Ellipse(_Outline):
         object.__setattr__(self, "semi_axis_y", _length(self.semi_axis_y, "semi_axis_y"))
 
     @classmethod
-    def from_table(cls, table, base_dir=None):
-        """From ``[punch]`` keys (``semi_axis_x``, ``semi_axis_y``)."""
-        return cls(_length(table["semi_axis_x"], "[punch] semi_axis_x"),
-                   _length(table["semi_axis_y"], "[punch] semi_axis_y"))
+    def from_values(cls, values, context):
+        """From the checked ``[punch]`` keys."""
+        return cls(values["semi_axis_x"], values["semi_axis_y"])
 
     @property
     def half_extent(self):
@@ -436,12 +532,28 @@ class Ellipse(_Outline):
         return ((np.asarray(x) / self.semi_axis_x) ** 2
                 + (np.asarray(y) / self.semi_axis_y) ** 2 < 1.0)
 
+    def covers(self, x, y):
+        """Points inside the ellipse or on it."""
+        return ((np.asarray(x) / self.semi_axis_x) ** 2
+                + (np.asarray(y) / self.semi_axis_y) ** 2 <= 1.0)
+
+    def support(self, direction):
+        """``hypot(ax ux, ay uy)``, m."""
+        lx, ly = self.half_extent
+        return math.hypot(lx * float(direction[0]), ly * float(direction[1]))
+
+    def circumradius(self):
+        """The larger semi-axis, m."""
+        return max(self.half_extent)
+
     def parameters(self):
         """The semi-axes, m."""
         return {"semi_axis_x": (self.semi_axis_x, "m"), "semi_axis_y": (self.semi_axis_y, "m")}
 
 
-@register_outline
+@OUTLINES.register("annulus", (_length_key("inner_radius", "radius of the inner circle"),
+                               _length_key("outer_radius", "radius of the outer circle")),
+                   doc="a ring, e.g. a seal face")
 @dataclasses.dataclass(frozen=True)
 class Annulus(_Outline):
     """A ring between two concentric circles: a seal face.
@@ -467,8 +579,6 @@ class Annulus(_Outline):
 
     inner_radius: float
     outer_radius: float
-    kind = "annulus"
-    keys = ({"inner_radius", "outer_radius"}, set())
 
     def __post_init__(self):
         """Check the radii."""
@@ -481,13 +591,9 @@ class Annulus(_Outline):
         object.__setattr__(self, "outer_radius", outer)
 
     @classmethod
-    def from_table(cls, table, base_dir=None):
-        """From ``[punch]`` keys (``inner_radius``, ``outer_radius``)."""
-        try:
-            return cls(_length(table["inner_radius"], "[punch] inner_radius"),
-                       _length(table["outer_radius"], "[punch] outer_radius"))
-        except ValueError as err:
-            raise ValueError(f"[punch] {err}") from None
+    def from_values(cls, values, context):
+        """From the checked ``[punch]`` keys."""
+        return cls(values["inner_radius"], values["outer_radius"])
 
     @property
     def half_extent(self):
@@ -504,10 +610,15 @@ class Annulus(_Outline):
         r2 = np.asarray(x) ** 2 + np.asarray(y) ** 2
         return (r2 < self.outer_radius**2) & (r2 > self.inner_radius**2)
 
+    def covers(self, x, y):
+        """Points between the two circles or on one of them."""
+        r = np.hypot(x, y)
+        return (r <= self.outer_radius) & (r >= self.inner_radius)
+
     def grid_mask(self, grid):
-        """The outer disk's :func:`steady.grid.face_mask` without the inner disk."""
+        """The outer disk's pixels (exact in integers) without the inner disk."""
         r2 = grid.x[:, None] ** 2 + grid.y[None, :] ** 2
-        return disk_face_mask(grid.n) & (r2 > self.inner_radius**2)
+        return _disk_mask(grid.n) & (r2 > self.inner_radius**2)
 
     def min_grid(self):
         """Three pixels across the ring, and :data:`MIN_SIDE_PIXELS`."""
@@ -520,13 +631,26 @@ class Annulus(_Outline):
         slack = 1e-12 * self.outer_radius
         return d + radius <= self.outer_radius + slack and d - radius >= self.inner_radius - slack
 
+    def support(self, direction):
+        """The outer radius in every direction, m."""
+        return self.outer_radius
+
+    def circumradius(self):
+        """The outer radius, m."""
+        return self.outer_radius
+
     def parameters(self):
         """The two radii, m."""
         return {"inner_radius": (self.inner_radius, "m"),
                 "outer_radius": (self.outer_radius, "m")}
 
 
-@register_outline
+@OUTLINES.register("mask", (Key("path", "path", required=True,
+                                doc=".npy: booleans, True on the face, or integers, -1 off it; "
+                                    ".png: the non-transparent pixels"),
+                            Key("pixel_size", "number", unit="m", low=0.0, required=True,
+                                doc="side of the mask's pixels")),
+                   doc="any face, as pixels")
 @dataclasses.dataclass(frozen=True, eq=False)
 class MaskOutline(_Outline):
     """A face given as pixels: ``True`` on the face, on an ``mx x my`` grid of square pixels.
@@ -545,7 +669,9 @@ class MaskOutline(_Outline):
     The bounding box is the mask's array, centred on the origin.  The face
     is the union of the mask's pixels, so a grid must refine the mask by a
     whole factor: ``n`` (pixels along the longer side) a multiple of
-    ``max(mx, my)``, each mask pixel becoming ``k x k`` grid pixels.
+    ``max(mx, my)``, each mask pixel becoming ``k x k`` grid pixels.  Two
+    masks are equal when their pixels and pixel sizes are (wherever they
+    came from).
 
     Examples
     --------
@@ -560,8 +686,6 @@ class MaskOutline(_Outline):
     mask: np.ndarray
     pixel_size: float
     source: str = "array"
-    kind = "mask"
-    keys = ({"path", "pixel_size"}, set())
 
     def __post_init__(self):
         """Check the mask; store it read-only."""
@@ -578,18 +702,21 @@ class MaskOutline(_Outline):
         object.__setattr__(self, "pixel_size", _length(self.pixel_size, "pixel_size"))
 
     @classmethod
-    def from_table(cls, table, base_dir="."):
-        """From ``[punch]`` keys (``path``, ``pixel_size``): see :func:`read_face_mask`."""
-        import pathlib
+    def from_values(cls, values, context):
+        """From the checked ``[punch]`` keys: see :func:`steady.array_files.read_face_mask`."""
+        path = values["path"]
+        return cls(read_face_mask(path), values["pixel_size"], source=repr(str(path)))
 
-        from .phases import read_face_mask
+    def __eq__(self, other):
+        """Equal pixels and pixel size (the source is not compared)."""
+        if not isinstance(other, MaskOutline):
+            return NotImplemented
+        return (self.pixel_size == other.pixel_size and self.mask.shape == other.mask.shape
+                and bool(np.array_equal(self.mask, other.mask)))
 
-        path = table["path"]
-        if not isinstance(path, str) or not path:
-            raise ValueError(f"[punch] path must be a non-empty string, got {shorten(path)}")
-        size = _length(table["pixel_size"], "[punch] pixel_size")
-        full = pathlib.Path(base_dir) / path
-        return cls(read_face_mask(full), size, source=repr(str(full)))
+    def __hash__(self):
+        """Hash of the pixel size, the shape and the pixels."""
+        return hash((self.pixel_size, self.mask.shape, self.mask.tobytes()))
 
     @property
     def half_extent(self):
@@ -614,7 +741,7 @@ class MaskOutline(_Outline):
 
     def check_grid(self, n):
         """``n`` as an int; ``ValueError`` unless a multiple of the mask's longer side."""
-        n = _grid_size(n)
+        n = grid_size(n)
         m0 = self.min_grid()
         if n < m0 or n % m0:
             raise ValueError(f"grid size n = {n} must be a multiple of {m0}, the longer side "
@@ -639,6 +766,14 @@ class MaskOutline(_Outline):
         k = grid.shape[0] // self.mask.shape[0]
         return np.kron(self.mask, np.ones((k, k), dtype=bool)).astype(bool)
 
+    def _pixel_edges(self):
+        """The mask's own pixels' edges, m."""
+        lx, ly = self.half_extent
+        i, j = np.nonzero(self.mask)
+        ps = self.pixel_size
+        x0, y0 = -lx + i * ps, -ly + j * ps
+        return x0, x0 + ps, y0, y0 + ps
+
     def parameters(self):
         """Pixel size (m) and the mask's size in pixels."""
         return {"pixel_size": (self.pixel_size, "m"),
@@ -650,6 +785,11 @@ class MaskOutline(_Outline):
         mx, my = self.mask.shape
         return (f"mask face {self.source} ({mx} x {my} pixels of "
                 f"{self.pixel_size * 1e3:.6g} mm)")
+
+
+#: The outline of grids given by their size alone: the unit disk, the face of
+#: phase geometries in units of the outline's scale.
+UNIT_DISK = Circle(1.0)
 
 
 def as_outline(outline):
@@ -675,6 +815,22 @@ def as_outline(outline):
     return Circle(_length(outline, "radius"))
 
 
+def as_grid(grid):
+    """A :class:`FaceGrid`: ``grid`` itself, or for a bare ``n`` the unit disk's ``n x n`` grid.
+
+    Phase geometries are in units of the outline's scale, so the unit disk's
+    grid is where a geometry given only ``n`` is rasterised.
+
+    Examples
+    --------
+    >>> as_grid(16).outline, as_grid(16).shape
+    (Circle(radius=1.0), (16, 16))
+    """
+    if isinstance(grid, FaceGrid):
+        return grid
+    return FaceGrid(UNIT_DISK, grid_size(grid))
+
+
 def outline_from_table(table, base_dir="."):
     """The outline of a scene's ``[punch]`` table.
 
@@ -682,10 +838,10 @@ def outline_from_table(table, base_dir="."):
     ----------
     table : dict
         ``shape`` (default ``"circle"``) and the keys of that outline
-        (``Circle``: ``radius``; ``Rectangle``: ``width``, ``length``;
-        ``Ellipse``: ``semi_axis_x``, ``semi_axis_y``; ``Annulus``:
-        ``inner_radius``, ``outer_radius``; ``MaskOutline``: ``path``,
-        ``pixel_size``), lengths in m.
+        (:data:`OUTLINES`: ``Circle``: ``radius``; ``Rectangle``:
+        ``width``, ``length``; ``Ellipse``: ``semi_axis_x``,
+        ``semi_axis_y``; ``Annulus``: ``inner_radius``, ``outer_radius``;
+        ``MaskOutline``: ``path``, ``pixel_size``), lengths in m.
     base_dir : path-like, optional
         Directory of the scene file (for ``path``).
 
@@ -706,19 +862,9 @@ def outline_from_table(table, base_dir="."):
     >>> outline_from_table({"radius": 0.004})
     Circle(radius=0.004)
     """
-    if not isinstance(table, dict):
-        raise ValueError(f"[punch] must be a table, got {shorten(table)}")
-    kind = table.get("shape", "circle")
-    if not isinstance(kind, str) or kind not in OUTLINES:
-        raise ValueError(f"[punch] shape must be one of {sorted(OUTLINES)}, got {shorten(kind)}")
-    cls = OUTLINES[kind]
-    required, optional = cls.keys
-    unknown = sorted(set(table) - required - optional - {"shape"})
-    if unknown:
-        allowed = ", ".join(sorted(required | optional | {"shape"}))
-        raise ValueError(f"unknown key {shorten(unknown[0])} in [punch] (shape {kind!r}; "
-                         f"allowed: {allowed})")
-    missing = sorted(required - set(table))
-    if missing:
-        raise ValueError(f"missing key {missing[0]!r} in [punch] (shape {kind!r})")
-    return cls.from_table(table, base_dir)
+    context = Context(base_dir=pathlib.Path(base_dir), where="[punch]")
+    try:
+        return OUTLINES.build(table, context)
+    except ValueError as err:
+        message = str(err)
+        raise ValueError(message if "[punch]" in message else f"[punch] {message}") from None

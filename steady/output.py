@@ -397,8 +397,8 @@ def read_outline(group):
             source = source.decode()
         return MaskOutline(np.asarray(group["mask"][()], dtype=bool),
                            float(group.attrs["pixel_size"]), source=str(source))
-    required, _ = OUTLINES[kind].keys
-    return OUTLINES[kind](**{name: float(group.attrs[name]) for name in sorted(required)})
+    cls = OUTLINES[kind]
+    return cls(**{key.name: float(group.attrs[key.name]) for key in cls.keys if key.required})
 
 
 def _write_micrograph(group, geometry):
@@ -518,7 +518,6 @@ def _read(f, path):
         wear_coefficients=np.atleast_1d(a["wear_coefficients"]).astype(float),
         exponent=float(a["exponent"]),
         normal_force=float(a["normal_force"]),
-        radius=outline.radius if isinstance(outline, Circle) else None,
         E_star=float(a["E_star"]),
         rms_slope_plain=float(a["rms_slope_plain"]),
         rms_slope_error=float(a["rms_slope_error"]),

@@ -10,7 +10,7 @@ bounding box), centred on the face's centre.  Every geometry has
   ``0..P-1`` at every face pixel of ``grid`` (a
   :class:`steady.outline.FaceGrid`) and ``-1`` off the face; an integer
   ``n`` stands for the ``n x n`` grid of the unit disk
-  (:func:`steady.grid.face_mask`);
+  (:func:`steady.outline.as_grid`);
 - ``min_grid(outline=None)`` : the smallest ``n`` (pixels along the longer
   side) at which the geometry is resolved on that outline (default: a disk);
 - ``check_grid(grid)`` : raises :class:`ValueError` (naming ``n`` and the
@@ -33,8 +33,14 @@ Resolution rules (``labels`` refuses coarser grids):
 - :class:`ArrayMap`: ``n`` must be a multiple of the map's size along its
   longer side;
 - :class:`~steady.inclusions.Inclusions` (random circular inclusions, in
-  :mod:`steady.inclusions`, exported here): at least 3 pixels per mean
-  radius, ``n >= ceil(6 / r)``.
+  :mod:`steady.inclusions`): at least 3 pixels per mean radius,
+  ``n >= ceil(6 / r)``.
+
+Every kind is registered in :data:`PHASE_MAPS` with its ``[phases] map``
+keys (:class:`steady.schema.Registry`): besides the kinds here,
+``inclusions`` (:mod:`steady.inclusions`) and ``micrograph``
+(:mod:`steady.micrograph`).  Label checks and fill factors are in
+:mod:`steady.labels`, the readers of map files in :mod:`steady.array_files`.
 """
 
 from __future__ import annotations
@@ -44,193 +50,58 @@ import functools
 import logging
 import math
 import pathlib
-import stat
 
 import numpy as np
-from scipy import ndimage, spatial
+from scipy import spatial
 
-from .grid import face_mask as disk_face_mask
-from .outline import Circle, FaceGrid
-from .text import format_bytes
+from .array_files import input_file_size, png_size, read_npy
+from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
+from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size
+from .schema import Key, Registry
 
 __all__ = [
+    "PHASE_MAPS",
     "ArrayMap",
     "Homogeneous",
-    "Inclusions",
-    "MIN_GRID",
     "Rods",
     "Voronoi",
-    "extend_off_face",
-    "face_grid",
+    "check_resolution",
     "load_phase_map",
-    "npy_header",
-    "read_face_mask",
-    "read_npy",
-    "realised_fill_factors",
-    "validate_labels",
 ]
 
 logger = logging.getLogger(__name__)
 
-#: Smallest grid accepted by any geometry, pixels across the diameter.
-MIN_GRID = 8
-
-#: Tolerance on the sum of the fill factors.
-_FILL_SUM_TOL = 1e-9
+#: Registered phase-map kinds (``[phases] map kind``), each with its keys.
+PHASE_MAPS = Registry("phase map", "kind")
 
 
-def _check_grid(n, minimum, what):
-    """Raise ``ValueError`` unless ``n`` is an integer ``>= minimum``.
-
-    ``n`` may be a :class:`~steady.outline.FaceGrid` (its ``n`` is checked).
-    """
-    if isinstance(n, FaceGrid):
-        n = n.n
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise ValueError(f"grid size n must be an integer, got {n!r}")
-    if n < minimum:
-        raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = {minimum}")
-    return int(n)
-
-
-#: The outline of grids given by their size alone: the unit disk.
-_UNIT_DISK = Circle(1.0)
-
-
-def face_grid(grid):
-    """The :class:`~steady.outline.FaceGrid` a geometry rasterises on.
+def check_resolution(grid, minimum, what):
+    """``n`` of a grid as an int; ``ValueError`` naming ``n`` and ``minimum`` if it is coarser.
 
     Parameters
     ----------
     grid : FaceGrid or int
-        A grid, or ``n`` for the ``n x n`` grid of the unit disk (the
-        cylindrical punch in units of its radius).
-
-    Returns
-    -------
-    FaceGrid
+        A grid, or its ``n`` (pixels along the longer side).
+    minimum : int
+        The geometry's smallest ``n``.
+    what : str
+        The geometry, for the message (``"1600 Voronoi seeds"``).
     """
-    if isinstance(grid, FaceGrid):
-        return grid
-    if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)):
-        raise ValueError(f"grid size n must be an integer, got {grid!r}")
-    return FaceGrid(_UNIT_DISK, int(grid))
+    n = grid.n if isinstance(grid, FaceGrid) else grid_size(grid)
+    if n < minimum:
+        raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = {minimum}")
+    return n
 
 
-def _outline_of(grid):
-    """The outline of a grid argument (the unit disk for an integer)."""
-    return grid.outline if isinstance(grid, FaceGrid) else _UNIT_DISK
-
-
-def validate_labels(labels, n_phases, *, face_mask=None):
-    """Check a rasterised phase map and count the pixels of each phase.
-
-    Parameters
-    ----------
-    labels : ndarray, shape (nx, ny), int
-        Phase index on the face, ``-1`` off the face.
-    n_phases : int
-        Number of phases ``P``.
-    face_mask : ndarray of bool, shape (nx, ny), optional
-        The face's pixels (e.g. :attr:`steady.outline.FaceGrid.mask`), to
-        check the labels against; default: the pixels with ``labels >= 0``.
-
-    Returns
-    -------
-    ndarray, shape (P,), int
-        Face pixels of each phase.
-
-    Raises
-    ------
-    ValueError
-        If the array is not 2-d, the face pixels do not carry labels
-        ``0..P-1``, a pixel off the face is not ``-1``, there is no face
-        pixel, or a phase has no pixel.
-    """
-    labels = np.asarray(labels)
-    if labels.ndim != 2:
-        raise ValueError(f"phase labels must be a 2-d array, got shape {labels.shape}")
-    if not np.issubdtype(labels.dtype, np.integer):
-        raise ValueError(f"phase labels must be integers, got dtype {labels.dtype}")
-    n_phases = int(n_phases)
-    if n_phases < 1:
-        raise ValueError(f"n_phases must be at least 1, got {n_phases}")
-    mask = labels >= 0 if face_mask is None else np.asarray(face_mask)
-    if mask.shape != labels.shape:
-        raise ValueError(f"face mask of shape {mask.shape} for labels of shape {labels.shape}")
-    if not mask.any():
-        raise ValueError("the phase map has no face pixel")
-    face_labels = labels[mask]
-    low, high = int(face_labels.min()), int(face_labels.max())
-    if low < 0:
-        raise ValueError(f"phase label {low} found on the face; face pixels need labels "
-                         f"0..{n_phases - 1}")
-    if high >= n_phases:
-        raise ValueError(f"unknown phase label {high} on the face: there are {n_phases} phases "
-                         f"(labels 0..{n_phases - 1})")
-    if np.any(labels[~mask] != -1):
-        raise ValueError("pixels off the face must carry the label -1")
-    if n_phases > face_labels.size:
-        # Counting would allocate one entry per label: refuse before.
-        raise ValueError(f"{n_phases} phases (labels 0..{n_phases - 1}) cannot all have a pixel "
-                         f"on a face of {face_labels.size} pixels")
-    counts = np.bincount(face_labels, minlength=n_phases)
-    empty = np.flatnonzero(counts == 0)
-    if empty.size:
-        shown = (f"pixel counts per phase: {counts.tolist()}" if n_phases <= 16
-                 else f"{empty.size} of the {n_phases} phases have none")
-        raise ValueError(f"phase {int(empty[0])} has no pixel on the face ({shown})")
-    return counts
-
-
-def realised_fill_factors(labels, n_phases):
-    """Fraction of the face pixels held by each phase (eq. 13).
-
-    Parameters
-    ----------
-    labels : ndarray, shape (n, n), int
-        Phase index on the face, ``-1`` off the face.
-    n_phases : int
-
-    Returns
-    -------
-    ndarray, shape (P,)
-        Pixel-count fractions; they sum to 1.
-
-    Raises
-    ------
-    ValueError
-        As :func:`validate_labels`.
-    """
-    counts = validate_labels(labels, n_phases)
-    return counts / counts.sum()
-
-
-def extend_off_face(values, face_mask=None):
-    """Copy of a face field with every pixel off the face set to its nearest face pixel.
-
-    Parameters
-    ----------
-    values : ndarray, shape (nx, ny)
-        Field on the pixel grid; values off the face are not used.
-    face_mask : ndarray of bool, shape (nx, ny), optional
-        The face's pixels; default: the disk of :func:`steady.grid.face_mask`
-        (``values`` square).
-
-    Returns
-    -------
-    ndarray, shape (nx, ny)
-        Same dtype; equal to ``values`` on the face.
-    """
-    values = np.asarray(values)
-    on_face = disk_face_mask(values.shape[0]) if face_mask is None else face_mask
-    _, (ii, jj) = ndimage.distance_transform_edt(~on_face, return_indices=True)
-    return values[ii, jj]
-
-
+@PHASE_MAPS.register("homogeneous", doc="one phase")
 @dataclasses.dataclass(frozen=True)
 class Homogeneous:
     """A single-phase face."""
+
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[phases] map`` keys (none)."""
+        return cls()
 
     @property
     def n_phases(self):
@@ -238,52 +109,28 @@ class Homogeneous:
         return 1
 
     def min_grid(self, outline=None):
-        """Smallest accepted grid, :data:`MIN_GRID` (the outline sets its own)."""
-        return MIN_GRID
+        """Smallest accepted grid, :data:`MIN_SIDE_PIXELS` (the outline sets its own)."""
+        return MIN_SIDE_PIXELS
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(grid, self.min_grid(), "a homogeneous face")
+        return check_resolution(grid, self.min_grid(), "a homogeneous face")
 
     def labels(self, grid):
         """Phase 0 on the face, -1 off it; shape of the grid."""
         self.check_grid(grid)
-        return np.where(face_grid(grid).mask, 0, -1)
+        return np.where(as_grid(grid).mask, 0, -1)
 
 
-def _as_fill_factors(fill_factors):
-    try:
-        values = tuple(float(v) for v in fill_factors)
-    except (TypeError, ValueError):
-        raise ValueError(f"fill factors must be a sequence of numbers, got "
-                         f"{fill_factors!r}") from None
-    if len(values) < 2:
-        raise ValueError(f"fill factors need at least two phases, got {list(values)}")
-    bad = [v for v in values if not (np.isfinite(v) and 0.0 < v < 1.0)]
-    if bad:
-        raise ValueError(f"fill factors must each lie in (0, 1), got {list(values)}")
-    if abs(math.fsum(values) - 1.0) > _FILL_SUM_TOL:
-        raise ValueError(f"fill factors must sum to 1, got {list(values)} "
-                         f"(sum {math.fsum(values)!r})")
-    return values
-
-
-def _apportion(fractions, total):
-    """Integers proportional to ``fractions`` summing to ``total``.
-
-    Largest-remainder rounding: each count is ``floor`` or ``ceil`` of
-    ``fraction * total``, which is as close to the fill factors as whole
-    seeds allow.
-    """
-    exact = np.asarray(fractions) * total
-    counts = np.floor(exact).astype(int)
-    remainder = total - counts.sum()
-    # Stable sort: ties go to the lower phase index, reproducibly.
-    order = np.argsort(-(exact - counts), kind="stable")
-    counts[order[:remainder]] += 1
-    return counts
-
-
+@PHASE_MAPS.register("voronoi", (
+    Key("n_seeds", "integer", low=1, low_open=False, required=True,
+        doc="seeds, uniform in the face's bounding box"),
+    Key("fill_factors", "numbers", unit="1", low=0.0, high=1.0, required=True,
+        doc="share of the seeds of each phase, summing to 1"),
+    Key("seed", "integer", low=0, low_open=False, required=True,
+        doc="seed of the random generator")),
+    doc="Voronoi cells of random seeds; exactly round(rho_i n_seeds) seeds (largest "
+        "remainder) get phase i, in random order")
 @dataclasses.dataclass(frozen=True)
 class Voronoi:
     """Voronoi cells of random seeds, each seed labelled with a phase.
@@ -321,8 +168,8 @@ class Voronoi:
         if (isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer))
                 or self.seed < 0):
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
-        fill = _as_fill_factors(self.fill_factors)
-        counts = _apportion(fill, int(self.n_seeds))
+        fill = check_fill_factors(self.fill_factors)
+        counts = apportion(fill, int(self.n_seeds))
         if np.any(counts == 0):
             raise ValueError(
                 f"{self.n_seeds} seeds are too few for fill factors {list(fill)}: phase "
@@ -330,6 +177,11 @@ class Voronoi:
         object.__setattr__(self, "n_seeds", int(self.n_seeds))
         object.__setattr__(self, "seed", int(self.seed))
         object.__setattr__(self, "fill_factors", fill)
+
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[phases] map`` keys."""
+        return cls(values["n_seeds"], values["fill_factors"], values["seed"])
 
     @property
     def n_phases(self):
@@ -358,7 +210,7 @@ class Voronoi:
             points = rng.uniform(-1.0, 1.0, size=(self.n_seeds, 2))
         else:
             points = rng.uniform((-bx, -by), (bx, by), size=(self.n_seeds, 2))
-        counts = _apportion(self.fill_factors, self.n_seeds)
+        counts = apportion(self.fill_factors, self.n_seeds)
         phases = rng.permutation(np.repeat(np.arange(self.n_phases), counts))
         points.flags.writeable = False
         phases.flags.writeable = False
@@ -376,12 +228,12 @@ class Voronoi:
         (``(1, 1)`` for a disk, the default).
         """
         bx, by = (1.0, 1.0) if outline is None else outline.aspect
-        return max(MIN_GRID, math.ceil(2.0 * math.sqrt(self.n_seeds / (bx * by)) - 1e-9))
+        return max(MIN_SIDE_PIXELS, math.ceil(2.0 * math.sqrt(self.n_seeds / (bx * by)) - 1e-9))
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(grid, self.min_grid(_outline_of(grid)),
-                           f"{self.n_seeds} Voronoi seeds")
+        return check_resolution(grid, self.min_grid(as_grid(grid).outline),
+                                f"{self.n_seeds} Voronoi seeds")
 
     def labels(self, grid):
         """Nearest-seed phase at every face pixel, -1 off it; shape of the grid.
@@ -389,7 +241,7 @@ class Voronoi:
         The seeds are uniform in the face's bounding box.
         """
         self.check_grid(grid)
-        grid = face_grid(grid)
+        grid = as_grid(grid)
         _, phases, tree = self.seeds(grid.outline.aspect)
         i, j = np.nonzero(grid.mask)
         _, nearest = tree.query(np.column_stack([grid.unit_x[i], grid.unit_y[j]]))
@@ -398,6 +250,14 @@ class Voronoi:
         return out
 
 
+@PHASE_MAPS.register("rods", (
+    Key("centres", "pairs", unit="m", required=True, doc="rod centres [x, y]"),
+    Key("radii", "numbers", unit="m", low=0.0, required=True, doc="rod radii"),
+    Key("matrix_phase", "integer", low=0, low_open=False, default=0,
+        doc="phase outside the rods"),
+    Key("rod_phases", "integers", low=0, low_open=False,
+        doc="phase of each rod (default 1 for every rod)")),
+    doc="circular rods inside the face, not overlapping")
 @dataclasses.dataclass(frozen=True)
 class Rods:
     """Circular rods of one phase in a matrix of another (paper Fig. 7-8).
@@ -483,6 +343,16 @@ class Rods:
         object.__setattr__(self, "matrix_phase", int(self.matrix_phase))
         object.__setattr__(self, "rod_phases", rod_phases)
 
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[phases] map`` keys (m), in units of the outline's scale."""
+        scale = context.outline.scale
+        rods = cls(tuple((x / scale, y / scale) for x, y in values["centres"]),
+                   tuple(r / scale for r in values["radii"]), values["matrix_phase"],
+                   values.get("rod_phases"))
+        rods.check_outline(context.outline)
+        return rods
+
     @property
     def n_phases(self):
         """Number of phases, ``1 + max(matrix_phase, rod_phases)``."""
@@ -490,11 +360,11 @@ class Rods:
 
     def min_grid(self, outline=None):
         """``max(8, ceil(6 / r_min))``: three pixels per radius of the smallest rod."""
-        return max(MIN_GRID, math.ceil(6.0 / min(self.radii) - 1e-9))
+        return max(MIN_SIDE_PIXELS, math.ceil(6.0 / min(self.radii) - 1e-9))
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return _check_grid(grid, self.min_grid(), f"rods of radius {min(self.radii)} L")
+        return check_resolution(grid, self.min_grid(), f"rods of radius {min(self.radii)} L")
 
     def check_outline(self, outline):
         """``ValueError`` naming the first rod that does not lie inside the face of ``outline``."""
@@ -508,7 +378,7 @@ class Rods:
     def labels(self, grid):
         """Rod phase inside each rod, matrix phase elsewhere on the face; shape of the grid."""
         self.check_grid(grid)
-        grid = face_grid(grid)
+        grid = as_grid(grid)
         self.check_outline(grid.outline)
         x, y = grid.unit_x, grid.unit_y
         out = np.where(grid.mask, self.matrix_phase, -1)
@@ -518,6 +388,11 @@ class Rods:
         return out
 
 
+@PHASE_MAPS.register("file", (
+    Key("path", "path", required=True,
+        doc=".npy: phase index per pixel (any value, e.g. -1, off the face); .png: one phase "
+            "per grey level or colour on the face, by increasing value"),),
+    doc="a phase map read from a file, rows along x")
 @dataclasses.dataclass(frozen=True, eq=False)
 class ArrayMap:
     """A phase map given as pixels.
@@ -551,7 +426,7 @@ class ArrayMap:
     def __post_init__(self):
         """Check the labels; store them read-only with the pixels off the face filled."""
         a = np.asarray(self.labels_array)
-        outline = _UNIT_DISK if self.outline is None else self.outline
+        outline = UNIT_DISK if self.outline is None else self.outline
         if a.ndim != 2 or (self.outline is None and a.shape[0] != a.shape[1]):
             raise ValueError(f"phase map {self.source} must be a square 2-d array, "
                              f"got shape {a.shape}")
@@ -559,7 +434,7 @@ class ArrayMap:
             raise ValueError(f"phase map {self.source} must hold integers, got dtype {a.dtype}")
         a = a.astype(np.int64)
         n0 = max(a.shape)
-        _check_grid(n0, MIN_GRID, f"phase map {self.source}")
+        check_resolution(n0, MIN_SIDE_PIXELS, f"phase map {self.source}")
         try:
             grid = FaceGrid(outline, n0)
             expected = grid.shape
@@ -582,6 +457,15 @@ class ArrayMap:
         object.__setattr__(self, "labels_array", filled)
         object.__setattr__(self, "_n_phases", n_phases)
 
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[phases] map`` keys: :func:`load_phase_map`.
+
+        The map's size must divide the scene's ``n``: a larger one is
+        refused before its data are read.
+        """
+        return load_phase_map(values["path"], max_size=context.n, outline=context.outline)
+
     @property
     def n_phases(self):
         """Number of phases: one more than the largest label on the face."""
@@ -600,7 +484,7 @@ class ArrayMap:
         """``n`` as an int; ``ValueError`` unless a multiple of the map size on the map's face."""
         n0 = self.size
         mx, my = self.labels_array.shape
-        n = _check_grid(grid, n0, f"phase map {self.source} of {mx} x {my} pixels")
+        n = check_resolution(grid, n0, f"phase map {self.source} of {mx} x {my} pixels")
         if n % n0:
             raise ValueError(f"grid size n = {n} is not a multiple of the size {n0} of phase "
                              f"map {self.source}")
@@ -615,154 +499,11 @@ class ArrayMap:
     def labels(self, grid):
         """Labels on a grid of ``n = k n0`` pixels along the longer side."""
         n = self.check_grid(grid)
-        grid = face_grid(grid)
+        grid = as_grid(grid)
         k = n // self.size
         fine = self.labels_array if k == 1 else np.kron(self.labels_array,
                                                         np.ones((k, k), dtype=np.int64))
         return np.where(grid.mask, fine, -1)
-
-
-def _input_file(path, what):
-    """Size in bytes of an input file; ``ValueError`` unless it is a readable regular file."""
-    try:
-        st = path.stat()
-    except FileNotFoundError:
-        raise ValueError(f"{what} {str(path)!r} does not exist") from None
-    except OSError as err:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
-    if stat.S_ISDIR(st.st_mode):
-        raise ValueError(f"{what} {str(path)!r} is a directory, not a file")
-    if not stat.S_ISREG(st.st_mode):
-        raise ValueError(f"{what} {str(path)!r} is not a regular file (a device or a pipe?)")
-    if st.st_size == 0:
-        raise ValueError(f"{what} {str(path)!r} is empty (0 bytes)")
-    return st.st_size
-
-
-def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
-    """Shape and dtype of a ``.npy`` file, read from its header without loading the data.
-
-    Parameters
-    ----------
-    path : str or path-like
-    what : str, optional
-        How messages name the file (e.g. ``"phase map"``).
-    shape : tuple of int, optional
-        Refuse any other shape.
-    max_side : int, optional
-        Refuse anything but a square 2-d array of at most
-        ``max_side x max_side`` values.
-    square : bool, optional
-        With ``max_side``: whether the array must be square (default True);
-        if not, any 2-d array whose longer side is at most ``max_side``.
-
-    Returns
-    -------
-    shape : tuple of int
-    dtype : numpy.dtype
-
-    Raises
-    ------
-    ValueError
-        Missing file, a directory or device, an empty file, no ``.npy``
-        header, a damaged header, an array of Python objects, a shape
-        refused by ``shape`` or ``max_side``, or fewer data bytes than the
-        header announces (a truncated file, or a header that claims a huge
-        array).
-    """
-    import numpy.lib.format as npy_format
-
-    path = pathlib.Path(path)
-    size = _input_file(path, what)
-    try:
-        with open(path, "rb") as f:
-            if f.read(6) != npy_format.MAGIC_PREFIX:
-                magic = False
-            else:
-                magic = True
-                f.seek(0)
-                version = npy_format.read_magic(f)
-                read = (npy_format.read_array_header_1_0 if version == (1, 0)
-                        else npy_format.read_array_header_2_0)
-                found, _, dtype = read(f)
-                offset = f.tell()
-    except OSError as err:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
-    except Exception as err:  # noqa: BLE001 -- numpy parses the header with Python's tokenizer
-        raise ValueError(f"{what} {str(path)!r} has a damaged .npy header: "
-                         f"{str(err)[:200]}") from None
-    if not magic:
-        raise ValueError(f"{what} {str(path)!r} is not a .npy file (no NumPy header)")
-    found = tuple(found)
-    if dtype.hasobject:
-        raise ValueError(f"{what} {str(path)!r} holds Python objects, not numbers")
-    if shape is not None and found != tuple(shape):
-        raise ValueError(f"{what} {str(path)!r} holds an array of shape {found}; "
-                         f"{tuple(shape)} is needed")
-    if max_side is not None:
-        if len(found) != 2 or (square and found[0] != found[1]):
-            kind = "square 2-d" if square else "2-d"
-            raise ValueError(f"{what} {str(path)!r} must be a {kind} array, got shape "
-                             f"{found}")
-        if max(found) > max_side:
-            raise ValueError(f"{what} {str(path)!r} has {found[0]} x {found[1]} pixels, more "
-                             f"than the grid's n = {max_side} (n must be a multiple of the "
-                             f"map's size)")
-    needed = math.prod(found) * dtype.itemsize
-    if size - offset < needed:
-        dims = " x ".join(str(d) for d in found) or "scalar"
-        raise ValueError(f"{what} {str(path)!r} is truncated: its header announces {dims} "
-                         f"values of {dtype} ({format_bytes(needed)}), the file holds "
-                         f"{size - offset} bytes of data")
-    return found, dtype
-
-
-def read_npy(path, *, what="file", max_side=None, shape=None, square=True):
-    """Read a 2-d array (square by default) from a ``.npy`` file, checking the file first.
-
-    Parameters
-    ----------
-    path : str or path-like
-    what : str, optional
-        How messages name the file (e.g. ``"phase map"``).
-    max_side : int, optional
-        Refuse arrays larger than ``max_side x max_side`` (before loading).
-    shape : tuple of int, optional
-        Refuse any other shape (before loading).
-    square : bool, optional
-        Refuse arrays that are not square (default True).
-
-    Returns
-    -------
-    ndarray, shape (m, m), or (mx, my) if not ``square``
-
-    Raises
-    ------
-    ValueError
-        As :func:`npy_header`, or not square 2-d.  Never ``EOFError`` or
-        ``MemoryError``.
-
-    Examples
-    --------
-    >>> import pathlib, tempfile
-    >>> path = pathlib.Path(tempfile.mkdtemp()) / "empty.npy"
-    >>> _ = path.write_bytes(b"")
-    >>> try:
-    ...     read_npy(path, what="phase map")
-    ... except ValueError as err:
-    ...     print(str(err).replace(str(path), "empty.npy"))
-    phase map 'empty.npy' is empty (0 bytes)
-    """
-    path = pathlib.Path(path)
-    found, dtype = npy_header(path, what=what, shape=shape, square=square,
-                              max_side=math.inf if max_side is None else max_side)
-    try:
-        return np.load(path, allow_pickle=False)
-    except (OSError, ValueError, EOFError) as err:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
-    except MemoryError:
-        raise ValueError(f"{what} {str(path)!r} ({found[0]} x {found[1]} values of {dtype}) "
-                         f"does not fit in memory") from None
 
 
 def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
@@ -804,7 +545,7 @@ def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
     what = "phase map"
     suffix = path.suffix.lower()
     if suffix not in (".npy", ".png"):
-        _input_file(path, what)
+        input_file_size(path, what)
         raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
     square = outline is None or outline.aspect == (1.0, 1.0)
     if suffix == ".npy":
@@ -814,82 +555,12 @@ def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
     return ArrayMap(a, source=repr(str(path)), outline=outline)
 
 
-def read_face_mask(path):
-    """The face of a ``.npy`` or ``.png`` file, as pixels: ``True`` on the face.
-
-    Parameters
-    ----------
-    path : str or path-like
-        ``.npy``: a 2-d boolean array (``True`` on the face) or integer
-        array (the face is where it is not -1, e.g. a phase map).
-        ``.png``: an image with an alpha channel; the face is its
-        non-transparent pixels.  Rows run along x, as in phase maps.
-
-    Returns
-    -------
-    ndarray of bool, shape (mx, my)
-
-    Raises
-    ------
-    ValueError
-        Missing, empty, truncated or unreadable file, an unsupported
-        suffix or dtype, a PNG without alpha channel, no face pixel.
-    """
-    path = pathlib.Path(path)
-    what = "face mask"
-    suffix = path.suffix.lower()
-    if suffix not in (".npy", ".png"):
-        _input_file(path, what)
-        raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
-    if suffix == ".npy":
-        a = read_npy(path, what=what, square=False)
-        if a.dtype == bool:
-            mask = a
-        elif np.issubdtype(a.dtype, np.integer):
-            mask = a != -1
-        else:
-            raise ValueError(f"{what} {str(path)!r} must hold booleans (True on the face) or "
-                             f"integers (-1 off the face), got dtype {a.dtype}")
-    else:
-        import matplotlib.image  # deferred: only PNG files need it
-
-        _input_file(path, what)
-        _png_size(path, what)
-        try:
-            img = matplotlib.image.imread(path)
-        except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
-            raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
-        if img.ndim != 3 or img.shape[2] not in (2, 4):
-            raise ValueError(f"{what} {str(path)!r} has no alpha channel: the face is the "
-                             f"non-transparent pixels of a PNG (or use a .npy array)")
-        mask = img[..., -1] > 0
-    if mask.ndim != 2 or not mask.any():
-        raise ValueError(f"{what} {str(path)!r} has no face pixel")
-    return np.ascontiguousarray(mask)
-
-
-def _png_size(path, what):
-    """Width and height from a PNG's header.
-
-    Raises ``ValueError`` naming the file as ``what`` if it cannot be read or
-    has no PNG signature.
-    """
-    try:
-        with open(path, "rb") as f:
-            head = f.read(24)
-    except OSError as err:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
-    if len(head) < 24 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
-        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
-    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
-
-
 def _png_labels(path, max_phases, max_size=None, outline=None):
     import matplotlib.image  # deferred: only PNG maps need it
 
     what = "phase map"
-    _input_file(path, what)
-    size = _png_size(path, what)
+    input_file_size(path, what)
+    size = png_size(path, what)
     square = outline is None or outline.aspect == (1.0, 1.0)
     if square and size[0] != size[1]:
         raise ValueError(f"{what} {str(path)!r} must be square, got {size[0]} x {size[1]} "
@@ -912,7 +583,7 @@ def _png_labels(path, max_phases, max_size=None, outline=None):
     else:
         img = img.astype(np.int64)
     pixels = img.reshape(mx * my, -1)
-    outline = _UNIT_DISK if outline is None else outline
+    outline = UNIT_DISK if outline is None else outline
     try:
         grid = FaceGrid(outline, max(mx, my))
         if grid.shape != (mx, my):
@@ -932,7 +603,3 @@ def _png_labels(path, max_phases, max_size=None, outline=None):
     logger.debug("%s: %d phases from levels %s", path, len(levels), levels.tolist())
     return labels.reshape(mx, my)
 
-
-# Random circular inclusions live in their own module, which builds on the
-# helpers above; imported last so that the import is not circular.
-from .inclusions import Inclusions  # noqa: E402

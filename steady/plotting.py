@@ -79,9 +79,7 @@ def result_figure(stored):
         ax.set_xlabel("x (mm)")
         ax.set_ylabel("y (mm)")
         ax.set_aspect("equal")
-    face = (f"a = {res.radius * 1e3:.3g} mm" if res.radius is not None
-            else res.outline.describe())
-    fig.suptitle(f"{face}, F = {res.normal_force:.3g} N, "
+    fig.suptitle(f"{res.outline.describe()}, F = {res.normal_force:.3g} N, "
                  f"E* = {res.E_star / 1e6:.3g} MPa, n = {res.n}")
     return fig
 
@@ -109,31 +107,32 @@ def plot_file(result_path, png_path, *, force=False, dpi=120):
         Unreadable result file, or ``png_path`` exists and ``force`` is
         False.
     """
-    png_path = _check_png(png_path, force)
-    return save_png(result_figure(read_result(result_path)), png_path, dpi=dpi)
+    return save_png(result_figure(read_result(result_path)), png_path, force=force, dpi=dpi)
 
 
-def _check_png(png_path, force):
-    """``png_path`` as a path; ``ValueError`` if it exists and ``force`` is False."""
-    png_path = pathlib.Path(png_path)
-    if png_path.exists() and not force:
-        raise ValueError(f"output {str(png_path)!r} exists (use force to overwrite)")
-    return png_path
-
-
-def save_png(fig, png_path, *, dpi=120):
+def save_png(fig, png_path, *, force=False, dpi=120):
     """Write a figure to a PNG file, creating missing parent directories.
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-    png_path : pathlib.Path
+    png_path : str or path-like
+    force : bool, optional
+        Overwrite an existing image (default False).
     dpi : int, optional
 
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        ``png_path`` exists and ``force`` is False.
     """
+    png_path = pathlib.Path(png_path)
+    if png_path.exists() and not force:
+        raise ValueError(f"output {str(png_path)!r} exists (use force to overwrite)")
     png_path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(png_path, dpi=dpi)
     logger.info("figure written to %s", png_path)

@@ -1,18 +1,19 @@
-"""Steady pressure on each phase (paper eq. 7).
+"""Steady pressure on each phase under the power law (paper eq. 7).
 
 In the steady state every point wears at the same rate, ``k_i p_i^m = C``,
 and the phases together carry the normal force.  :func:`phase_pressures`
-is the one place eq. 7 is written; :func:`pressure_field` spreads it over
-the pixels of a phase map.
+is the one place eq. 7 is written, for one set of wear coefficients or for
+many rows of them at once (sweeps, :class:`steady.basis.PhaseBasis`); the
+power law of :mod:`steady.wear` inverts its steady state with it, and
+:func:`steady.wear.pressure_field` spreads a law's phase pressures over the
+pixels of a phase map.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .phases import validate_labels
-
-__all__ = ["phase_pressures", "pressure_field"]
+__all__ = ["phase_pressures"]
 
 
 def _phase_pressures(counts, k, normal_force, pixel_area, exponent):
@@ -60,44 +61,3 @@ def phase_pressures(counts, wear_coefficients, normal_force, pixel_area, *, expo
     if counts.ndim == 1 and k.ndim == 1:
         return _phase_pressures(counts, k, normal_force, pixel_area, exponent)
     return _phase_pressures_rows(counts, k, normal_force, pixel_area, exponent)
-
-
-def pressure_field(labels, wear_coefficients, normal_force, pixel_area, *, exponent=1.0,
-                   face_mask=None):
-    """Steady pressure at every pixel of a phase map (eq. 7).
-
-    Parameters
-    ----------
-    labels : ndarray, shape (n, n), int
-        Phase index ``0..P-1`` on the face, -1 off it; every phase present
-        (checked, :func:`steady.phases.validate_labels`).
-    wear_coefficients : array_like, shape (P,), 1/Pa
-        ``k_i``, positive.
-    normal_force : float, N
-    pixel_area : float, m^2
-        ``h^2``.
-    exponent : float, optional
-        ``m`` in ``dw/ds = k p^m`` (default 1, Archard).
-    face_mask : ndarray of bool, shape (n, n), optional
-        :func:`steady.grid.face_mask` of ``n``, if the caller has it.
-
-    Returns
-    -------
-    pressure : ndarray, shape (n, n), Pa
-        ``p_i`` on the pixels of phase ``i``, zero off the face.
-    phase_pressures : ndarray, shape (P,), Pa
-        :func:`phase_pressures`.
-    counts : ndarray, shape (P,), int
-        Face pixels of each phase.
-
-    Raises
-    ------
-    ValueError
-        Labels that do not fit ``P = len(wear_coefficients)`` phases.
-    """
-    labels = np.asarray(labels)
-    k = np.atleast_1d(np.asarray(wear_coefficients, dtype=float))
-    counts = validate_labels(labels, k.size, face_mask=face_mask)
-    p = phase_pressures(counts, k, normal_force, pixel_area, exponent=exponent)
-    # Label -1 (off the face) picks the trailing zero.
-    return np.append(p, 0.0)[labels], p, counts

@@ -4,8 +4,9 @@ The differential profile of the paper (Fig. 7b, 8b) is a cross section minus
 the average of the face over the ring of the same radius: it removes the
 macroscopic curvature (eq. 10) and leaves the effect of the phases.
 
-Fields are ``(n, n)`` arrays on the pixel grid of :mod:`steady.grid`
-(axis 0 is x), NaN off the face.
+Fields are ``(nx, ny)`` arrays on the grid of a face outline
+(:class:`steady.outline.FaceGrid`, axis 0 along x), NaN off the face; the
+outline is an outline object or a number, the radius of a disk (m).
 """
 
 from __future__ import annotations
@@ -13,34 +14,36 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .grid import face_mask, pixel_size, polar
-from .phases import extend_off_face
+from .labels import extend_off_face
+from .outline import FaceGrid, as_outline
 
 __all__ = ["cross_section", "differential_profile", "ring_average"]
 
 
-def _check_field(field):
+def _grid_of(field, outline):
+    """The field as floats and the outline's grid it lies on, checked."""
     field = np.asarray(field, dtype=float)
-    if field.ndim != 2 or field.shape[0] != field.shape[1]:
-        raise ValueError(f"field must be a square 2-d array, got shape {field.shape}")
-    return field
+    if field.ndim != 2:
+        raise ValueError(f"field must be a 2-d array, got shape {field.shape}")
+    outline = as_outline(outline)
+    grid = FaceGrid(outline, max(field.shape))
+    if grid.shape != field.shape:
+        raise ValueError(f"field of shape {field.shape} is not on a grid of the "
+                         f"{outline.describe()} (n = {grid.n} gives {grid.shape})")
+    return field, grid
 
 
-def _check_radius(radius):
-    if not (np.isfinite(radius) and radius > 0):
-        raise ValueError(f"radius must be positive and finite (m), got {radius!r}")
-
-
-def cross_section(field, radius, start, end, n_points):
+def cross_section(field, outline, start, end, n_points):
     """Sample a face along a straight line by bilinear interpolation.
 
     Parameters
     ----------
-    field : ndarray, shape (n, n)
+    field : ndarray, shape (nx, ny)
         Values at the pixel centres (e.g. ``SteadyResult.face``, m); values
         off the face are not used.
-    radius : float, m
-        Punch radius ``a``.
+    outline : outline object or float
+        The face (:mod:`steady.outline`); a number is the radius ``a`` of a
+        disk, m.
     start, end : (float, float), m
         End points ``(x, y)`` of the line.
     n_points : int
@@ -51,23 +54,22 @@ def cross_section(field, radius, start, end, n_points):
     distance : ndarray, shape (n_points,), m
         Distance of each sample from ``start``.
     values : ndarray, shape (n_points,)
-        Interpolated values; NaN at samples off the face (``r > a``).
+        Interpolated values; NaN at samples off the face (outside the
+        outline; a sample on the rim is on the face).
 
     Notes
     -----
     Near the rim the bilinear stencil reaches pixels off the face; those
     take the value of the nearest face pixel, so that the profile extends
-    to ``r = a``.
+    to the rim.
     """
-    field = _check_field(field)
-    _check_radius(radius)
+    field, grid = _grid_of(field, outline)
     distance, points = _line(start, end, n_points)
-    n = field.shape[0]
-    h = pixel_size(n, radius)
-    filled = extend_off_face(field)
-    index = (points + radius) / h - 0.5  # fractional pixel index along each axis
+    filled = extend_off_face(field, grid.mask)
+    half = np.array([grid.x.size, grid.y.size]) / grid.n * grid.outline.scale
+    index = (points + half[:, None]) / grid.h - 0.5  # fractional pixel index along each axis
     values = ndimage.map_coordinates(filled, index, order=1, mode="nearest")
-    values[np.hypot(points[0], points[1]) > radius] = np.nan
+    values[~grid.outline.covers(points[0], points[1])] = np.nan
     return distance, values
 
 
@@ -84,17 +86,19 @@ def _line(start, end, n_points):
     return t * np.linalg.norm(end - start), points
 
 
-def ring_average(field, radius, n_bins):
-    """Average of a face over rings of equal radius.
+def ring_average(field, outline, n_bins):
+    """Average of a face over rings of equal radius about its centre.
 
     Parameters
     ----------
-    field : ndarray, shape (n, n)
+    field : ndarray, shape (nx, ny)
         Values at the pixel centres; only face pixels are used.
-    radius : float, m
+    outline : outline object or float
+        The face; a number is the radius of a disk, m.
     n_bins : int
-        Rings of equal width ``a / n_bins`` from 0 to ``a``.  About ``n/2``
-        (one pixel per ring) is a sensible choice.
+        Rings of equal width ``R / n_bins`` from 0 to the face's
+        circumradius ``R`` (``a`` for a disk).  About ``n/2`` (one pixel
+        per ring) is a sensible choice.
 
     Returns
     -------
@@ -104,15 +108,13 @@ def ring_average(field, radius, n_bins):
         Average over the face pixels whose centre lies in the ring; NaN for
         a ring that holds no pixel centre.
     """
-    field = _check_field(field)
-    _check_radius(radius)
+    field, grid = _grid_of(field, outline)
     if int(n_bins) != n_bins or n_bins < 1:
         raise ValueError(f"n_bins must be a positive integer, got {n_bins!r}")
     n_bins = int(n_bins)
-    n = field.shape[0]
-    on_face = face_mask(n)
-    r, _ = polar(n, radius)
-    ring = np.minimum((r[on_face] / radius * n_bins).astype(int), n_bins - 1)
+    radius = grid.outline.circumradius()
+    on_face = grid.mask
+    ring = np.minimum((grid.radii[on_face] / radius * n_bins).astype(int), n_bins - 1)
     sums = np.bincount(ring, weights=field[on_face], minlength=n_bins)
     counts = np.bincount(ring, minlength=n_bins)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -120,15 +122,16 @@ def ring_average(field, radius, n_bins):
     return (np.arange(n_bins) + 0.5) * radius / n_bins, mean
 
 
-def differential_profile(field, radius, start, end, n_points, *, n_bins=None):
+def differential_profile(field, outline, start, end, n_points, *, n_bins=None):
     """Cross section minus the ring average at each sample's radius (Fig. 7b, 8b).
 
     Parameters
     ----------
-    field, radius, start, end, n_points
+    field, outline, start, end, n_points
         As in :func:`cross_section`.
     n_bins : int, optional
-        Rings for :func:`ring_average`; default ``n // 2`` (one pixel wide).
+        Rings for :func:`ring_average`; default ``n // 2`` (one pixel wide
+        on a disk).
 
     Returns
     -------
@@ -137,11 +140,10 @@ def differential_profile(field, radius, start, end, n_points, *, n_bins=None):
         NaN off the face.  Zero, up to interpolation, for an axisymmetric
         face.
     """
-    field = _check_field(field)
-    n = field.shape[0]
-    n_bins = max(n // 2, 1) if n_bins is None else n_bins
-    distance, values = cross_section(field, radius, start, end, n_points)
-    r_ring, mean = ring_average(field, radius, n_bins)
+    field, grid = _grid_of(field, outline)
+    n_bins = max(grid.n // 2, 1) if n_bins is None else n_bins
+    distance, values = cross_section(field, grid.outline, start, end, n_points)
+    r_ring, mean = ring_average(field, grid.outline, n_bins)
     ok = np.isfinite(mean)
     _, points = _line(start, end, n_points)
     r = np.hypot(points[0], points[1])

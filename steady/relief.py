@@ -33,10 +33,10 @@ class PlaneFit:
     Examples
     --------
     >>> import numpy as np
-    >>> from steady.grid import face_mask, pixel_centres
-    >>> x = pixel_centres(16, 1.0)
-    >>> plane = 0.3 + 0.1 * x[:, None] - 0.2 * x[None, :]
-    >>> print(f"{PlaneFit(face_mask(16), 2 / 16)(plane):.1e}")
+    >>> from steady.outline import UNIT_DISK
+    >>> grid = UNIT_DISK.grid(16)
+    >>> plane = 0.3 + 0.1 * grid.x[:, None] - 0.2 * grid.y[None, :]
+    >>> print(f"{PlaneFit(grid.mask, grid.h)(plane):.1e}")
     0.0e+00
     """
 

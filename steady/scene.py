@@ -1,54 +1,30 @@
 """Scene files: one TOML file describes one punch, load, counter-body and grid.
 
-Example (every key of the core sections)::
+Example (every section a scene needs)::
 
     [punch]
-    radius = 0.004                      # m (a circular face; see below)
+    radius = 0.004                      # m (a circular face; other shapes: [punch] shape)
     [load]
     normal_force = 10.0                 # N
     [counterbody]
     E_star = 1.3e6                      # Pa
     [grid]
-    n = 256                             # pixels across the diameter
+    n = 256                             # pixels along the longer side of the face's box
     [wear]
     coefficients = [1.0e-9, 1.7e-9]     # 1/Pa, one per phase
-    exponent = 1.0                      # optional, default 1 (Archard)
     [phases]
     map = { kind = "file", path = "phases.npy" }
 
-Face outlines (``[punch]``, :mod:`steady.outline`): ``shape`` is
-``"circle"`` (default; ``radius``), ``"rectangle"`` (``width`` along x,
-``length`` along y), ``"ellipse"`` (``semi_axis_x``, ``semi_axis_y``),
-``"annulus"`` (``inner_radius``, ``outer_radius``) or ``"mask"`` (``path``
-to a ``.npy`` or ``.png`` face mask, ``pixel_size`` in m); lengths in m.
-``[grid] n`` counts pixels along the longer side of the face's bounding
-box (across the diameter of a disk), and phase geometries are in units of
-the outline's scale ``L`` (the radius of a disk; else the larger half side
-of the bounding box).
-
-Map kinds (``[phases] map``):
-
-- ``{ kind = "homogeneous" }``
-- ``{ kind = "voronoi", n_seeds = 1600, fill_factors = [0.5, 0.5], seed = 2024 }``
-- ``{ kind = "rods", centres = [[0.0, 0.0], ...], radii = [0.0025, ...],
-  matrix_phase = 0, rod_phases = [1, ...] }`` -- centres and radii in m
-  (like ``[punch] radius``); ``matrix_phase`` (default 0) and
-  ``rod_phases`` (default 1 for every rod) optional.
-- ``{ kind = "inclusions", radius = 0.0002, fill_factor = 0.2, seed = 2024 }``
-  -- random non-overlapping circular inclusions (phase 1) in a matrix
-  (phase 0); ``radius`` is the mean radius in m; ``count`` (expected
-  inclusion centres on the face) instead of ``fill_factor``;
-  ``radius_spread`` (relative standard deviation of log-normal radii,
-  default 0) optional (see :class:`steady.inclusions.Inclusions`).
-- ``{ kind = "file", path = "phases.npy" }`` -- ``.npy`` or ``.png``, the
-  path relative to the scene file (see :func:`steady.phases.load_phase_map`).
-- ``{ kind = "micrograph", path = "grains.png", n_phases = 2, smoothing = 1.0,
-  min_speck = 20, pixel_size = 2e-6, cover = "crop", offset = [0.0, 0.0] }``
-  -- a grey-level image segmented into ``n_phases`` phases; ``smoothing``
-  (Gaussian sigma, pixels, default 0), ``min_speck`` (pixels, default 0),
-  ``pixel_size`` (m, default: a square image spans the diameter), ``cover``
-  (``"crop"``, default, or ``"tile"``) and ``offset`` (m, default centred)
-  optional (see :func:`steady.micrograph.load_micrograph`).
+The keys are declared once, with their types, units, ranges and meanings:
+:data:`SECTIONS` for ``[load]``, ``[counterbody]`` and ``[grid]``, and the
+registries of the tables that name a kind -- the face outline
+(:data:`steady.outline.OUTLINES`, ``[punch] shape``), the phase map
+(:data:`steady.phases.PHASE_MAPS`, ``[phases] map kind``) and the wear law
+(:data:`steady.wear.WEAR_LAWS`, ``[wear] law``).  The README's tables of
+scene keys are checked against them (``tests/test_scene.py``).  Lengths of
+phase geometries are in m in the file and in units of the outline's scale
+``L`` in the geometry objects (the radius of a disk; else the larger half
+side of the bounding box).
 
 Every key is checked; unknown sections and keys are errors, so that a typo
 cannot pass silently.  Other packages can add sections through
@@ -61,7 +37,6 @@ alone, so that one scene file serves the steady and the run-in commands.
 from __future__ import annotations
 
 import dataclasses
-import math
 import pathlib
 import stat
 import types
@@ -73,43 +48,38 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from .inclusions import Inclusions
-from .micrograph import load_micrograph
-from .outline import Circle, FaceGrid, outline_from_table
-from .phases import Homogeneous, Rods, Voronoi, load_phase_map, validate_labels
+from . import inclusions, micrograph  # noqa: F401 -- they register their map kinds
+from .labels import validate_labels
+from .outline import FaceGrid, outline_from_table
+from .phases import PHASE_MAPS, Voronoi
+from .schema import Context, Key, read_table
 from .text import one_line, shorten
+from .wear import wear_law_from_table
 
-__all__ = ["CORE_SECTIONS", "MAX_SCENE_BYTES", "RUN_IN_SECTIONS", "Scene", "load_scene",
+__all__ = ["MAX_SCENE_BYTES", "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene",
            "parse_scene"]
 
 #: Largest scene file read, bytes: a scene is a few lines; large data belong in
 #: ``.npy`` files (a 40 MB list would take Python's TOML parser half a minute).
 MAX_SCENE_BYTES = 2 ** 20
 
-#: Sections every scene file has, with their keys (required, optional).
-CORE_SECTIONS = {
-    "punch": (set(), {"shape"}),  # and the keys of the shape (steady.outline)
-    "load": ({"normal_force"}, set()),
-    "counterbody": ({"E_star"}, set()),
-    "grid": ({"n"}, set()),
-    "wear": ({"coefficients"}, {"exponent"}),
-    "phases": ({"map"}, set()),
+#: The keys of the sections that name no kind.
+SECTIONS = {
+    "load": (Key("normal_force", "number", unit="N", low=0.0, required=True,
+                 doc="the normal force F_N"),),
+    "counterbody": (Key("E_star", "number", unit="Pa", low=0.0, required=True,
+                        doc="effective modulus E / (1 - nu^2) of the counter-body"),),
+    "grid": (Key("n", "integer", low=2, low_open=False, required=True,
+                 doc="pixels along the longer side of the face's bounding box"),),
 }
+
+#: Every section a scene file has: those of :data:`SECTIONS` and the ones that name a kind.
+CORE_SECTIONS = ("punch", "load", "counterbody", "grid", "wear", "phases")
 
 #: Sections read by the run-in command (package ``transient``).  Without a
 #: parser for them in ``extra_sections`` they are skipped, not refused: the
 #: steady state does not depend on them.  Only the names are known here.
 RUN_IN_SECTIONS = ("initial_face", "transient")
-
-_MAP_KEYS = {
-    "homogeneous": (set(), set()),
-    "voronoi": ({"n_seeds", "fill_factors", "seed"}, set()),
-    "rods": ({"centres", "radii"}, {"matrix_phase", "rod_phases"}),
-    "inclusions": ({"radius", "seed"}, {"fill_factor", "count", "radius_spread"}),
-    "file": ({"path"}, set()),
-    "micrograph": ({"path", "n_phases"},
-                   {"smoothing", "min_speck", "pixel_size", "cover", "offset"}),
-}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -118,9 +88,8 @@ class Scene:
 
     Attributes
     ----------
-    radius : float or None, m
-        Punch radius ``a`` of a circular face; None for other outlines
-        (their lengths are in ``outline``).
+    outline : outline object
+        The face's outline (:mod:`steady.outline`, ``[punch]``).
     normal_force : float, N
         ``F_N``.
     E_star : float, Pa
@@ -128,10 +97,8 @@ class Scene:
     n : int
         Pixels along the longer side of the face's bounding box (across the
         diameter of a disk).
-    wear_coefficients : tuple of float, 1/Pa
-        ``k_i``, one per phase.
-    exponent : float
-        ``m`` in the wear law ``dw/ds = k p^m``.
+    wear : wear law
+        The local wear law of the phases (:mod:`steady.wear`, ``[wear]``).
     geometry : Homogeneous, Voronoi, Rods, ArrayMap, ...
         Phase geometry in units of the outline's scale (see
         :mod:`steady.phases`).
@@ -144,36 +111,19 @@ class Scene:
     ignored_sections : tuple of str
         Run-in sections (:data:`RUN_IN_SECTIONS`) present in the file but
         not parsed (no ``extra_sections`` parser for them), sorted.
-    outline : outline object
-        The face's outline (:mod:`steady.outline`); default: the disk of
-        ``radius``.
     """
 
-    radius: float | None
+    outline: object
     normal_force: float
     E_star: float
     n: int
-    wear_coefficients: tuple
-    exponent: float
+    wear: object
     geometry: object
     source_path: pathlib.Path | None = None
     text: str = ""
     extra: types.MappingProxyType = dataclasses.field(
         default_factory=lambda: types.MappingProxyType({}))
     ignored_sections: tuple = ()
-    outline: object = None
-
-    def __post_init__(self):
-        """Complete ``outline`` from ``radius`` (a disk) or ``radius`` from a circular outline."""
-        if self.outline is None:
-            if self.radius is None:
-                raise ValueError("a scene needs a radius or an outline")
-            object.__setattr__(self, "outline", Circle(self.radius))
-        elif isinstance(self.outline, Circle):
-            object.__setattr__(self, "radius", self.outline.radius)
-        elif self.radius is not None:
-            raise ValueError(f"a {self.outline.kind} face has no radius, got radius = "
-                             f"{self.radius!r}")
 
     @property
     def n_phases(self):
@@ -187,15 +137,16 @@ class Scene:
 
     def grid(self, n=None):
         """The :class:`~steady.outline.FaceGrid` of ``n`` pixels (default ``self.n``)."""
-        return FaceGrid(self.outline, self.n if n is None else int(n))
+        return FaceGrid(self.outline, self.n if n is None else n)
 
     def phase_labels(self, n=None):
         """The phase map on the grid of ``n``, every phase checked to have a face pixel.
 
         Parameters
         ----------
-        n : int, optional
-            Grid size, pixels along the longer side (default ``self.n``).
+        n : int or FaceGrid, optional
+            Grid size, pixels along the longer side (default ``self.n``),
+            or the scene outline's grid itself.
 
         Returns
         -------
@@ -209,7 +160,7 @@ class Scene:
             whose seeds all lie off the face or whose cells fall between
             pixel centres); the message names the phase, the seeds and ``n``.
         """
-        grid = self.grid(n)
+        grid = n if isinstance(n, FaceGrid) else self.grid(n)
         n = grid.n
         labels = self.geometry.labels(grid)
         counts = np.bincount(labels[labels >= 0], minlength=self.n_phases)
@@ -230,113 +181,18 @@ class Scene:
         return labels
 
 
-def _number(value, key, unit, *, positive=True):
-    """A finite float (``int`` accepted, ``bool`` not)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{key} must be a number ({unit}), got {shorten(value)}")
-    v = float(value)
-    if not math.isfinite(v) or (positive and v <= 0):
-        raise ValueError(f"{key} must be a positive finite number ({unit}), got "
-                         f"{shorten(value)}")
-    return v
-
-
-def _integer(value, key, *, minimum):
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ValueError(f"{key} must be an integer, got {shorten(value)}")
-    if value < minimum:
-        raise ValueError(f"{key} must be at least {minimum}, got {shorten(value)}")
-    return value
-
-
-def _list(value, key):
-    if not isinstance(value, list):
-        raise ValueError(f"{key} must be an array, got {shorten(value)}")
-    return value
-
-
-def _check_keys(table, where, required, optional):
-    if not isinstance(table, dict):
-        raise ValueError(f"{where} must be a table, got {shorten(table)}")
-    unknown = sorted(set(table) - required - optional)
-    if unknown:
-        allowed = ", ".join(sorted(required | optional)) or "none"
-        raise ValueError(f"unknown key {shorten(unknown[0])} in {where} (allowed: {allowed})")
-    missing = sorted(required - set(table))
-    if missing:
-        raise ValueError(f"missing key {missing[0]!r} in {where}")
-
-
-def _geometry(spec, outline, base_dir, n):
+def _geometry(table, outline, base_dir, n):
+    """The phase geometry of ``[phases] map`` (a registered kind of :data:`PHASE_MAPS`)."""
     where = "[phases] map"
-    if not isinstance(spec, dict):
-        raise ValueError(f"{where} must be an inline table with a 'kind', got {shorten(spec)}")
-    kind = spec.get("kind")
-    if kind not in _MAP_KEYS:
-        raise ValueError(f"{where} kind must be one of {sorted(_MAP_KEYS)}, got "
-                         f"{shorten(kind)}")
-    required, optional = _MAP_KEYS[kind]
-    _check_keys(spec, f"{where} (kind {kind!r})", required | {"kind"}, optional)
-    scale = outline.scale
-    if kind == "homogeneous":
-        return Homogeneous()
-    if kind == "voronoi":
-        n_seeds = _integer(spec["n_seeds"], f"{where} n_seeds", minimum=1)
-        fill = [_number(v, f"{where} fill_factors", "dimensionless")
-                for v in _list(spec["fill_factors"], f"{where} fill_factors")]
-        seed = _integer(spec["seed"], f"{where} seed", minimum=0)
-        try:
-            return Voronoi(n_seeds, tuple(fill), seed)
-        except ValueError as err:
-            raise ValueError(f"{where}: {one_line(err, 300)}") from None
-    if kind == "rods":
-        centres = []
-        for c in _list(spec["centres"], f"{where} centres"):
-            if not isinstance(c, list) or len(c) != 2:
-                raise ValueError(f"{where} centres must be [x, y] pairs in m, got {shorten(c)}")
-            centres.append(tuple(_number(v, f"{where} centres", "m", positive=False) / scale
-                                 for v in c))
-        radii = [_number(v, f"{where} radii", "m") / scale
-                 for v in _list(spec["radii"], f"{where} radii")]
-        matrix_phase = _integer(spec.get("matrix_phase", 0), f"{where} matrix_phase",
-                                minimum=0)
-        rod_phases = spec.get("rod_phases")
-        if rod_phases is not None:
-            rod_phases = tuple(_integer(v, f"{where} rod_phases", minimum=0)
-                               for v in _list(rod_phases, f"{where} rod_phases"))
-        try:
-            rods = Rods(tuple(centres), tuple(radii), matrix_phase, rod_phases)
-            rods.check_outline(outline)
-        except ValueError as err:
-            raise ValueError(f"{where}: {one_line(err, 300)}") from None
-        return rods
-    if kind == "inclusions":
-        options = {"seed": _integer(spec["seed"], f"{where} seed", minimum=0),
-                   "radius": _number(spec["radius"], f"{where} radius", "m") / scale}
-        for key, unit in (("fill_factor", "dimensionless"), ("count", "dimensionless"),
-                          ("radius_spread", "dimensionless")):
-            if key in spec:
-                options[key] = _number(spec[key], f"{where} {key}", unit,
-                                       positive=key != "radius_spread")
-        if not isinstance(outline, Circle):  # count is per face area (the unit disk's pi)
-            options["face_area"] = outline.area / scale**2
-        try:
-            return Inclusions(**options)
-        except ValueError as err:
-            raise ValueError(f"{where}: {one_line(err, 300)}") from None
-    # kind == "file" or "micrograph"
-    path = spec["path"]
-    if not isinstance(path, str) or not path:
-        raise ValueError(f"{where} path must be a non-empty string, got {shorten(path)}")
-    if kind == "micrograph":
-        # The keys are load_micrograph's parameters, which check their values.
-        options = {key: value for key, value in spec.items() if key not in ("kind", "path")}
-        try:
-            return load_micrograph(pathlib.Path(base_dir) / path, outline, **options)
-        except ValueError as err:
-            raise ValueError(f"{where}: {one_line(err, 300)}") from None
-    # The map's size must divide n: a larger one is refused before its data are read.
-    return load_phase_map(pathlib.Path(base_dir) / path, max_size=n, outline=outline)
+    if not isinstance(table, dict):
+        raise ValueError(f"{where} must be an inline table with a 'kind', got {shorten(table)}")
+    context = Context(base_dir=base_dir, outline=outline, n=n, where=where)
+    cls, values = PHASE_MAPS.read(table, context)
+    try:
+        return cls.from_values(values, context)
+    except ValueError as err:
+        message = one_line(err, 300)
+        raise ValueError(message if where in message else f"{where}: {message}") from None
 
 
 def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
@@ -371,12 +227,7 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     clash = sorted(set(extra_sections) & set(CORE_SECTIONS))
     if clash:
         raise ValueError(f"extra section {clash[0]!r} clashes with a core section")
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"malformed TOML: {one_line(err, 200)}") from None
-    except RecursionError:
-        raise ValueError("malformed TOML: arrays or tables nested too deeply") from None
+    doc = _toml(text)
     base_dir = pathlib.Path(base_dir)
     ignored = tuple(sorted(name for name in RUN_IN_SECTIONS
                            if name in doc and name not in extra_sections))
@@ -385,36 +236,25 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
         allowed = ", ".join(sorted(set(CORE_SECTIONS) | set(extra_sections)
                                    | set(RUN_IN_SECTIONS)))
         raise ValueError(f"unknown section [{shorten(unknown[0])[1:-1]}] (allowed: {allowed})")
-    for name in ignored:
-        if not isinstance(doc[name], dict):
-            raise ValueError(f"[{name}] must be a table, got {shorten(doc[name])}")
-    for name, (required, optional) in CORE_SECTIONS.items():
+    for name in CORE_SECTIONS:
         if name not in doc:
             raise ValueError(f"missing section [{name}]")
-        if name != "punch":  # the outline checks its own keys
-            _check_keys(doc[name], f"[{name}]", required, optional)
-
-    try:
-        outline = outline_from_table(doc["punch"], base_dir)
-    except ValueError as err:
-        message = one_line(err, 300)
-        raise ValueError(message if message.startswith("[punch]") or "[punch]" in message
-                         else f"[punch] {message}") from None
-    normal_force = _number(doc["load"]["normal_force"], "[load] normal_force", "N")
-    E_star = _number(doc["counterbody"]["E_star"], "[counterbody] E_star", "Pa")
-    n = _integer(doc["grid"]["n"], "[grid] n", minimum=2)
-    exponent = _number(doc["wear"].get("exponent", 1.0), "[wear] exponent", "dimensionless")
+    for name in (*CORE_SECTIONS, *ignored):
+        if not isinstance(doc[name], dict):
+            raise ValueError(f"[{name}] must be a table, got {shorten(doc[name])}")
+    values = {name: read_table(doc[name], f"[{name}]", keys, base_dir)
+              for name, keys in SECTIONS.items()}
+    read_table(doc["phases"], "[phases]", (), ignore=("map",))  # the map is read by its kind
+    if "map" not in doc["phases"]:
+        raise ValueError("missing key 'map' in [phases]")
+    outline = outline_from_table(doc["punch"], base_dir)
+    n = values["grid"]["n"]
     try:
         outline.check_grid(n)
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
     geometry = _geometry(doc["phases"]["map"], outline, base_dir, n)
-    coefficients = _list(doc["wear"]["coefficients"], "[wear] coefficients")
-    if len(coefficients) != geometry.n_phases:  # counted before any value is looked at
-        raise ValueError(f"[wear] coefficients has {len(coefficients)} values "
-                         f"{shorten(coefficients)} but the phase map has {geometry.n_phases} "
-                         f"phases")
-    k = tuple(_number(v, "[wear] coefficients", "1/Pa") for v in coefficients)
+    wear = wear_law_from_table(doc["wear"], base_dir, n_phases=geometry.n_phases)
     try:
         geometry.check_grid(FaceGrid(outline, n))
     except ValueError as err:
@@ -426,12 +266,23 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
             try:
                 extra[name] = parse(doc[name], base_dir)
             except ValueError as err:
-                raise ValueError(f"[{name}]: {err}") from None
-    return Scene(radius=outline.radius if isinstance(outline, Circle) else None,
-                 outline=outline, normal_force=normal_force, E_star=E_star, n=n,
-                 wear_coefficients=k, exponent=exponent, geometry=geometry,
+                message = str(err)
+                raise ValueError(message if f"[{name}]" in message
+                                 else f"[{name}]: {message}") from None
+    return Scene(outline=outline, normal_force=values["load"]["normal_force"],
+                 E_star=values["counterbody"]["E_star"], n=n, wear=wear, geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored)
+
+
+def _toml(text):
+    """The TOML document of a scene's text; ``ValueError`` with the parser's message."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"malformed TOML: {one_line(err, 200)}") from None
+    except RecursionError:
+        raise ValueError("malformed TOML: arrays or tables nested too deeply") from None
 
 
 def load_scene(path, *, extra_sections=None):

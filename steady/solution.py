@@ -33,10 +33,8 @@ import math
 import numpy as np
 
 from .accuracy import estimate_rms_slope
-from .halfspace import HalfSpace
 from .normalisation import reference_slope
-from .outline import Circle
-from .pressures import pressure_field
+from .problem import Problem
 from .relief import rms_height
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
@@ -76,9 +74,9 @@ class SteadyResult:
     exponent : float
         Pressure exponent ``m`` of the wear law.
     normal_force : float, N
-    radius : float or None, m
-        Punch radius ``a`` of a circular face; None for other outlines.
     E_star : float, Pa
+    outline : outline object
+        The face's outline (:mod:`steady.outline`).
     rms_slope_plain : float, dimensionless
         Root mean square of ``slope`` over the face pixels (plain pixel
         quadrature: first order, low by up to tens of per cent on fine
@@ -90,9 +88,6 @@ class SteadyResult:
         Rms of ``face`` over the face pixels about its least-squares plane
         (:func:`steady.relief.rms_height`; the asymptote of the run-in's
         ``rms_height``); NaN when not computed.
-    outline : outline object
-        The face's outline (:mod:`steady.outline`); default the disk of
-        ``radius``.
     reference_slope_error : float, dimensionless
         Uncertainty of ``reference_slope`` (0 for a closed form).
     reference_slope_source : str
@@ -110,19 +105,13 @@ class SteadyResult:
     wear_coefficients: np.ndarray
     exponent: float
     normal_force: float
-    radius: float
     E_star: float
+    outline: object
     rms_slope_plain: float = math.nan
     rms_slope_error: float = math.nan
     rms_height: float = math.nan
-    outline: object = None
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
-
-    def __post_init__(self):
-        """Complete ``outline`` from ``radius`` (a disk)."""
-        if self.outline is None:
-            object.__setattr__(self, "outline", Circle(self.radius))
 
     @property
     def n(self):
@@ -151,9 +140,7 @@ class SteadyResult:
 
     @property
     def mean_pressure(self):
-        """``pbar = F_N / A`` (``pi a^2`` for a disk), Pa."""
-        if isinstance(self.outline, Circle):
-            return self.normal_force / (math.pi * self.outline.radius**2)
+        """``pbar = F_N / A``, ``A`` the outline's exact area (``pi a^2`` for a disk), Pa."""
         return self.normal_force / self.outline.area
 
     @property
@@ -176,58 +163,25 @@ class SteadyResult:
         return self.face / (self.reference_slope * self.scale)
 
 
-def _positive_finite(value, name, unit):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive finite number ({unit}), "
-                         f"got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number ({unit}), got {value!r}")
-    return v
-
-
-def _wear_coefficients(wear_coefficients, n_phases):
-    k = np.atleast_1d(np.asarray(wear_coefficients, dtype=float))
-    if k.ndim != 1 or k.size != n_phases:
-        raise ValueError(f"need one wear coefficient per phase ({n_phases}), got "
-                         f"{np.asarray(wear_coefficients).tolist()}")
-    if not np.all(np.isfinite(k) & (k > 0)):
-        raise ValueError(f"wear coefficients must be positive and finite (1/Pa), got "
-                         f"{k.tolist()}")
-    return k
-
-
-def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0, outline=None):
+def solve(problem):
     """Limiting worn face of a multi-phase punch (eq. 7, 9).
 
     Parameters
     ----------
-    halfspace : HalfSpace
-        Operator of the grid over the face's bounding box; carries its
-        shape ``(nx, ny)``, the pixel size ``h`` and ``E*``.
-    labels : ndarray, shape (nx, ny), int
-        Phase index ``0..P-1`` on the face, -1 off it (the face is where
-        ``labels >= 0``); every phase present.
-    wear_coefficients : array_like, shape (P,), 1/Pa
-        ``k_i = k_wear,i / sigma_0,i``, positive and finite.
-    normal_force : float, N
-        ``F_N``, positive and finite.
-    exponent : float, optional
-        Pressure exponent ``m`` of the local wear law ``dw/ds = k p^m``
-        (default 1, Archard).  Positive and finite.
-    outline : outline object, optional
-        The face's outline (:mod:`steady.outline`), for the normalisation;
-        default: the disk of radius ``a = n h / 2`` on a square grid.
+    problem : steady.problem.Problem
+        The phase map on the face's grid, the wear law, the load and ``E*``.
 
     Returns
     -------
     SteadyResult
+        With the plain pixel rms slope (``rms_slope_error`` NaN): the
+        corrected rms slope and its error bar need the phase geometry at
+        several grids, :func:`solve_scene`.
 
     Raises
     ------
     ValueError
-        Bad input (named in the message), or a non-finite result.
+        A non-finite result.
 
     Notes
     -----
@@ -240,39 +194,26 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0, o
     A biphasic Voronoi punch whose phase 1 wears ten times faster: by eq. 7
     its pressure is ten times lower.
 
-    >>> from steady import HalfSpace, Voronoi, pixel_size, solve
-    >>> n, a = 64, 4e-3
-    >>> labels = Voronoi(100, (0.5, 0.5), seed=2024).labels(n)
-    >>> result = solve(HalfSpace(n, pixel_size(n, a), 1.3e6), labels, [1e-13, 1e-12], 10.0)
+    >>> from steady import Circle, FacePhases, Problem, Voronoi, solve
+    >>> grid = Circle(4e-3).grid(64)
+    >>> phases = FacePhases(grid, Voronoi(100, (0.5, 0.5), seed=2024).labels(grid), 2)
+    >>> result = solve(Problem(phases, [1e-13, 1e-12], 10.0, 1.3e6))
     >>> print(f"{result.phase_pressures[0] / result.phase_pressures[1]:.6f}")
     10.000000
     >>> result.face.shape, result.n_phases
     ((64, 64), 2)
-    >>> print(f"rms slope {result.rms_slope:.4f} = {result.normalised_rms_slope:.4f} grad_f0")
-    rms slope 0.2583 = 1.3259 grad_f0
+    >>> print(f"plain pixel rms slope {result.rms_slope_plain / result.reference_slope:.4f} "
+    ...       f"grad_f0")
+    plain pixel rms slope 1.3259 grad_f0
     """
-    if not isinstance(halfspace, HalfSpace):
-        raise ValueError(f"halfspace must be a HalfSpace, got {type(halfspace).__name__}")
-    labels = np.asarray(labels)
-    shape = tuple(halfspace.shape)
-    if labels.shape != shape:
-        raise ValueError(f"labels must have shape {shape} to match the half-space grid, "
-                         f"got {labels.shape}")
-    normal_force = _positive_finite(normal_force, "normal_force", "N")
-    exponent = _positive_finite(exponent, "exponent", "dimensionless")
-    if not np.issubdtype(labels.dtype, np.integer):
-        raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
-    n_phases = int(labels.max()) + 1
-    k = _wear_coefficients(wear_coefficients, n_phases)
-    on_face = labels >= 0
-    h = halfspace.h
-    if outline is None:
-        if shape[0] != shape[1]:
-            raise ValueError(f"a {shape[0]} x {shape[1]} grid needs its outline (the default "
-                             f"is a disk on a square grid)")
-        outline = Circle(0.5 * shape[0] * h)
-    pressure, p_phase, counts = pressure_field(labels, k, normal_force, h * h,
-                                               exponent=exponent, face_mask=on_face)
+    if not isinstance(problem, Problem):
+        raise ValueError(f"solve takes a steady.problem.Problem, got {type(problem).__name__}")
+    halfspace = problem.halfspace
+    labels = problem.labels
+    on_face = problem.face_mask
+    counts = problem.phases.counts
+    p_phase = problem.phase_pressures()
+    pressure = problem.steady_pressure()
 
     pressure_q = halfspace.forward(pressure)
     face = halfspace.displacement_q(pressure_q)
@@ -280,7 +221,7 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0, o
     slope2 = gx * gx
     slope2 += gy * gy
     rms = math.sqrt(np.sum(slope2, where=on_face) / counts.sum())
-    height = rms_height(face, on_face, h)
+    height = rms_height(face, on_face, halfspace.h)
     off = ~on_face
     face[off] = np.nan
     slope = np.sqrt(slope2, out=slope2)
@@ -288,12 +229,12 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0, o
     if not math.isfinite(rms):
         raise ValueError(f"steady solve produced a non-finite rms slope ({rms}); "
                          f"phase pressures {p_phase.tolist()} Pa")
-    ref = reference_slope(outline, normal_force, halfspace.E_star)
+    ref = reference_slope(problem.outline, problem.normal_force, problem.E_star)
     grad_f0 = ref.value
-    logger.debug("steady %s P=%d rms slope %.6g (%.6g grad_f0)", shape, n_phases, rms,
-                 rms / grad_f0)
+    logger.debug("steady %s P=%d rms slope %.6g (%.6g grad_f0)", problem.shape,
+                 problem.n_phases, rms, rms / grad_f0)
     return SteadyResult(
-        labels=labels,
+        labels=np.array(labels),
         pressure=pressure,
         phase_pressures=p_phase,
         face=face,
@@ -301,14 +242,13 @@ def solve(halfspace, labels, wear_coefficients, normal_force, *, exponent=1.0, o
         rms_slope=rms,
         reference_slope=grad_f0,
         fill_factors=counts / counts.sum(),
-        wear_coefficients=k,
-        exponent=exponent,
-        normal_force=normal_force,
-        radius=outline.radius if isinstance(outline, Circle) else None,
-        E_star=halfspace.E_star,
+        wear_coefficients=np.asarray(problem.wear.coefficients, dtype=float),
+        exponent=problem.wear.exponent,
+        normal_force=problem.normal_force,
+        E_star=problem.E_star,
+        outline=problem.outline,
         rms_slope_plain=rms,
         rms_height=height,
-        outline=outline,
         reference_slope_error=ref.error,
         reference_slope_source=ref.source,
     )
@@ -346,14 +286,11 @@ def solve_scene(scene, *, n=None, slope_error=True):
     ...       f"plain {result.rms_slope_plain / result.reference_slope:.3f}")
     0.997 +- 0.012 grad_f0, plain 0.965
     """
-    grid = scene.grid(n)
-    labels = scene.geometry.labels(grid)
-    halfspace = HalfSpace(grid.shape, grid.h, scene.E_star)
-    result = solve(halfspace, labels, scene.wear_coefficients, scene.normal_force,
-                   exponent=scene.exponent, outline=scene.outline)
+    problem = Problem.from_scene(scene, n=n)
+    result = solve(problem)
     if not slope_error:
         return result
-    estimate = estimate_rms_slope(scene.geometry, scene.wear_coefficients, scene.normal_force,
-                                  scene.outline, scene.E_star, grid.n, exponent=scene.exponent)
+    estimate = estimate_rms_slope(scene.geometry, problem.wear, scene.normal_force,
+                                  scene.outline, scene.E_star, problem.n)
     return dataclasses.replace(result, rms_slope=estimate.rms_slope,
                                rms_slope_error=estimate.error)

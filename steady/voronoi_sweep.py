@@ -25,7 +25,9 @@ import numpy as np
 
 from .accuracy import grid_ladder, ladder_error
 from .basis import PhaseBasis
+from .outline import UNIT_DISK
 from .phases import Voronoi
+from .problem import FacePhases
 from .sweep import run_sweep
 
 __all__ = [
@@ -81,7 +83,9 @@ def voronoi_slopes(point, *, n, ratios):
     k = np.column_stack([np.ones(len(ratios)), np.asarray(ratios, dtype=float)])
     values, plain, fill = [], None, None
     for m in grids:
-        basis = PhaseBasis(geometry.labels(m), 1.0, 1.0, faces=False)
+        grid = UNIT_DISK.grid(m)
+        basis = PhaseBasis(FacePhases(grid, geometry.labels(grid), geometry.n_phases), 1.0,
+                           faces=False)
         sweep = basis.rms_slopes(k, np.pi)  # pbar = 1 Pa, E* = 1 Pa
         values.append(sweep.normalised)
         if m == n:

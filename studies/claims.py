@@ -36,7 +36,9 @@ import voronoi_study
 
 from steady.basis import PhaseBasis
 from steady.design import DesignTable
+from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
+from steady.problem import FacePhases
 from steady.reference import fine_grain_rms_slope
 
 NAME = "claims"
@@ -103,11 +105,13 @@ def compute(path, params, *, workers=None, scheduler=None, progress=False):
     # Exactly: one map and the same map with its phases swapped.
     g = Voronoi(params["swap_level"], (1 - params["swap_fill"], params["swap_fill"]),
                 params["seeds"][0])
-    labels = g.labels(params["swap_n"])
+    grid = UNIT_DISK.grid(params["swap_n"])
+    labels = g.labels(grid)
     swapped = np.where(labels >= 0, 1 - labels, -1)
     k = np.column_stack([np.ones(ratios.size), ratios])
-    a_ = PhaseBasis(labels, 1.0, 1.0, faces=False).rms_slopes(k, np.pi).normalised
-    b_ = PhaseBasis(swapped, 1.0, 1.0, faces=False).rms_slopes(k[:, ::-1], np.pi).normalised
+    a_ = PhaseBasis(FacePhases(grid, labels, 2), 1.0, faces=False).rms_slopes(k, np.pi).normalised
+    b_ = PhaseBasis(FacePhases(grid, swapped, 2), 1.0,
+                    faces=False).rms_slopes(k[:, ::-1], np.pi).normalised
     attrs["symmetry_swapped_max_relative_difference"] = (float(np.max(np.abs(a_ / b_ - 1))),
                                                          "1")
 

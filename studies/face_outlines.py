@@ -31,10 +31,10 @@ import study_io
 from matplotlib.colors import ListedColormap
 
 from steady.accuracy import estimate_rms_slope
-from steady.halfspace import HalfSpace
 from steady.normalisation import reference_slope
 from steady.outline import Annulus, Circle, Rectangle
 from steady.phases import Voronoi
+from steady.problem import FacePhases, Problem
 from steady.solution import solve
 
 NAME = "face_outlines"
@@ -78,8 +78,8 @@ def compute(path, params):
             if i == 0:
                 grid = outline.grid(n)
                 labels = geometry.labels(grid)
-                result = solve(HalfSpace(grid.shape, grid.h, E_star), labels, k, force,
-                               outline=outline)
+                phases = FacePhases(grid, labels, geometry.n_phases)
+                result = solve(Problem(phases, k, force, E_star))
                 face = np.where(labels >= 0, result.face - result.face[labels >= 0].mean(),
                                 np.nan)
                 datasets[f"{name}/labels"] = (labels.astype(np.int8), "1")

@@ -24,8 +24,9 @@ import study_io
 
 from steady import reference
 from steady.basis import PhaseBasis
-from steady.grid import polar
+from steady.outline import UNIT_DISK
 from steady.phases import Homogeneous
+from steady.problem import FacePhases
 
 NAME = "fig2_homogeneous"
 PARAMS = {"n": 512, "refinement": [32, 64, 128, 256, 512, 1024]}
@@ -35,17 +36,22 @@ QUICK = {"n": 64, "refinement": [32, 64]}
 def compute(path, params):
     """Solve the homogeneous face and the rms slope ladder; write HDF5."""
     n = params["n"]
-    labels = Homogeneous().labels(n)
-    basis = PhaseBasis(labels, 1.0, 1.0)
+    grid = UNIT_DISK.grid(n)
+    labels = Homogeneous().labels(grid)
+    basis = PhaseBasis(FacePhases(grid, labels, 1), 1.0)
     force = np.pi  # pbar = 1 Pa on a unit disk, E* = 1 Pa: grad_f0 = 4 / pi
     g0 = 4.0 / np.pi
     face = basis.face([1.0], force) / g0  # f / (grad_f0 a) = f pi E* / (4 pbar a)
-    r, _ = polar(n, 1.0)
+    r = grid.radii
     on = labels >= 0
     exact = reference.cylinder_face(r, 1.0, 1.0, 1.0) / g0
     corrected, plain = [], []
     for m in params["refinement"]:
-        b = basis if m == n else PhaseBasis(Homogeneous().labels(m), 1.0, 1.0, faces=False)
+        if m == n:
+            b = basis
+        else:
+            g = UNIT_DISK.grid(m)
+            b = PhaseBasis(FacePhases(g, Homogeneous().labels(g), 1), 1.0, faces=False)
         s = b.rms_slopes([[1.0]], force)
         corrected.append(s.normalised[0])
         plain.append(s.rms_slope_plain[0] / s.reference_slope)

@@ -26,7 +26,9 @@ from matplotlib.colors import ListedColormap
 
 from steady.accuracy import grid_ladder, ladder_error
 from steady.basis import PhaseBasis
+from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
+from steady.problem import FacePhases
 
 NAME = "fig3_biphasic"
 PARAMS = {"n": 512, "n_seeds": 1600, "fill_factor": 0.5, "seed": 2718, "ratio": 10.0}
@@ -41,7 +43,9 @@ def compute(path, params):
     grids = grid_ladder(geometry, n)
     values = []
     for m in grids:
-        basis = PhaseBasis(geometry.labels(m), 1.0, 1.0, faces=(m == n))
+        grid = UNIT_DISK.grid(m)
+        phases = FacePhases(grid, geometry.labels(grid), geometry.n_phases)
+        basis = PhaseBasis(phases, 1.0, faces=(m == n))
         s = basis.rms_slopes([k], np.pi)
         values.append(s.normalised[0])
         if m == n:

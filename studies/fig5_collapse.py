@@ -29,7 +29,9 @@ import study_io
 import voronoi_study
 
 from steady.basis import PhaseBasis
+from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
+from steady.problem import FacePhases
 from steady.reference import fine_grain_rms_slope
 
 NAME = "fig5_collapse"
@@ -60,7 +62,8 @@ def compute(path, params, *, workers=None, scheduler=None, progress=False):
     inserts = []
     geometry = Voronoi(params["map_level"], (1 - params["insert_fill"], params["insert_fill"]),
                        params["seeds"][0])
-    basis = PhaseBasis(geometry.labels(params["insert_n"]), 1.0, 1.0)
+    grid = UNIT_DISK.grid(params["insert_n"])
+    basis = PhaseBasis(FacePhases(grid, geometry.labels(grid), geometry.n_phases), 1.0)
     for r in params["insert_ratios"]:
         face = basis.face([1.0, r], np.pi) / (4 / np.pi)
         inserts.append(face - np.nanmin(face))

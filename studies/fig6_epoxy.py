@@ -37,7 +37,7 @@ def compute(path, params):
     """Solve the scene and sample its cross sections; write HDF5."""
     scene = load_scene(SCENE)
     res = solve_scene(scene, n=params["n"])
-    a = scene.radius
+    a = scene.outline.radius
     pbar = reference.mean_pressure(scene.normal_force, a)
     rim = float(reference.cylinder_face(a, a, pbar, scene.E_star))
     sections = []

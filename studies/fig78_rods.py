@@ -26,7 +26,6 @@ import numpy as np
 import study_io
 from matplotlib.patches import Circle
 
-from steady.grid import polar
 from steady.phases import Rods
 from steady.profiles import differential_profile
 from steady.scene import load_scene
@@ -48,8 +47,8 @@ def compute(path, params):
         if not isinstance(scene.geometry, Rods):
             raise ValueError(f"scene {file} is not a rods scene")
         res = solve_scene(scene, n=params["n"])
-        a = scene.radius
-        r, _ = polar(res.n, a)
+        a = scene.outline.radius
+        r = scene.grid(res.n).radii
         rim = np.mean(res.face[(res.labels >= 0) & (r > a - 1.5 * res.pixel_size)])
         profiles, positions = [], []
         for y_mm in params["chords_y_mm"]:
@@ -63,7 +62,7 @@ def compute(path, params):
         datasets[f"{key}/x"] = (np.asarray(positions), "m")
         datasets[f"{key}/differential"] = (np.asarray(profiles), "m")
         datasets[f"{key}/phase_pressures"] = (res.phase_pressures, "Pa")
-        datasets[f"{key}/wear_coefficients"] = (np.asarray(scene.wear_coefficients), "1/Pa")
+        datasets[f"{key}/wear_coefficients"] = (np.asarray(scene.wear.coefficients), "1/Pa")
         datasets[f"{key}/rod_centres"] = (np.asarray(scene.geometry.centres) * a, "m")
         datasets[f"{key}/rod_radii"] = (np.asarray(scene.geometry.radii) * a, "m")
         # Differential profile at the side rods on the y = 0 chord (rods minus the

@@ -27,7 +27,7 @@ import numpy as np
 import study_io
 from scipy import ndimage
 
-from steady import FaceModel, HalfSpace, MeasuredFace, load_scene, pixel_size, solve
+from steady import Circle, FaceModel, FacePhases, MeasuredFace, Problem, load_scene, solve
 
 NAME = "fit_rods"
 SCENES = {"steel_in_brass": "rods_steel_in_brass.toml",
@@ -56,13 +56,14 @@ def _truth(scene, key, ratio, n):
     """Steady face (m) for k_steel / k_brass = ``ratio`` on the n x n grid, and its relief."""
     k = np.full(2, 1e-13)
     k[STEEL[key]] = ratio * 1e-13
-    face = solve(HalfSpace(n, pixel_size(n, scene.radius), scene.E_star),
-                 scene.geometry.labels(n), k, scene.normal_force).face
+    grid = scene.grid(n)
+    phases = FacePhases(grid, scene.phase_labels(grid), scene.n_phases)
+    face = solve(Problem(phases, k, scene.normal_force, scene.E_star)).face
     return face, float(np.nanmax(face) - np.nanmin(face))
 
 
 def _plane(n, radius, offset, tilt):
-    x = (np.arange(n) - 0.5 * (n - 1)) * pixel_size(n, radius)
+    x = (np.arange(n) - 0.5 * (n - 1)) * Circle(radius).grid(n).h
     return offset + tilt[0] * x[:, None] + tilt[1] * x[None, :]
 
 
@@ -81,14 +82,14 @@ def compute(path, params):
     separated = {}
     for key, file in SCENES.items():
         scene = load_scene(study_io.ROOT / "studies" / "scenes" / file)
-        ratio_printed = max(scene.wear_coefficients) / min(scene.wear_coefficients)
-        if abs(scene.wear_coefficients[STEEL[key]] / scene.wear_coefficients[1 - STEEL[key]]
-               - 1.7) > 1e-12 or abs(ratio_printed - 1.7) > 1e-12:
+        k = scene.wear.coefficients
+        ratio_printed = max(k) / min(k)
+        if abs(k[STEEL[key]] / k[1 - STEEL[key]] - 1.7) > 1e-12 or abs(ratio_printed - 1.7) > 1e-12:
             raise ValueError(f"scene {file}: expected k_steel / k_brass = 1.7")
         model = FaceModel.from_scene(scene, n=n)
         brass = 1 - STEEL[key]
-        plane = _plane(n, scene.radius, params["offset"], params["tilt"])
-        h = pixel_size(n, scene.radius)
+        plane = _plane(n, scene.outline.radius, params["offset"], params["tilt"])
+        h = scene.grid(n).h
         for label, ratio in TRUTHS.items():
             face, relief = _truth(scene, key, ratio, n)
             fitted, lower, upper = [], [], []
@@ -137,7 +138,7 @@ def compute(path, params):
                 coverage_hits += lo <= ratio <= hi
                 coverage_total += 1
     datasets["levels"] = (np.asarray(levels), "1")
-    attrs["radius"] = (scene.radius, "m")
+    attrs["radius"] = (scene.outline.radius, "m")
     for name, value in separated.items():
         attrs[f"separated_up_to_{name.replace('/', '_over_')}"] = (value, "1")
     attrs["coverage"] = (coverage_hits / coverage_total, "1")
@@ -151,7 +152,7 @@ def compute(path, params):
     face, _ = _truth(scene, "steel_in_brass", 1.7, fine)
     b = params["fine"]
     measured = MeasuredFace(face.reshape(n, b, n, b).mean(axis=(1, 3)),
-                            pixel_size(n, scene.radius))
+                            scene.grid(n).h)
     bias = []
     for n_model in params["model_grids"]:
         fit = FaceModel.from_scene(scene, n=n_model).fit(measured, reference_phase=0)

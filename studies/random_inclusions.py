@@ -37,10 +37,10 @@ import study_io
 from matplotlib.colors import ListedColormap
 from wear_exponent import exponent_slopes
 
-from steady.grid import face_mask, pixel_size
 from steady.halfspace import HalfSpace
 from steady.inclusions import Inclusions
-from steady.phases import validate_labels
+from steady.labels import validate_labels
+from steady.outline import UNIT_DISK
 from steady.pressures import phase_pressures
 from steady.reference import fine_grain_rms_slope
 
@@ -55,8 +55,9 @@ QUICK = {"n": 96, "radii": [0.08, 0.16], "fill_factors": [0.1, 0.3], "ratios": [
 @functools.lru_cache(maxsize=4)
 def _face_gradient(n):
     """Slope field of a unit pressure on the whole face, grid ``n`` (a = 1 m, E* = 1 Pa)."""
-    halfspace = HalfSpace(n, pixel_size(n, 1.0), 1.0)
-    return halfspace, halfspace.gradient(face_mask(n).astype(float))
+    grid = UNIT_DISK.grid(n)
+    halfspace = HalfSpace(grid.shape, grid.h, 1.0)
+    return halfspace, halfspace.gradient(grid.mask.astype(float))
 
 
 def inclusion_rms(geometry, grids, wear_coefficients):

@@ -32,7 +32,7 @@ import study_io
 from fit_rods import STEEL
 from matplotlib.patches import Circle
 
-from steady.grid import face_mask, pixel_centres, polar
+from steady.outline import as_outline
 from steady.profiles import differential_profile, ring_average
 from steady.scene import load_scene
 from steady.solution import solve_scene
@@ -47,24 +47,25 @@ QUICK = {"n": 48, "chords_y_mm": [0.0, 6.0], "points": 81}
 
 def _with_ratio(scene, key, ratio):
     """The scene with ``k_steel / k_brass = ratio`` (brass keeps its coefficient)."""
-    k = list(scene.wear_coefficients)
+    k = list(scene.wear.coefficients)
     brass = k[1 - STEEL[key]]
     k[STEEL[key]] = ratio * brass
-    return dataclasses.replace(scene, wear_coefficients=tuple(k))
+    return dataclasses.replace(scene, wear=dataclasses.replace(scene.wear, coefficients=tuple(k)))
 
 
 def _rod_heights(face, geometry, radius):
     """Mean height of each rod's pixels above the ring average at their radius, m."""
     n = face.shape[0]
+    grid = as_outline(radius).grid(n)
     r_ring, mean = ring_average(face, radius, n // 2)
     ok = np.isfinite(mean)
-    r_px, _ = polar(n, radius)
+    r_px = grid.radii
     relief = face - np.interp(r_px, r_ring[ok], mean[ok])
-    x = pixel_centres(n, radius)
+    x = grid.x
     out = []
     for (cx, cy), rr in zip(geometry.centres, geometry.radii, strict=True):
         inside = ((x[:, None] - cx * radius) ** 2 + (x[None, :] - cy * radius) ** 2
-                  < (rr * radius) ** 2) & face_mask(n)
+                  < (rr * radius) ** 2) & grid.mask
         out.append(float(np.mean(relief[inside])))
     return np.asarray(out)
 
@@ -74,16 +75,16 @@ def compute(path, params):
     datasets, attrs = {}, {}
     for key, file in fig78_rods.SCENES.items():
         base = load_scene(study_io.ROOT / "studies" / "scenes" / file)
-        k = base.wear_coefficients
+        k = base.wear.coefficients
         if abs(k[STEEL[key]] / k[1 - STEEL[key]] - 1.7) > 1e-12:
             raise ValueError(f"scene {file}: expected k_steel / k_brass = 1.7")
-        a = base.radius
+        a = base.outline.radius
         datasets[f"{key}/rod_centres"] = (np.asarray(base.geometry.centres) * a, "m")
         datasets[f"{key}/rod_radii"] = (np.asarray(base.geometry.radii) * a, "m")
         for case, ratio in RATIOS.items():
             scene = _with_ratio(base, key, ratio)
             res = solve_scene(scene, n=params["n"])
-            r, _ = polar(res.n, a)
+            r = scene.grid(res.n).radii
             rim = np.mean(res.face[(res.labels >= 0) & (r > a - 1.5 * res.pixel_size)])
             profiles, positions = [], []
             for y_mm in params["chords_y_mm"]:
@@ -98,7 +99,7 @@ def compute(path, params):
             datasets[f"{g}/x"] = (np.asarray(positions), "m")
             datasets[f"{g}/differential"] = (np.asarray(profiles), "m")
             datasets[f"{g}/phase_pressures"] = (res.phase_pressures, "Pa")
-            datasets[f"{g}/wear_coefficients"] = (np.asarray(scene.wear_coefficients), "1/Pa")
+            datasets[f"{g}/wear_coefficients"] = (np.asarray(scene.wear.coefficients), "1/Pa")
             heights = _rod_heights(res.face, scene.geometry, a)
             datasets[f"{g}/rod_heights"] = (heights, "m")
             attrs[f"{key}_{case}_rms_slope"] = (res.rms_slope, "1")

@@ -71,13 +71,14 @@ def run_case(point, *, tol, distances):
     from steady.solution import solve_scene
     from transient.history import rim_layer_excess
     from transient.initial_face import flat
+    from transient.options import RunOptions
     from transient.problem import WearProblem
-    from transient.runin import RunOptions, run_in
+    from transient.runin import run_in
 
     scene = _scene(point["case"])
     n = point["n"]
     problem = WearProblem.from_scene(scene, n=n)
-    result = run_in(problem, flat(n, scene.radius), RunOptions(tol=tol, snapshots=distances))
+    result = run_in(problem, flat(problem.grid), RunOptions(tol=tol, snapshots=distances))
     if not result.success:
         raise RuntimeError(f"{point}: run-in ended {result.status}: {result.message}")
     g0 = result.reference_slope

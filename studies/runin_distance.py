@@ -35,8 +35,10 @@ import sys
 import numpy as np
 import study_io
 
+from steady.outline import Circle
 from steady.phases import Homogeneous, Voronoi
 from steady.scene import Scene, load_scene
+from steady.wear import PowerLaw
 
 NAME = "runin_distance"
 BASE = {"ratio": 0.1, "fill": 0.3, "n_seeds": 400}
@@ -85,8 +87,9 @@ def crossing(distance, value, band):
 def _run(case, n, scheme, tol, band):
     """One run-in from a flat face; its history and run-in distances."""
     from transient.initial_face import flat
+    from transient.options import RunOptions
     from transient.problem import WearProblem
-    from transient.runin import RunOptions, run_in
+    from transient.runin import run_in
 
     if case["n_seeds"] == 0:
         geometry, k = Homogeneous(), (1.0,)
@@ -94,10 +97,10 @@ def _run(case, n, scheme, tol, band):
         geometry = Voronoi(case["n_seeds"], (1 - case["fill"], case["fill"]), case["seed"])
         k = (1.0, case["ratio"])
     # a = 1 m, pbar = 1 Pa, E* = 1 Pa: distances come out in units of a / (k E*).
-    scene = Scene(radius=1.0, normal_force=np.pi, E_star=1.0, n=n, wear_coefficients=k,
-                  exponent=1.0, geometry=geometry)
+    scene = Scene(outline=Circle(1.0), normal_force=np.pi, E_star=1.0, n=n, wear=PowerLaw(k),
+                  geometry=geometry)
     problem = WearProblem.from_scene(scene, n=n)
-    result = run_in(problem, flat(n, 1.0), RunOptions(scheme=scheme, tol=tol))
+    result = run_in(problem, flat(problem.grid), RunOptions(scheme=scheme, tol=tol))
     if not result.success:
         raise ValueError(f"run-in of {case} ended {result.status}: {result.message}")
     h = result.history
@@ -157,11 +160,11 @@ def compute(path, params):
                     "depth_factor": "f* per s*"}.get(field, "s*")
             attrs[f"{name.replace('/', '_')}_{field}"] = (v[field], unit)
     scene = load_scene(study_io.ROOT / "studies" / "scenes" / params["scene"])
-    attrs["epoxy_radius"] = (scene.radius, "m")
+    radius = scene.outline.radius
+    attrs["epoxy_radius"] = (radius, "m")
     attrs["epoxy_E_star"] = (scene.E_star, "Pa")
-    attrs["epoxy_k"] = (scene.wear_coefficients[0], "1/Pa")
-    attrs["epoxy_depth_scale"] = (scene.normal_force / (np.pi * scene.radius * scene.E_star),
-                                  "m")
+    attrs["epoxy_k"] = (scene.wear.coefficients[0], "1/Pa")
+    attrs["epoxy_depth_scale"] = (scene.normal_force / (np.pi * radius * scene.E_star), "m")
     return study_io.write_study(path, NAME, params, datasets, attrs)
 
 

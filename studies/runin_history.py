@@ -33,9 +33,11 @@ import sys
 import numpy as np
 import study_io
 
+from steady.outline import Circle
 from steady.phases import Voronoi
 from steady.scene import Scene, load_scene
 from steady.sweep import run_sweep
+from steady.wear import PowerLaw
 
 NAME = "runin_history"
 CASES = {
@@ -62,8 +64,8 @@ def _scene(case, n, n_seeds, fill, seed):
     spec = CASES[case]
     if spec["kind"] == "voronoi":
         # pbar = 1 Pa, a = 1 m, E* = 1 Pa: the normalised history.
-        return Scene(radius=1.0, normal_force=np.pi, E_star=1.0, n=n,
-                     wear_coefficients=(1.0, spec["ratio"]), exponent=1.0,
+        return Scene(outline=Circle(1.0), normal_force=np.pi, E_star=1.0, n=n,
+                     wear=PowerLaw((1.0, spec["ratio"])),
                      geometry=Voronoi(n_seeds, (1 - fill, fill), seed))
     return load_scene(study_io.ROOT / "studies" / "scenes" / spec["scene"])
 
@@ -73,14 +75,15 @@ def run_case(point, *, n, n_seeds, fill, seed, tol):
     from steady.solution import solve_scene
     from transient.comparison import compare_with_steady
     from transient.initial_face import flat
+    from transient.options import RunOptions
     from transient.problem import WearProblem
-    from transient.runin import RunOptions, run_in
+    from transient.runin import run_in
     from transient.spatial_error import spatial_error
 
     scene = _scene(point["case"], n, n_seeds, fill, seed)
     problem = WearProblem.from_scene(scene, n=n)
     options = RunOptions(tol=tol)
-    result = run_in(problem, flat(n, scene.radius), options)
+    result = run_in(problem, flat(problem.grid), options)
     if not result.success:
         raise RuntimeError(f"run-in of {point['case']} ended {result.status}: "
                            f"{result.message}")

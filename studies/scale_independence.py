@@ -33,8 +33,8 @@ import voronoi_study
 
 from steady.accuracy import SlopeEnergy
 from steady.phases import Voronoi
-from steady.pressures import pressure_field
 from steady.reference import fine_grain_rms_slope
+from steady.wear import pressure_field
 
 NAME = "scale_independence"
 PARAMS = dict(voronoi_study.FULL, fill=0.5, seeds=list(range(1000, 1050)),

@@ -37,7 +37,9 @@ from matplotlib.colors import ListedColormap
 
 from steady.accuracy import grid_ladder, ladder_error
 from steady.basis import PhaseBasis
+from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
+from steady.problem import FacePhases
 from steady.reference import fine_grain_rms_slope
 
 NAME = "three_phases"
@@ -79,15 +81,19 @@ def reduction(geometry, n, contrasts):
         Two-phase Voronoi map with the same seed points and
         ``rho_2 = rho_hard`` (Fig. 4b's map), ``k = (1, 1/R)``.
     """
-    labels = geometry.labels(n)
+    grid = UNIT_DISK.grid(n)
+    labels = geometry.labels(grid)
     k3 = np.array([(1.0, 1.0 / r, 1.0) for r in contrasts])
     k2 = k3[:, :2]
-    three = PhaseBasis(labels, 1.0, 1.0, faces=False).rms_slopes(k3, np.pi).normalised
+    three = PhaseBasis(FacePhases(grid, labels, 3), 1.0,
+                       faces=False).rms_slopes(k3, np.pi).normalised
     merged_labels = np.where(labels < 0, -1, (labels == 1).astype(labels.dtype))
-    merged = PhaseBasis(merged_labels, 1.0, 1.0, faces=False).rms_slopes(k2, np.pi).normalised
+    merged = PhaseBasis(FacePhases(grid, merged_labels, 2), 1.0,
+                        faces=False).rms_slopes(k2, np.pi).normalised
     rho_h = geometry.fill_factors[1]
     two = Voronoi(geometry.n_seeds, (1.0 - rho_h, rho_h), geometry.seed)
-    voronoi = PhaseBasis(two.labels(n), 1.0, 1.0, faces=False).rms_slopes(k2, np.pi).normalised
+    voronoi = PhaseBasis(FacePhases(grid, two.labels(grid), 2), 1.0,
+                         faces=False).rms_slopes(k2, np.pi).normalised
     return three, merged, voronoi
 
 
@@ -106,7 +112,9 @@ def map_values(geometry, n, contrasts):
     grids = grid_ladder(geometry, n)
     values = []
     for m in grids:
-        basis = PhaseBasis(geometry.labels(m), 1.0, 1.0, faces=m == n)
+        grid = UNIT_DISK.grid(m)
+        phases = FacePhases(grid, geometry.labels(grid), geometry.n_phases)
+        basis = PhaseBasis(phases, 1.0, faces=m == n)
         values.append(basis.rms_slopes(k, np.pi).normalised)  # pbar = 1 Pa, E* = 1 Pa
         if m == n:
             labels = basis.labels

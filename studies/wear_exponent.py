@@ -35,7 +35,9 @@ import study_io
 
 from steady.accuracy import grid_ladder, ladder_error
 from steady.basis import PhaseBasis
+from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
+from steady.problem import FacePhases
 from steady.reference import fine_grain_rms_slope
 
 NAME = "wear_exponent"
@@ -82,7 +84,9 @@ def exponent_slopes(geometry, n, ratios, exponents):
     grids = grid_ladder(geometry, n)
     values = []
     for m in grids:
-        basis = PhaseBasis(geometry.labels(m), 1.0, 1.0, faces=False)
+        grid = UNIT_DISK.grid(m)
+        phases = FacePhases(grid, geometry.labels(grid), geometry.n_phases)
+        basis = PhaseBasis(phases, 1.0, faces=False)
         values.append([basis.rms_slopes(k, np.pi, exponent=e).normalised for e in exponents])
     archard = np.array([basis.rms_slopes(np.column_stack([np.ones_like(ratios),
                                                           ratios ** (1.0 / e)]),

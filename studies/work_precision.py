@@ -65,15 +65,18 @@ import time
 
 import numpy as np
 
+from steady.outline import Circle
 from steady.output import atomic_h5
 from steady.phases import Voronoi
 from steady.scene import Scene
+from steady.wear import PowerLaw
 from transient.comparison import compare_with_steady
 from transient.contact import solve_contact
 from transient.history import HistoryEstimator
 from transient.initial_face import flat
+from transient.options import RunOptions
 from transient.problem import WearProblem
-from transient.runin import RunOptions, run_in
+from transient.runin import run_in
 from transient.spatial_error import spatial_error
 from transient.stepping import SCHEMES
 
@@ -113,9 +116,8 @@ logger = logging.getLogger("work_precision")
 
 def scene(n=N):
     """The study's scene (a Voronoi punch on the epoxy cylinder's load)."""
-    return Scene(radius=RADIUS, normal_force=FORCE, E_star=E_STAR, n=n,
-                 wear_coefficients=(K1, K1 * RATIO), exponent=1.0,
-                 geometry=Voronoi(SEEDS, FILL, SEED))
+    return Scene(outline=Circle(RADIUS), normal_force=FORCE, E_star=E_STAR, n=n,
+                 wear=PowerLaw((K1, K1 * RATIO)), geometry=Voronoi(SEEDS, FILL, SEED))
 
 
 def build(n, *, contact_rtol=CONTACT_RTOL):

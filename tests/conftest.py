@@ -5,8 +5,9 @@ Tests draw their scenes from here rather than carrying inline copies:
 - :data:`RADIUS`, :data:`E_STAR`, :data:`FORCE`, :data:`K1` -- the paper's
   epoxy cylinder (Fig. 6) and a matrix wear coefficient;
 - :data:`GEOMETRIES` -- named phase geometries;
-- :func:`wear_problem` -- a :class:`transient.problem.WearProblem` of a
-  named geometry;
+- :func:`problem` -- the :class:`steady.problem.Problem` of a geometry on a
+  face's grid; :func:`wear_problem` -- its
+  :class:`transient.problem.WearProblem` (named geometries);
 - :data:`SCENES` and :func:`scene_text` -- scene files (TOML) by name, with
   keys overridden where a test needs it (the phase map too: homogeneous,
   Voronoi, rods or a file); the fixture ``scene_file`` writes one into the
@@ -17,10 +18,10 @@ import math
 
 import pytest
 
-from steady.grid import pixel_size
 from steady.halfspace import HalfSpace
-from steady.outline import Annulus, Circle, Ellipse, Rectangle
+from steady.outline import Annulus, Circle, Ellipse, FaceGrid, Rectangle, as_outline
 from steady.phases import Homogeneous, Rods, Voronoi
+from steady.problem import FacePhases, Problem
 from transient.problem import WearProblem
 
 RADIUS = 4e-3      # m, the paper's epoxy cylinder (Fig. 6)
@@ -56,9 +57,40 @@ OUTLINES = {
 }
 
 
-def halfspace(n, radius=RADIUS):
-    """The half-space operator of the ``n x n`` grid over the punch."""
-    return HalfSpace(n, pixel_size(n, radius), E_STAR)
+def halfspace(n, radius=RADIUS, E_star=E_STAR):
+    """The half-space operator of the ``n x n`` grid over the punch of ``radius``."""
+    return HalfSpace(n, Circle(radius).grid(n).h, E_star)
+
+
+def problem(labels_or_geometry, wear, *, n=None, outline=RADIUS, force=FORCE, E_star=E_STAR,
+            n_phases=None):
+    """The :class:`steady.problem.Problem` of a phase map on a face's grid.
+
+    Parameters
+    ----------
+    labels_or_geometry : ndarray or phase geometry
+        Labels on the outline's grid (then ``n`` is their longer side), or
+        a geometry rasterised on ``outline.grid(n)``.
+    wear : wear law or sequence of float
+        Coefficients stand for Archard's law.
+    n : int, optional
+        Grid size (with a geometry).
+    outline : outline object or float
+        The face; a number is a disk's radius (default :data:`RADIUS`).
+    force, E_star : float
+    n_phases : int, optional
+        Declared phases (default: the geometry's, or ``labels.max() + 1``).
+    """
+    outline = as_outline(outline)
+    if hasattr(labels_or_geometry, "labels"):
+        grid = outline.grid(n)
+        labels = labels_or_geometry.labels(grid)
+        n_phases = labels_or_geometry.n_phases if n_phases is None else n_phases
+    else:
+        labels = labels_or_geometry
+        grid = FaceGrid(outline, max(labels.shape))
+        n_phases = int(labels.max()) + 1 if n_phases is None else n_phases
+    return Problem(FacePhases(grid, labels, n_phases), wear, force, E_star)
 
 
 def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, **options):
@@ -69,8 +101,7 @@ def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, **options):
     """
     if isinstance(geometry, str):
         geometry = GEOMETRIES[geometry]
-    k = [K1 * r for r in ratios]
-    return WearProblem(halfspace(n), geometry.labels(n), k, FORCE, RADIUS, **options)
+    return WearProblem(problem(geometry, [K1 * r for r in ratios], n=n), **options)
 
 
 _MAPS = {

@@ -14,16 +14,16 @@ from steady.accuracy import (
     monopole_tail,
     resample_labels,
 )
-from steady.grid import face_mask, pixel_size, polar
+from steady.outline import UNIT_DISK, Circle
 from steady.phases import ArrayMap, Homogeneous, Voronoi
-from steady.pressures import pressure_field
+from steady.wear import pressure_field
 
 G0 = 4 / np.pi  # grad_f0 for pbar = 1 Pa, E* = 1 Pa
 
 
 def _integrals(geometry, n, k, radius=1.0):
     labels = geometry.labels(n)
-    h = pixel_size(n, radius)
+    h = Circle(radius).grid(n).h
     pressure, _, _ = pressure_field(labels, k, np.pi * radius**2, h * h)
     return SlopeEnergy(n, h, 1.0)(pressure, labels >= 0)
 
@@ -57,9 +57,10 @@ def test_quadratures_converge_to_the_exact_total():
     ns = np.array([64, 128, 256])
     defects = []
     for n in ns:
-        r, _ = polar(n, 1.0)
+        grid = UNIT_DISK.grid(n)
+        r, _ = grid.polar()
         p = np.exp(-((r / 0.2) ** 2))
-        s = SlopeEnergy(n, 2.0 / n, 1.0)(p, face_mask(n))
+        s = SlopeEnergy(n, 2.0 / n, 1.0)(p, grid.mask)
         defects.append(abs(s.defect) / s.total)
     order = -np.polyfit(np.log(ns), np.log(defects), 1)[0]
     assert 0.9 < order < 1.1, f"defect order {order:.3f}, defects {defects}"
@@ -179,7 +180,7 @@ def test_rms_slope_is_independent_of_grain_size():
 def test_single_field_path_is_the_gram_path(n):
     """SlopeEnergy(p) (the run-in's every-step path) equals gram([p]) to round-off."""
     labels = Voronoi(100, (0.7, 0.3), 2718).labels(n)
-    h = pixel_size(n, 1.0)
+    h = UNIT_DISK.grid(n).h
     pressure, _, _ = pressure_field(labels, [1.0, 10.0], np.pi, h * h)
     energy = SlopeEnergy(n, h, 1.0)
     fast = energy(pressure, labels >= 0)
@@ -200,7 +201,7 @@ def test_resample_labels_is_the_rasterisation_up_to_half_a_pixel(n, m):
     geometry = Voronoi(100, (0.7, 0.3), 2718)
     resampled = resample_labels(geometry.labels(n), m)
     direct = geometry.labels(m)
-    face = face_mask(m)
+    face = UNIT_DISK.grid(m).mask
     assert np.array_equal(resampled >= 0, face), "face of the new grid"
     differ = np.mean(resampled[face] != direct[face])
     assert differ < 0.08, f"{differ:.1%} of the pixels differ from the rasterisation"

@@ -19,7 +19,7 @@ from steady.accuracy import (
 )
 from steady.outline import Annulus, FaceGrid, Rectangle
 from steady.phases import Homogeneous, Rods, Voronoi
-from steady.pressures import pressure_field
+from steady.wear import pressure_field
 
 A = 4e-3       # m, the scale L of every outline (the epoxy cylinder's radius)
 E_STAR = 1.3e6  # Pa

@@ -5,9 +5,16 @@ import pytest
 
 from steady.accuracy import SlopeEnergy
 from steady.basis import PhaseBasis
-from steady.halfspace import HalfSpace
+from steady.outline import Circle
 from steady.phases import Voronoi
+from steady.problem import FacePhases, Problem
 from steady.solution import solve
+
+
+def face_phases(labels, radius=1.0):
+    """Labels on the grid of the disk of ``radius`` (``n`` their side), phases 0..max."""
+    labels = np.asarray(labels)
+    return FacePhases(Circle(radius).grid(max(labels.shape)), labels, int(labels.max()) + 1)
 
 
 @pytest.mark.parametrize("n", [95, 96])
@@ -15,14 +22,14 @@ def test_basis_matches_direct_solves(n):
     """Face, plain and corrected rms slope equal the direct solve to round-off."""
     labels = Voronoi(300, (0.2, 0.3, 0.5), 8128).labels(n)
     radius, E_star, force = 0.004, 1.3e6, 10.0
-    basis = PhaseBasis(labels, radius, E_star)
+    phases = face_phases(labels, radius)
+    basis = PhaseBasis(phases, E_star)
     rng = np.random.default_rng(1729)
     ks = 10.0 ** rng.uniform(-12, -6, size=(4, 3))
     sweep = basis.rms_slopes(ks, force)
-    hs = HalfSpace(n, 2 * radius / n, E_star)
-    energy = SlopeEnergy(n, hs.h, E_star)
+    energy = SlopeEnergy(n, phases.grid.h, E_star)
     for row, k in enumerate(ks):
-        direct = solve(hs, labels, k, force)
+        direct = solve(Problem(phases, k, force, E_star))
         face = basis.face(k, force)
         on = labels >= 0
         err = np.max(np.abs(face[on] - direct.face[on])) / np.max(np.abs(direct.face[on]))
@@ -39,15 +46,16 @@ def test_basis_matches_direct_solves(n):
 def test_equal_coefficients_give_the_homogeneous_slope():
     """k_1 = k_2: the phase map no longer matters (eq. 7 gives p = pbar)."""
     n = 128
-    basis = PhaseBasis(Voronoi(400, (0.5, 0.5), 6174).labels(n), 1.0, 1.0)
-    homogeneous = PhaseBasis(np.where(basis.labels >= 0, 0, -1), 1.0, 1.0)
+    basis = PhaseBasis(face_phases(Voronoi(400, (0.5, 0.5), 6174).labels(n)), 1.0)
+    homogeneous = PhaseBasis(face_phases(np.where(basis.labels >= 0, 0, -1)), 1.0)
     a = basis.rms_slopes([[2.0, 2.0]], np.pi).normalised[0]
     b = homogeneous.rms_slopes([[2.0]], np.pi).normalised[0]
     assert a == pytest.approx(b, rel=1e-12), f"{a} vs homogeneous {b}"
 
 
 def test_wrong_number_of_coefficients():
-    basis = PhaseBasis(Voronoi(100, (0.5, 0.5), 9001).labels(32), 1.0, 1.0, faces=False)
+    basis = PhaseBasis(face_phases(Voronoi(100, (0.5, 0.5), 9001).labels(32)), 1.0,
+                       faces=False)
     with pytest.raises(ValueError, match="2 wear coefficients"):
         basis.rms_slopes([[1.0, 2.0, 3.0]], 1.0)
     with pytest.raises(ValueError, match="faces=False"):
@@ -65,7 +73,8 @@ def test_pillars_limit_over_the_whole_face(rho):
     """
     from steady import reference
 
-    basis = PhaseBasis(Voronoi(1600, (1 - rho, rho), 31).labels(256), 1.0, 1.0, faces=False)
+    basis = PhaseBasis(face_phases(Voronoi(1600, (1 - rho, rho), 31).labels(256)), 1.0,
+                       faces=False)
     got = basis.rms_slopes([[1.0, 1e-8]], np.pi).normalised[0]
     want = reference.fine_grain_rms_slope(basis.fill_factors, [1.0, 1e-8])
     assert got == pytest.approx(want, rel=0.015), f"rho={rho}: {got} vs asymptote {want}"

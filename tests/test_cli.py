@@ -50,7 +50,8 @@ def test_good_run_writes_result_and_figure(tmp_path):
 
 
 @pytest.mark.parametrize("old, new, fragment", [
-    ("normal_force = 10.0", "normal_force = -10.0", "normal_force must be a positive"),
+    ("normal_force = 10.0", "normal_force = -10.0",
+     "[load] normal_force must be a number > 0 (N), got -10.0"),
     ("n = 40", "n = 12", "grid too coarse"),
     ("[grid]", "[grdi]", "unknown section [grdi]"),
     ("n = 40", "n = = 40", "malformed TOML"),

@@ -9,8 +9,8 @@ import scipy.linalg
 import scipy.optimize
 
 from steady import reference
-from steady.grid import face_mask, pixel_size, polar
 from steady.halfspace import HalfSpace
+from steady.outline import Circle
 from transient import initial_face
 from transient.contact import ContactResult, solve_contact
 from transient.preconditioners import PRECONDITIONERS
@@ -24,9 +24,15 @@ FORCE = 10.0
 CRITICAL_TILT = FORCE / (4 * RADIUS**2 * E_STAR)
 
 
+def grid(n):
+    """The grid of the ``n x n`` pixels over the punch."""
+    return Circle(RADIUS).grid(n)
+
+
 def setup(n, E_star=E_STAR):
-    hs = HalfSpace(n, pixel_size(n, RADIUS), E_star)
-    return hs, face_mask(n)
+    g = grid(n)
+    hs = HalfSpace(n, g.h, E_star)
+    return hs, g.mask
 
 
 def effective_radius(face, hs):
@@ -76,7 +82,7 @@ def flat_results():
     out = {}
     for n in FLAT_SIZES:
         hs, face = setup(n)
-        out[n] = (hs, face, solve_contact(hs, face, initial_face.flat(n, RADIUS), FORCE))
+        out[n] = (hs, face, solve_contact(hs, face, initial_face.flat(grid(n)), FORCE))
     return out
 
 
@@ -105,7 +111,7 @@ def test_flat_punch_pressure_is_boussinesq_away_from_the_rim(flat_results):
     errors = []
     for n in FLAT_SIZES:
         hs, face, res = flat_results[n]
-        r, _ = polar(n, RADIUS)
+        r, _ = grid(n).polar()
         exact = reference.flat_punch_pressure(r, effective_radius(face, hs), FORCE)
         inner = face & (r < 0.5 * RADIUS)
         rms = np.sqrt(np.mean((res.pressure[inner] - exact[inner]) ** 2))
@@ -118,7 +124,7 @@ def test_flat_punch_pressure_is_boussinesq_away_from_the_rim(flat_results):
 
 def test_flat_punch_rim_carries_the_peak(flat_results):
     hs, face, res = flat_results[128]
-    r, _ = polar(128, RADIUS)
+    r, _ = grid(128).polar()
     assert r[np.unravel_index(np.argmax(res.pressure), r.shape)] > 0.97 * RADIUS, (
         "the edge singularity must put the peak pressure on the rim")
 
@@ -140,10 +146,10 @@ def test_crowned_face_is_hertz(n):
     hs, face = setup(n)
     sphere = 4 * E_STAR * (0.6 * RADIUS) ** 3 / (3 * HERTZ_FORCE)
     c, p_max, approach = reference.hertz(HERTZ_FORCE, sphere, E_STAR)
-    res = solve_contact(hs, face, initial_face.crowned(n, RADIUS, sphere), HERTZ_FORCE)
+    res = solve_contact(hs, face, initial_face.crowned(grid(n), sphere), HERTZ_FORCE)
     assert res.success, res.message
     assert abs(load(res, hs) / HERTZ_FORCE - 1) < 1e-13, f"load {load(res, hs)} N"
-    r, _ = polar(n, RADIUS)
+    r, _ = grid(n).polar()
     contact = res.pressure > 0
     assert r[contact].max() < 0.7 * RADIUS, "contact must stay inside the rim"
     radius = np.sqrt(contact.sum() * hs.h**2 / np.pi)
@@ -163,9 +169,9 @@ def test_crowned_face_is_hertz(n):
 def test_tilted_face_in_full_contact_has_the_rigid_punch_moment(n):
     hs, face = setup(n)
     tilt = 0.5 * CRITICAL_TILT
-    res = solve_contact(hs, face, initial_face.tilted(n, RADIUS, tilt), FORCE)
+    res = solve_contact(hs, face, initial_face.tilted(grid(n), tilt), FORCE)
     assert res.success and res.contact_fraction == 1.0, res.message
-    r, theta = polar(n, RADIUS)
+    r, theta = grid(n).polar()
     centroid = np.sum(res.pressure * r * np.cos(theta)) * hs.h**2 / FORCE
     # A flat punch forced to a tilt theta carries M = 4/3 E* a^3 theta
     # (Johnson, Contact Mechanics, sec. 3.8); the face recedes towards +x.
@@ -184,7 +190,7 @@ def test_tilted_face_in_full_contact_has_the_rigid_punch_moment(n):
 @pytest.mark.parametrize("n", [64, 65])
 def test_tilted_face_lifts_off_on_the_recessed_side(n):
     hs, face = setup(n)
-    height = initial_face.tilted(n, RADIUS, 2 * CRITICAL_TILT)
+    height = initial_face.tilted(grid(n), 2 * CRITICAL_TILT)
     cold = solve_contact(hs, face, height, FORCE, rtol=1e-10)
     assert cold.success, cold.message
     assert 0.3 < cold.contact_fraction < 0.95, f"contact fraction {cold.contact_fraction}"
@@ -197,7 +203,7 @@ def test_tilted_face_lifts_off_on_the_recessed_side(n):
         if column.any():
             last = np.nonzero(column)[0].max()
             assert column[: last + 1].all(), f"row y={j}: contact not contiguous from -x"
-    r, theta = polar(n, RADIUS)
+    r, theta = grid(n).polar()
     centroid = np.sum(cold.pressure * r * np.cos(theta)) * hs.h**2 / FORCE
     # Past the critical tilt the centroid moves beyond the full-contact
     # value at lift-off, -a/3 (measured -0.547 a).
@@ -219,7 +225,7 @@ def test_tilted_face_lifts_off_on_the_recessed_side(n):
 def test_warm_start_from_the_solution_converges_at_once():
     n = 48
     hs, face = setup(n)
-    height = initial_face.tilted(n, RADIUS, 2 * CRITICAL_TILT, azimuth=0.7)
+    height = initial_face.tilted(grid(n), 2 * CRITICAL_TILT, azimuth=0.7)
     cold = solve_contact(hs, face, height, FORCE)
     warm = solve_contact(hs, face, height, FORCE, x0=cold.pressure)
     assert warm.success and warm.nit <= 1, f"warm start took {warm.nit} iterations"
@@ -230,7 +236,7 @@ def test_known_displacement_of_the_warm_start_saves_a_product(n, monkeypatch):
     hs, face = setup(n)
     rng = np.random.default_rng(4409)
     shift = hs.self_influence * np.where(rng.random((n, n)) < 0.3, 2.0, 0.2)
-    height = initial_face.crowned(n, RADIUS, 0.2)
+    height = initial_face.crowned(grid(n), 0.2)
     cold = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11)
     # A warm start near the solution, non-negative, zero off the face.
     x0 = np.where(face, cold.pressure * (1 + 0.01 * rng.random((n, n))), 0.0)
@@ -306,7 +312,7 @@ def test_shifted_operator_matches_dense_direct_solve(n, magnitude):
     # Two phases with wear ratios 1e-2 apart, shift in units of the self-influence.
     phase = rng.random((n, n)) < 0.4
     shift = hs.self_influence * magnitude * np.where(phase, 1.0, 1e-2)
-    height = initial_face.tilted(n, RADIUS, 3 * CRITICAL_TILT, azimuth=0.3)
+    height = initial_face.tilted(grid(n), 3 * CRITICAL_TILT, azimuth=0.3)
     expected_p, expected_d = dense_lcp(hs, face, height, FORCE, shift)
     res = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-12)
     assert res.success, res.message
@@ -327,7 +333,7 @@ def test_big_shift_is_nearly_diagonal():
     n = 40
     hs, face = setup(n)
     shift = np.full((n, n), 1e6 * n * hs.self_influence)
-    height = initial_face.tilted(n, RADIUS, 1e-3)
+    height = initial_face.tilted(grid(n), 1e-3)
     res = solve_contact(hs, face, height, FORCE, shift=shift)
     assert res.success and res.nit <= 3, f"{res.nit} iterations: {res.message}"
     # Winkler foundation: p = (d - h) / s where positive.
@@ -344,7 +350,7 @@ def test_every_preconditioner_gives_the_same_answer(name):
     hs, face = setup(n)
     rng = np.random.default_rng(9173)
     shift = hs.self_influence * rng.uniform(0.0, 5.0, (n, n))
-    height = initial_face.crowned(n, RADIUS, 0.05)
+    height = initial_face.crowned(grid(n), 0.05)
     reference_res = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11,
                                   preconditioner="none")
     res = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11, preconditioner=name)
@@ -358,7 +364,7 @@ def test_every_preconditioner_gives_the_same_answer(name):
 def test_result_reports_the_stopping_rule():
     n = 50
     hs, face = setup(n)
-    height = initial_face.tilted(n, RADIUS, 2 * CRITICAL_TILT)
+    height = initial_face.tilted(grid(n), 2 * CRITICAL_TILT)
     seen = []
     res = solve_contact(hs, face, height, FORCE, rtol=1e-9, callback=seen.append)
     assert isinstance(res, ContactResult)
@@ -399,7 +405,7 @@ def test_no_convergence_is_reported_not_hidden(caplog):
 def test_zero_force_gives_zero_pressure():
     n = 16
     hs, face = setup(n)
-    height = initial_face.tilted(n, RADIUS, 0.01)
+    height = initial_face.tilted(grid(n), 0.01)
     res = solve_contact(hs, face, height, 0.0)
     assert res.success and not res.pressure.any(), "no load, no pressure"
     assert res.approach == height[face].min(), "the face just touches"
@@ -466,7 +472,7 @@ def test_crowned_face_on_a_fine_grid():
     hs, face = setup(n)
     sphere = 4 * E_STAR * (0.6 * RADIUS) ** 3 / (3 * HERTZ_FORCE)
     c, p_max, approach = reference.hertz(HERTZ_FORCE, sphere, E_STAR)
-    res = solve_contact(hs, face, initial_face.crowned(n, RADIUS, sphere), HERTZ_FORCE)
+    res = solve_contact(hs, face, initial_face.crowned(grid(n), sphere), HERTZ_FORCE)
     assert res.success, res.message
     radius = np.sqrt((res.pressure > 0).sum() * hs.h**2 / np.pi)
     # Measured +7.9e-4 (contact radius) and +7.2e-5 (peak) at n = 512.

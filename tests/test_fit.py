@@ -18,18 +18,18 @@ import sys
 import h5py
 import numpy as np
 import pytest
-from conftest import E_STAR, FORCE, GEOMETRIES, K1, OUTLINES, RADIUS, halfspace
+from conftest import E_STAR, FORCE, GEOMETRIES, K1, OUTLINES, RADIUS, problem
 from scipy import ndimage
 
 from steady import (
     FaceModel,
     HalfSpace,
     MeasuredFace,
+    PowerLaw,
     Voronoi,
     fit_face,
     fit_scene,
     load_scene,
-    pixel_size,
     pressure_field,
     read_fit,
     read_measured,
@@ -38,7 +38,6 @@ from steady import (
 )
 from steady.cli.fit import main
 from steady.fit_files import fit_figure, plot_fit
-from steady.grid import face_mask, polar
 from steady.outline import Circle, MaskOutline, Rectangle
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -49,18 +48,32 @@ TWO = (GEOMETRIES["voronoi"], (1.0, 3.0))
 THREE = (Voronoi(64, (0.5, 0.3, 0.2), 3301), (1.0, 3.0, 0.5))
 
 
+def pixel_size(n):
+    """Pixel size of the n x n grid over the disk of :data:`RADIUS`, m."""
+    return Circle(RADIUS).grid(n).h
+
+
+def fit_problem(labels, outline=RADIUS, *, exponent=1.0):
+    """The fit's model: ``labels`` on the outline's grid, E*, F_N and the power law of ``exponent``.
+
+    Only the law's exponent enters the fit; its coefficients (all :data:`K1`
+    here) are reported beside it as ``scene_ratios``.
+    """
+    wear = PowerLaw([K1] * (int(np.max(labels)) + 1), exponent=exponent)
+    return problem(labels, wear, outline=outline)
+
+
 def steady_face(geometry, ratios, n, *, E_star=E_STAR, exponent=1.0):
     """The forward model: steady face (m, NaN off the face), labels and relief."""
-    labels = geometry.labels(n)
-    k = [K1 * r for r in ratios]
-    result = solve(HalfSpace(n, pixel_size(n, RADIUS), E_star), labels, k, FORCE,
-                   exponent=exponent)
-    return result.face, labels, float(np.nanmax(result.face) - np.nanmin(result.face))
+    wear = PowerLaw([K1 * r for r in ratios], exponent=exponent)
+    model = problem(geometry, wear, n=n, E_star=E_star)
+    result = solve(model)
+    return result.face, model.labels, float(np.nanmax(result.face) - np.nanmin(result.face))
 
 
 def plane(n, offset=2e-5, tilt=(1e-3, -4e-4)):
     """Offset plus tilt on the n x n grid, m."""
-    x = (np.arange(n) - 0.5 * (n - 1)) * pixel_size(n, RADIUS)
+    x = (np.arange(n) - 0.5 * (n - 1)) * pixel_size(n)
     return offset + tilt[0] * x[:, None] + tilt[1] * x[None, :]
 
 
@@ -98,14 +111,13 @@ def test_exact_face_is_recovered(case, n):
     """No noise: pressures, ratios, offset and tilt to round-off; the load scale is 1."""
     geometry, ratios = case
     face, labels, _ = steady_face(geometry, ratios, n)
-    fit = fit_face(MeasuredFace(face + plane(n), pixel_size(n, RADIUS)), labels, RADIUS, E_STAR,
-                   FORCE)
+    fit = fit_face(MeasuredFace(face + plane(n), pixel_size(n)), fit_problem(labels))
     assert fit.success, fit.message
     assert np.allclose(fit.ratios, ratios, rtol=1e-9), f"ratios {fit.ratios}"
     assert fit.offset == pytest.approx(2e-5, rel=1e-8), f"offset {fit.offset}"
     assert np.allclose(fit.tilt, (1e-3, -4e-4), rtol=1e-8), f"tilt {fit.tilt}"
     assert fit.load_scale == pytest.approx(1.0, rel=1e-9), "sum A_i p_i = F_N (eq. 5)"
-    assert fit.samples == face_mask(n).sum(), "every face pixel is fitted"
+    assert fit.samples == Circle(RADIUS).grid(n).mask.sum(), "every face pixel is fitted"
 
 
 @pytest.mark.parametrize("exponent", [0.5, 2.0])
@@ -113,8 +125,7 @@ def test_power_law_ratios(exponent):
     """k_i p_i^m = C: the ratios are (p_0 / p_i)^m, whatever m."""
     n = 40
     face, labels, _ = steady_face(TWO[0], TWO[1], n, exponent=exponent)
-    fit = fit_face(MeasuredFace(face, pixel_size(n, RADIUS)), labels, RADIUS, E_STAR, FORCE,
-                   exponent=exponent)
+    fit = fit_face(MeasuredFace(face, pixel_size(n)), fit_problem(labels, exponent=exponent))
     assert fit.ratios[1] == pytest.approx(3.0, rel=1e-9), f"m = {exponent}: {fit.ratios}"
     expected = 3.0 ** (-1 / exponent)
     p = fit.phase_pressures
@@ -134,7 +145,7 @@ def test_round_trip_with_noise_tilt_offset_and_holes(case):
     n = 41
     face, labels, relief = steady_face(geometry, ratios, n)
     gaps = holes(n, 6007)
-    model = FaceModel(labels, RADIUS, E_STAR, FORCE)
+    model = FaceModel(fit_problem(labels))
     errors = {}
     for level in (0.01, 0.1):
         misses = np.zeros(len(ratios), dtype=int)
@@ -142,9 +153,10 @@ def test_round_trip_with_noise_tilt_offset_and_holes(case):
         for seed in range(6101, 6121):
             heights = face + plane(n) + level * relief * noise(np.random.default_rng(seed), n)
             heights[gaps] = np.nan
-            fit = model.fit(MeasuredFace(heights, pixel_size(n, RADIUS)))
+            fit = model.fit(MeasuredFace(heights, pixel_size(n)))
             assert fit.success, f"noise {level}, seed {seed}: {fit.message}"
-            assert fit.samples == np.sum(face_mask(n) & ~gaps), "holes are left out, not fatal"
+            assert fit.samples == np.sum(Circle(RADIUS).grid(n).mask & ~gaps), \
+                "holes are left out, not fatal"
             misses += ~in_interval(fit, ratios)
             errors[level].append(fit.phase_pressure_errors)
         assert np.all(misses <= 4), f"noise {level}: intervals missed {misses} times of 20"
@@ -164,13 +176,13 @@ def test_coverage_is_nominal(correlation):
     geometry, ratios = THREE
     n = 32
     face, labels, relief = steady_face(geometry, ratios, n)
-    model = FaceModel(labels, RADIUS, E_STAR, FORCE)
+    model = FaceModel(fit_problem(labels))
     rng = np.random.default_rng(7411 if correlation else 7417)
     hits = np.zeros(len(ratios))
     trials = 120
     for _ in range(trials):
         heights = face + plane(n) + 0.1 * relief * noise(rng, n, correlation)
-        hits += in_interval(model.fit(MeasuredFace(heights, pixel_size(n, RADIUS))), ratios)
+        hits += in_interval(model.fit(MeasuredFace(heights, pixel_size(n))), ratios)
     rate = hits[1:] / trials
     assert np.all((rate >= 0.89) & (rate <= 1.0)), f"coverage {rate} (nominal 0.95)"
 
@@ -189,14 +201,14 @@ def test_coverage_measured(case, correlation):
     geometry, ratios = case
     n = 40
     face, labels, relief = steady_face(geometry, ratios, n)
-    model = FaceModel(labels, RADIUS, E_STAR, FORCE)
+    model = FaceModel(fit_problem(labels))
     rng = np.random.default_rng(9049 if correlation else 9059)
     hits = np.zeros(len(ratios))
     load_hits = 0
     trials = 1000
     for _ in range(trials):
         heights = face + plane(n) + 0.1 * relief * noise(rng, n, correlation)
-        fit = model.fit(MeasuredFace(heights, pixel_size(n, RADIUS)))
+        fit = model.fit(MeasuredFace(heights, pixel_size(n)))
         hits += in_interval(fit, ratios)
         load_hits += fit.load_scale_interval[0] <= 1 <= fit.load_scale_interval[1]
     rate = hits[1:] / trials
@@ -215,8 +227,7 @@ def test_other_grid_and_modulus():
     """
     face, _, relief = steady_face(TWO[0], TWO[1], 96, E_star=2 * E_STAR)
     heights = face + 0.01 * relief * noise(np.random.default_rng(5807), 96)
-    fit = fit_face(MeasuredFace(heights, pixel_size(96, RADIUS)), TWO[0].labels(48), RADIUS,
-                   E_STAR, FORCE)
+    fit = fit_face(MeasuredFace(heights, pixel_size(96)), fit_problem(TWO[0].labels(48)))
     assert in_interval(fit, TWO[1]).all(), f"{fit.ratios} {fit.ratio_intervals}"
     assert abs(fit.ratios[1] / 3 - 1) < 0.02, f"ratio {fit.ratios[1]}"
     assert fit.load_scale == pytest.approx(0.5, rel=0.01), f"load scale {fit.load_scale}"
@@ -228,17 +239,17 @@ def test_shift_is_found():
     """The face sits 3 pixels right and 2 down of the map's centre: the search finds it."""
     n, pad = 48, 6
     face, labels, relief = steady_face(TWO[0], TWO[1], n)
-    h = pixel_size(n, RADIUS)
+    h = pixel_size(n)
     heights = np.full((n + 2 * pad, n + 2 * pad), np.nan)
     heights[pad + 3:pad + 3 + n, pad - 2:pad - 2 + n] = (
         face + plane(n) + 0.01 * relief * noise(np.random.default_rng(4421), n))
     measured = MeasuredFace(heights, h)
-    fit = fit_face(measured, labels, RADIUS, E_STAR, FORCE, search_shift=True, max_shift=5 * h)
+    fit = fit_face(measured, fit_problem(labels), search_shift=True, max_shift=5 * h)
     assert np.allclose(fit.shift, (3 * h, -2 * h), atol=0.05 * h), \
         f"shift {np.divide(fit.shift, h)} pixels"
     assert in_interval(fit, TWO[1]).all(), f"{fit.ratios} {fit.ratio_intervals}"
     assert fit.residual_rms < 0.015 * relief, f"residual {fit.residual_rms / relief} of relief"
-    unshifted = fit_face(measured, labels, RADIUS, E_STAR, FORCE, rim_margin=5 * h)
+    unshifted = fit_face(measured, fit_problem(labels), rim_margin=5 * h)
     assert unshifted.residual_rms > 3 * fit.residual_rms, "a misplaced map fits worse"
 
 
@@ -247,7 +258,7 @@ def test_faster_phase_is_only_bounded_below():
     n = 40
     face, labels, relief = steady_face(TWO[0], (1.0, 1e4), n)
     heights = face + 0.1 * relief * noise(np.random.default_rng(6653), n)
-    fit = fit_face(MeasuredFace(heights, pixel_size(n, RADIUS)), labels, RADIUS, E_STAR, FORCE)
+    fit = fit_face(MeasuredFace(heights, pixel_size(n)), fit_problem(labels))
     lo, hi = fit.ratio_intervals[1]
     assert np.isinf(hi) and 1 < lo < 1e4, f"interval {lo, hi}"
     assert "bounded only from below" in fit.message, fit.message
@@ -256,7 +267,7 @@ def test_faster_phase_is_only_bounded_below():
 def test_upside_down_map_fails_with_a_reason():
     n = 40
     face, labels, _ = steady_face(TWO[0], TWO[1], n)
-    fit = fit_face(MeasuredFace(-face, pixel_size(n, RADIUS)), labels, RADIUS, E_STAR, FORCE)
+    fit = fit_face(MeasuredFace(-face, pixel_size(n)), fit_problem(labels))
     assert not fit.success, "negative pressures are not a success"
     assert "not positive" in fit.message and "upside down" in fit.message, fit.message
 
@@ -264,24 +275,24 @@ def test_upside_down_map_fails_with_a_reason():
 def test_errors_name_the_problem():
     n = 40
     face, labels, _ = steady_face(TWO[0], TWO[1], n)
-    h = pixel_size(n, RADIUS)
+    h = pixel_size(n)
     with pytest.raises(ValueError,
                        match=r"36 x 36 pixels .* cannot cover the circle face \(radius 4 mm\) "
                              r"of 8 x 8 mm"):
-        fit_face(MeasuredFace(face[2:-2, 2:-2], h), labels, RADIUS, E_STAR, FORCE)
+        fit_face(MeasuredFace(face[2:-2, 2:-2], h), fit_problem(labels))
     with pytest.raises(ValueError, match=r"cannot cover the circle face"):
-        fit_face(MeasuredFace(face, 0.9 * h), labels, RADIUS, E_STAR, FORCE)
+        fit_face(MeasuredFace(face, 0.9 * h), fit_problem(labels))
     absent = np.where(labels == 1, np.nan, face)
     with pytest.raises(ValueError, match=r"phase 1 covers 0 of the \d+ fitted pixels"):
-        fit_face(MeasuredFace(absent, h), labels, RADIUS, E_STAR, FORCE)
+        fit_face(MeasuredFace(absent, h), fit_problem(labels))
     with pytest.raises(ValueError, match="reference_phase must be a phase index 0..1"):
-        fit_face(MeasuredFace(face, h), labels, RADIUS, E_STAR, FORCE, reference_phase=2)
+        fit_face(MeasuredFace(face, h), fit_problem(labels), reference_phase=2)
     with pytest.raises(ValueError, match="confidence must lie in"):
-        fit_face(MeasuredFace(face, h), labels, RADIUS, E_STAR, FORCE, confidence=95)
+        fit_face(MeasuredFace(face, h), fit_problem(labels), confidence=95)
     with pytest.raises(ValueError, match="rim_margin must be a non-negative"):
-        fit_face(MeasuredFace(face, h), labels, RADIUS, E_STAR, FORCE, rim_margin=-1e-4)
+        fit_face(MeasuredFace(face, h), fit_problem(labels), rim_margin=-1e-4)
     with pytest.raises(ValueError, match="nothing left to fit"):
-        fit_face(MeasuredFace(face, h), labels, RADIUS, E_STAR, FORCE, rim_margin=RADIUS)
+        fit_face(MeasuredFace(face, h), fit_problem(labels), rim_margin=RADIUS)
     with pytest.raises(ValueError, match="2-d array"):
         MeasuredFace(face[0], h)
     with pytest.raises(ValueError, match="no finite height"):
@@ -297,13 +308,14 @@ def test_collinear_phase_is_undetermined():
     phase's face and the plane to 1e-7.
     """
     n = 200
-    r, _ = polar(n, RADIUS)
+    grid = Circle(RADIUS).grid(n)
+    r, _ = grid.polar()
     labels = np.where(r < 0.5 * RADIUS, 0, 1)
-    labels[~face_mask(n)] = -1
-    model = FaceModel(labels, RADIUS, E_STAR, FORCE)
+    labels[~grid.mask] = -1
+    model = FaceModel(fit_problem(labels))
     face = np.tensordot([2e5, 1e5], model.faces, axes=1)
     with pytest.raises(ValueError, match=r"phase 1: its face is a combination of the other"):
-        model.fit(MeasuredFace(face, pixel_size(n, RADIUS)), rim_margin=0.93 * RADIUS,
+        model.fit(MeasuredFace(face, pixel_size(n)), rim_margin=0.93 * RADIUS,
                   min_phase_pixels=0)
 
 
@@ -352,8 +364,8 @@ def test_file_round_trip_and_figure(tmp_path):
     n = 41
     face, labels, relief = steady_face(THREE[0], THREE[1], n)
     heights = face + plane(n) + 0.05 * relief * noise(np.random.default_rng(3907), n)
-    fit = fit_face(MeasuredFace(heights, pixel_size(n, RADIUS), source="synthetic"), labels,
-                   RADIUS, E_STAR, FORCE)
+    fit = fit_face(MeasuredFace(heights, pixel_size(n), source="synthetic"),
+                   fit_problem(labels))
     path = write_fit(tmp_path / "fit.h5", fit)
     stored = read_fit(path)
     assert np.array_equal(stored.attrs["ratios"], fit.ratios), "ratios stored"
@@ -373,9 +385,8 @@ def test_file_round_trip_and_figure(tmp_path):
 
 def test_fit_scene_uses_the_scene(scene_file):
     scene = load_scene(scene_file("steady", n=40))
-    truth = solve(halfspace(40), scene.geometry.labels(40), scene.wear_coefficients,
-                  scene.normal_force)
-    fit = fit_scene(scene, MeasuredFace(truth.face, pixel_size(40, RADIUS)))
+    truth = solve(problem(scene.geometry, scene.wear, n=40, force=scene.normal_force))
+    fit = fit_scene(scene, MeasuredFace(truth.face, pixel_size(40)))
     assert np.allclose(fit.ratios, fit.scene_ratios, rtol=1e-9), "ratios of the scene"
     assert fit.scene_ratios[1] == pytest.approx(10.0), "scene ratios reported"
 
@@ -388,7 +399,7 @@ def run_cli(*args, cwd):
 def test_command_line(tmp_path, scene_file, capsys):
     scene_path = scene_file("steady", n=40)
     scene = load_scene(scene_path)
-    truth = solve(halfspace(40), scene.geometry.labels(40), [1e-9, 4e-9], FORCE)
+    truth = solve(problem(scene.geometry, [1e-9, 4e-9], n=40))
     np.save(tmp_path / "face.npy", truth.face * 1e6)       # micrometres
     args = [str(scene_path), str(tmp_path / "face.npy"), "--pixel-size", "2e-4",
             "--height-scale", "1e-6", "-o", str(tmp_path / "fit.h5")]
@@ -484,8 +495,7 @@ def test_forward_model_is_the_solver():
     """The helper's face is the solver's on the rectangle, to round-off."""
     outline = OUTLINES["rectangle"]
     face, labels, _, grid = outline_face(outline, *TWO, 48)
-    result = solve(HalfSpace(grid.shape, grid.h, E_STAR), labels, [K1, 3 * K1], FORCE,
-                   outline=outline)
+    result = solve(problem(labels, [K1, 3 * K1], outline=outline))
     assert np.allclose(face, result.face, rtol=1e-12, atol=0, equal_nan=True), \
         "pressure_field + HalfSpace is solve's face"
 
@@ -498,15 +508,15 @@ def test_exact_face_on_outlines(name, case, n):
     geometry, ratios = case
     outline = OUTLINES[name]
     face, labels, _, grid = outline_face(outline, geometry, ratios, n)
-    fit = fit_face(MeasuredFace(face + grid_plane(grid), grid.h), labels, outline, E_STAR,
-                   FORCE)
+    fit = fit_face(MeasuredFace(face + grid_plane(grid), grid.h), fit_problem(labels, outline))
     assert fit.success, fit.message
     assert np.allclose(fit.ratios, ratios, rtol=1e-9), f"{name}: ratios {fit.ratios}"
     assert fit.offset == pytest.approx(2e-5, rel=1e-8), f"{name}: offset {fit.offset}"
     assert np.allclose(fit.tilt, (1e-3, -4e-4), rtol=1e-8), f"{name}: tilt {fit.tilt}"
     assert fit.load_scale == pytest.approx(1.0, rel=1e-9), "sum A_i p_i = F_N (eq. 5)"
     assert fit.samples == grid.mask.sum(), f"{name}: every face pixel is fitted"
-    assert fit.outline == outline and fit.radius is None, "the result carries the outline"
+    assert fit.outline == outline and not isinstance(fit.outline, Circle), \
+        "the result carries the outline, not a disk's radius"
     assert np.array_equal(fit.phase, labels), f"{name}: phases on the measured grid"
     assert np.array_equal(np.isfinite(fit.fitted), grid.mask), "fitted face on the face only"
 
@@ -544,7 +554,7 @@ def test_round_trip_on_outlines(name, n, case):
     geometry, ratios = case
     outline = OUTLINES[name]
     face, labels, relief, grid = outline_face(outline, geometry, ratios, n)
-    model = FaceModel(labels, outline, E_STAR, FORCE)
+    model = FaceModel(fit_problem(labels, outline))
     key = (name, "two" if len(ratios) == 2 else "three")
     errors = {}
     for level in (0.01, 0.1):
@@ -600,7 +610,7 @@ def test_mask_outline_round_trip():
     heights = face + grid_plane(grid) + 0.01 * relief * noise(np.random.default_rng(5413),
                                                               grid.shape)
     margin = 3e-4
-    fit = fit_face(MeasuredFace(heights, grid.h), labels, outline, E_STAR, FORCE,
+    fit = fit_face(MeasuredFace(heights, grid.h), fit_problem(labels, outline),
                    rim_margin=margin)
     assert fit.success and in_interval(fit, TWO[1]).all(), f"{fit.ratios} {fit.ratio_intervals}"
     assert abs(fit.ratios[1] / 3 - 1) < 0.01, f"ratio {fit.ratios[1]} (1 % noise)"
@@ -628,7 +638,7 @@ def test_rim_margin_on_rectangle():
     outline = OUTLINES["rectangle"]
     face, labels, _, grid = outline_face(outline, *TWO, 48)
     h = grid.h
-    model = FaceModel(labels, outline, E_STAR, FORCE)
+    model = FaceModel(fit_problem(labels, outline))
     fit = model.fit(MeasuredFace(face, h), rim_margin=2.2 * h)
     assert fit.samples == 12 * 44, f"{fit.samples} pixels kept, 528 expected"
     expected = np.zeros(grid.shape, dtype=bool)
@@ -655,7 +665,7 @@ def test_distance_transform_against_closed_forms(name, n):
     """
     outline = OUTLINES[name]
     grid = outline.grid(n)
-    model = FaceModel(GEOMETRIES["voronoi"].labels(grid), outline, E_STAR, FORCE)
+    model = FaceModel(fit_problem(GEOMETRIES["voronoi"].labels(grid), outline))
     X, Y = np.meshgrid(grid.x, grid.y, indexing="ij")
     x, y = X[grid.mask], Y[grid.mask]
     error = np.abs(model.rim_distance(x, y, closed_form=False) - model.rim_distance(x, y))
@@ -671,15 +681,15 @@ def test_distance_transform_against_closed_forms(name, n):
 
 def test_phases_off_the_outline():
     """``phases_at`` is -1 off the face of the outline: the annulus's hole, beyond its sides."""
-    annulus = FaceModel(TWO[0].labels(OUTLINES["annulus"].grid(41)), OUTLINES["annulus"],
-                        E_STAR, FORCE)
+    annulus = FaceModel(fit_problem(TWO[0].labels(OUTLINES["annulus"].grid(41)),
+                                    OUTLINES["annulus"]))
     x = np.array([0.0, 1.9e-3, 3e-3, 0.0, 4.1e-3])
     y = np.array([0.0, 0.0, 0.0, -3e-3, 0.0])
     phases = annulus.phases_at(x, y)
     assert np.all(phases[[0, 1, 4]] == -1), f"the hole and the outside: {phases}"
     assert np.all(phases[[2, 3]] >= 0), f"on the ring: {phases}"
-    rectangle = FaceModel(TWO[0].labels(OUTLINES["rectangle"].grid(48)), OUTLINES["rectangle"],
-                          E_STAR, FORCE)
+    rectangle = FaceModel(fit_problem(TWO[0].labels(OUTLINES["rectangle"].grid(48)),
+                                      OUTLINES["rectangle"]))
     phases = rectangle.phases_at(np.array([1.4e-3, 1.2e-3, 0.0]), np.array([0.0, 3.9e-3, 4.1e-3]))
     assert phases[0] == -1 and phases[1] >= 0 and phases[2] == -1, \
         f"beyond the half width 1.33 mm, inside, beyond the half length 4 mm: {phases}"
@@ -700,7 +710,7 @@ def test_shift_search_on_rectangle():
     heights = np.full((nx + 2 * pad, ny + 2 * pad), np.nan)
     heights[pad + 1:pad + 1 + nx, pad - 1:pad - 1 + ny] = (
         face + grid_plane(grid) + 0.01 * relief * noise(np.random.default_rng(4423), grid.shape))
-    fit = fit_face(MeasuredFace(heights, h), labels, outline, E_STAR, FORCE, search_shift=True)
+    fit = fit_face(MeasuredFace(heights, h), fit_problem(labels, outline), search_shift=True)
     assert np.allclose(fit.shift, (h, -h), atol=0.05 * h), \
         f"shift {np.divide(fit.shift, h)} pixels"
     assert fit.samples == 28 * 92, f"{fit.samples} pixels, 2576 expected (erosion 0.05 L)"
@@ -717,26 +727,26 @@ def test_errors_on_outlines():
              r"8 mm")
     with pytest.raises(ValueError, match=r"16 x 40 pixels of 0.1667 x 0.1667 mm \(2.667 x "
                                          r"6.667 mm\) " + sizes):
-        fit_face(MeasuredFace(face[:, 4:-4], h), labels, outline, E_STAR, FORCE)
+        fit_face(MeasuredFace(face[:, 4:-4], h), fit_problem(labels, outline))
     with pytest.raises(ValueError, match=r"48 x 16 pixels .* \(8 x 2.667 mm\) " + sizes):
-        fit_face(MeasuredFace(face.T, h), labels, outline, E_STAR, FORCE)   # x and y swapped
+        fit_face(MeasuredFace(face.T, h), fit_problem(labels, outline))   # x and y swapped
     with pytest.raises(ValueError, match=r"the part fitted .* 2 x 7.333 mm"):
-        fit_face(MeasuredFace(face, h), labels, outline, E_STAR, FORCE, shift=(0.0, 1e-3),
+        fit_face(MeasuredFace(face, h), fit_problem(labels, outline), shift=(0.0, 1e-3),
                  rim_margin=1 / 3 * 1e-3)
     absent = np.where(labels == 1, 2, labels)                     # phases 0 and 2, no 1
     with pytest.raises(ValueError, match=r"phase 1 has no pixel on the face"):
-        FaceModel(absent, outline, E_STAR, FORCE)
+        FaceModel(fit_problem(absent, outline))
     hidden = np.where(labels == 1, np.nan, face)
     with pytest.raises(ValueError, match=r"phase 1 covers 0 of the \d+ fitted pixels"):
-        fit_face(MeasuredFace(hidden, h), labels, outline, E_STAR, FORCE)
-    with pytest.raises(ValueError, match=r"labels of shape \(48, 48\) do not fit the rectangle "
-                                         r"face .* whose grid of n = 48 is 16 x 48 pixels"):
-        FaceModel(TWO[0].labels(48), outline, E_STAR, FORCE)
+        fit_face(MeasuredFace(hidden, h), fit_problem(labels, outline))
+    with pytest.raises(ValueError, match=r"labels must have shape \(16, 48\) to match the grid "
+                                         r"of the rectangle face .* at n = 48, got \(48, 48\)"):
+        FaceModel(fit_problem(TWO[0].labels(48), outline))
     ring = OUTLINES["annulus"]
     ring_face, ring_labels, _, ring_grid = outline_face(ring, *TWO, 41)
     with pytest.raises(ValueError, match=r"nothing left to fit: .* annulus face \(inner_radius "
                                          r"2 mm, outer_radius 4 mm\)"):
-        fit_face(MeasuredFace(ring_face, ring_grid.h), ring_labels, ring, E_STAR, FORCE,
+        fit_face(MeasuredFace(ring_face, ring_grid.h), fit_problem(ring_labels, ring),
                  rim_margin=1e-3)
 
 
@@ -745,7 +755,7 @@ def test_errors_on_outlines():
 def test_shipped_scenes(path, n):
     """Each shipped outline's scene fits its own steady face: the scene's ratios to round-off."""
     scene = load_scene(ROOT / "studies" / "scenes" / path)
-    ratios = np.array(scene.wear_coefficients) / K1
+    ratios = np.array(scene.wear.coefficients) / K1
     face, _, _, grid = outline_face(scene.outline, scene.geometry, ratios, n,
                                     E_star=scene.E_star)
     face *= scene.normal_force / FORCE                 # outline_face loads with FORCE
@@ -800,7 +810,7 @@ def test_figure_of_a_wide_face(tmp_path):
     """A face more than twice as wide as tall: the three panels stacked, on its box."""
     outline = Rectangle(2 * RADIUS, 2 * RADIUS / 3)
     face, labels, _, grid = outline_face(outline, *TWO, 48)
-    fit = fit_face(MeasuredFace(face, grid.h), labels, outline, E_STAR, FORCE)
+    fit = fit_face(MeasuredFace(face, grid.h), fit_problem(labels, outline))
     fig = fit_figure(read_fit(write_fit(tmp_path / "fit.h5", fit)))
     panels = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
     assert [ax.get_subplotspec().get_geometry()[:2] for ax in panels] == [(3, 1)] * 3, "stacked"
@@ -814,7 +824,7 @@ def test_fit_file_records_the_outline(tmp_path, name):
     """Kind and lengths with units; a mask's own mask."""
     outline = chip_outline() if name == "mask" else OUTLINES[name]
     face, labels, _, grid = outline_face(outline, *TWO, 96 if name == "mask" else 41)
-    fit = fit_face(MeasuredFace(face, grid.h), labels, outline, E_STAR, FORCE)
+    fit = fit_face(MeasuredFace(face, grid.h), fit_problem(labels, outline))
     stored = read_fit(write_fit(tmp_path / "fit.h5", fit))
     assert type(stored.outline) is type(outline), stored.outline
     assert stored.outline.parameters() == outline.parameters(), "lengths"
@@ -835,7 +845,7 @@ def test_reads_version_1_files(tmp_path):
     """Files of the previous layout (disks only: a radius, no outline group) still read."""
     n = 40
     face, labels, _ = steady_face(TWO[0], TWO[1], n)
-    fit = fit_face(MeasuredFace(face, pixel_size(n, RADIUS)), labels, RADIUS, E_STAR, FORCE)
+    fit = fit_face(MeasuredFace(face, pixel_size(n)), fit_problem(labels))
     path = write_fit(tmp_path / "fit.h5", fit)
     with h5py.File(path, "r+") as f:           # as version 1 wrote it
         del f["outline"]
@@ -870,7 +880,7 @@ def test_coverage_measured_on_outlines(name, correlation, case):
     geometry, ratios = case
     outline = OUTLINES[name]
     face, labels, relief, grid = outline_face(outline, geometry, ratios, 48)
-    model = FaceModel(labels, outline, E_STAR, FORCE)
+    model = FaceModel(fit_problem(labels, outline))
     rng = np.random.default_rng(9049 if correlation else 9059)
     hits = np.zeros(len(ratios))
     load_hits = 0

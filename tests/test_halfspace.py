@@ -5,8 +5,8 @@ import pytest
 from scipy import integrate
 
 from steady import reference
-from steady.grid import face_mask, polar
 from steady.halfspace import HalfSpace, pixel_integral, pixel_integral_gradient
+from steady.outline import UNIT_DISK
 
 
 def _direct(p, h, E_star):
@@ -81,9 +81,10 @@ def test_product_reuse_does_not_alias():
 def test_uniform_disk_against_eq10(n):
     """Uniform pressure on the face: displacement vs eq. 10, error O(h)."""
     hs = HalfSpace(n, 2.0 / n, 1.0)
-    face = face_mask(n)
+    grid = UNIT_DISK.grid(n)
+    face = grid.mask
     p = np.where(face, 1.0 / (face.sum() * hs.h**2) * np.pi, 0.0)
-    r, _ = polar(n, 1.0)
+    r, _ = grid.polar()
     u = hs.displacement(p)
     exact = reference.cylinder_face(r, 1.0, 1.0, 1.0)
     err = np.max(np.abs(u[face] - exact[face])) / (4 / np.pi)

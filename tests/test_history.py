@@ -14,7 +14,7 @@ import pytest
 from conftest import CRITICAL_TILT, FORCE, GEOMETRIES, RADIUS, RODS, wear_problem
 
 from steady import reference
-from steady.grid import face_mask
+from steady.outline import Circle
 from transient import initial_face
 from transient.axisymmetric import reference_history
 from transient.history import (
@@ -41,7 +41,8 @@ def test_flat_face_starts_at_zero_then_jumps(n):
     0.8593 +- 0.0303 at n = 33 (measured).
     """
     problem = wear_problem("homogeneous", (1.0,), n)
-    result = run_in(problem, initial_face.flat(n, RADIUS), dataclasses.replace(FAST, max_steps=3))
+    result = run_in(problem, initial_face.flat(problem.grid),
+                    dataclasses.replace(FAST, max_steps=3))
     h = result.history
     assert h["rms_slope"][0] == 0.0 and h["rms_slope_error"][0] == 0.0, \
         f"flat face at s = 0: {h['rms_slope'][0]} +- {h['rms_slope_error'][0]}"
@@ -62,7 +63,7 @@ def test_tilted_face_starts_at_its_tilt(tilt):
     n = 33
     angle = math.atan(tilt * CRITICAL_TILT)
     problem = wear_problem(VORONOI, (1.0, 10.0), n)
-    result = run_in(problem, initial_face.tilted(n, RADIUS, angle), dataclasses.replace(
+    result = run_in(problem, initial_face.tilted(problem.grid, angle), dataclasses.replace(
         FAST, max_steps=3))
     h = result.history
     exact = initial_face.exact_statistics("tilted", RADIUS, angle=angle).rms_slope
@@ -85,7 +86,8 @@ def test_crowned_face_statistics_match_the_closed_form(n):
     """
     sphere = 2 * RADIUS
     exact = initial_face.exact_statistics("crowned", RADIUS, sphere_radius=sphere)
-    stats = face_statistics(initial_face.crowned(n, RADIUS, sphere), face_mask(n), 2 * RADIUS / n)
+    grid = Circle(RADIUS).grid(n)
+    stats = face_statistics(initial_face.crowned(grid, sphere), grid.mask, 2 * RADIUS / n)
     assert abs(stats.rms_slope - exact.rms_slope) <= stats.rms_slope_error, \
         f"n={n}: {stats.rms_slope} vs {exact.rms_slope} +- {stats.rms_slope_error}"
     assert stats.rms_height == pytest.approx(exact.rms_height, rel=1e-2), \
@@ -116,7 +118,7 @@ def test_partial_contact_estimate_is_the_face_slope(n):
     """
     sphere = 1.5 * RADIUS
     problem = wear_problem("homogeneous", (1.0,), n)
-    height = initial_face.crowned(n, RADIUS, sphere)
+    height = initial_face.crowned(problem.grid, sphere)
     estimator = HistoryEstimator(problem, height)
     contact = problem.contact(height)
     figures = estimator.figures(1e-12, height, contact.pressure, contact.approach)
@@ -141,7 +143,7 @@ def test_rim_layer_excess_fit():
 def test_history_of_a_resumed_run_is_the_same():
     """A resumed run builds its estimator from the stored initial face: same history."""
     problem = wear_problem(RODS, (1.0, 1.7), 32)
-    h0 = initial_face.tilted(32, RADIUS, 0.5 * CRITICAL_TILT)
+    h0 = initial_face.tilted(problem.grid, 0.5 * CRITICAL_TILT)
     stopped = run_in(problem, h0, dataclasses.replace(FAST, max_steps=4))
     done = run_in(wear_problem(RODS, (1.0, 1.7), 32), None, FAST, resume=stopped)
     straight = run_in(wear_problem(RODS, (1.0, 1.7), 32), h0, FAST)
@@ -161,9 +163,9 @@ def test_companion_run_gives_the_spatial_error(scene_file, tmp_path):
     from transient.scene import load_transient_scene
     from transient.spatial_error import spatial_error
 
-    scene, settings, initial = load_transient_scene(scene_file("runin", n=48))
+    scene, options, initial = load_transient_scene(scene_file("runin", n=48))
     problem = wear_problem(scene.geometry, (1.0, 10.0), 48)
-    result = run_in(problem, initial.height(48, RADIUS), FAST)
+    result = run_in(problem, initial.height(problem.grid), FAST)
     companion = spatial_error(scene, initial, FAST, result)
     assert companion.grid == 24 and companion.run.success, \
         f"companion on n = {companion.grid}: {companion.run.status}"
@@ -180,7 +182,7 @@ def test_companion_run_gives_the_spatial_error(scene_file, tmp_path):
     assert np.array_equal(back.history["rms_slope_spatial_error"], error), "round trip"
     with pytest.raises(ValueError, match="not the same run"):
         companion.attach(run_in(wear_problem(scene.geometry, (1.0, 10.0), 48),
-                                initial.height(48, RADIUS), dataclasses.replace(
+                                initial.height(problem.grid), dataclasses.replace(
                                     FAST, max_steps=2)))
 
 

@@ -7,7 +7,7 @@ import pytest
 from conftest import scene_text
 
 from steady.inclusions import MAX_FILL, MAX_RADIUS, Inclusions
-from steady.phases import realised_fill_factors, validate_labels
+from steady.labels import realised_fill_factors, validate_labels
 from steady.scene import parse_scene
 
 

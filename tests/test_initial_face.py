@@ -3,15 +3,20 @@
 import numpy as np
 import pytest
 
-from steady.grid import face_mask, pixel_centres
+from steady.outline import Circle
 from transient import initial_face
 
 RADIUS = 4e-3
 
 
+def grid(n, radius=RADIUS):
+    """The ``n x n`` grid over the disk of ``radius``."""
+    return Circle(radius).grid(n)
+
+
 @pytest.mark.parametrize("n", [15, 16])
 def test_flat_is_zero(n):
-    h = initial_face.flat(n, RADIUS)
+    h = initial_face.flat(grid(n))
     assert h.shape == (n, n) and not h.any(), "a flat face has zero height"
 
 
@@ -19,8 +24,8 @@ def test_flat_is_zero(n):
 @pytest.mark.parametrize("azimuth", [0.0, 0.9, -2.5])
 def test_tilted_is_a_plane_receding_towards_the_azimuth(n, azimuth):
     angle = 0.02
-    h = initial_face.tilted(n, RADIUS, angle, azimuth)
-    x = pixel_centres(n, RADIUS)
+    h = initial_face.tilted(grid(n), angle, azimuth)
+    x = grid(n).x
     X, Y = np.meshgrid(x, x, indexing="ij")
     # Least-squares plane through the field: slope tan(angle) along the azimuth.
     design = np.column_stack([X.ravel(), Y.ravel(), np.ones(n * n)])
@@ -29,7 +34,7 @@ def test_tilted_is_a_plane_receding_towards_the_azimuth(n, azimuth):
     assert np.isclose(np.arctan2(gy, gx), np.arctan2(np.sin(azimuth), np.cos(azimuth)),
                       atol=1e-12), "slope direction"
     assert np.isclose(c, np.tan(angle) * RADIUS, rtol=1e-12), "zero at the lowest rim point"
-    face = face_mask(n)
+    face = grid(n).mask
     assert h[face].min() >= 0, "pixel centres lie inside the disk: heights non-negative"
     assert h[face].max() <= 2 * RADIUS * np.tan(angle), "at most 2 a tan(angle)"
 
@@ -37,10 +42,10 @@ def test_tilted_is_a_plane_receding_towards_the_azimuth(n, azimuth):
 @pytest.mark.parametrize("n", [15, 16])
 def test_crowned_is_a_sphere_close_to_its_paraboloid(n):
     sphere = 0.08
-    h = initial_face.crowned(n, RADIUS, sphere)
-    x = pixel_centres(n, RADIUS)
+    h = initial_face.crowned(grid(n), sphere)
+    x = grid(n).x
     r2 = x[:, None] ** 2 + x[None, :] ** 2
-    face = face_mask(n)
+    face = grid(n).mask
     assert np.allclose((sphere - h[face]) ** 2 + r2[face], sphere**2, rtol=1e-12, atol=0), (
         "points on the sphere")
     # Exact sphere vs paraboloid: r^4 / (8 R^3) at most.
@@ -55,24 +60,25 @@ def test_from_array_and_file_round_trip(tmp_path):
     rng = np.random.default_rng(61023)
     values = rng.normal(scale=1e-6, size=(n, n))
     values[0, 0] = np.nan  # off the face: ignored
-    h = initial_face.from_array(values, n)
+    h = initial_face.from_array(values, grid(n))
     assert h is not values and np.array_equal(h, values, equal_nan=True), "a float copy"
     path = tmp_path / "face.npy"
     np.save(path, values)
-    assert np.array_equal(initial_face.from_file(path, n), values, equal_nan=True), "file"
+    assert np.array_equal(initial_face.from_file(grid(n), path), values, equal_nan=True), "file"
 
 
 @pytest.mark.parametrize("call, match", [
-    (lambda: initial_face.flat(1, RADIUS), "n"),
-    (lambda: initial_face.flat(8, -1.0), "radius"),
-    (lambda: initial_face.flat(8.5, RADIUS), "n"),
-    (lambda: initial_face.tilted(8, RADIUS, np.pi / 2), "angle"),
-    (lambda: initial_face.tilted(8, RADIUS, -0.1), "angle"),
-    (lambda: initial_face.tilted(8, RADIUS, 0.1, np.nan), "azimuth"),
-    (lambda: initial_face.crowned(8, RADIUS, 0.5 * RADIUS), "sphere_radius"),
-    (lambda: initial_face.crowned(8, RADIUS, np.inf), "sphere_radius"),
-    (lambda: initial_face.from_array(np.zeros((8, 7)), 8), "shape"),
-    (lambda: initial_face.from_array(np.full((8, 8), np.inf), 8), "finite"),
+    (lambda: initial_face.flat(grid(1)), "n = 1,"),
+    (lambda: initial_face.flat(grid(8, -1.0)), "radius"),
+    (lambda: initial_face.flat(grid(8.5)), "grid size n .* 8.5"),
+    (lambda: initial_face.flat(8), "grid"),
+    (lambda: initial_face.tilted(grid(8), np.pi / 2), "angle"),
+    (lambda: initial_face.tilted(grid(8), -0.1), "angle"),
+    (lambda: initial_face.tilted(grid(8), 0.1, np.nan), "azimuth"),
+    (lambda: initial_face.crowned(grid(8), 0.5 * RADIUS), "sphere_radius"),
+    (lambda: initial_face.crowned(grid(8), np.inf), "sphere_radius"),
+    (lambda: initial_face.from_array(np.zeros((8, 7)), grid(8)), "shape"),
+    (lambda: initial_face.from_array(np.full((8, 8), np.inf), grid(8)), "finite"),
 ])
 def test_bad_input_raises(call, match):
     with pytest.raises(ValueError, match=match):
@@ -83,4 +89,4 @@ def test_from_file_needs_npy(tmp_path):
     path = tmp_path / "face.txt"
     path.write_text("0")
     with pytest.raises(ValueError, match="npy"):
-        initial_face.from_file(path, 8)
+        initial_face.from_file(grid(8), path)

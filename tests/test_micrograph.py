@@ -308,26 +308,25 @@ def test_scene_builds_a_micrograph_map(skimage, grains_png, caplog):
     ('path = "grains.png", n_phases = 2, sigma = 1.0',
      "unknown key 'sigma' in [phases] map (kind 'micrograph') (allowed: cover, kind, "
      "min_speck, n_phases, offset, path, pixel_size, smoothing)"),
-    ('path = "grains.png", n_phases = 1', "n_phases must be an integer of at least 2, got 1"),
-    ('path = "grains.png", n_phases = 2.0', "n_phases must be an integer of at least 2, "
+    ('path = "grains.png", n_phases = 1', "[phases] map n_phases must be an integer >= 2, got 1"),
+    ('path = "grains.png", n_phases = 2.0', "[phases] map n_phases must be an integer >= 2, "
                                              "got 2.0"),
-    ('path = "grains.png", n_phases = 2, smoothing = -1.0', "smoothing must be a finite number "
-                                                           ">= 0 (Gaussian sigma, pixels), "
-                                                           "got -1.0"),
+    ('path = "grains.png", n_phases = 2, smoothing = -1.0', "[phases] map smoothing must be a "
+                                                           "number >= 0 (pixels), got -1.0"),
     ('path = "grains.png", n_phases = 2, smoothing = true', "smoothing must be"),
     ('path = "grains.png", n_phases = 2, min_speck = 2.5', "min_speck must be an integer >= 0 "
                                                           "(pixels), got 2.5"),
-    ('path = "grains.png", n_phases = 2, pixel_size = 0', "pixel_size must be a positive finite "
-                                                         "number (m), got 0"),
+    ('path = "grains.png", n_phases = 2, pixel_size = 0', "[phases] map pixel_size must be a "
+                                                         "number > 0 (m), got 0"),
     ('path = "grains.png", n_phases = 2, pixel_size = 5e-5, cover = "stretch"',
-     "cover must be one of ['crop', 'tile'], got 'stretch'"),
+     "[phases] map cover must be one of 'crop', 'tile', got 'stretch'"),
     ('path = "grains.png", n_phases = 2, pixel_size = 5e-5, offset = [1e-4]',
-     "offset must be a pair [x, y] of finite numbers (m), got [0.0001]"),
+     "[phases] map offset must be an [x, y] pair (m), got [0.0001]"),
     ('path = "grains.png", n_phases = 2', "it must be square"),
     ('path = "grains.png", n_phases = 2, pixel_size = 2e-5', "covers 4 mm x 3.2 mm"),
     ('path = "missing.png", n_phases = 2', "micrograph"),
     ('path = "s.toml", n_phases = 2', "must be a .png or .npy file"),
-    ('path = "", n_phases = 2', "path must be a non-empty string"),
+    ('path = "", n_phases = 2', "[phases] map path must be a file name, got ''"),
 ])
 def test_bad_micrograph_keys_are_one_line_errors(skimage, grains_png, keys, fragment):
     path, _ = grains_png

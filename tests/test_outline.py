@@ -6,19 +6,21 @@ import numpy as np
 import pytest
 from conftest import OUTLINES, RADIUS, scene_text
 
-from steady.grid import face_mask, pixel_centres
-from steady.halfspace import HalfSpace
+from steady.array_files import read_face_mask
 from steady.outline import (
+    UNIT_DISK,
     Annulus,
     Circle,
     Ellipse,
     FaceGrid,
     MaskOutline,
     Rectangle,
+    as_grid,
     as_outline,
     outline_from_table,
 )
-from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi, read_face_mask
+from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi
+from steady.problem import FacePhases, Problem
 from steady.scene import parse_scene
 from steady.solution import solve
 
@@ -27,9 +29,19 @@ from steady.solution import solve
 def test_circle_grid_is_the_disk_grid(n):
     grid = Circle(RADIUS).grid(n)
     assert grid.shape == (n, n), f"shape {grid.shape}"
-    assert np.array_equal(grid.mask, face_mask(n)), "the circle's mask is steady.grid's"
-    assert np.array_equal(grid.x, pixel_centres(n, RADIUS)), "pixel centres bit for bit"
-    assert np.array_equal(grid.unit_y, pixel_centres(n, 1.0)), "unit centres bit for bit"
+    # Pixel centres strictly inside the disk, tested exactly in integers:
+    # (2i + 1 - n)^2 + (2j + 1 - n)^2 < n^2; the same mask for every radius.
+    c = 2 * np.arange(n) + 1 - n
+    disk = c[:, None] ** 2 + c[None, :] ** 2 < n * n
+    assert np.array_equal(grid.mask, disk), "the circle's mask is the exact disk test"
+    assert np.array_equal(UNIT_DISK.grid(n).mask, disk), "the unit disk's mask too"
+    assert np.array_equal(as_grid(n).mask, disk), "and that of a bare n"
+    # Centres -a + (i + 1/2) h, h = 2a / n, bit for bit.
+    centres = -RADIUS + (np.arange(n) + 0.5) * (2.0 * RADIUS / n)
+    unit = -1.0 + (np.arange(n) + 0.5) * (2.0 / n)
+    assert np.array_equal(grid.x, centres), "pixel centres bit for bit"
+    assert np.array_equal(grid.unit_y, unit), "unit centres bit for bit"
+    assert np.array_equal(UNIT_DISK.grid(n).x, unit), "the unit disk's centres are the units"
     assert grid.h == 2 * RADIUS / n, f"pixel size {grid.h}"
 
 
@@ -80,7 +92,7 @@ def test_annulus_mask_and_resolution():
     ring = Annulus(2e-3, 4e-3)
     grid = ring.grid(64)
     r = np.hypot(grid.x[:, None], grid.y[None, :])
-    assert np.array_equal(grid.mask, (r < 4e-3) & (r > 2e-3) & face_mask(64)), "ring mask"
+    assert np.array_equal(grid.mask, (r < 4e-3) & (r > 2e-3) & as_grid(64).mask), "ring mask"
     thin = Annulus(3.6e-3, 4e-3)            # ring 0.1 of the outer radius
     assert thin.min_grid() == 60, f"three pixels across the ring: {thin.min_grid()}"
     with pytest.raises(ValueError, match="grid too coarse for the annulus face.*n = 40, the "
@@ -148,7 +160,7 @@ def test_outline_from_table_and_errors():
         ({"shape": "rectangle", "width": 1.0, "length": 2.0, "radius": 1.0},
          "unknown key 'radius' in [punch] (shape 'rectangle'"),
         ({"shape": "rectangle", "width": -1.0, "length": 2.0},
-         "[punch] width must be a positive finite number (m), got -1.0"),
+         "[punch] width must be a number > 0 (m), got -1.0"),
         ({"shape": "annulus", "inner_radius": 2.0, "outer_radius": 1.0},
          "inner_radius must be smaller than outer_radius"),
         ({"shape": "mask", "path": "nowhere.npy", "pixel_size": 1e-3}, "does not exist"),
@@ -166,7 +178,8 @@ def test_scene_files_with_outlines(tmp_path):
     punch = {"shape": "rectangle", "width": 0.004, "length": 0.012}
     text = scene_text("steady", n=96, punch=punch)
     scene = parse_scene(text, tmp_path)
-    assert scene.outline == Rectangle(0.004, 0.012) and scene.radius is None, "outline parsed"
+    assert scene.outline == Rectangle(0.004, 0.012), "outline parsed"
+    assert "radius" not in scene.outline.parameters(), "a rectangle has no radius"
     labels = scene.phase_labels()
     assert labels.shape == (32, 96), f"labels of shape {labels.shape}"
     counts = np.bincount(labels.ravel() + 1)
@@ -221,8 +234,7 @@ def test_rectangle_steady_face_transposes():
     for outline in (Rectangle(2e-3, 6e-3), Rectangle(6e-3, 2e-3)):
         grid = outline.grid(n)
         labels = Homogeneous().labels(grid)
-        res = solve(HalfSpace(grid.shape, grid.h, E_star), labels, [1e-13], force,
-                    outline=outline)
+        res = solve(Problem(FacePhases(grid, labels, 1), [1e-13], force, E_star))
         faces.append(res)
     a, b = faces
     assert np.allclose(a.face, b.face.T, rtol=1e-12, atol=0), "faces transpose"

@@ -5,17 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from steady.grid import face_mask
-from steady.phases import (
-    ArrayMap,
-    Homogeneous,
-    Rods,
-    Voronoi,
-    load_phase_map,
-    read_npy,
-    realised_fill_factors,
-    validate_labels,
-)
+from steady.array_files import read_npy
+from steady.labels import realised_fill_factors, validate_labels
+from steady.outline import as_grid
+from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi, load_phase_map
 
 FIVE_RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
 
@@ -23,7 +16,7 @@ FIVE_RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)),
 @pytest.mark.parametrize("n", [8, 33, 64])
 def test_homogeneous_labels_follow_face_mask(n):
     labels = Homogeneous().labels(n)
-    on_face = face_mask(n)
+    on_face = as_grid(n).mask
     assert labels.shape == (n, n), f"shape {labels.shape}"
     assert np.all(labels[on_face] == 0), "face pixels must be phase 0"
     assert np.all(labels[~on_face] == -1), "pixels off the face must be -1"
@@ -83,10 +76,10 @@ def test_array_map_replication(k):
     base = Voronoi(25, (0.4, 0.6), 9151).labels(n0)
     geo = ArrayMap(base)
     fine = geo.labels(k * n0)
-    on_face = face_mask(k * n0)
+    on_face = as_grid(k * n0).mask
     assert np.all(fine[~on_face] == -1), "off-face pixels must be -1"
     assert np.all(fine[on_face] >= 0), "every face pixel of the refined grid must be labelled"
-    coarse_mask = face_mask(n0)
+    coarse_mask = as_grid(n0).mask
     replicated = np.kron(base, np.ones((k, k), dtype=int))
     both = on_face & np.kron(coarse_mask, np.ones((k, k), dtype=bool))
     assert np.array_equal(fine[both], replicated[both]), "replication must keep the labels"
@@ -176,11 +169,11 @@ def test_labels_validation():
     inside = labels.copy()
     inside[16, 16] = -1
     with pytest.raises(ValueError, match="label -1 found on the face"):
-        validate_labels(inside, 2, face_mask=face_mask(32))
+        validate_labels(inside, 2, face_mask=as_grid(32).mask)
     # Without a mask the face is where the labels say: the hole is off it.
     assert validate_labels(inside, 2).sum() == (labels >= 0).sum() - 1, \
         "without a mask the labels define the face"
-    counts = validate_labels(labels, 2, face_mask=face_mask(32))
+    counts = validate_labels(labels, 2, face_mask=as_grid(32).mask)
     assert counts.tolist() == np.bincount(labels[labels >= 0]).tolist(), \
         f"counts with the caller's mask: {counts}"
     with pytest.raises(ValueError, match="phase map array: phase label -1 found on the face"):
@@ -271,7 +264,7 @@ def test_hostile_png_maps(tmp_path):
 
 def test_huge_label_is_refused_before_counting():
     """A label of 10**12 on the face would make bincount allocate terabytes."""
-    labels = np.where(face_mask(8), 0, -1)
+    labels = np.where(as_grid(8).mask, 0, -1)
     labels[4, 4] = 10 ** 12
     with pytest.raises(ValueError, match="cannot all have a pixel on a face of 52 pixels"):
         ArrayMap(labels)

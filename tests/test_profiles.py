@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from conftest import problem
 
 from steady import reference
-from steady.grid import face_mask, pixel_size, polar
-from steady.halfspace import HalfSpace
+from steady.outline import Circle
 from steady.phases import Homogeneous, Rods
 from steady.profiles import cross_section, differential_profile, ring_average
 from steady.solution import solve
@@ -14,15 +14,15 @@ RADIUS = 0.01  # m
 
 
 def _face(n, geometry, k):
-    hs = HalfSpace(n, pixel_size(n, RADIUS), 1.3e6)
-    return solve(hs, geometry.labels(n), k, 35.0)
+    return solve(problem(geometry, k, n=n, outline=RADIUS, force=35.0, E_star=1.3e6))
 
 
 @pytest.mark.parametrize("n", [63, 64])
 def test_cross_section_of_a_linear_field_is_exact(n):
-    r, theta = polar(n, RADIUS)
+    grid = Circle(RADIUS).grid(n)
+    r, theta = grid.polar()
     x = r * np.cos(theta)
-    field = np.where(face_mask(n), 3.0 * x + 1.0, np.nan)
+    field = np.where(grid.mask, 3.0 * x + 1.0, np.nan)
     d, v = cross_section(field, RADIUS, (-0.005, -0.002), (0.006, 0.003), 41)
     xs = np.linspace(-0.005, 0.006, 41)
     assert np.allclose(d[-1], np.hypot(0.011, 0.005), rtol=1e-14), f"length {d[-1]}"
@@ -31,7 +31,7 @@ def test_cross_section_of_a_linear_field_is_exact(n):
 
 def test_cross_section_nan_off_face_and_defined_to_rim():
     n = 64
-    field = np.where(face_mask(n), 1.0, np.nan)
+    field = np.where(Circle(RADIUS).grid(n).mask, 1.0, np.nan)
     d, v = cross_section(field, RADIUS, (-1.2 * RADIUS, 0.0), (1.2 * RADIUS, 0.0), 241)
     x = np.linspace(-1.2, 1.2, 241)
     assert np.all(np.isnan(v[np.abs(x) > 1.0 + 1e-12])), "NaN beyond the rim"
@@ -70,7 +70,11 @@ def test_bad_arguments():
     field = np.zeros((16, 16))
     with pytest.raises(ValueError, match="n_points must be an integer >= 2, got 1"):
         cross_section(field, RADIUS, (0, 0), (0.001, 0), 1)
-    with pytest.raises(ValueError, match="radius must be positive"):
+    with pytest.raises(ValueError, match=r"radius must be a positive finite number \(m\), "
+                                         r"got -1.0"):
         ring_average(field, -1.0, 4)
-    with pytest.raises(ValueError, match="square 2-d array"):
+    with pytest.raises(ValueError, match=r"field of shape \(16, 17\) is not on a grid of the "
+                                         r"circle face"):
+        ring_average(np.zeros((16, 17)), RADIUS, 4)
+    with pytest.raises(ValueError, match=r"grid too coarse for the circle face .*: n = 5"):
         ring_average(np.zeros((4, 5)), RADIUS, 4)

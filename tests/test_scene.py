@@ -17,9 +17,9 @@ BASE = scene_text("parser")
 
 def test_parse_base_scene(tmp_path):
     scene = parse_scene(BASE, tmp_path)
-    assert scene.radius == 0.004 and scene.normal_force == 10.0, f"{scene}"
+    assert scene.outline.radius == 0.004 and scene.normal_force == 10.0, f"{scene}"
     assert scene.E_star == 1.3e6 and scene.n == 64, f"{scene}"
-    assert scene.wear_coefficients == (1.0e-9, 1.7e-9), f"{scene.wear_coefficients}"
+    assert scene.wear.coefficients == (1.0e-9, 1.7e-9), f"{scene.wear.coefficients}"
     assert scene.geometry == Voronoi(100, (0.5, 0.5), 2024), f"{scene.geometry}"
     assert scene.text == BASE, "raw text must be kept"
     assert dict(scene.extra) == {}, f"extra {scene.extra}"
@@ -29,7 +29,7 @@ def test_exponent_defaults_to_one(tmp_path):
     text = scene_text("parser", exponent=None)
     assert "exponent" not in text, f"test setup: exponent still in {text!r}"
     scene = parse_scene(text, tmp_path)
-    assert scene.exponent == 1.0, f"exponent {scene.exponent}"
+    assert scene.wear.exponent == 1.0, f"exponent {scene.wear.exponent}"
 
 
 def test_rods_in_metres(tmp_path):
@@ -83,7 +83,8 @@ def test_run_in_sections_are_ignored_without_a_parser(tmp_path):
     assert dict(scene.extra) == {}, f"nothing parsed: {scene.extra}"
     plain = parse_scene(BASE, tmp_path)
     assert plain.ignored_sections == (), f"no run-in section: {plain.ignored_sections}"
-    assert (scene.radius, scene.n, scene.geometry) == (plain.radius, plain.n, plain.geometry), \
+    assert ((scene.outline.radius, scene.n, scene.geometry)
+            == (plain.outline.radius, plain.n, plain.geometry)), \
         "the run-in sections must not change the steady scene"
     # With a parser for one of them, only the other is ignored.
     scene = parse_scene(text, tmp_path, extra_sections={"initial_face": lambda t, d: t["kind"]})
@@ -103,29 +104,31 @@ def test_shipped_run_in_scene_loads_for_steady():
 
 @pytest.mark.parametrize("old, new, fragment", [
     ("radius = 0.004", "radius = -0.004",
-     "[punch] radius must be a positive finite number (m), got -0.004"),
-    ("radius = 0.004", 'radius = "4 mm"', "[punch] radius must be a number (m), got '4 mm'"),
+     "[punch] radius must be a number > 0 (m), got -0.004"),
+    ("radius = 0.004", 'radius = "4 mm"', "[punch] radius must be a number > 0 (m), got '4 mm'"),
     ("normal_force = 10.0", "normal_force = 0",
-     "[load] normal_force must be a positive finite number (N), got 0"),
+     "[load] normal_force must be a number > 0 (N), got 0"),
     ("normal_force = 10.0", "normal_force = nan", "got nan"),
     ("E_star = 1300000.0", "E_star = true",
-     "[counterbody] E_star must be a number (Pa), got True"),
-    ("n = 64", "n = 64.0", "[grid] n must be an integer, got 64.0"),
+     "[counterbody] E_star must be a number > 0 (Pa), got True"),
+    ("n = 64", "n = 64.0", "[grid] n must be an integer >= 2, got 64.0"),
     ("n = 64", "n = 10",
      "[grid] n: grid too coarse for 100 Voronoi seeds: n = 10, the minimum is n = 20"),
     ("[1e-09, 1.7e-09]", "[1e-09, -1.7e-09]",
-     "[wear] coefficients must be a positive finite number (1/Pa), got -1.7e-09"),
+     "[wear] coefficients must be an array of numbers each > 0 (1/Pa), got [1e-09, -1.7e-09]"),
     ("[1e-09, 1.7e-09]", "[1e-09]",
      "[wear] coefficients has 1 values [1e-09] but the phase map has 2 phases"),
-    ("[1e-09, 1.7e-09]", "1e-09", "[wear] coefficients must be an array, got 1e-09"),
-    ("exponent = 1.0", "exponent = -2.0",
-     "[wear] exponent must be a positive finite number (dimensionless), got -2.0"),
+    ("[1e-09, 1.7e-09]", "1e-09",
+     "[wear] coefficients must be an array of numbers each > 0 (1/Pa), got 1e-09"),
+    ("exponent = 1.0", "exponent = -2.0", "[wear] exponent must be a number > 0 (1), got -2.0"),
     ("[0.5, 0.5]", "[0.5, 0.6]", "fill factors must sum to 1, got [0.5, 0.6]"),
-    ("[0.5, 0.5]", "[1.5, -0.5]", "[phases] map fill_factors must be a positive finite "
-                                  "number (dimensionless), got -0.5"),
-    ("[0.5, 0.5]", "[1.2, 0.3]", "fill factors must each lie in (0, 1), got [1.2, 0.3]"),
-    ("[0.5, 0.5]", "[1.0, 0.0]", "got 0.0"),
-    ("seed = 2024", "seed = -3", "[phases] map seed must be at least 0, got -3"),
+    ("[0.5, 0.5]", "[1.5, -0.5]", "[phases] map fill_factors must be an array of numbers each "
+                                  "in (0, 1) (1), got [1.5, -0.5]"),
+    ("[0.5, 0.5]", "[1.2, 0.3]", "[phases] map fill_factors must be an array of numbers each "
+                                 "in (0, 1) (1), got [1.2, 0.3]"),
+    ("[0.5, 0.5]", "[1.0, 0.0]", "fill_factors must be an array of numbers each in (0, 1) (1), "
+                                 "got [1.0, 0.0]"),
+    ("seed = 2024", "seed = -3", "[phases] map seed must be an integer >= 0, got -3"),
     ('kind = "voronoi"', 'kind = "hexagons"',
      "kind must be one of ['file', 'homogeneous', 'inclusions', 'micrograph', 'rods', "
      "'voronoi'], got 'hexagons'"),

@@ -4,21 +4,25 @@ import math
 
 import numpy as np
 import pytest
+from conftest import E_STAR, FORCE, RADIUS, problem
 
 from steady import reference
-from steady.grid import face_mask, pixel_size, polar
-from steady.halfspace import HalfSpace
+from steady.outline import Circle
 from steady.phases import Homogeneous, Rods, Voronoi
-from steady.pressures import phase_pressures, pressure_field
+from steady.pressures import phase_pressures
+from steady.problem import FacePhases, Problem
 from steady.solution import solve
-
-RADIUS = 4e-3  # m
-FORCE = 10.0  # N
-E_STAR = 1.3e6  # Pa
+from steady.wear import PowerLaw, pressure_field
 
 
-def halfspace(n, radius=RADIUS, E_star=E_STAR):
-    return HalfSpace(n, pixel_size(n, radius), E_star)
+def grid(n):
+    """The ``n x n`` grid over the punch of radius :data:`RADIUS`."""
+    return Circle(RADIUS).grid(n)
+
+
+def steady(labels, wear, force=FORCE, E_star=E_STAR):
+    """Steady solve of labels on the punch's grid (``n`` their side), a law or coefficients."""
+    return solve(problem(labels, wear, force=force, E_star=E_star))
 
 
 def loglog_order(ns, errors):
@@ -33,10 +37,10 @@ REFINEMENT = [32, 45, 64, 91, 128, 181, 256]
 def test_homogeneous_face_converges_to_eq10():
     errors = []
     for n in REFINEMENT:
-        res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
-        r, _ = polar(n, RADIUS)
+        res = steady(Homogeneous().labels(n), [1e-13])
+        r, _ = grid(n).polar()
         exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
-        on_face = face_mask(n)
+        on_face = grid(n).mask
         relief = exact[on_face].max() - exact[on_face].min()
         errors.append(np.abs(res.face - exact)[on_face].max() / relief)
     assert np.all(np.diff(errors) < 0), f"max face error must decrease: {errors}"
@@ -54,7 +58,7 @@ def test_homogeneous_rms_slope_converges_to_quadrature():
     assert abs(target - 1.0) < 1e-12, f"quadrature reference {target} should be 1"
     gaps = []
     for n in REFINEMENT:
-        res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
+        res = steady(Homogeneous().labels(n), [1e-13])
         gaps.append(target - res.normalised_rms_slope)
     assert np.all(np.array(gaps) > 0), f"the grid misses slope at the rim: gaps {gaps}"
     assert np.all(np.diff(gaps) < 0), f"approach to 1 must be monotone: gaps {gaps}"
@@ -69,16 +73,17 @@ def test_homogeneous_rms_slope_converges_to_quadrature():
 def test_load_and_phase_pressures(n):
     geo = Voronoi(400, (0.25, 0.35, 0.4), 6113)
     k = np.array([1.0e-13, 4.0e-13, 2.5e-14])
-    res = solve(halfspace(n), geo.labels(n), k, FORCE)
-    h = pixel_size(n, RADIUS)
+    res = steady(geo.labels(n), k)
+    h = grid(n).h
     load = res.pressure.sum() * h * h
     assert math.isclose(load, FORCE, rel_tol=1e-13), f"load {load} N vs {FORCE} N"
     ratio = res.phase_pressures[:, None] / res.phase_pressures[None, :]
     assert np.allclose(ratio, k[None, :] / k[:, None], rtol=1e-13), \
         f"p_i / p_j must be k_j / k_i: {ratio}"
-    assert np.all(res.pressure[~face_mask(n)] == 0), "no pressure off the face"
-    assert np.all(np.isnan(res.face[~face_mask(n)])), "face is NaN off the face"
-    assert np.all(np.isfinite(res.slope[face_mask(n)])), "slope finite on the face"
+    on_face = grid(n).mask
+    assert np.all(res.pressure[~on_face] == 0), "no pressure off the face"
+    assert np.all(np.isnan(res.face[~on_face])), "face is NaN off the face"
+    assert np.all(np.isfinite(res.slope[on_face])), "slope finite on the face"
 
 
 @pytest.mark.parametrize("n", [63, 64])
@@ -86,9 +91,9 @@ def test_pressure_field_is_the_solver_pressure(n):
     """Eq. 7 is written once: the field, per-phase values and counts of the solve."""
     labels = Voronoi(400, (0.25, 0.35, 0.4), 6113).labels(n)
     k = np.array([1.0e-13, 4.0e-13, 2.5e-14])
-    res = solve(halfspace(n), labels, k, FORCE, exponent=2.0)
-    h = pixel_size(n, RADIUS)
-    field, p, counts = pressure_field(labels, k, FORCE, h * h, exponent=2.0)
+    res = steady(labels, PowerLaw(k, exponent=2.0))
+    h = grid(n).h
+    field, p, counts = pressure_field(labels, PowerLaw(k, exponent=2.0), FORCE, h * h)
     assert np.array_equal(field, res.pressure), "pressure field differs from the solve"
     assert np.array_equal(p, res.phase_pressures), "phase pressures differ from the solve"
     assert np.array_equal(counts / counts.sum(), res.fill_factors), "pixel counts"
@@ -104,29 +109,28 @@ def test_pressure_field_is_the_solver_pressure(n):
 def test_power_law_wear(m):
     n = 48
     k = np.array([2.0e-13, 1.0e-12])
-    res = solve(halfspace(n), Voronoi(100, (0.6, 0.4), 7211).labels(n), k, FORCE, exponent=m)
+    res = steady(Voronoi(100, (0.6, 0.4), 7211).labels(n), PowerLaw(k, exponent=m))
     rate = k * res.phase_pressures**m
     assert np.allclose(rate, rate[0], rtol=1e-13), f"k_i p_i^m must be equal: {rate}"
     expected = (k[1] / k[0]) ** (1 / m)
     assert math.isclose(res.phase_pressures[0] / res.phase_pressures[1], expected,
                         rel_tol=1e-13), f"p_0/p_1 vs (k_1/k_0)^(1/m) = {expected}"
-    load = res.pressure.sum() * pixel_size(n, RADIUS) ** 2
+    load = res.pressure.sum() * grid(n).h ** 2
     assert math.isclose(load, FORCE, rel_tol=1e-13), f"load {load} N"
 
 
 @pytest.mark.parametrize("n", [65, 96])
 def test_swapping_phases_and_coefficients_gives_the_same_face(n):
     labels = Voronoi(400, (0.3, 0.7), 4409).labels(n)
-    hs = halfspace(n)
     swapped = np.where(labels >= 0, 1 - labels, -1)
-    a = solve(hs, labels, [1e-13, 5e-13], FORCE)
-    b = solve(hs, swapped, [5e-13, 1e-13], FORCE)
+    a = steady(labels, [1e-13, 5e-13])
+    b = steady(swapped, [5e-13, 1e-13])
     assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "relabelling changes nothing"
     # The paper's symmetry slope(rho_2, k2/k1) = slope(1 - rho_2, k1/k2): phase 2
     # of the second description is the first one's phase 1 (fill 1 - rho_2) and
     # the ratio is inverted; the physical punch, hence the face, is the same.
     rho_2 = a.fill_factors[1]
-    c = solve(hs, swapped, [1.0, 1.0 / 5.0], FORCE)  # k2/k1 = 5 -> k1/k2 = 1/5
+    c = steady(swapped, [1.0, 1.0 / 5.0])  # k2/k1 = 5 -> k1/k2 = 1/5
     assert math.isclose(c.fill_factors[1], 1 - rho_2, rel_tol=1e-12), "fill factor 1 - rho_2"
     assert np.allclose(a.face, c.face, rtol=1e-12, equal_nan=True), "same punch, same face"
     assert math.isclose(a.normalised_rms_slope, c.normalised_rms_slope, rel_tol=1e-12), \
@@ -137,9 +141,8 @@ def test_splitting_a_phase_with_equal_k_changes_nothing():
     n = 80
     three = Voronoi(400, (0.3, 0.3, 0.4), 8087).labels(n)
     two = np.where(three == 2, 0, three)
-    hs = halfspace(n)
-    a = solve(hs, two, [1e-13, 7e-13], FORCE)
-    b = solve(hs, three, [1e-13, 7e-13, 1e-13], FORCE)
+    a = steady(two, [1e-13, 7e-13])
+    b = steady(three, [1e-13, 7e-13, 1e-13])
     assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "split phase changed face"
     assert math.isclose(a.rms_slope, b.rms_slope, rel_tol=1e-12), "split phase changed rms"
     assert math.isclose(b.fill_factors[0] + b.fill_factors[2], a.fill_factors[0],
@@ -149,15 +152,15 @@ def test_splitting_a_phase_with_equal_k_changes_nothing():
 def test_normalised_results_independent_of_load_and_modulus():
     n = 72
     labels = Voronoi(400, (0.5, 0.5), 5303).labels(n)
-    a = solve(halfspace(n), labels, [1e-13, 1e-12], FORCE)
-    b = solve(halfspace(n, E_star=0.21 * E_STAR), labels, [1e-13, 1e-12], 3.7 * FORCE)
+    a = steady(labels, [1e-13, 1e-12])
+    b = steady(labels, [1e-13, 1e-12], force=3.7 * FORCE, E_star=0.21 * E_STAR)
     assert math.isclose(a.normalised_rms_slope, b.normalised_rms_slope, rel_tol=1e-12), \
         f"rms/grad_f0 {a.normalised_rms_slope} vs {b.normalised_rms_slope}"
     assert np.allclose(a.normalised_face, b.normalised_face, rtol=1e-12, equal_nan=True), \
         "normalised face must not depend on F_N and E*"
     assert not math.isclose(a.rms_slope, b.rms_slope, rel_tol=1e-3), "raw rms must scale"
     # Homogeneous: the normalised face is E(r/a) (eq. 10), pi/2 on the axis.
-    hom = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
+    hom = steady(Homogeneous().labels(n), [1e-13])
     centre = hom.normalised_face[n // 2, n // 2]
     assert abs(centre - math.pi / 2) < 0.02, f"normalised face near the axis {centre} vs pi/2"
 
@@ -172,10 +175,9 @@ def test_pillars_limit():
     # spanning 51 pixels (a homogeneous disk at n = 51 gives 0.96).
     n = 256
     labels = Rods(((0.0, 0.0),), (0.2,)).labels(n)
-    hs = halfspace(n)
     values = []
     for ratio in (1e-1, 1e-2, 1e-4):
-        res = solve(hs, labels, [1.0, ratio], FORCE)
+        res = steady(labels, [1.0, ratio])
         rho_2 = res.fill_factors[1]
         hard = np.sqrt(np.mean(res.slope[labels == 1] ** 2)) / res.reference_slope
         values.append(hard * rho_2)
@@ -200,9 +202,8 @@ def test_plain_grid_scale_independence_at_equal_resolution():
     seeds = (3101, 3102, 3103, 3104, 3105, 3106)
     means, sems = [], []
     for n_seeds, n in ((1600, 160), (6400, 320)):
-        hs = halfspace(n)
-        values = [solve(hs, Voronoi(n_seeds, (0.5, 0.5), s).labels(n), [1.0, 10.0],
-                        FORCE).normalised_rms_slope for s in seeds]
+        values = [steady(Voronoi(n_seeds, (0.5, 0.5), s).labels(n), [1.0, 10.0])
+                  .normalised_rms_slope for s in seeds]
         means.append(np.mean(values))
         sems.append(np.std(values, ddof=1) / math.sqrt(len(values)))
     gap = abs(means[1] - means[0])
@@ -211,8 +212,8 @@ def test_plain_grid_scale_independence_at_equal_resolution():
 
 def test_plain_grid_rms_of_fine_grains_grows_under_refinement():
     # 40^2 seeds: measured 1.262 (n=80), 1.392 (n=160), 1.484 (n=320), mean of 6.
-    values = [np.mean([solve(halfspace(n), Voronoi(1600, (0.5, 0.5), s).labels(n),
-                             [1.0, 10.0], FORCE).normalised_rms_slope for s in (3101, 3102)])
+    values = [np.mean([steady(Voronoi(1600, (0.5, 0.5), s).labels(n), [1.0, 10.0])
+                       .normalised_rms_slope for s in (3101, 3102)])
               for n in (80, 160, 320)]
     assert np.all(np.diff(values) > 0), f"rms must grow with n: {values}"
 
@@ -224,9 +225,11 @@ def test_plain_grid_rms_of_fine_grains_grows_under_refinement():
     (dict(wear_coefficients=[1e-13, 0.0]), "got [1e-13, 0.0]"),
     (dict(wear_coefficients=[1e-13, -2e-13]), "got [1e-13, -2e-13]"),
     (dict(wear_coefficients=[1e-13, math.nan]), "got [1e-13, nan]"),
-    (dict(wear_coefficients=[1e-13]), "one wear coefficient per phase (2), got [1e-13]"),
-    (dict(wear_coefficients=[1e-13] * 3), "one wear coefficient per phase (2)"),
-    (dict(exponent=0.0), "exponent must be a positive finite number"),
+    (dict(wear_coefficients=[1e-13]),
+     "is for 1 phase(s) (Archard's law dw/ds = k p, k = [1e-13] 1/Pa), the phase map has 2"),
+    (dict(wear_coefficients=[1e-13] * 3), "is for 3 phase(s) (Archard's law dw/ds = k p, "
+     "k = [1e-13, 1e-13, 1e-13] 1/Pa), the phase map has 2"),
+    (dict(exponent=0.0), "exponent must be positive and finite, got 0.0"),
     (dict(exponent=math.nan), "got nan"),
 ])
 def test_bad_input(kwargs, fragment):
@@ -235,8 +238,8 @@ def test_bad_input(kwargs, fragment):
     args.update(kwargs)
     labels = Rods(((0.0, 0.0),), (0.5,)).labels(n)
     with pytest.raises(ValueError) as err:
-        solve(halfspace(n), labels, args["wear_coefficients"], args["normal_force"],
-              exponent=args["exponent"])
+        solve(problem(labels, PowerLaw(args["wear_coefficients"], exponent=args["exponent"]),
+                      force=args["normal_force"]))
     assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
 
 
@@ -244,9 +247,9 @@ def test_bad_labels():
     n = 32
     labels = Rods(((0.0, 0.0),), (0.5,)).labels(n)
     with pytest.raises(ValueError, match="phase 1 has no pixel"):
-        solve(halfspace(n), np.where(labels == 1, 2, labels), [1e-13] * 3, FORCE)
+        steady(np.where(labels == 1, 2, labels), [1e-13] * 3)
     with pytest.raises(ValueError, match=r"shape \(32, 32\)"):
-        solve(halfspace(n), labels[:-1], [1e-13] * 2, FORCE)
+        solve(Problem(FacePhases(grid(n), labels[:-1], 2), [1e-13] * 2, FORCE, E_STAR))
 
 
 @pytest.mark.slow
@@ -256,10 +259,10 @@ def test_homogeneous_convergence_continues_on_fine_grids():
     ns = [256, 362, 512, 724, 1024]
     errors, gaps = [], []
     for n in ns:
-        res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
-        r, _ = polar(n, RADIUS)
+        res = steady(Homogeneous().labels(n), [1e-13])
+        r, _ = grid(n).polar()
         exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
-        on_face = face_mask(n)
+        on_face = grid(n).mask
         errors.append(np.abs(res.face - exact)[on_face].max() / np.ptp(exact[on_face]))
         gaps.append(reference.cylinder_rms_slope() - res.normalised_rms_slope)
     assert np.all(np.diff(errors) < 0), f"face errors must decrease: {errors}"
@@ -287,7 +290,7 @@ def test_homogeneous_rms_height_converges_to_eq10():
     ns = [63, 64, 127, 128, 255, 256]
     errors = []
     for n in ns:
-        res = solve(halfspace(n), Homogeneous().labels(n), [1e-13], FORCE)
+        res = steady(Homogeneous().labels(n), [1e-13])
         errors.append(abs(res.normalised_rms_height / exact - 1))
     assert max(errors[-2:]) < 5e-4, f"n = 255, 256: errors {errors[-2:]}"
     assert loglog_order(ns, errors) > 1.2, f"rms height errors {errors} do not fall"

@@ -21,8 +21,10 @@ import functools
 import numpy as np
 import pytest
 import scipy.linalg
-from conftest import FORCE, halfspace, wear_problem
+from conftest import FORCE, GEOMETRIES, K1, problem
 
+from steady.outline import Circle
+from steady.wear import PowerLaw
 from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
 from transient.stepping import ESDIRK3, SCHEMES, ExplicitEuler, StepState, get_scheme
@@ -33,8 +35,8 @@ DISTANCE = 0.5     # s*, end of the compared run-in (spread still ~0.3 there)
 
 def make_problem(n, ratio, *, exponent=1.0, rtol=1e-13):
     """The 9-seed Voronoi map (fits n = 12) with wear ratio ``ratio``."""
-    return wear_problem("voronoi_small", (1.0, ratio), n, exponent=exponent,
-                        contact_rtol=rtol)
+    wear = PowerLaw([K1 * r for r in (1.0, ratio)], exponent=exponent)
+    return WearProblem(problem(GEOMETRIES["voronoi_small"], wear, n=n), contact_rtol=rtol)
 
 
 def uniform_pressure_face(problem):
@@ -213,9 +215,9 @@ def test_unknown_scheme_is_named():
 
 @pytest.mark.parametrize("bad", [0.0, -1e-13, np.nan, np.inf])
 def test_bad_wear_coefficient_is_named(bad):
-    labels = np.zeros((8, 8), dtype=int)
+    labels = np.where(Circle(4e-3).grid(8).mask, 0, -1)
     with pytest.raises(ValueError, match="wear coefficients must be positive") as err:
-        WearProblem(halfspace(8), labels, [bad], FORCE, 4e-3)
+        WearProblem(problem(labels, [bad], outline=4e-3, force=FORCE))
     assert repr(float(bad)) in str(err.value), f"bad value not named: {err.value}"
 
 

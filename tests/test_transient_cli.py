@@ -82,7 +82,7 @@ def test_existing_output_needs_force_or_resume(tmp_path, write_scene):
 @pytest.mark.parametrize("keys,match", [
     ({"bogus": 1}, "unknown key 'bogus'"),
     ({"scheme": "rk4"}, "unknown scheme 'rk4'"),
-    ({"tol": -1.0}, "tol must be a positive"),
+    ({"tol": -1.0}, "[transient] tol must be a number > 0 (f*), got -1.0"),
 ])
 def test_bad_transient_section(tmp_path, scene_file, keys, match):
     scene = scene_file("runin", transient=keys)
@@ -95,7 +95,8 @@ def test_bad_transient_section(tmp_path, scene_file, keys, match):
 def test_bad_initial_face_section(tmp_path, scene_file):
     scene = scene_file("runin", initial_face={"kind": "tilted", "angle": 2.0})
     proc = cli(scene, "-o", tmp_path / "run.h5", cwd=tmp_path)
-    assert proc.returncode == 2 and "angle must lie in [0, pi/2)" in proc.stderr, proc.stderr
+    assert proc.returncode == 2 and "angle must be a number in [0, 1.5708) (rad), got 2.0" \
+        in proc.stderr, proc.stderr
     assert "[initial_face]" in proc.stderr, f"section not named: {proc.stderr!r}"
 
 
@@ -112,7 +113,7 @@ def test_bad_command_line(tmp_path):
 
 def test_usage_names_the_command_as_typed(tmp_path, monkeypatch):
     """``runin-transient --help`` says runin-transient, ``python -m transient`` says that."""
-    from transient.__main__ import build_parser
+    from transient.cli.runin import build_parser
 
     monkeypatch.setattr(sys, "argv", ["/usr/local/bin/runin-transient", "--help"])
     usage = build_parser().format_usage()

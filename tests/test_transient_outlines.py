@@ -38,6 +38,7 @@ import h5py
 import numpy as np
 import pytest
 from conftest import E_STAR, FORCE, K1, RADIUS
+from conftest import problem as face_problem
 
 from steady.accuracy import estimate_rms_slope
 from steady.halfspace import HalfSpace
@@ -69,9 +70,8 @@ BLOCK_RODS = Rods(((0.0, 0.0), (0.0, 0.55), (0.0, -0.55)), (0.25,) * 3)
 
 def problem_on(outline, geometry, ratios, n, **options):
     """The wear problem of a geometry on an outline's grid ``n``."""
-    grid = outline.grid(n)
-    return WearProblem(HalfSpace(grid.shape, grid.h, E_STAR), geometry.labels(grid),
-                       [K1 * r for r in ratios], FORCE, outline, **options)
+    return WearProblem(face_problem(geometry, [K1 * r for r in ratios], n=n, outline=outline),
+                       **options)
 
 
 def flat_contact(outline, n):
@@ -179,9 +179,7 @@ def run_to_steady(outline, geometry, ratios, n, options=FAST):
     problem = problem_on(outline, geometry, ratios, n)
     result = run_in(problem, initial_face.flat(problem.grid), options)
     assert result.status == "steady", result.message
-    grid = problem.grid
-    steady = solve(HalfSpace(grid.shape, grid.h, E_STAR), geometry.labels(grid),
-                   problem.wear_coefficients, FORCE, outline=outline)
+    steady = solve(face_problem(geometry, problem.wear_coefficients, n=n, outline=outline))
     return problem, result, steady
 
 
@@ -334,11 +332,12 @@ def test_disk_as_a_radius_or_a_circle_runs_bit_for_bit_the_same():
     runs = []
     for outline in (RADIUS, Circle(RADIUS)):
         grid = Circle(RADIUS).grid(32)
-        problem = WearProblem(HalfSpace(32, 2 * RADIUS / 32, E_STAR), geometry.labels(32),
-                              [K1, 10 * K1], FORCE, outline)
-        assert problem.radius == RADIUS and problem.scale == RADIUS and problem.shape == (32, 32)
+        problem = WearProblem(face_problem(geometry, [K1, 10 * K1], n=32, outline=outline))
+        assert problem.outline.radius == RADIUS and problem.scale == RADIUS \
+            and problem.shape == (32, 32)
+        assert problem.halfspace.h == 2 * RADIUS / 32, "the disk's pixel size"
         assert np.array_equal(problem.face_mask, grid.mask), "the disk's face"
-        runs.append(run_in(problem, initial_face.flat(32, RADIUS), FAST))
+        runs.append(run_in(problem, initial_face.flat(problem.grid), FAST))
     a, b = runs
     assert a.steps == b.steps and np.array_equal(a.height, b.height, equal_nan=True)
     for name in HISTORY_UNITS:
@@ -354,7 +353,7 @@ def test_disk_as_a_radius_or_a_circle_runs_bit_for_bit_the_same():
 def test_scales_and_reference_slope_come_from_the_outline():
     problem = problem_on(BLOCK, VORONOI, (1.0, 10.0), 48)
     L = BLOCK.scale
-    assert L == 4e-3 and problem.radius is None and problem.n == 48
+    assert L == 4e-3 and getattr(problem.outline, "radius", None) is None and problem.n == 48
     pbar_pixels = FORCE / (problem.face_mask.sum() * problem.halfspace.h ** 2)
     assert problem.face_mask.all(), "a rectangle of whole pixels covers its grid"
     assert problem.depth_scale == pytest.approx(pbar_pixels * L / E_STAR, rel=1e-15)
@@ -382,22 +381,24 @@ def test_scene_problem_uses_the_scene_outline_and_grid(scene_file):
     assert np.array_equal(problem.labels, scene.phase_labels()), "the scene's phase map"
     assert problem.halfspace.h == scene.grid().h
     assert initial.height(problem.grid).shape == (24, 48)
-    assert initial.height(48, scene.outline).shape == (24, 48)
+    assert initial.height(scene.outline.grid(48)).shape == (24, 48)
     with pytest.raises(ValueError, match=r"n = 12, the minimum is n = 16"):
         WearProblem.from_scene(scene, n=12)
 
 
 @pytest.mark.parametrize("make, match", [
-    (lambda: WearProblem(HalfSpace((24, 48), 8e-3 / 48, E_STAR), np.zeros((24, 48), int),
-                         [K1], FORCE, Rectangle(4e-3, 12e-3)),
-     r"half-space grid is 24 x 48 pixels; the grid of the rectangle face .* has 16 x 48"),
-    (lambda: WearProblem(HalfSpace((24, 48), 1e-4, E_STAR), np.zeros((24, 48), int),
-                         [K1], FORCE, BLOCK), "pixel size"),
-    (lambda: WearProblem(HalfSpace(12, 1e-3, E_STAR), np.zeros((12, 12), int), [K1], FORCE,
-                         Annulus(2.5e-3, 4e-3)),
+    (lambda: WearProblem(face_problem(np.zeros((24, 48), int), [K1],
+                                      outline=Rectangle(4e-3, 12e-3))),
+     r"labels must have shape \(16, 48\) to match the grid of the rectangle face .* "
+     r"got \(24, 48\)"),
+    # The half-space is the problem's own (its grid's pixel size): a bare one is refused.
+    (lambda: WearProblem(HalfSpace((24, 48), 1e-4, E_STAR)),
+     "takes a steady.problem.Problem, got HalfSpace"),
+    (lambda: WearProblem(face_problem(np.zeros((12, 12), int), [K1],
+                                      outline=Annulus(2.5e-3, 4e-3))),
      r"grid too coarse for the annulus face .*: n = 12, the minimum is n = 16"),
-    (lambda: WearProblem(HalfSpace(16, 5e-4, E_STAR), np.zeros((16, 16), int), [K1], FORCE,
-                         "4 mm"), "an outline or a radius"),
+    (lambda: WearProblem(face_problem(np.zeros((16, 16), int), [K1], outline="4 mm")),
+     "an outline or a radius"),
 ])
 def test_a_problem_off_its_outline_is_refused(make, match):
     with pytest.raises(ValueError, match=match):
@@ -415,12 +416,12 @@ def test_tilted_block_touches_at_its_leading_edge():
         "a plane receding towards +x, zero at the edge x = -width/2"
     # Towards the diagonal: zero at the corner (-Lx, -Ly).
     c, s = math.cos(1.0), math.sin(1.0)
-    h = initial_face.initial_height("tilted", 48, BLOCK, angle=angle, azimuth=1.0)
+    h = initial_face.initial_height("tilted", BLOCK.grid(48), angle=angle, azimuth=1.0)
     lx, ly = BLOCK.half_extent
     corner_pixel = math.tan(angle) * ((grid.x[0] + lx) * c + (grid.y[0] + ly) * s)
     assert h[0, 0] == pytest.approx(corner_pixel, rel=1e-12) and h.min() == h[0, 0]
-    assert initial_face.support(RING, (0.6, 0.8)) == RING.outer_radius
-    assert initial_face.support(Ellipse(2e-3, 4e-3), (1.0, 0.0)) == pytest.approx(2e-3)
+    assert RING.support((0.6, 0.8)) == RING.outer_radius
+    assert Ellipse(2e-3, 4e-3).support((1.0, 0.0)) == pytest.approx(2e-3)
 
 
 def test_crowned_block_and_file_faces():
@@ -437,9 +438,9 @@ def test_crowned_block_and_file_faces():
     values = np.full((16, 32), 1e-6)
     assert np.array_equal(initial_face.from_array(values, grid), values)
     with pytest.raises(ValueError, match=r"shape \(16, 32\)"):
-        initial_face.from_array(np.zeros((32, 32)), 32, BLOCK)
+        initial_face.from_array(np.zeros((32, 32)), BLOCK.grid(32))
     with pytest.raises(ValueError, match=r"n = 4, the minimum is n = 16"):
-        initial_face.flat(4, BLOCK)
+        initial_face.flat(BLOCK.grid(4))
 
 
 def test_file_initial_face_of_a_rectangle(tmp_path, scene_file):

@@ -18,8 +18,11 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
   and checkpoints;
 - :mod:`transient.comparison` -- agreement with the steady face;
 - :mod:`transient.output` -- HDF5 run files;
+- :mod:`transient.options` -- the run options, each declared once for the
+  library, the scene and the command line;
 - :mod:`transient.scene` -- the ``[transient]`` and ``[initial_face]`` scene
   sections;
+- :mod:`transient.memory` -- the memory a run-in needs;
 - :mod:`transient.plotting` -- figures of run files (imported on demand: it
   loads matplotlib).
 
@@ -38,9 +41,9 @@ from .initial_face import (
     from_array,
     from_file,
     initial_height,
-    register_initial_face,
     tilted,
 )
+from .options import RunOptions
 from .output import FORMAT, FORMAT_VERSION, read_run, write_run
 from .preconditioners import (
     PRECONDITIONERS,
@@ -51,10 +54,9 @@ from .preconditioners import (
     register_preconditioner,
 )
 from .problem import StepFailure, WearProblem
-from .runin import HISTORY_UNITS, RunOptions, RunResult, run_in
+from .runin import HISTORY_UNITS, RunResult, run_in
 from .scene import (
     InitialFace,
-    TransientSettings,
     load_transient_scene,
     parse_initial_face,
     parse_transient,
@@ -96,7 +98,6 @@ __all__ = [
     "StepFailure",
     "StepState",
     "StopTests",
-    "TransientSettings",
     "Trial",
     "WearProblem",
     "compare_with_steady",
@@ -112,7 +113,6 @@ __all__ = [
     "parse_initial_face",
     "parse_transient",
     "read_run",
-    "register_initial_face",
     "register_preconditioner",
     "register_scheme",
     "run_in",

@@ -187,7 +187,6 @@ class AxisymmetricRunIn:
         a_inv_one = a_inv.sum(axis=1)
         self._load_row = self.areas @ a_inv
         self._denominator = float(self.areas @ a_inv_one)
-        self._a_inv = a_inv
         b = a_inv - np.outer(a_inv_one, self._load_row) / self._denominator
         self._b = b
         self._c = a_inv_one * self.normal_force / self._denominator

@@ -131,9 +131,9 @@ def compare_with_steady(result, steady, problem):
     if math.isfinite(steady.rms_slope_error):
         steady_rms, steady_error = float(steady.rms_slope), float(steady.rms_slope_error)
     else:
-        estimate = estimate_map_rms_slope(steady.labels, steady.wear_coefficients,
-                                          steady.normal_force, steady.outline, steady.E_star,
-                                          exponent=steady.exponent, energy=estimator.energy)
+        estimate = estimate_map_rms_slope(steady.labels, problem.wear, steady.normal_force,
+                                          steady.outline, steady.E_star,
+                                          energy=estimator.energy)
         steady_rms, steady_error = estimate.rms_slope, estimate.error
     rms, error = final["rms_slope"], final["rms_slope_error"]
     n_phases = len(steady.phase_pressures)

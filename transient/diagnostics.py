@@ -70,12 +70,12 @@ def face_rms_slope(halfspace, face_mask, height, pressure, approach, *, gradient
 
     This is the slope of the half-space surface under the pixel pressure,
     at the pixel centres: a first-order quadrature of a log-singular
-    integrand.  For the flat punch at ``s = 0`` it is not zero but about
-    0.6 ``grad_f0`` (measured 0.589, 0.596, 0.598, 0.600 at n = 32, 64, 128,
-    256): the pixel pressure of the edge singularity, ``~ (a/h)^(1/2)``,
-    makes ``K p`` ripple between the pixel centres of the rim, whose share
-    of the face falls like ``h/a``, so the rms does not vanish under
-    refinement.
+    integrand.  For the flat punch at ``s = 0`` it is not zero but a
+    finite share of ``grad_f0`` that does not vanish under refinement
+    (docs/model.md, "The run-in history", gives the measured values): the
+    pixel pressure of the edge singularity, ``~ (a/h)^(1/2)``, makes
+    ``K p`` ripple between the pixel centres of the rim, whose share of the
+    face falls like ``h/a``.
 
     Parameters
     ----------

@@ -185,9 +185,10 @@ def face_statistics(face, face_mask, h):
 
     Examples
     --------
-    >>> from steady.grid import face_mask
+    >>> from steady.outline import Circle
     >>> from transient.initial_face import tilted
-    >>> stats = face_statistics(tilted(33, 4e-3, 0.01), face_mask(33), 8e-3 / 33)
+    >>> grid = Circle(4e-3).grid(33)
+    >>> stats = face_statistics(tilted(grid, 0.01), grid.mask, grid.h)
     >>> print(f"{stats.rms_slope:.6f} {stats.rms_slope_error:.1e} {stats.rms_height:.1e}")
     0.010000 0.0e+00 0.0e+00
     """
@@ -281,14 +282,13 @@ class HistoryEstimator:
         interior = (padded[2:, 1:-1] & padded[:-2, 1:-1] & padded[1:-1, 2:]
                     & padded[1:-1, :-2])
         self.rim = self.face_mask & ~interior
-        m = problem.exponent
-        rate = problem.coefficient_field[self.rim] * m * problem.pixel_mean_pressure ** (m - 1)
+        rate = problem.wear.rate_constant(problem.coefficient_field[self.rim],
+                                          problem.pixel_mean_pressure)
         # Layer width per unit sliding distance, in pixels.
         self._rim_growth = rate * hs.E_star / hs.h
         self._rim_weight = self._rim_weights(h0)
-        estimate = estimate_map_rms_slope(problem.labels, problem.wear_coefficients,
-                                          problem.normal_force, problem.outline, hs.E_star,
-                                          exponent=m, energy=self.energy)
+        estimate = estimate_map_rms_slope(problem.labels, problem.wear, problem.normal_force,
+                                          problem.outline, hs.E_star, energy=self.energy)
         self.map_error = estimate.error / estimate.rms_slope
 
     def _rim_weights(self, h0):
@@ -394,7 +394,7 @@ class HistoryEstimator:
         mean_square = energy / integrals.face_area
         excess = self.reference_slope ** 2 * float(
             np.mean(self._rim_weight * rim_layer_excess(self._rim_growth * distance)))
-        if self.problem.exponent == 1.0:
+        if self.problem.wear.linear:
             slope = math.sqrt(max(mean_square - excess, 0.0))
             spread = RIM_LAYER_SCATTER * excess
             rim_error = max(abs(math.sqrt(max(mean_square - excess + sign * spread, 0.0)) - slope)

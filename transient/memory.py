@@ -54,10 +54,9 @@ def run_in_memory(n, snapshots=0):
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
     The closing steady solve of the comparison needs less than one step.
-    Measured against the peak resident memory of a run (the process's
-    high-water mark) at ``n = 256`` and 512 with 0 to 10 snapshots,
-    the estimate is an upper bound by a factor of 1.12 to 1.33
-    (``tests/test_memory.py``).
+    The estimate is an upper bound of the measured peak within a factor of
+    2 (``tests/test_memory.py``; the measured ratios are in
+    docs/benchmarks.md, "Memory estimates").
 
     Parameters
     ----------

@@ -17,11 +17,8 @@ import functools
 
 import numpy as np
 
-from steady.halfspace import HalfSpace
 from steady.normalisation import reference_slope
-from steady.outline import Circle, FaceGrid, as_outline
-from steady.phases import validate_labels
-from steady.pressures import phase_pressures
+from steady.problem import Problem
 from steady.solution import solve
 
 from .contact import solve_contact
@@ -48,24 +45,9 @@ class WearProblem:
 
     Parameters
     ----------
-    halfspace : steady.halfspace.HalfSpace
-        Elastic half-space operator of the outline's grid
-        (:class:`steady.outline.FaceGrid`: shape ``(nx, ny)``, ``n`` pixels
-        along the longer side, pixel size ``h = 2 L / n``).
-    labels : ndarray of int, shape (nx, ny)
-        Phase index ``0..P-1`` of each face pixel, -1 off the face; every
-        phase present on the face.
-    wear_coefficients : array_like, shape (P,), 1/Pa
-        ``k_i`` of each phase, positive and finite (Pa^-m for an exponent
-        ``m != 1``).
-    normal_force : float, N
-        Prescribed normal force ``F_N``.
-    outline : outline object or float
-        The face's outline (:mod:`steady.outline`); a number is the radius
-        ``a`` (m) of a circular face.  Its scale ``L`` (``a`` for a disk)
-        sets the natural scales, its homogeneous face the reference slope.
-    exponent : float, optional
-        Wear exponent ``m`` (default 1, Archard).
+    problem : steady.problem.Problem
+        The phase map on the face's grid, the wear law, the load and ``E*``
+        (checked there); its half-space operator is the one of the run.
     contact_rtol : float, optional
         Relative tolerance of every contact solve (default 1e-10).
     contact_maxiter : int, optional
@@ -81,6 +63,10 @@ class WearProblem:
 
     Attributes
     ----------
+    problem : steady.problem.Problem
+    wear : wear law
+        The problem's (:mod:`steady.wear`): the rate, its linearisation and
+        the steady pressures all come from it.
     outline : outline object
         The face's outline.
     grid : steady.outline.FaceGrid
@@ -92,12 +78,10 @@ class WearProblem:
         disk).
     scale : float, m
         ``L``, the outline's length scale (the radius of a disk).
-    radius : float or None, m
-        The radius ``a`` of a circular face; None for other outlines.
     face_mask : ndarray of bool, shape (nx, ny)
         Pixels of the punch face (``labels >= 0``).
     coefficient_field : ndarray, shape (nx, ny), 1/Pa
-        Wear coefficient of each pixel's phase, zero off the face.
+        The wear law's coefficient of each pixel, zero off the face.
     solves : int
         Contact solves done so far (counter, for work accounting).
     iterations : int
@@ -105,61 +89,38 @@ class WearProblem:
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from steady import HalfSpace, Voronoi, pixel_size
-    >>> n, a = 32, 4e-3
-    >>> labels = Voronoi(64, (0.7, 0.3), seed=2029).labels(n)
-    >>> problem = WearProblem(HalfSpace(n, pixel_size(n, a), 1.3e6), labels,
-    ...                       [1e-13, 1e-12], 10.0, a)
+    >>> from steady import Circle, FacePhases, Problem, Voronoi
+    >>> grid = Circle(4e-3).grid(32)
+    >>> phases = FacePhases(grid, Voronoi(64, (0.7, 0.3), seed=2029).labels(grid), 2)
+    >>> problem = WearProblem(Problem(phases, [1e-13, 1e-12], 10.0, 1.3e6))
     >>> problem.n_phases, float(problem.coefficient_field[problem.face_mask].min())
     (2, 1e-13)
     """
 
-    def __init__(self, halfspace, labels, wear_coefficients, normal_force, outline, *,
-                 exponent=1.0, contact_rtol=1e-10, contact_maxiter=None, newton_rtol=1e-9,
+    def __init__(self, problem, *, contact_rtol=1e-10, contact_maxiter=None, newton_rtol=1e-9,
                  newton_maxiter=30, pressure_floor=1e-6):
-        shape = tuple(halfspace.shape)
-        outline = as_outline(outline)
-        grid = _matching_grid(outline, halfspace)
-        labels = np.asarray(labels)
-        if labels.shape != shape:
-            raise ValueError(f"labels must have shape {shape} to match the half-space grid, "
-                             f"got {labels.shape}")
-        if not np.issubdtype(labels.dtype, np.integer):
-            raise ValueError(f"labels must be integers, got dtype {labels.dtype}")
-        face_mask = labels >= 0
-        if not face_mask.any():
-            raise ValueError("the phase map has no face pixel")
-        k = np.atleast_1d(np.asarray(wear_coefficients, dtype=float))
-        n_phases = int(labels.max()) + 1
-        if k.ndim != 1 or k.size != n_phases:
-            raise ValueError(f"need one wear coefficient per phase ({n_phases}), got "
-                             f"{np.asarray(wear_coefficients).tolist()}")
-        if not (np.all(np.isfinite(k)) and np.all(k > 0)):
-            raise ValueError(f"wear coefficients must be positive and finite, got "
-                             f"{k.tolist()} 1/Pa")
-        self.counts = validate_labels(labels, n_phases)
-        if not (np.isfinite(normal_force) and normal_force > 0):
-            raise ValueError(f"normal_force must be positive, got {normal_force!r} N")
-        if not (np.isfinite(exponent) and exponent > 0):
-            raise ValueError(f"wear exponent must be positive, got {exponent!r}")
-        self.halfspace = halfspace
-        self.outline = outline
+        if not isinstance(problem, Problem):
+            raise ValueError(f"WearProblem takes a steady.problem.Problem, got "
+                             f"{type(problem).__name__}")
+        grid = problem.grid
+        self.problem = problem
+        self.wear = problem.wear
+        self.halfspace = problem.halfspace
+        self.outline = grid.outline
         self.grid = grid
-        self.shape = shape
+        self.shape = grid.shape
         self.n = grid.n
-        self.labels = labels
-        self.wear_coefficients = k
-        self.face_mask = face_mask
-        self.coefficient_field = np.where(face_mask, k[np.maximum(labels, 0)], 0.0)
-        self.normal_force = float(normal_force)
-        self.exponent = float(exponent)
+        self.labels = problem.labels
+        self.counts = problem.phases.counts
+        self.face_mask = problem.face_mask
+        self.coefficient_field = problem.coefficient_field()
+        self.normal_force = problem.normal_force
         self.contact_rtol = float(contact_rtol)
         self.contact_maxiter = contact_maxiter
         self.newton_rtol = float(newton_rtol)
         self.newton_maxiter = int(newton_maxiter)
         self.pressure_floor = float(pressure_floor)
-        self.area = float(face_mask.sum()) * halfspace.h ** 2
+        self.area = float(self.face_mask.sum()) * self.halfspace.h ** 2
         self.solves = 0
         self.iterations = 0
         # (x0, K x0) of the warm start implicit() predicted, for the next solve.
@@ -193,39 +154,42 @@ class WearProblem:
         ------
         ValueError
             A grid too coarse for the outline or the phase geometry (the
-            message names ``n`` and the minimum).
+            message names ``n`` and the minimum), or a phase without a pixel
+            on the face at this grid.
 
         Examples
         --------
         >>> from transient.scene import load_transient_scene
-        >>> scene, settings, initial = load_transient_scene(
+        >>> scene, options, initial = load_transient_scene(
         ...     "studies/scenes/voronoi_transient.toml")
         >>> problem = WearProblem.from_scene(scene, n=40)
         >>> problem.n, problem.n_phases
         (40, 2)
         """
-        grid = scene.grid(n)
-        settings = scene.extra.get("transient")
-        if settings is not None:
-            options.setdefault("contact_rtol", settings.contact_rtol)
-        halfspace = HalfSpace(grid.shape, grid.h, scene.E_star)
-        return cls(halfspace, scene.geometry.labels(grid), scene.wear_coefficients,
-                   scene.normal_force, scene.outline, exponent=scene.exponent, **options)
+        run_options = scene.extra.get("transient")
+        if run_options is not None:
+            options.setdefault("contact_rtol", run_options.contact_rtol)
+        return cls(Problem.from_scene(scene, n=n), **options)
 
     @property
     def n_phases(self):
         """Number of phases ``P``."""
-        return self.wear_coefficients.size
+        return self.problem.n_phases
+
+    @property
+    def wear_coefficients(self):
+        """``k_i`` of each phase, shape (P,), 1/Pa (the power law's coefficients)."""
+        return np.asarray(self.wear.coefficients, dtype=float)
+
+    @property
+    def exponent(self):
+        """The power law's exponent ``m``."""
+        return self.wear.exponent
 
     @property
     def scale(self):
         """``L``, the outline's length scale, m (the radius ``a`` of a disk)."""
         return self.outline.scale
-
-    @property
-    def radius(self):
-        """The radius ``a`` of a circular face, m; None for other outlines."""
-        return self.outline.radius if isinstance(self.outline, Circle) else None
 
     @property
     def reference(self):
@@ -274,8 +238,7 @@ class WearProblem:
                                    * self.halfspace.E_star)
 
     def _rate_constant(self, k):
-        m = self.exponent
-        return k * m * self.pixel_mean_pressure ** (m - 1.0)
+        return self.wear.rate_constant(k, self.pixel_mean_pressure)
 
     def steady_pressure(self):
         """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (nx, ny).
@@ -283,8 +246,8 @@ class WearProblem:
         The limit of an implicit Euler step as ``ds -> infinity``: the warm
         start of a jump.
         """
-        p_phase = phase_pressures(self.counts, self.wear_coefficients, self.normal_force,
-                                  self.halfspace.h ** 2, exponent=self.exponent)
+        p_phase = self.wear.phase_pressures(self.counts, self.normal_force,
+                                            self.halfspace.h ** 2)
         return np.append(p_phase, 0.0)[self.labels]
 
     def solve_steady(self):
@@ -295,16 +258,12 @@ class WearProblem:
         steady.solution.SteadyResult
             Plain pixel rms slope, no error estimate.
         """
-        return solve(self.halfspace, self.labels, self.wear_coefficients, self.normal_force,
-                     exponent=self.exponent, outline=self.outline)
+        return solve(self.problem)
 
     # -- the right-hand side -------------------------------------------
     def rate(self, pressure):
-        """Wear rate ``k p^m``, m/m (dimensionless), shape (nx, ny); zero off the face."""
-        p = np.maximum(pressure, 0.0)
-        if self.exponent == 1.0:
-            return self.coefficient_field * p
-        return self.coefficient_field * p ** self.exponent
+        """Wear rate of the law, m/m (dimensionless), shape (nx, ny); zero off the face."""
+        return self.wear.rate(pressure, self.coefficient_field)
 
     @functools.cached_property
     def compliance_floor(self):
@@ -324,16 +283,10 @@ class WearProblem:
         circulant's symbol, which bounds every principal submatrix (any contact
         set) from below.
         """
-        lam_min = self.compliance_floor
-        m = self.exponent
-        k = self.coefficient_field[self.face_mask]
-        if m == 1.0:
-            slope = float(k.max())
-        else:
-            p = np.maximum(pressure[self.face_mask],
-                           self.pressure_floor * self.pixel_mean_pressure)
-            slope = float(np.max(k * m * p ** (m - 1.0)))
-        return 2.0 * lam_min / slope
+        slope = self.wear.largest_rate_slope(pressure[self.face_mask],
+                                             self.coefficient_field[self.face_mask],
+                                             self.pressure_floor * self.pixel_mean_pressure)
+        return 2.0 * self.compliance_floor / slope
 
     # -- contact solves ------------------------------------------------
     def contact(self, height, *, shift=None, x0=None, x0_displacement=None, atol=0.0,
@@ -401,14 +354,9 @@ class WearProblem:
         return w, dataclasses.replace(res, approach=d)
 
     def _linearisation(self, height, c, p0):
-        """Shift and height of the contact problem linearised about ``p0`` (m != 1)."""
-        m = self.exponent
-        # Off the face the wear coefficient is 0; 1 keeps p^(m-1) finite there.
-        floor = self.pressure_floor * self.pixel_mean_pressure if m < 1.0 else 0.0
-        pl = np.where(self.face_mask, np.maximum(p0, floor), 1.0)
-        shift = c * self.coefficient_field * m * pl ** (m - 1.0)
-        h_lin = height + c * self.coefficient_field * (1.0 - m) * pl ** m
-        return shift, h_lin
+        """Shift and height of the contact problem linearised about ``p0`` (a nonlinear law)."""
+        return self.wear.linearisation(height, c, p0, self.coefficient_field, self.face_mask,
+                                       self.pressure_floor * self.pixel_mean_pressure)
 
     def implicit(self, height, c, x0, *, history=None, atol=0.0):
         """Solve ``w = height + c k P(w)^m`` for ``w``.
@@ -438,8 +386,7 @@ class WearProblem:
             The contact of the face ``w`` (its pressure is ``P(w)``).
 
         """
-        m = self.exponent
-        if m == 1.0:
+        if self.wear.linear:
             shift = c * self.coefficient_field
             if history is not None and len(history):
                 x0, kx0 = history.predict(height, shift_scale=c)
@@ -646,24 +593,3 @@ class PressureHistory:
             return v0.reshape(shape).copy(), kv0.reshape(shape).copy()
         return ((v0 + np.einsum("i,ij->j", beta, diff)).reshape(shape),
                 (kv0 + np.einsum("i,ij->j", beta, kdiff)).reshape(shape))
-
-
-def _matching_grid(outline, halfspace):
-    """The outline's :class:`~steady.outline.FaceGrid` of the half-space's grid, checked.
-
-    Raises
-    ------
-    ValueError
-        The grid is too coarse for the outline (naming ``n`` and the
-        minimum), or its shape or pixel size is not the outline's.
-    """
-    shape = tuple(halfspace.shape)
-    grid = FaceGrid(outline, max(shape))  # ValueError names n and the minimum
-    if grid.shape != shape:
-        raise ValueError(f"the half-space grid is {shape[0]} x {shape[1]} pixels; the grid of the "
-                         f"{outline.describe()} with n = {grid.n} has {grid.shape[0]} x "
-                         f"{grid.shape[1]}")
-    if abs(halfspace.h - grid.h) > 1e-9 * grid.h:
-        raise ValueError(f"the half-space's pixel size {halfspace.h:.6g} m is not the "
-                         f"{outline.describe()}'s at n = {grid.n}, 2 L / n = {grid.h:.6g} m")
-    return grid

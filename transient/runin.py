@@ -78,6 +78,7 @@ import numpy as np
 from .control import DIVERGENCE_RELIEF, StepController, StopTests, checkpoint_due, contact_tolerance
 from .diagnostics import shape_rms, wear_rate_spread
 from .history import HistoryEstimator
+from .options import RunOptions
 from .problem import PressureHistory, StepFailure
 from .stepping import StepState, get_scheme
 
@@ -116,92 +117,6 @@ HISTORY_UNITS = {
     "worn_volume": "m^3",
     "solves": "1",
 }
-
-
-@dataclasses.dataclass(frozen=True)
-class RunOptions:
-    """Options of :func:`run_in`; distances in units of ``s* = L / (k_min E*)`` (``L = a``, a disk).
-
-    Attributes
-    ----------
-    scheme : str
-        Registered integrator (default ``"esdirk3"``, third order: as cheap
-        as ``"sdirk2"`` for a history error of 1e-3 on a mild wear contrast,
-        cheaper on a strong one and for smaller errors; docs/benchmarks.md,
-        "Run-in speed").
-    tol : float
-        Local error per step, rms over the face of the shape error in units of
-        ``f*`` (default 1e-5).
-    step : float or None
-        Fixed step in s* (no adaptivity, no jump); default None (adaptive).
-    initial_step : float or None
-        First adaptive step in s*; default ``0.01 * sqrt(tol) * h/L``
-        (the fast scale, where the flat punch's edge relaxes).
-    spread_tol : float
-        Steady when the wear-rate spread is below this (default 1e-6) ...
-    shape_tol : float
-        ... and the shape changes by less than this many ``f*`` per s*
-        (default 1e-6).
-    jump_spread : float
-        Jump to the steady state once the spread is below this
-        (default 1e-3; 0 disables, ``inf`` jumps at once).
-    jump_step : float
-        Length of a jump, in s* (default 1e8).
-    max_distance : float
-        Stop (resumable, status ``"stopped"``) beyond this distance in s*
-        (default 1e12).
-    max_steps : int
-        Stop after this many accepted steps (default 100000).
-    snapshots : tuple of float
-        Distances in s* at which the face and the pressure are stored; steps
-        land on them exactly.
-    max_failures : int
-        Consecutive failed attempts before the run stops (default 20).
-    checkpoint_interval : float
-        Least wall-clock seconds between checkpoints (default 10; 0 = every
-        step); further apart where writing one takes over 5 % of the time
-        between them (:func:`transient.control.checkpoint_due`).
-    """
-
-    scheme: str = "esdirk3"
-    tol: float = 1e-5
-    step: float | None = None
-    initial_step: float | None = None
-    spread_tol: float = 1e-6
-    shape_tol: float = 1e-6
-    jump_spread: float = 1e-3
-    jump_step: float = 1e8
-    max_distance: float = 1e12
-    max_steps: int = 100000
-    snapshots: tuple = ()
-    max_failures: int = 20
-    checkpoint_interval: float = 10.0
-
-    def __post_init__(self):
-        """Check every option; store the snapshots sorted and without repeats."""
-        get_scheme(self.scheme)
-        for name in ("tol", "spread_tol", "shape_tol", "jump_step", "max_distance"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and value > 0 and not math.isnan(value)):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
-        for name in ("step", "initial_step"):
-            value = getattr(self, name)
-            if value is not None and not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive distance in s*, got {value!r}")
-        if not (self.jump_spread >= 0):
-            raise ValueError(f"jump_spread must be >= 0, got {self.jump_spread!r}")
-        if int(self.max_steps) != self.max_steps or self.max_steps < 1:
-            raise ValueError(f"max_steps must be a positive integer, got {self.max_steps!r}")
-        if int(self.max_failures) != self.max_failures or self.max_failures < 1:
-            raise ValueError(f"max_failures must be a positive integer, got "
-                             f"{self.max_failures!r}")
-        if not (self.checkpoint_interval >= 0):
-            raise ValueError(f"checkpoint_interval must be >= 0 s, got "
-                             f"{self.checkpoint_interval!r}")
-        snaps = tuple(float(s) for s in self.snapshots)
-        if any(not (math.isfinite(s) and s >= 0) for s in snaps):
-            raise ValueError(f"snapshots must be non-negative distances in s*, got {snaps!r}")
-        object.__setattr__(self, "snapshots", tuple(sorted(set(snaps))))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -544,7 +459,7 @@ class _Run:
         # other stage from the Galerkin combination of the recent pressures,
         # and solves to what the step's error and the spread need.
         atol = 0.0
-        if not (jump or self.controller.fixed) and p.exponent == 1.0:
+        if not (jump or self.controller.fixed) and p.wear.linear:
             atol = contact_tolerance(self.options.tol, self.f_star, self.history["spread"][-1],
                                      p.compliance_floor, p.pixel_mean_pressure)
         state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
@@ -682,7 +597,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     >>> scene, settings, initial = load_transient_scene(
     ...     "studies/scenes/voronoi_transient.toml")
     >>> problem = WearProblem.from_scene(scene, n=40)
-    >>> result = run_in(problem, initial.height(problem.n, scene.radius),
+    >>> result = run_in(problem, initial.height(problem.grid),
     ...                 RunOptions(tol=1e-2))
     >>> result.status
     'steady'

@@ -6,73 +6,41 @@ They are registered with :func:`steady.scene.load_scene` through its
     [transient]
     scheme = "esdirk3"          # registered integrator (transient.stepping.SCHEMES)
     tol = 1e-5                  # local error per step, rms shape / f*
-    spread_tol = 1e-6           # steady: (max - min) / mean of k p^m over the contact ...
-    shape_tol = 1e-6            # ... and shape change per s*, in f*
-    jump_spread = 1e-3          # jump to the steady state below this spread (0: never)
-    jump_step = 1e8             # s*, length of a jump
-    max_distance = 1e12         # s*, stop (resumable) beyond this distance
-    max_steps = 100000
-    step = 0.01                 # s*, optional: fixed steps, no adaptivity
-    initial_step = 1e-5         # s*, optional: first adaptive step
     snapshots = [0.1, 1.0, 3.0] # s*, face and pressure stored there
-    contact_rtol = 1e-10        # relative tolerance of every contact solve (floor)
-    checkpoint_interval = 10.0  # least s of wall clock between checkpoints
 
     [initial_face]
     kind = "tilted"             # "flat" (default), "tilted", "crowned" or "file"
     angle = 1e-3                # rad (tilted)
-    azimuth = 0.0               # rad (tilted, optional)
-    # sphere_radius = 0.5       # m (crowned)
-    # path = "face.npy"         # (file) height in m on the grid (n x n for a disk),
-                                # beside the scene file
 
-Distances are in units of the run-in distance ``s* = L / (k_min E*)``, ``L``
-the face outline's scale (the radius ``a`` of a disk; docs/model.md,
-"Natural scales").  Every key is optional and checked; unknown
-keys are errors.  The initial face kinds and their keys are those registered
-in :mod:`transient.initial_face`.
+The keys of ``[transient]`` are the fields of
+:class:`transient.options.RunOptions`, declared there with their types,
+units, ranges and meanings; those of ``[initial_face]`` are declared by
+each kind of :data:`transient.initial_face.INITIAL_FACES`.  Distances are
+in units of the run-in distance ``s* = L / (k_min E*)``, ``L`` the face
+outline's scale (the radius ``a`` of a disk; docs/model.md, "Natural
+scales").  Every key is optional and checked; unknown keys are errors.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import pathlib
 import types
 
-from steady.phases import npy_header
+from steady.array_files import npy_header
 from steady.scene import load_scene
-from steady.text import one_line, shorten
+from steady.schema import Context
+from steady.text import one_line
 
-from .initial_face import INITIAL_FACES, face_grid, initial_height
-from .runin import RunOptions
+from .initial_face import INITIAL_FACES, initial_height
+from .options import RunOptions, options_from_table
 
 __all__ = [
     "InitialFace",
-    "TransientSettings",
     "load_transient_scene",
     "parse_initial_face",
     "parse_transient",
 ]
-
-_FLOAT_KEYS = {"tol", "spread_tol", "shape_tol", "jump_spread", "jump_step", "max_distance",
-               "step", "initial_step", "checkpoint_interval", "contact_rtol"}
-_INT_KEYS = {"max_steps", "max_failures"}
-_TRANSIENT_KEYS = _FLOAT_KEYS | _INT_KEYS | {"scheme", "snapshots"}
-
-@dataclasses.dataclass(frozen=True)
-class TransientSettings:
-    """The ``[transient]`` section.
-
-    Attributes
-    ----------
-    options : transient.runin.RunOptions
-    contact_rtol : float
-        Relative tolerance of every contact solve (default 1e-10).
-    """
-
-    options: RunOptions = dataclasses.field(default_factory=RunOptions)
-    contact_rtol: float = 1e-10
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,54 +54,40 @@ class InitialFace:
         ``"flat"`` (default), ``"tilted"``, ``"crowned"`` or ``"file"``.
     parameters : mapping
         The kind's parameters: numbers (rad, m), or for ``"file"`` the
-        absolute ``path`` of the ``.npy`` file.
+        ``path`` of the ``.npy`` file (resolved against the scene's
+        directory).
     """
 
     kind: str = "flat"
     parameters: types.MappingProxyType = dataclasses.field(
         default_factory=lambda: types.MappingProxyType({}))
 
-    def height(self, n, outline=None):
-        """Initial height on the grid of ``n`` pixels of a face outline.
+    def height(self, grid):
+        """Initial height on the grid of a face outline.
 
         Parameters
         ----------
-        n : int or steady.outline.FaceGrid
-            Pixels along the longer side of the outline's bounding box
-            (across the diameter of a disk), or the grid itself.
-        outline : outline object or float
-            The face (``scene.outline``); a number is a disk's radius (m)
-            (``scene.radius``).
+        grid : steady.outline.FaceGrid
+            The face's grid (``scene.grid(n)``, ``problem.grid``).
 
         Returns
         -------
-        ndarray, shape of the grid (``(n, n)`` for a disk), m
+        ndarray, shape of the grid, m
             Larger = recessed.
 
         Raises
         ------
         ValueError
-            A parameter out of range for this grid and face, or a grid too
-            coarse for the outline, named.
+            A parameter out of range for this grid and face, or a file of
+            another shape, named.
         """
         path = self.parameters.get("path")
         try:
-            grid = face_grid(n, outline)
-            if path is not None:
-                # The header first: a wrong shape is refused before the data are read.
-                npy_header(path, what="initial face file", shape=grid.shape)
             return initial_height(self.kind, grid, **self.parameters)
         except (OSError, EOFError) as err:  # the file changed since the scene was read
             raise ValueError(f"[initial_face]: cannot read {str(path)!r}: {err}") from None
         except ValueError as err:
             raise ValueError(f"[initial_face]: {one_line(err, 300)}") from None
-
-
-def _float(table, key):
-    value = table[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{key} must be a number, got {shorten(value)}")
-    return float(value)
 
 
 def parse_transient(table, base_dir):
@@ -147,44 +101,14 @@ def parse_transient(table, base_dir):
 
     Returns
     -------
-    TransientSettings
+    RunOptions
 
     Raises
     ------
     ValueError
         Unknown key or bad value, named.
     """
-    unknown = sorted(set(table) - _TRANSIENT_KEYS)
-    if unknown:
-        raise ValueError(f"unknown key {shorten(unknown[0])} (allowed: "
-                         f"{', '.join(sorted(_TRANSIENT_KEYS))})")
-    kw = {}
-    for key in _FLOAT_KEYS & set(table):
-        kw[key] = _float(table, key)
-    for key in _INT_KEYS & set(table):
-        value = table[key]
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ValueError(f"{key} must be an integer, got {shorten(value)}")
-        kw[key] = value
-    if "scheme" in table:
-        if not isinstance(table["scheme"], str):
-            raise ValueError(f"scheme must be a string, got {shorten(table['scheme'])}")
-        kw["scheme"] = table["scheme"]
-    if "snapshots" in table:
-        snaps = table["snapshots"]
-        if not isinstance(snaps, list) or any(isinstance(v, bool) or not
-                                              isinstance(v, (int, float)) for v in snaps):
-            raise ValueError(f"snapshots must be an array of distances in s*, got "
-                             f"{shorten(snaps)}")
-        kw["snapshots"] = tuple(float(v) for v in snaps)
-    contact_rtol = kw.pop("contact_rtol", 1e-10)
-    if not (math.isfinite(contact_rtol) and 0 < contact_rtol < 1):
-        raise ValueError(f"contact_rtol must lie in (0, 1), got {shorten(contact_rtol)}")
-    try:
-        options = RunOptions(**kw)
-    except ValueError as err:
-        raise ValueError(one_line(err, 300)) from None
-    return TransientSettings(options=options, contact_rtol=contact_rtol)
+    return options_from_table(table, base_dir)
 
 
 def parse_initial_face(table, base_dir):
@@ -203,36 +127,16 @@ def parse_initial_face(table, base_dir):
     Raises
     ------
     ValueError
-        Unknown kind or key, missing key, a value of the wrong type or a
-        missing file, named.
+        Unknown kind or key, missing key, a value of the wrong type or range,
+        or a missing or damaged file, named.
     """
-    kind = table.get("kind", "flat")
-    if kind not in INITIAL_FACES:
-        raise ValueError(f"kind must be one of {sorted(INITIAL_FACES)}, got {shorten(kind)}")
-    spec = INITIAL_FACES[kind]
-    allowed = set(spec.required) | set(spec.optional) | {"kind"}
-    unknown = sorted(set(table) - allowed)
-    if unknown:
-        raise ValueError(f"unknown key {shorten(unknown[0])} for kind {kind!r} (allowed: "
-                         f"{', '.join(sorted(allowed))})")
-    missing = sorted(set(spec.required) - set(table))
-    if missing:
-        raise ValueError(f"missing key {missing[0]!r} for kind {kind!r}")
-    parameters = {}
-    for key in sorted(set(table) - {"kind"}):
-        if key == "path":
-            path = table[key]
-            if not isinstance(path, str) or not path:
-                raise ValueError(f"path must be a non-empty string, got {shorten(path)}")
-            full = pathlib.Path(base_dir) / path
-            npy_header(full, what="initial face file")  # exists, is a .npy, not truncated
-            parameters[key] = full
-        else:
-            value = _float(table, key)
-            if not math.isfinite(value):
-                raise ValueError(f"{key} must be finite, got {shorten(value)}")
-            parameters[key] = value
-    return InitialFace(kind, types.MappingProxyType(parameters))
+    context = Context(base_dir=pathlib.Path(base_dir), where="[initial_face]")
+    build, values = INITIAL_FACES.read(table, context)
+    for key in build.keys:
+        if key.type == "path" and key.name in values:
+            # Exists, is a .npy file, not truncated: checked before the run.
+            npy_header(values[key.name], what="initial face file")
+    return InitialFace(build.kind, types.MappingProxyType(values))
 
 
 def load_transient_scene(path):
@@ -241,8 +145,8 @@ def load_transient_scene(path):
     Returns
     -------
     scene : steady.scene.Scene
-    settings : TransientSettings
-        Defaults when the section is absent.
+    options : RunOptions
+        The ``[transient]`` options; defaults when the section is absent.
     initial : InitialFace
         Flat when the section is absent.
 
@@ -250,9 +154,15 @@ def load_transient_scene(path):
     ------
     ValueError
         Any error of :func:`steady.scene.load_scene` or of the two sections.
+
+    Examples
+    --------
+    >>> scene, options, initial = load_transient_scene("studies/scenes/tilted_transient.toml")
+    >>> initial.kind, initial.height(scene.grid()).shape
+    ('tilted', (64, 64))
     """
     scene = load_scene(path, extra_sections={"transient": parse_transient,
                                              "initial_face": parse_initial_face})
-    settings = scene.extra.get("transient", TransientSettings())
+    options = scene.extra.get("transient", RunOptions())
     initial = scene.extra.get("initial_face", InitialFace())
-    return scene, settings, initial
+    return scene, options, initial

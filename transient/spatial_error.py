@@ -22,7 +22,7 @@ import types
 import numpy as np
 
 from steady.accuracy import ladder_error
-from steady.outline import Circle, FaceGrid
+from steady.outline import FaceGrid
 
 from .problem import WearProblem
 from .runin import run_in
@@ -135,9 +135,9 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
         The scene of the main run (its phase geometry is rasterised at the
         companion's grid).
     initial : transient.scene.InitialFace or callable
-        The initial face: an object with ``height(n, outline)`` (the
-        scene's ``[initial_face]``), or ``initial(n, outline) -> ndarray``
-        (``outline`` the scene's radius for a disk, else its outline).  It
+        The initial face: an object with ``height(grid)`` (the scene's
+        ``[initial_face]``), or ``initial(grid) -> ndarray`` (``grid`` the
+        companion's :class:`steady.outline.FaceGrid`).  It
         must exist on the companion's grid: a height file of the main grid
         (``kind = "file"``) does not, and raises ``ValueError``.
     options : transient.runin.RunOptions
@@ -164,7 +164,7 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
     >>> scene, _, initial = load_transient_scene("studies/scenes/voronoi_transient.toml")
     >>> options = RunOptions(tol=1e-2)
     >>> problem = WearProblem.from_scene(scene, n=64)
-    >>> result = run_in(problem, initial.height(64, scene.radius), options)
+    >>> result = run_in(problem, initial.height(problem.grid), options)
     >>> companion = spatial_error(scene, initial, options, result)
     >>> result = companion.attach(result)
     >>> companion.grid, result.history["rms_slope_spatial_error"].shape == (result.steps + 1,)
@@ -178,8 +178,7 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
     build = initial.height if hasattr(initial, "height") else initial
     problem = WearProblem.from_scene(scene, n=m, **problem_options)
     logger.info("companion run on n = %d (main run n = %d)", m, n)
-    face = outline.radius if isinstance(outline, Circle) else outline
-    coarse = run_in(problem, build(m, face), options, on_step=on_step)
+    coarse = run_in(problem, build(problem.grid), options, on_step=on_step)
     if not coarse.success:
         logger.warning("companion run %s: %s", coarse.status, coarse.message)
     values = _at(coarse.history["distance"], coarse.history["rms_slope"],

@@ -183,8 +183,6 @@ class Scheme:
         Classical order of the solution.
     error_order : int
         The error estimate scales as ``ds^(error_order + 1)``.
-    solves_per_step : int
-        Contact solves per step (m = 1).
     max_growth : float
         Largest step ratio the scheme tolerates.
     explicit : bool
@@ -193,7 +191,6 @@ class Scheme:
     name = ""
     order = 1
     error_order = 1
-    solves_per_step = 1
     max_growth = 5.0
     explicit = False
 
@@ -327,7 +324,6 @@ class SDIRK2(Scheme):
     name = "sdirk2"
     order = 2
     error_order = 1
-    solves_per_step = 2
     gamma = 1.0 - 1.0 / math.sqrt(2.0)
 
     def step(self, problem, state, ds):
@@ -385,7 +381,6 @@ class ESDIRK3(Scheme):
     name = "esdirk3"
     order = 3
     error_order = 2
-    solves_per_step = 3
     gamma, a, b, b_hat = _esdirk3_tableau()
 
     def step(self, problem, state, ds):

@@ -48,8 +48,8 @@ import time
 import numpy as np
 
 from steady import reference
-from steady.grid import face_mask, pixel_size, polar
 from steady.halfspace import HalfSpace
+from steady.outline import Circle
 from steady.output import atomic_h5
 from steady.phases import Voronoi
 from transient.contact import solve_contact
@@ -99,8 +99,9 @@ def case_setup(case, n):
     n : int
         Grid size.
     """
-    face = face_mask(n)
-    r, _ = polar(n, RADIUS)
+    grid = Circle(RADIUS).grid(n)
+    face = grid.mask
+    r = grid.radii
     if case == "flat":
         return face, np.zeros((n, n)), FLAT_FORCE, reference.flat_punch_approach(
             FLAT_FORCE, RADIUS, E_STAR)
@@ -250,7 +251,7 @@ def peers():
 
 def check_same_operator(n=64):
     """The peers' operators must equal ours (same discrete problem)."""
-    hs = HalfSpace(n, pixel_size(n, RADIUS), E_STAR, workers=1)
+    hs = HalfSpace(n, Circle(RADIUS).grid(n).h, E_STAR, workers=1)
     p = np.random.default_rng(4099).random((n, n))
     ours = hs.displacement(p)
     out = {}
@@ -316,7 +317,7 @@ def peer_table(sizes, repeat, found):
     rows = []
     for case in ("flat", "crowned"):
         for n in sizes:
-            hs = CountingHalfSpace(n, pixel_size(n, RADIUS), E_STAR, workers=1)
+            hs = CountingHalfSpace(n, Circle(RADIUS).grid(n).h, E_STAR, workers=1)
             face, height, force, d_exact = case_setup(case, n)
             unit = fft_unit(hs)
             ref_p = run_ours(hs, face, height, force, 1e-12)[0]
@@ -362,7 +363,7 @@ def preconditioner_table(sizes, repeat):
     rows = []
     names = ["none", "jacobi", "fourier-padded", "fourier", "amg", "auto"]
     for n in sizes:
-        hs = CountingHalfSpace(n, pixel_size(n, RADIUS), E_STAR, workers=1)
+        hs = CountingHalfSpace(n, Circle(RADIUS).grid(n).h, E_STAR, workers=1)
         unit = fft_unit(hs)
         phases = {"pixels": np.random.default_rng(3571).random((n, n)) < 0.4,
                   # (fewer seeds on grids below the 400 seeds' minimum, n = 40)

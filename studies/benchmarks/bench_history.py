@@ -42,14 +42,15 @@ def _median(fn, repeats):
 def measure(n, distance):
     """Timings on one grid (s): estimator call and build, warm shifted solve, run fractions."""
     from transient import history
+    from transient.options import RunOptions
     from transient.problem import WearProblem
-    from transient.runin import RunOptions, run_in
+    from transient.runin import run_in
     from transient.scene import load_transient_scene
 
     scene, _, initial = load_transient_scene(ROOT / "studies" / "scenes" /
                                              "voronoi_transient.toml")
     problem = WearProblem.from_scene(scene, n=n)
-    h0 = initial.height(n, scene.radius)
+    h0 = initial.height(problem.grid)
     build = _median(lambda: history.HistoryEstimator(problem, h0), 3)
     estimator = history.HistoryEstimator(problem, h0)
     # A state in the middle of the run-in: 0.1 s*.

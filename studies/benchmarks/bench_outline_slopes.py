@@ -112,25 +112,25 @@ class HalfPlanes:
     n_phases = 2
 
     def min_grid(self, outline=None):
-        """The smallest grid of any geometry (:data:`steady.phases.MIN_GRID`)."""
-        from steady.phases import MIN_GRID
+        """The smallest grid of any geometry (:data:`steady.outline.MIN_SIDE_PIXELS`)."""
+        from steady.outline import MIN_SIDE_PIXELS
 
-        return MIN_GRID
+        return MIN_SIDE_PIXELS
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` below :meth:`min_grid`."""
-        from steady.phases import face_grid
+        from steady.outline import as_grid
 
-        n = face_grid(grid).n
+        n = as_grid(grid).n
         if n < self.min_grid():
             raise ValueError(f"grid too coarse for two half-planes: n = {n}")
         return n
 
     def labels(self, grid):
         """Phase 0 or 1 on the face, -1 off it; shape of the grid."""
-        from steady.phases import face_grid
+        from steady.outline import as_grid
 
-        grid = face_grid(grid)
+        grid = as_grid(grid)
         value = (grid.unit_x[:, None] * np.cos(self.angle)
                  + grid.unit_y[None, :] * np.sin(self.angle))
         tie = np.abs(value) < 1e-9

@@ -51,9 +51,10 @@ import numpy as np
 from steady.halfspace import HalfSpace
 from steady.output import atomic_h5
 from transient.diagnostics import face_rms_slope, shape_rms
+from transient.options import RunOptions
 from transient.preconditioners import FourierPreconditioner
 from transient.problem import WearProblem
-from transient.runin import RunOptions, run_in
+from transient.runin import run_in
 from transient.scene import load_transient_scene
 from transient.stepping import SCHEMES
 
@@ -105,8 +106,9 @@ def counted_transforms():
 def problem_of(scene, n, ratio=None):
     """The scene's wear problem on the ``n x n`` grid, wear ratio ``k_2/k_1`` optionally reset."""
     if ratio is not None:
-        k = scene.wear_coefficients
-        scene = dataclasses.replace(scene, wear_coefficients=(k[0], k[0] * ratio))
+        k = scene.wear.coefficients
+        scene = dataclasses.replace(scene, wear=dataclasses.replace(
+            scene.wear, coefficients=(k[0], k[0] * ratio)))
     return WearProblem.from_scene(scene, n=n)
 
 
@@ -129,12 +131,12 @@ def run_counted(problem, initial_height, options):
 
 def grid_table(scene_path, sizes, tol):
     """Rows of the table: the scene at each grid size, to the steady state."""
-    scene, settings, initial = load_transient_scene(scene_path)
-    options = dataclasses.replace(settings.options, tol=tol, checkpoint_interval=1e9)
+    scene, options, initial = load_transient_scene(scene_path)
+    options = dataclasses.replace(options, tol=tol, checkpoint_interval=1e9)
     rows = []
     for n in sizes:
         problem = problem_of(scene, n)
-        result, row = run_counted(problem, initial.height(n, scene.radius), options)
+        result, row = run_counted(problem, initial.height(problem.grid), options)
         row.update(n=n, scheme=options.scheme, tol=tol)
         rows.append(row)
         logger.info("n = %d: %s", n, row)

@@ -47,12 +47,14 @@ def _best(fn, repeats):
 
 def speed_one(n, repeats):
     """Timings for one grid, run in a fresh process (for its peak memory)."""
-    from steady.halfspace import HalfSpace
+    from steady.outline import Circle
     from steady.phases import Voronoi
+    from steady.problem import FacePhases, Problem
     from steady.solution import solve
 
     radius, E_star, force = 0.004, 1.3e6, 10.0
-    labels = Voronoi(20**2, (0.5, 0.5), 2024).labels(n)
+    grid = Circle(radius).grid(n)
+    labels = Voronoi(20**2, (0.5, 0.5), 2024).labels(grid)
     k = [1e-9, 1e-8]
     padded = np.zeros((2 * n, 2 * n))
     padded[:n, :n] = labels >= 0
@@ -63,10 +65,10 @@ def speed_one(n, repeats):
     fft_pair()
     t_pair = _best(fft_pair, repeats)
     t0 = time.perf_counter()
-    hs = HalfSpace(n, 2 * radius / n, E_star)
-    solve(hs, labels, k, force)
+    problem = Problem(FacePhases(grid, labels, 2), k, force, E_star)
+    solve(problem)  # builds the half-space operator, then kept by the problem
     t_cold = time.perf_counter() - t0
-    t_warm = _best(lambda: solve(hs, labels, k, force), repeats)
+    t_warm = _best(lambda: solve(problem), repeats)
     t_pair2 = _best(fft_pair, repeats)  # again, after: the machine may drift
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB -> GiB
     return dict(n=n, pair=min(t_pair, t_pair2), cold=t_cold, warm=t_warm, peak_gib=peak)
@@ -98,13 +100,14 @@ def speed(grids, repeats):
 
 def _steady_homogeneous(n):
     from steady import reference
-    from steady.grid import polar
-    from steady.halfspace import HalfSpace
+    from steady.outline import UNIT_DISK
     from steady.phases import Homogeneous
+    from steady.problem import FacePhases, Problem
     from steady.solution import solve
 
-    res = solve(HalfSpace(n, 2.0 / n, 1.0), Homogeneous().labels(n), [1.0], np.pi)
-    r, _ = polar(n, 1.0)
+    grid = UNIT_DISK.grid(n)
+    res = solve(Problem(FacePhases(grid, Homogeneous().labels(grid), 1), [1.0], np.pi, 1.0))
+    r = grid.radii
     exact = reference.cylinder_face(r, 1.0, 1.0, 1.0)
     on = ~np.isnan(res.face)
     relief = np.nanmax(exact) - np.nanmin(exact)

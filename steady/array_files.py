@@ -1,0 +1,235 @@
+"""Input arrays read from files: ``.npy`` arrays and PNG images, checked before their data.
+
+A scene names files (phase maps, face masks, micrographs, initial faces);
+every one is checked before its data are read: it exists and is a regular
+file, is not empty, has a valid header (a ``.npy`` header or a PNG
+signature), announces a shape the caller accepts, and holds the bytes its
+header announces -- so that an empty, truncated, foreign or oversized file
+is refused with a message naming it, never an ``EOFError`` or a
+``MemoryError`` half-way.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import stat
+
+import numpy as np
+
+from .text import format_bytes
+
+__all__ = ["input_file_size", "npy_header", "png_size", "read_face_mask", "read_npy"]
+
+
+def input_file_size(path, what):
+    """Size in bytes of an input file; ``ValueError`` unless it is a readable regular file."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise ValueError(f"{what} {str(path)!r} does not exist") from None
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ValueError(f"{what} {str(path)!r} is a directory, not a file")
+    if not stat.S_ISREG(st.st_mode):
+        raise ValueError(f"{what} {str(path)!r} is not a regular file (a device or a pipe?)")
+    if st.st_size == 0:
+        raise ValueError(f"{what} {str(path)!r} is empty (0 bytes)")
+    return st.st_size
+
+
+def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
+    """Shape and dtype of a ``.npy`` file, read from its header without loading the data.
+
+    Parameters
+    ----------
+    path : str or path-like
+    what : str, optional
+        How messages name the file (e.g. ``"phase map"``).
+    shape : tuple of int, optional
+        Refuse any other shape.
+    max_side : int, optional
+        Refuse anything but a square 2-d array of at most
+        ``max_side x max_side`` values.
+    square : bool, optional
+        With ``max_side``: whether the array must be square (default True);
+        if not, any 2-d array whose longer side is at most ``max_side``.
+
+    Returns
+    -------
+    shape : tuple of int
+    dtype : numpy.dtype
+
+    Raises
+    ------
+    ValueError
+        Missing file, a directory or device, an empty file, no ``.npy``
+        header, a damaged header, an array of Python objects, a shape
+        refused by ``shape`` or ``max_side``, or fewer data bytes than the
+        header announces (a truncated file, or a header that claims a huge
+        array).
+    """
+    import numpy.lib.format as npy_format
+
+    path = pathlib.Path(path)
+    size = input_file_size(path, what)
+    try:
+        with open(path, "rb") as f:
+            if f.read(6) != npy_format.MAGIC_PREFIX:
+                magic = False
+            else:
+                magic = True
+                f.seek(0)
+                version = npy_format.read_magic(f)
+                read = (npy_format.read_array_header_1_0 if version == (1, 0)
+                        else npy_format.read_array_header_2_0)
+                found, _, dtype = read(f)
+                offset = f.tell()
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
+    except Exception as err:  # noqa: BLE001 -- numpy parses the header with Python's tokenizer
+        raise ValueError(f"{what} {str(path)!r} has a damaged .npy header: "
+                         f"{str(err)[:200]}") from None
+    if not magic:
+        raise ValueError(f"{what} {str(path)!r} is not a .npy file (no NumPy header)")
+    found = tuple(found)
+    if dtype.hasobject:
+        raise ValueError(f"{what} {str(path)!r} holds Python objects, not numbers")
+    if shape is not None and found != tuple(shape):
+        raise ValueError(f"{what} {str(path)!r} holds an array of shape {found}; "
+                         f"{tuple(shape)} is needed")
+    if max_side is not None:
+        if len(found) != 2 or (square and found[0] != found[1]):
+            kind = "square 2-d" if square else "2-d"
+            raise ValueError(f"{what} {str(path)!r} must be a {kind} array, got shape "
+                             f"{found}")
+        if max(found) > max_side:
+            raise ValueError(f"{what} {str(path)!r} has {found[0]} x {found[1]} pixels, more "
+                             f"than the grid's n = {max_side} (n must be a multiple of the "
+                             f"map's size)")
+    needed = math.prod(found) * dtype.itemsize
+    if size - offset < needed:
+        dims = " x ".join(str(d) for d in found) or "scalar"
+        raise ValueError(f"{what} {str(path)!r} is truncated: its header announces {dims} "
+                         f"values of {dtype} ({format_bytes(needed)}), the file holds "
+                         f"{size - offset} bytes of data")
+    return found, dtype
+
+
+def read_npy(path, *, what="file", max_side=None, shape=None, square=True):
+    """Read a 2-d array (square by default) from a ``.npy`` file, checking the file first.
+
+    Parameters
+    ----------
+    path : str or path-like
+    what : str, optional
+        How messages name the file (e.g. ``"phase map"``).
+    max_side : int, optional
+        Refuse arrays larger than ``max_side x max_side`` (before loading).
+    shape : tuple of int, optional
+        Refuse any other shape (before loading).
+    square : bool, optional
+        Refuse arrays that are not square (default True).
+
+    Returns
+    -------
+    ndarray, shape (m, m), or (mx, my) if not ``square``
+
+    Raises
+    ------
+    ValueError
+        As :func:`npy_header`, or not square 2-d.  Never ``EOFError`` or
+        ``MemoryError``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "empty.npy"
+    >>> _ = path.write_bytes(b"")
+    >>> try:
+    ...     read_npy(path, what="phase map")
+    ... except ValueError as err:
+    ...     print(str(err).replace(str(path), "empty.npy"))
+    phase map 'empty.npy' is empty (0 bytes)
+    """
+    path = pathlib.Path(path)
+    found, dtype = npy_header(path, what=what, shape=shape, square=square,
+                              max_side=math.inf if max_side is None else max_side)
+    try:
+        return np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+    except MemoryError:
+        raise ValueError(f"{what} {str(path)!r} ({found[0]} x {found[1]} values of {dtype}) "
+                         f"does not fit in memory") from None
+
+
+def read_face_mask(path):
+    """The face of a ``.npy`` or ``.png`` file, as pixels: ``True`` on the face.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``.npy``: a 2-d boolean array (``True`` on the face) or integer
+        array (the face is where it is not -1, e.g. a phase map).
+        ``.png``: an image with an alpha channel; the face is its
+        non-transparent pixels.  Rows run along x, as in phase maps.
+
+    Returns
+    -------
+    ndarray of bool, shape (mx, my)
+
+    Raises
+    ------
+    ValueError
+        Missing, empty, truncated or unreadable file, an unsupported
+        suffix or dtype, a PNG without alpha channel, no face pixel.
+    """
+    path = pathlib.Path(path)
+    what = "face mask"
+    suffix = path.suffix.lower()
+    if suffix not in (".npy", ".png"):
+        input_file_size(path, what)
+        raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
+    if suffix == ".npy":
+        a = read_npy(path, what=what, square=False)
+        if a.dtype == bool:
+            mask = a
+        elif np.issubdtype(a.dtype, np.integer):
+            mask = a != -1
+        else:
+            raise ValueError(f"{what} {str(path)!r} must hold booleans (True on the face) or "
+                             f"integers (-1 off the face), got dtype {a.dtype}")
+    else:
+        import matplotlib.image  # deferred: only PNG files need it
+
+        input_file_size(path, what)
+        png_size(path, what)
+        try:
+            img = matplotlib.image.imread(path)
+        except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
+            raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+        if img.ndim != 3 or img.shape[2] not in (2, 4):
+            raise ValueError(f"{what} {str(path)!r} has no alpha channel: the face is the "
+                             f"non-transparent pixels of a PNG (or use a .npy array)")
+        mask = img[..., -1] > 0
+    if mask.ndim != 2 or not mask.any():
+        raise ValueError(f"{what} {str(path)!r} has no face pixel")
+    return np.ascontiguousarray(mask)
+
+
+def png_size(path, what):
+    """Width and height from a PNG's header.
+
+    Raises ``ValueError`` naming the file as ``what`` if it cannot be read or
+    has no PNG signature.
+    """
+    try:
+        with open(path, "rb") as f:
+            head = f.read(24)
+    except OSError as err:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
+    if len(head) < 24 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")

@@ -1,0 +1,276 @@
+"""One declaration per scene key: the registries, the README's tables, and adding a kind.
+
+The scene's keys are declared once (``steady.schema.Key``) in the registries of outlines,
+phase maps, wear laws and initial faces, and in the fields of ``RunOptions``; the README's
+tables must list exactly what is registered, and one registration must be all a new kind needs.
+"""
+
+import dataclasses
+import pathlib
+import re
+
+import numpy as np
+import pytest
+from conftest import FORCE, K1, RADIUS, problem, scene_text
+
+from steady.outline import OUTLINES, Circle, MaskOutline
+from steady.phases import PHASE_MAPS
+from steady.scene import SECTIONS, load_scene, parse_scene
+from steady.schema import Key, read_table
+from steady.solution import solve, solve_scene
+from steady.wear import WEAR_LAWS, ArchardLaw, PowerLaw
+from transient.cli.runin import build_parser
+from transient.initial_face import INITIAL_FACES, initial_height
+from transient.options import RunOptions, option_keys
+from transient.problem import WearProblem
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text()
+
+
+def _table(header):
+    """``kind -> keys column`` of the README's Markdown table whose header starts so."""
+    lines = README.split(header, 1)[1].split("\n")[2:]
+    rows = {}
+    for line in lines:
+        if not line.startswith("|"):
+            break
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        rows[cells[0].strip("`")] = cells[1]
+    return rows
+
+
+@pytest.mark.parametrize("registry, header", [(OUTLINES, "| shape | keys |"),
+                                              (PHASE_MAPS, "| kind | keys |"),
+                                              (WEAR_LAWS, "| law | keys |")])
+def test_readme_tables_list_what_is_registered(registry, header):
+    rows = _table(header)
+    assert set(rows) == set(registry), \
+        f"README table {header!r} lists {sorted(rows)}, registered {sorted(registry)}"
+    for kind, column in rows.items():
+        named = set(re.findall(r"`([a-z_]+)`", column))
+        keys = {key.name for key in registry[kind].keys}
+        assert named == keys, f"README row {kind!r} names keys {sorted(named)}, the " \
+                              f"registered keys are {sorted(keys)}"
+
+
+def test_readme_names_every_run_option_and_initial_face():
+    section = README.split("## Run-in (transient)", 1)[1].split("In Python:", 1)[0]
+    for key in option_keys():
+        assert re.search(rf"\b{key.name}\b", section), f"README lacks [transient] {key.name}"
+    for kind in INITIAL_FACES:
+        assert kind in section, f"README lacks the initial face kind {kind!r}"
+        for key in INITIAL_FACES[kind].keys:
+            assert key.name in section, f"README lacks [initial_face] {key.name} ({kind})"
+
+
+def test_core_sections_name_their_keys_in_the_readme():
+    block = README.split("```toml", 1)[1].split("```", 1)[0]
+    for section, keys in SECTIONS.items():
+        for key in keys:
+            assert re.search(rf"\[{section}\]\s*\n{key.name} =", block), \
+                f"README's scene example lacks [{section}] {key.name}"
+
+
+# -- keys ----------------------------------------------------------------
+@pytest.mark.parametrize("key, value, fragment", [
+    (Key("n", "integer", low=2, low_open=False), 1.5, "[t] n must be an integer >= 2, got 1.5"),
+    (Key("n", "integer", low=2, low_open=False), True, "got True"),
+    (Key("f", "number", unit="N", low=0.0), 0, "[t] f must be a number > 0 (N), got 0"),
+    (Key("f", "number", unit="N", low=0.0), float("inf"), "got inf"),
+    (Key("f", "number", unit="N", low=0.0), "10", "got '10'"),
+    (Key("r", "numbers", unit="1", low=0.0, high=1.0), [0.5, 1.5],
+     "[t] r must be an array of numbers each in (0, 1) (1), got [0.5, 1.5]"),
+    (Key("c", "string", choices=("crop", "tile")), "stretch", "one of 'crop', 'tile'"),
+    (Key("p", "path"), "a\0b", "[t] p must not contain a null byte"),
+    (Key("o", "pair", unit="m"), [1.0], "[t] o must be an [x, y] pair (m), got [1.0]"),
+])
+def test_a_bad_value_is_named_with_its_table_key_and_value(key, value, fragment):
+    with pytest.raises(ValueError) as err:
+        key.parse(value, "[t]")
+    assert fragment in str(err.value), f"message {str(err.value)!r}"
+
+
+def test_read_table_refuses_unknown_and_missing_keys():
+    keys = (Key("a", "number", required=True), Key("b", "integer", default=3))
+    assert read_table({"a": 1}, "[t]", keys) == {"a": 1.0, "b": 3}, "default filled"
+    with pytest.raises(ValueError, match=r"unknown key 'c' in \[t\] \(allowed: a, b\)"):
+        read_table({"a": 1, "c": 2}, "[t]", keys)
+    with pytest.raises(ValueError, match=r"missing key 'a' in \[t\]"):
+        read_table({"b": 1}, "[t]", keys)
+
+
+def test_a_section_prefix_is_given_once():
+    text = scene_text("parser", punch={"shape": "annulus", "inner_radius": -1.0,
+                                       "outer_radius": 0.004})
+    with pytest.raises(ValueError) as err:
+        parse_scene(text, ".")
+    assert "[punch] inner_radius must be a number > 0 (m), got -1.0" in str(err.value), \
+        str(err.value)
+    assert "[punch] [punch]" not in str(err.value), str(err.value)
+
+
+# -- one registration makes a kind ----------------------------------------
+@dataclasses.dataclass(frozen=True)
+class _Halves:
+    """Phase 0 left of the face's centre, phase 1 right of it."""
+
+    @property
+    def n_phases(self):
+        return 2
+
+    def min_grid(self, outline=None):
+        return 8
+
+    def check_grid(self, grid):
+        return grid.n
+
+    def labels(self, grid):
+        right = np.broadcast_to(grid.unit_x[:, None] > 0, grid.shape)
+        return np.where(grid.mask, right.astype(np.int64), -1)
+
+    @classmethod
+    def from_values(cls, values, context):
+        return cls()
+
+
+def test_a_phase_map_kind_is_one_registration(tmp_path):
+    PHASE_MAPS.register("halves", (), doc="two half-disks")(_Halves)
+    try:
+        path = tmp_path / "s.toml"
+        path.write_text(scene_text("steady").replace(
+            scene_text("steady").split("map = ", 1)[1].split("\n", 1)[0], '{ kind = "halves" }'))
+        result = solve_scene(load_scene(path), slope_error=False)
+    finally:
+        PHASE_MAPS.unregister("halves")
+    # Eq. 7: equal areas, k_1 = 10 k_0 -> p_0 = 10 p_1; the map is mirror-symmetric in x.
+    p0, p1 = result.phase_pressures
+    assert p0 / p1 == pytest.approx(10.0, rel=1e-12), f"phase pressures {p0}, {p1}"
+    assert result.fill_factors[0] == pytest.approx(0.5, abs=1e-12), \
+        f"half-disks of equal area: {result.fill_factors}"
+
+
+@dataclasses.dataclass(frozen=True)
+class _ScaledArchard(ArchardLaw):
+    """Archard's law with every coefficient multiplied by ``factor``."""
+
+    factor: float = 1.0
+
+    @classmethod
+    def from_values(cls, values, context):
+        return cls(tuple(values["factor"] * k for k in values["coefficients"]),
+                   factor=values["factor"])
+
+
+def test_a_wear_law_is_one_registration(tmp_path):
+    keys = ArchardLaw.keys + (Key("factor", "number", unit="1", low=0.0, required=True),)
+    WEAR_LAWS.register("scaled_archard", keys)(_ScaledArchard)
+    try:
+        text = scene_text("steady").replace(
+            "[wear]\n", '[wear]\nlaw = "scaled_archard"\nfactor = 4.0\n')
+        scaled = parse_scene(text, tmp_path)
+    finally:
+        WEAR_LAWS.unregister("scaled_archard")
+    plain = parse_scene(scene_text("steady"), tmp_path)
+    assert isinstance(scaled.wear, _ScaledArchard), f"law {scaled.wear}"
+    # The steady face depends on the ratios only; the run-in distance s* = a / (k E*).
+    a, b = solve_scene(scaled, slope_error=False), solve_scene(plain, slope_error=False)
+    assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "steady face"
+    ratio = (WearProblem.from_scene(plain).run_in_distance
+             / WearProblem.from_scene(scaled).run_in_distance)
+    assert ratio == pytest.approx(4.0, rel=1e-12), f"s* ratio {ratio}"
+
+
+def test_archard_is_the_power_law_of_exponent_one(tmp_path):
+    plain = parse_scene(scene_text("steady"), tmp_path)
+    archard = parse_scene(scene_text("steady").replace("[wear]\n", '[wear]\nlaw = "archard"\n'),
+                          tmp_path)
+    assert isinstance(archard.wear, ArchardLaw) and archard.wear.exponent == 1.0, archard.wear
+    a, b = solve_scene(archard, slope_error=False), solve_scene(plain, slope_error=False)
+    assert np.array_equal(a.face, b.face, equal_nan=True), "bit for bit the power law's face"
+    with pytest.raises(ValueError, match=r"unknown key 'exponent' in \[wear\] \(law 'archard'\)"):
+        parse_scene(scene_text("parser").replace("[wear]\n", '[wear]\nlaw = "archard"\n'),
+                    tmp_path)
+
+
+# -- run options ------------------------------------------------------------
+def test_every_run_option_is_a_key_and_every_flag_option_a_flag():
+    keys = {key.name for key in option_keys()}
+    fields = {f.name for f in dataclasses.fields(RunOptions)}
+    assert keys == fields, f"[transient] keys {sorted(keys)} against fields {sorted(fields)}"
+    flags = {a.dest for a in build_parser()._actions}
+    marked = {f.name for f in dataclasses.fields(RunOptions) if f.metadata["flag"]}
+    assert marked <= flags, f"flags missing: {sorted(marked - flags)}"
+    assert "contact_rtol" in fields, "contact_rtol is a run option"
+
+
+def test_a_flag_is_checked_by_its_key(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        build_parser().parse_args(["s.toml", "-o", "r.h5", "--tol", "-1"])
+    assert exit_.value.code == 2, "bad input"
+    err = capsys.readouterr().err
+    assert "--tol" in err and "a number > 0 (f*)" in err and "'-1'" in err, err
+
+
+def test_a_run_option_from_python_is_checked_by_its_key():
+    with pytest.raises(ValueError, match=r"tol must be a number > 0 \(f\*\), got -1"):
+        RunOptions(tol=-1)
+    with pytest.raises(ValueError, match=r"contact_rtol must be a number in \(0, 1\)"):
+        RunOptions(contact_rtol=2.0)
+    assert RunOptions(max_steps=10.0).max_steps == 10.0, "a whole float is a whole number"
+
+
+def test_an_initial_face_kind_is_one_registration():
+    keys = (Key("depth", "number", unit="m", low=0.0, required=True, doc="a dimple"),)
+
+    def dimple(grid, depth):
+        return np.where(grid.radii < 0.5 * grid.outline.scale, depth, 0.0)
+
+    INITIAL_FACES.register("dimple", keys)(dimple)
+    dimple.statistics = None
+    try:
+        h = initial_height("dimple", Circle(RADIUS).grid(16), depth=1e-6)
+    finally:
+        INITIAL_FACES.unregister("dimple")
+    assert h.max() == 1e-6 and h.min() == 0.0, "the registered face"
+
+
+# -- the two messages the restructure mends ---------------------------------
+def test_a_phase_without_pixels_is_named_not_counted(tmp_path):
+    """A Voronoi phase whose seeds miss every pixel centre: the phase, not the coefficients."""
+    text = scene_text("steady", n=16, n_seeds=8, fill_factors=(0.875, 0.125), seed=6)
+    scene = parse_scene(text, tmp_path)
+    for build in (lambda: solve_scene(scene), lambda: WearProblem.from_scene(scene)):
+        with pytest.raises(ValueError) as err:
+            build()
+        message = str(err.value)
+        assert "phase 1 has no pixel on the face" in message and "seed = 6" in message, message
+        assert "wear coefficient" not in message, message
+
+
+def test_a_declared_phase_count_is_not_guessed_from_labels():
+    labels = Circle(RADIUS).grid(16).mask.astype(int) - 1  # every face pixel phase 0
+    with pytest.raises(ValueError, match=r"phase 1 has no pixel on the face"):
+        problem(labels, [K1, 10 * K1], n_phases=2)
+    result = solve(problem(labels, [K1], n_phases=1))
+    assert result.phase_pressures[0] * result.fill_factors[0] > 0, "one phase carries the load"
+    assert result.normal_force == FORCE, "the load"
+
+
+def test_equal_masks_are_one_outline():
+    mask = np.ones((4, 8), dtype=bool)
+    mask[0, :2] = False
+    a = MaskOutline(mask, 1e-3, source="'a.npy'")
+    b = MaskOutline(mask.copy(), 1e-3, source="'b.png'")
+    assert a == b and hash(a) == hash(b), "equal pixels and pixel size: one face"
+    assert a != MaskOutline(mask, 2e-3), "another pixel size is another face"
+    assert initial_height("flat", a.grid(8)).shape == b.grid(8).shape == (4, 8), \
+        "a grid of one mask serves the other"
+    shifted = mask.copy()
+    shifted[0, 2] = False
+    assert a != MaskOutline(shifted, 1e-3), "other pixels are another face"
+
+
+def test_the_power_law_is_the_default(tmp_path):
+    scene = parse_scene(scene_text("parser"), tmp_path)
+    assert scene.wear == PowerLaw((1.0e-9, 1.7e-9), 1.0), scene.wear

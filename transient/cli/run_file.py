@@ -1,0 +1,230 @@
+"""The run file of ``runin-transient``: inputs, checkpoints, backup, resume, settings history.
+
+A run writes its file at a time under the run file's lock
+(:class:`transient.output.RunLock`).  :class:`RunFile` writes every
+checkpoint atomically with the run's inputs (:func:`run_inputs`); the file
+it replaces is kept as ``RUN.h5.prev`` while the run goes on.  A resumed
+run continues only the run of the same problem (:func:`check_same_inputs`:
+face, grid, load, phases, wear law, initial face), from a file whose
+checksums hold (:func:`read_resume`, which names the previous checkpoint
+when the file is damaged); its settings may change, and each part of the
+run is recorded with its settings in the root attribute
+``settings_history``.  Ctrl-C is held back while a checkpoint is written
+(:func:`interrupt_held`), so that what :meth:`RunFile.saved_text` says is
+what is on disk.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import signal
+import threading
+
+import numpy as np
+
+from steady.text import shorten
+
+from .. import output
+
+__all__ = ["RunFile", "at_text", "check_same_inputs", "interrupt_held", "read_resume",
+           "run_inputs"]
+
+
+def run_inputs(scene, problem):
+    """Root attributes and datasets that identify the run's inputs.
+
+    The outline goes into the run file with the result (its group
+    ``outline``; ``radius`` for a disk), from ``problem.outline``.
+    """
+    attrs = {"scene": scene.text, "scene_path": str(scene.source_path or ""),
+             "n": problem.n, "normal_force": scene.normal_force,
+             "E_star": scene.E_star, "exponent": scene.wear.exponent,
+             "wear_coefficients": problem.wear_coefficients}
+    return attrs, {"phase": problem.labels}
+
+
+def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, outline):
+    """Refuse to resume a run of another problem (face, grid, load, phases, wear law, start)."""
+    if stored.outline is None or stored.outline != outline:
+        was = "an unknown face" if stored.outline is None else stored.outline.describe()
+        raise ValueError(f"{str(path)!r} was run on {was}, the scene has the "
+                         f"{outline.describe()}; use --force to start over")
+    for key in ("n", "normal_force", "E_star", "exponent"):
+        if stored_attrs.get(key) != attrs[key]:
+            raise ValueError(f"{str(path)!r} was run with {key} = "
+                             f"{shorten(stored_attrs.get(key))}, the scene has {attrs[key]!r}; "
+                             f"use --force to start over")
+    if not np.array_equal(np.asarray(stored_attrs.get("wear_coefficients")),
+                          attrs["wear_coefficients"]):
+        raise ValueError(f"{str(path)!r} was run with other wear coefficients "
+                         f"({shorten(stored_attrs.get('wear_coefficients'))}); use --force")
+    if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
+        raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
+    face_mask = arrays["phase"] >= 0
+    if not np.array_equal(stored.initial_height[face_mask], h0[face_mask]):
+        raise ValueError(f"{str(path)!r} was run from another initial face; use --force")
+
+
+def at_text(steps, distance_s_star):
+    """Where a run is, for messages: ``step 12, s = 0.5 s*``."""
+    return f"step {steps}, s = {distance_s_star:.6g} s*"
+
+
+@contextlib.contextmanager
+def interrupt_held():
+    """Hold Ctrl-C (SIGINT) back until the block is done; it arrives right after.
+
+    A handler of its own notes the signal during the block and the
+    interrupt is raised when the block ends.  (Blocking the signal with a
+    thread's signal mask instead lets the kernel hand it to another thread
+    of the process, a transform or BLAS worker, where it can be lost.)
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if held:
+        raise KeyboardInterrupt
+
+
+class RunFile:
+    """The run file being written: checkpoints, backup, settings history, what is saved.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    attrs, arrays : dict
+        The inputs stored with every checkpoint (:func:`run_inputs`).
+    settings : dict
+        The settings of this part of the run (:meth:`RunOptions.settings`).
+    requested : transient.runin.RunOptions
+        The options as asked for (stored in the attribute ``options``).
+    """
+
+    def __init__(self, path, attrs, arrays, settings, requested):
+        self.path = path
+        self.attrs = dict(attrs)
+        self.arrays = arrays
+        self.requested = requested
+        self.history = []
+        self.missing = []
+        self.settings = settings
+        # Whether ``path`` holds a checkpoint of this run (then it becomes the backup).
+        self.ours = False
+        self.saved = None  # (steps, distance in s*) of the checkpoint on disk
+
+    def start(self):
+        """A new run: one part, from step 0."""
+        self.history = [self._part(0, 0.0, [])]
+
+    def resume(self, stored, stored_attrs):
+        """Continue ``stored`` (a verified :class:`RunResult` read from :attr:`path`).
+
+        Returns
+        -------
+        notes : list of str
+            Changed settings and missing snapshots, for stderr.
+        snapshots : tuple of float
+            Snapshot distances (s*) for the run: the stored ones, then the
+            requested ones still ahead.
+        """
+        s_star = stored.run_in_distance
+        here = stored.distance / s_star
+        self.ours = True
+        self.saved = (stored.steps, here)
+        try:
+            self.history = json.loads(stored_attrs.get("settings_history", "[]"))
+        except (TypeError, ValueError):
+            self.history = []
+        missing = stored_attrs.get("snapshots_missing")
+        self.missing = [] if missing is None else [float(v) for v in np.atleast_1d(missing)]
+        notes = []
+        if not self.history:
+            self.history = [{"from_step": 0, "to_step": stored.steps, "from_distance": 0.0,
+                             "to_distance": stored.distance, "status": stored.status,
+                             "settings": None, "snapshots_missing": []}]
+            notes.append(f"{str(self.path)!r} does not record the settings of its first "
+                         f"{stored.steps} steps")
+        previous = self.history[-1].get("settings")
+        if previous is not None:
+            changes = [f"{key} {shorten(previous.get(key), 40)} -> {shorten(value, 40)}"
+                       for key, value in self.settings.items() if previous.get(key) != value]
+            if changes:
+                notes.append(f"resuming {str(self.path)!r} at {at_text(stored.steps, here)} with "
+                             f"changed settings: {'; '.join(changes)} (each part of the run is "
+                             f"recorded with its settings in the attribute settings_history)")
+        # Requested snapshots behind the run: stored already, or missing for good.
+        stored_d = stored.snapshot_distance.tolist()
+        passed = [r for r in self.requested.snapshots
+                  if r * s_star <= stored.distance * (1 + 1e-12)]
+        ahead = [r for r in self.requested.snapshots if r not in passed]
+        gone = [r for r in passed
+                if not any(abs(d - r * s_star) <= 1e-9 * max(d, r * s_star) + 1e-12 * s_star
+                           for d in stored_d)]
+        new_missing = [r * s_star for r in gone if r * s_star not in self.missing]
+        if new_missing:
+            self.missing += new_missing
+            notes.append(f"snapshots at {', '.join(f'{r:g}' for r in gone)} s* were passed "
+                         f"before this resume (at s = {here:.6g} s*) and are not in the file "
+                         f"(listed in the attribute snapshots_missing)")
+        self.history.append(self._part(stored.steps, stored.distance,
+                                       [d / s_star for d in new_missing]))
+        return notes, tuple(d / s_star for d in stored_d) + tuple(ahead)
+
+    def _part(self, steps, distance, missing):
+        return {"from_step": steps, "to_step": steps, "from_distance": distance,
+                "to_distance": distance, "status": "running", "settings": self.settings,
+                "snapshots_missing": missing}
+
+    def write(self, result, comparison=None, extra_attrs=None):
+        """Write a checkpoint or the final run; the file it replaces becomes the backup."""
+        self.history[-1].update(to_step=result.steps, to_distance=result.distance,
+                                status=result.status)
+        attrs = dict(self.attrs, **(extra_attrs or {}))
+        attrs.update({
+            "options": repr(self.requested),
+            "settings_history": json.dumps(self.history),
+            "settings_history_units": "from_distance, to_distance: m; settings: distances "
+                                      "in s*, as in [transient]",
+            "snapshots_missing": np.asarray(self.missing, dtype=float),
+            "snapshots_missing_units": "m"})
+        with interrupt_held():  # what saved_text() says must be what is on disk
+            output.write_run(self.path, result, attrs=attrs, arrays=self.arrays,
+                             comparison=comparison, backup=self.ours)
+            if not self.ours:
+                # A backup beside a new run belongs to the run this one replaced.
+                output.backup_path(self.path).unlink(missing_ok=True)
+            self.ours = True
+            self.saved = (result.steps, result.distance / result.run_in_distance)
+
+    def saved_text(self):
+        """What can be continued, for a message."""
+        if self.saved is None:
+            return "nothing was saved (no checkpoint had been written)"
+        return (f"the checkpoint in {str(self.path)!r} ({at_text(*self.saved)}) can be continued "
+                f"with --resume")
+
+
+def read_resume(out):
+    """The run stored in ``out``, verified; a damaged file is refused naming its backup."""
+    try:
+        return output.read_run(out)
+    except output.DamagedRunFileError as err:
+        backup = output.backup_path(out)
+        try:
+            prev = output.read_run(backup)[0] if backup.exists() else None
+        except ValueError:
+            prev = None
+        if prev is None:
+            hint = "no intact previous checkpoint is left; start over with --force"
+        else:
+            hint = (f"the previous checkpoint {str(backup)!r} "
+                    f"({at_text(prev.steps, prev.distance / prev.run_in_distance)}) is intact: "
+                    f"rename it to {str(out)!r} and --resume")
+        raise ValueError(f"{err}; {hint}") from None

@@ -1,0 +1,394 @@
+"""The command ``runin-transient``: run-in of the punch described by a scene file.
+
+Usage (``runin-transient`` once installed, or ``python -m transient``)::
+
+    runin-transient SCENE.toml -o RUN.h5 [--resume | --force] [--plot RUN.png]
+                    [--scheme NAME] [--tol T] [--spread-tol T] [--shape-tol T]
+                    [--jump-spread T] [--max-distance S] [--max-steps N]
+                    [--checkpoint-interval SEC] [--memory-limit GIB] [-v]
+
+Starts from the scene's initial face (``[initial_face]``, flat by default),
+wears it until the wear rates equalise (``[transient]`` options, overridden
+by the flags), compares the final face with the closed-form steady face
+(eq. 9), prints the agreement and stores everything in ``RUN.h5``.  The
+face may have any outline of the scene's ``[punch]`` (:mod:`steady.outline`);
+the summary names it and the reference slope ``grad_f0`` the rms slopes are
+normalised by (the homogeneous face's: eq. 12 for a disk), with its source.  A
+progress bar is drawn when stderr is a terminal.
+
+Before the run starts everything that can be checked is: the scene, the
+output paths (missing directories are created; a directory, a device, an
+unwritable place or ``--plot`` naming the run file are refused), the
+memory the grid and the snapshots need (:func:`transient.memory.run_in_memory`) and the
+run file's lock: one writer at a time (:class:`transient.output.RunLock`),
+a second one is refused at once.
+
+The run file is checkpointed atomically right after the first step and
+then every ``checkpoint_interval`` seconds (further apart on fine grids,
+so that checkpoints take at most 5 % of the run); the file it replaces is kept as
+``RUN.h5.prev``.  Every checkpoint carries checksums, verified by
+``--resume``; a damaged file is refused, naming the previous checkpoint if
+it is intact.  ``--resume`` continues a killed, stopped or failed run with
+the scene's (and the flags') current settings: the inputs that define the
+problem (grid, load, phases, wear law, initial face) must be unchanged,
+the run settings (scheme, tolerances, limits, snapshots) may change, since
+the stored state (face, pressure, previous face and rate, next step) is
+what every scheme continues from.  Each part of the run is recorded with
+its settings in the root attribute ``settings_history`` (JSON, one entry
+per part: steps, distances, status, settings); snapshots requested at
+distances the run had already passed are listed in ``snapshots_missing``
+and on stderr.  ``--force`` starts over.
+
+Exit status: 0 steady state reached; 1 run stopped or failed (resumable),
+or an operating-system error (the message names the last checkpoint);
+2 bad input (``error: ...`` on stderr, nothing written), including a run
+whose first contact solve fails and a run file another run is writing or
+that is damaged; 130 interrupted (the message says whether a checkpoint can
+be continued).
+
+A flag that overrides a :class:`transient.options.RunOptions` field comes
+from the field's declaration (``flag``).  One that adds a computation
+after the run reads what it needs from the ``_Job`` (scene, initial face,
+problem, options) in ``_run``, stores its figures
+through the ``extra_attrs`` of ``RunFile.write`` and prints them in
+``_report``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import pathlib
+import sys
+
+import numpy as np
+
+from steady.cli.common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    ArgumentParser,
+    CommandError,
+    add_memory_limit,
+    check_distinct,
+    configure_logging,
+    describe_os_error,
+    note,
+    prepare_output,
+    program_name,
+    run_command,
+)
+from steady.memory import check_memory, keep_freed_memory
+
+from ..memory import run_in_memory
+from ..options import add_option_flags, options_from_flags
+from .progress import Progress
+from .run_file import RunFile, at_text, check_same_inputs, read_resume, run_inputs
+
+__all__ = ["build_parser", "main"]
+
+logger = logging.getLogger(__name__)
+
+_EPILOG = ("exit status: 0 steady state reached, 1 run stopped or failed (resume it) or an "
+           "operating-system error, 2 bad input (nothing written), 130 interrupted")
+
+
+def build_parser():
+    """The argument parser of ``runin-transient`` (``python -m transient``)."""
+    p = ArgumentParser(prog=program_name("python -m transient"),
+                       description="Run-in wear of a multi-phase punch on an elastic "
+                                   "half-space, from its initial face to the steady state.",
+                       epilog=_EPILOG)
+    p.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
+    p.add_argument("-o", "--output", type=pathlib.Path, required=True,
+                   help="HDF5 run file (checkpointed while running; missing directories "
+                        "are created)")
+    start = p.add_mutually_exclusive_group()
+    start.add_argument("--resume", action="store_true",
+                       help="continue the run stored in the output file (starts afresh if "
+                            "it does not exist)")
+    start.add_argument("--force", action="store_true",
+                       help="start over, overwriting existing output files")
+    p.add_argument("--plot", type=pathlib.Path, metavar="PNG",
+                   help="draw the history and the final face into this PNG (from RUN.h5; an "
+                        "existing figure is replaced with --resume or --force)")
+    from ..stepping import SCHEMES
+
+    add_option_flags(p, choices={"scheme": sorted(SCHEMES)})
+    p.add_argument("--spatial-error", action="store_true",
+                   help="after the run, run the scene again on about half the grid and store "
+                        "the history's spatial error |S_n - S_n/2| as rms_slope_spatial_error "
+                        "(about a quarter of the cost)")
+    add_memory_limit(p)
+    p.add_argument("-v", "--verbose", action="count", default=0,
+                   help="log progress (-v) or details (-vv) to stderr")
+    return p
+
+
+def _run_in_text(grid, snapshots):
+    """The run-in, as a memory refusal names it."""
+    nx, ny = grid.shape
+    pixels = "" if nx == ny else f" ({nx} x {ny} pixels)"
+    return (f"a run-in at n = {grid.n}{pixels}"
+            + (f" with {snapshots} snapshots" if snapshots else ""))
+
+
+def _check_outputs(args):
+    """Refuse what the output paths cannot be, before any work; create missing directories."""
+    from ..output import backup_path, lock_path
+
+    out = args.output
+    check_distinct([("the scene", args.scene), ("-o", out),
+                    ("the run file's backup", backup_path(out)),
+                    ("the run file's lock", lock_path(out)), ("--plot", args.plot)])
+    # Existence is checked again under the run's lock.
+    prepare_output(out, force=True)
+    if args.plot is not None:
+        # The figure of a resumed run is drawn anew from its file.
+        prepare_output(args.plot, force=args.force or args.resume, what="--plot")
+
+
+def _first_solve_failed(err, job):
+    """The message of a run whose initial contact solve fails, naming the likely cause."""
+    face = job.initial_height[job.problem.face_mask]
+    relief = float(np.ptp(face)) if np.all(np.isfinite(face)) else math.inf
+    relief_f = relief / job.problem.depth_scale
+    rtol = job.options.contact_rtol
+    if not relief_f < 1e6:
+        cause = (f"the [initial_face] (kind {job.initial.kind!r}) has a relief of {relief:.3g} m "
+                 f"= {relief_f:.3g} f*")
+    elif rtol < 1e-13:
+        cause = f"[transient] contact_rtol = {rtol:g} is below what round-off allows"
+    else:
+        cause = (f"check [transient] contact_rtol = {rtol:g} and the [initial_face] (kind "
+                 f"{job.initial.kind!r}, relief {relief_f:.3g} f*)")
+    return f"the first contact solve failed: {cause} ({err})"
+
+
+def _report(result, comparison):
+    """The summary printed after the run."""
+    lines = [f"{result.status}: {result.message}",
+             f"scheme {result.scheme}: {result.steps} steps ({result.rejected} rejected, "
+             f"{result.failures} failed), {result.solves} contact solves, "
+             f"{result.iterations} solver iterations, {result.wall_time:.3g} s"]
+    if result.outline is not None:
+        nx, ny = result.shape
+        lines.append(f"face: {result.outline.describe()}, n = {max(nx, ny)} ({nx} x {ny} "
+                     f"pixels)")
+    if result.reference_slope_error > 0:
+        ref = f"{result.reference_slope:.6g} +- {result.reference_slope_error:.2g}"
+    else:
+        ref = f"{result.reference_slope:.6g}"
+    source = result.reference_slope_source or "unknown"
+    lines += [f"grad_f0 = {ref} ({source}): the unit of the normalised rms slopes",
+              f"scales: f* = {result.depth_scale:.4g} m, s* = {result.run_in_distance:.4g} m, "
+              f"fastest relaxation h/(k_max E*) = {result.fast_distance:.4g} m"]
+    if comparison is not None:
+        lines += ["agreement with the steady face (eq. 9):", comparison.summary()]
+    return lines
+
+
+@dataclasses.dataclass
+class _Job:
+    """A run-in ready to start or continue, under the run file's lock."""
+
+    scene: object
+    initial: object
+    problem: object
+    initial_height: np.ndarray
+    options: object
+    resume: object
+    run_file: RunFile
+    companion_grid: int | None = None  # --spatial-error: the companion run's grid
+
+
+def _prepare(args, lock, scene, initial, options):
+    """Check the run file under its lock, build the problem, read what is resumed."""
+    from ..output import backup_path, remove_temporaries
+    from ..problem import WearProblem
+
+    out = args.output
+    if lock.previous_pid is not None:
+        note(f"took over the lock of {str(out)!r} left by process {lock.previous_pid}, which "
+              f"has ended")
+    for tmp in remove_temporaries(out):
+        logger.info("removed %s, left by a killed writer", tmp)
+    if out.exists() and not (args.resume or args.force):
+        raise ValueError(f"{str(out)!r} exists; use --resume to continue it or --force to "
+                         f"start over")
+    if not out.exists() and backup_path(out).exists() and not args.force:
+        raise ValueError(f"{str(out)!r} does not exist but its backup "
+                         f"{str(backup_path(out))!r} does: rename it to {str(out)!r} to "
+                         f"continue from it, or use --force to start over")
+    problem = WearProblem.from_scene(scene)
+    h0 = initial.height(problem.grid)
+    attrs, arrays = run_inputs(scene, problem)
+    run_file = RunFile(out, attrs, arrays, options.settings(), options)
+    resume = None
+    if args.resume and out.exists():
+        resume, stored_attrs, stored_arrays = read_resume(out)
+        check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
+                           problem.outline)
+        if "sha256" not in stored_attrs:
+            note(f"{str(out)!r} carries no checksums; resumed without verification")
+        if resume.status == "steady":
+            note(f"{str(out)!r} holds a finished run; nothing to continue")
+        else:
+            notes, snapshots = run_file.resume(resume, stored_attrs)
+            for text in notes:
+                note(text)
+            options = dataclasses.replace(options, snapshots=snapshots)
+            check_memory(run_in_memory(problem.shape, len(snapshots)),
+                         _run_in_text(problem.grid, len(snapshots)), args.memory_limit)
+    else:
+        if args.resume:
+            note(f"{str(out)!r} does not exist; starting a new run")
+        run_file.start()
+    grid = _companion_grid(scene, initial, problem.n) if args.spatial_error else None
+    return _Job(scene, initial, problem, h0, options, resume, run_file,
+                companion_grid=grid)
+
+
+def _companion_grid(scene, initial, n):
+    """The grid of ``--spatial-error``'s companion run; refused before the run if none exists."""
+    from ..spatial_error import companion_grid
+
+    m = companion_grid(scene.geometry, n, scene.outline)  # ValueError names the minimum grid
+    try:
+        initial.height(scene.grid(m))
+    except ValueError as err:
+        raise ValueError(f"--spatial-error needs the initial face on the companion grid "
+                         f"n = {m}: {err}") from None
+    return m
+
+
+def run(args):
+    """Do the work for parsed arguments; return the exit status."""
+    from ..output import RunLock
+    from ..scene import load_transient_scene
+
+    out = args.output
+    scene, options, initial = load_transient_scene(args.scene)
+    options = options_from_flags(options, args)
+    _check_outputs(args)
+    grid = scene.grid()  # load_scene has checked n against the outline
+    check_memory(run_in_memory(grid.shape, len(options.snapshots)),
+                 _run_in_text(grid, len(options.snapshots)), args.memory_limit)
+    scene.phase_labels()  # names a phase without a face pixel before the run
+
+    with RunLock(out) as lock:
+        try:
+            job = _prepare(args, lock, scene, initial, options)
+        except KeyboardInterrupt:
+            raise CommandError("interrupted before the run started; nothing was written",
+                               EXIT_INTERRUPTED) from None
+        try:
+            result, comparison = _run(job)
+        except KeyboardInterrupt:
+            raise CommandError(f"interrupted; {job.run_file.saved_text()}",
+                               EXIT_INTERRUPTED) from None
+        except OSError as err:
+            raise CommandError(f"{describe_os_error(err)}; {job.run_file.saved_text()}",
+                               EXIT_FAILED) from None
+        except _StepFailureAtStart as err:
+            raise CommandError(_first_solve_failed(err.__cause__, job),
+                               EXIT_BAD_INPUT) from None
+        print("\n".join(_report(result, comparison)))
+        status = EXIT_OK if result.success else EXIT_FAILED
+        at = at_text(result.steps, result.distance / result.run_in_distance)
+        stop = f"run {result.status} at {at}: {result.message}; continue with --resume"
+        del job, result, comparison  # the figure is drawn from the file
+        if args.plot is not None:
+            _plot(out, args.plot)
+    if status != EXIT_OK:
+        print(f"error: {stop}", file=sys.stderr)
+    return status
+
+
+class _StepFailureAtStart(Exception):
+    """The initial contact solve of a new run failed (its ``__cause__`` says how)."""
+
+
+def _run(job):
+    """Run (or continue), checkpointing; compare and write the result; return both."""
+    from ..comparison import compare_with_steady
+    from ..problem import StepFailure
+    from ..runin import run_in
+
+    problem, resume = job.problem, job.resume
+    finished = resume is not None and resume.status == "steady"
+    bar = Progress(0 if resume is None else resume.steps)
+    try:
+        result = run_in(problem, job.initial_height, job.options, resume=resume, on_step=bar,
+                        on_checkpoint=None if finished else job.run_file.write)
+    except StepFailure as err:  # every later failure is retried inside the run
+        raise _StepFailureAtStart() from err
+    finally:
+        bar.close()
+    comparison = None
+    if result.success:
+        comparison = compare_with_steady(result, problem.solve_steady(), problem)
+        if job.companion_grid is not None and not finished:
+            result = _companion(job, result)
+    if not finished:
+        extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
+        job.run_file.write(result, comparison, extra)
+    return result, comparison
+
+
+def _companion(job, result):
+    """The run on about half the grid beside it: the history's spatial error bar."""
+    from ..spatial_error import spatial_error
+
+    bar = Progress(0)
+    try:
+        companion = spatial_error(job.scene, job.initial, job.options, result,
+                                  grid=job.companion_grid, on_step=bar)
+    finally:
+        bar.close()
+    result = companion.attach(result)
+    error = result.history["rms_slope_spatial_error"] / result.reference_slope
+    print(f"spatial error (companion run on n = {companion.grid}, {companion.run.wall_time:.3g}"
+          f" s): largest {np.nanmax(error):.3g} grad_f0, at the end {error[-1]:.3g} grad_f0")
+    return result
+
+
+def _plot(out, png):
+    """Draw the run file's figure; the run is saved whatever happens here."""
+    from ..plotting import plot_run  # deferred: matplotlib is slow to import
+
+    try:
+        plot_run(out, png)
+    except OSError as err:
+        raise CommandError(f"cannot draw the figure: {describe_os_error(err)}; the run is "
+                           f"saved in {str(out)!r}", EXIT_FAILED) from None
+    except KeyboardInterrupt:
+        raise CommandError(f"interrupted while drawing the figure; the run is saved in "
+                           f"{str(out)!r}", EXIT_INTERRUPTED) from None
+    print(f"figure: {png}")
+
+
+def main(argv=None):
+    """Entry point of ``runin-transient`` and ``python -m transient``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0 steady state reached, 1 run stopped or failed
+        (resumable) or an operating-system error, 2 bad input, 130
+        interrupted.
+    """
+    args = build_parser().parse_args(argv)
+    # The summary and the error line say how a run ended: library warnings (a failed
+    # contact solve, retried) show with -v.
+    configure_logging(args.verbose)
+    # Large work arrays are allocated at every step: keep them in the heap.
+    keep_freed_memory()
+    return run_command(run, args, verbose=args.verbose)

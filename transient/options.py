@@ -1,0 +1,221 @@
+"""Options of a run-in: one declaration per option, for the library, the scene and the command.
+
+Every option of :func:`transient.runin.run_in` is a field of
+:class:`RunOptions` that carries its scene key (:class:`steady.schema.Key`:
+type, unit, range, meaning) in the field's metadata.  From that one
+declaration come
+
+- the check of a :class:`RunOptions` built from Python;
+- the keys of the scene section ``[transient]``
+  (:func:`transient.scene.parse_transient`, :func:`options_from_table`);
+- the flags of ``runin-transient`` that override them (the fields marked
+  ``flag``: :func:`add_option_flags`, :func:`options_from_flags`).
+
+Adding an option is one field here (and its use in the run).  Distances are
+in units of the run-in distance ``s* = L / (k_min E*)``, ``L`` the face
+outline's scale (the radius ``a`` of a disk).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+
+from steady.schema import Key, read_table
+from steady.text import shorten
+
+from .stepping import get_scheme
+
+__all__ = ["RunOptions", "add_option_flags", "option_keys", "options_from_flags",
+           "options_from_table"]
+
+
+def _option(default, key, *, flag=False):
+    """A field of :class:`RunOptions` with its scene key (and whether a flag overrides it)."""
+    return dataclasses.field(default=default, metadata={"key": key, "flag": flag})
+
+
+@dataclasses.dataclass(frozen=True)
+class RunOptions:
+    """Options of :func:`transient.runin.run_in`; distances in units of ``s*``.
+
+    Each attribute is also the ``[transient]`` key of the same name; those
+    marked (flag) also a flag of ``runin-transient`` (``--spread-tol`` for
+    ``spread_tol``).
+
+    Attributes
+    ----------
+    scheme : str
+        Registered integrator (default ``"esdirk3"``, third order;
+        docs/benchmarks.md, "Run-in speed") (flag).
+    tol : float
+        Local error per step, rms over the face of the shape error in units
+        of ``f*`` (default 1e-5) (flag).
+    step : float or None
+        Fixed step in s* (no adaptivity, no jump); default None (adaptive).
+    initial_step : float or None
+        First adaptive step in s*; default ``0.01 * sqrt(tol) * h/L``
+        (the fast scale, where the flat punch's edge relaxes).
+    spread_tol : float
+        Steady when the wear-rate spread is below this (default 1e-6) ...
+        (flag)
+    shape_tol : float
+        ... and the shape changes by less than this many ``f*`` per s*
+        (default 1e-6) (flag).
+    jump_spread : float
+        Jump to the steady state once the spread is below this (default
+        1e-3; 0 disables, ``inf`` jumps at once) (flag).
+    jump_step : float
+        Length of a jump, in s* (default 1e8).
+    max_distance : float
+        Stop (resumable, status ``"stopped"``) beyond this distance in s*
+        (default 1e12) (flag).
+    max_steps : int
+        Stop after this many accepted steps (default 100000) (flag).
+    snapshots : tuple of float
+        Distances in s* at which the face and the pressure are stored; steps
+        land on them exactly.
+    max_failures : int
+        Consecutive failed attempts before the run stops (default 20).
+    checkpoint_interval : float
+        Least wall-clock seconds between checkpoints (default 10; 0 = every
+        step); further apart where writing one takes over 5 % of the time
+        between them (:func:`transient.control.checkpoint_due`) (flag).
+    contact_rtol : float
+        Relative tolerance of every contact solve, the floor of the solves
+        of a regular step (default 1e-10).
+    """
+
+    scheme: str = _option("esdirk3", Key(
+        "scheme", "string", doc="registered integrator (transient.stepping.SCHEMES)"), flag=True)
+    tol: float = _option(1e-5, Key(
+        "tol", "number", unit="f*", low=0.0, doc="local error per step, shape rms / f*"),
+        flag=True)
+    step: float | None = _option(None, Key(
+        "step", "number", unit="s*", low=0.0, doc="fixed steps, no adaptivity (default: adaptive)"))
+    initial_step: float | None = _option(None, Key(
+        "initial_step", "number", unit="s*", low=0.0, doc="first adaptive step"))
+    spread_tol: float = _option(1e-6, Key(
+        "spread_tol", "number", unit="1", low=0.0,
+        doc="steady when (max - min) / mean of k p^m is below this"), flag=True)
+    shape_tol: float = _option(1e-6, Key(
+        "shape_tol", "number", unit="f*/s*", low=0.0,
+        doc="... and the shape changes less than this (f*) per s*"), flag=True)
+    jump_spread: float = _option(1e-3, Key(
+        "jump_spread", "number", unit="1", low=0.0, low_open=False, finite=False,
+        doc="jump to the steady state once the spread is below this (inf: at once, 0: never)"),
+        flag=True)
+    jump_step: float = _option(1e8, Key(
+        "jump_step", "number", unit="s*", low=0.0, finite=False, doc="length of a jump"))
+    max_distance: float = _option(1e12, Key(
+        "max_distance", "number", unit="s*", low=0.0, finite=False,
+        doc="stop (resumable) beyond this distance"), flag=True)
+    max_steps: int = _option(100000, Key(
+        "max_steps", "integer", low=1, low_open=False, doc="stop after this many steps"),
+        flag=True)
+    snapshots: tuple = _option((), Key(
+        "snapshots", "numbers", unit="s*", low=0.0, low_open=False,
+        doc="distances at which face and pressure are stored"))
+    max_failures: int = _option(20, Key(
+        "max_failures", "integer", low=1, low_open=False,
+        doc="consecutive failed attempts before the run stops"))
+    checkpoint_interval: float = _option(10.0, Key(
+        "checkpoint_interval", "number", unit="s", low=0.0, low_open=False,
+        doc="wall-clock seconds between checkpoints (0: every step; the first one follows the "
+            "first step)"), flag=True)
+    contact_rtol: float = _option(1e-10, Key(
+        "contact_rtol", "number", unit="1", low=0.0, high=1.0,
+        doc="relative tolerance of every contact solve (floor)"))
+
+    def __post_init__(self):
+        """Check every option against its key; store the snapshots sorted and without repeats."""
+        get_scheme(self.scheme)
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if value is None and field.default is None:
+                continue
+            if field.name == "snapshots":
+                value = list(value) if isinstance(value, (tuple, list)) else value
+            elif isinstance(value, (int, float)) and not isinstance(value, bool):
+                if field.type in ("float", "float | None"):
+                    value = float(value)
+                elif isinstance(value, float) and value == int(value) and math.isfinite(value):
+                    value = int(value)  # max_steps = 1e3 from Python
+            field.metadata["key"].parse(value, "")
+        snaps = tuple(float(s) for s in self.snapshots)
+        object.__setattr__(self, "snapshots", tuple(sorted(set(snaps))))
+
+    def settings(self):
+        """The options as plain values (JSON-ready), as the run file records them."""
+        values = dataclasses.asdict(self)
+        values["snapshots"] = list(values["snapshots"])
+        return values
+
+
+def option_keys():
+    """The ``[transient]`` keys, in the order of :class:`RunOptions`' fields."""
+    return tuple(field.metadata["key"] for field in dataclasses.fields(RunOptions))
+
+
+def options_from_table(table, base_dir="."):
+    """The :class:`RunOptions` of a scene's ``[transient]`` table (absent keys: defaults).
+
+    Raises
+    ------
+    ValueError
+        An unknown key or a bad value, named.
+    """
+    values = read_table(table, "[transient]", option_keys(), base_dir)
+    try:
+        return RunOptions(**values)
+    except ValueError as err:
+        raise ValueError(f"[transient] {err}") from None
+
+
+def _flag_type(key):
+    """The argparse type of a flag: its key's check, one line on failure."""
+    def parse(text):
+        try:
+            value = int(text) if key.type == "integer" else float(text)
+        except ValueError:
+            value = text if key.type == "string" else None
+        if value is None:
+            raise argparse.ArgumentTypeError(f"expected {key.describe()}, got {shorten(text)}")
+        try:
+            return key.parse(value, "")
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {key.describe()}, got "
+                                             f"{shorten(text)}") from None
+    return parse
+
+
+def add_option_flags(parser, choices=None):
+    """Add a flag for every :class:`RunOptions` field marked ``flag`` (``--spread-tol``).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+    choices : mapping of str to sequence, optional
+        Choices of string options (``{"scheme": sorted(SCHEMES)}``).
+    """
+    choices = choices or {}
+    for field in dataclasses.fields(RunOptions):
+        if not field.metadata["flag"]:
+            continue
+        key = field.metadata["key"]
+        flag = "--" + field.name.replace("_", "-")
+        unit = f"{key.unit}; " if key.unit and key.unit != "1" else ""
+        help_text = f"{key.doc} ({unit}overrides [transient] {field.name})"
+        if field.name in choices:
+            parser.add_argument(flag, choices=choices[field.name], help=help_text)
+        else:
+            metavar = field.name.upper().split("_")[-1]
+            parser.add_argument(flag, type=_flag_type(key), metavar=metavar, help=help_text)
+
+
+def options_from_flags(options, args):
+    """``options`` with the fields the flags in ``args`` override."""
+    overrides = {field.name: getattr(args, field.name) for field in dataclasses.fields(options)
+                 if field.metadata["flag"] and getattr(args, field.name, None) is not None}
+    return dataclasses.replace(options, **overrides)
