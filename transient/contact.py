@@ -23,8 +23,8 @@ changes:
   active set (after Vollebregt, J. Comput. Phys. 257 (2014) 333-351,
   doi:10.1016/j.jcp.2013.10.005), with one symbol per level of a
   non-uniform shift, stitched by the shift map.  The iteration count then
-  hardly grows with the grid (8 to 14 for the flat punch from n = 32 to
-  1024 at ``rtol = 1e-8``), where plain Polonsky-Keer needs 18 to 94;
+  hardly grows with the grid, while that of plain Polonsky-Keer does
+  (figures in docs/benchmarks.md, "Contact solver");
 - the elastic displacement ``K p`` is updated with the conjugate
   direction's product (one padded FFT pair per iteration for the
   operator), the change from the few pixels that enter or leave the active
@@ -208,23 +208,20 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     maxiter : int, optional
         Maximum number of iterations (default ``max(200, 10 max(nx, ny))``).
     preconditioner : str or callable, optional
-        One of ``"auto"``, ``"fourier"``, ``"fourier-padded"``, ``"jacobi"``,
-        ``"amg"``, ``"none"``.  ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
-        ``K + shift`` aliased to the ``nx x ny`` grid (one unpadded FFT pair
-        per iteration, about a third of a padded one; ``"fourier-padded"``
-        applies it on the padded grid); a non-uniform shift is split into
-        levels, one symbol and one FFT pair each, stitched by the shift map
-        (:class:`transient.preconditioners.FourierPreconditioner`).  Where
-        the shift is at least ten times the largest eigenvalue of ``K`` on
-        every face pixel the operator is diagonal to within 10 % and
-        ``"auto"`` takes ``"jacobi"`` (free).  ``"amg"`` (one
-        smoothed-aggregation V-cycle on a truncated kernel) needs
-        :mod:`pyamg` and is slower in every case measured
-        (docs/benchmarks.md).  Or a preconditioner already built for this
-        face and shift, called as ``z = preconditioner(residual, active)``
-        (a pressure, Pa, zero off ``active``, from a gap residual, m): a
-        caller that solves many problems of one shift pattern builds them
-        with :class:`transient.preconditioners.ScaledShift`.
+        One of ``"auto"``, ``"fourier"``, ``"fourier-padded"``, ``"jacobi"``, ``"amg"``,
+        ``"none"``.  ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
+        ``K + shift`` aliased to the ``nx x ny`` grid (one unpadded FFT pair per iteration,
+        cheaper than a padded one; ``"fourier-padded"`` applies it on the padded grid); a
+        non-uniform shift is split into levels, one symbol and one FFT pair each, stitched by
+        the shift map (:class:`transient.preconditioners.FourierPreconditioner`).  Where the
+        shift is at least ten times the largest eigenvalue of ``K`` on every face pixel the
+        operator is diagonal to within 10 % and ``"auto"`` takes ``"jacobi"`` (free).
+        ``"amg"`` (one smoothed-aggregation V-cycle on a truncated kernel) needs :mod:`pyamg`
+        and is slower in every case of docs/benchmarks.md.  Or a preconditioner already built
+        for this face and shift, called as ``z = preconditioner(residual, active)`` (a
+        pressure, Pa, zero off ``active``, from a gap residual, m): a caller that solves many
+        problems of one shift pattern builds them with
+        :class:`transient.preconditioners.ScaledShift`.
     callback : callable, optional
         Called as ``callback(pressure)`` after each iteration with the
         current pressure (read-only view; copy it to keep it).
@@ -242,24 +239,21 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
 
     Notes
     -----
-    Stopping rule.  With ``d`` the mean of ``u + h`` over the active set
-    ``I = {p > 0}`` and the gap ``g = u + h - d``, the residual is the rms,
-    over the face pixels, of the violation of the contact conditions::
+    Stopping rule.  With ``d`` the mean of ``u + h`` over the active set ``I = {p > 0}`` and
+    the gap ``g = u + h - d``, the residual is the rms, over the face pixels, of the violation
+    of the contact conditions::
 
         residual = sqrt( (sum_I g^2 + sum_{face \ I} min(g, 0)^2) / N_face )
 
-    (gap left open under pressure, or interpenetration where there is
-    none), in metres.  The iteration stops when
-    ``residual <= max(rtol * U, atol)`` with ``U`` the rms displacement
-    over the active set, the elastic scale of the problem (for the flat
-    punch ``U = F / (2 a E*)``).  So ``rtol`` is the relative residual of
-    the contact equation ``u = d - h`` on the contact area.  ``p >= 0``
-    holds exactly and the load is met to round-off at every iteration.
-    The returned ``approach`` is ``d``.  The displacement behind the
-    residual is updated with each step, which rounds each of its entries by
-    at most a few ``eps max|u|``; when the accumulated bound could reach a
-    thousandth of the tolerance, it is recomputed by FFT and the rule
-    checked again.
+    (gap left open under pressure, or interpenetration where there is none), in metres.  The
+    iteration stops when ``residual <= max(rtol * U, atol)`` with ``U`` the rms displacement
+    over the active set, the elastic scale of the problem (for the flat punch
+    ``U = F / (2 a E*)``).  So ``rtol`` is the relative residual of the contact equation
+    ``u = d - h`` on the contact area.  ``p >= 0`` holds exactly and the load is met to
+    round-off at every iteration.  The returned ``approach`` is ``d``.  The displacement
+    behind the residual is updated with each step, which rounds each of its entries by at
+    most a few ``eps max|u|``; when the accumulated bound could reach a thousandth of the
+    tolerance, it is recomputed by FFT and the rule checked again.
 
     Examples
     --------
@@ -278,15 +272,41 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     >>> print(f"{res.approach / reference.flat_punch_approach(force, a, E_star):.3f}")
     1.002
     """
+    on_face, n_face, height, force, shift, x0, maxiter = _checked_inputs(
+        halfspace, face_mask, height, normal_force, shift, x0, rtol, atol, maxiter,
+        preconditioner)
+    operator = _Operator(halfspace, shift)
+    h_face = np.where(on_face, height, 0.0)
+    if force == 0.0:
+        return _zero_load_result(h_face, on_face)
+    if not callable(preconditioner):
+        preconditioner = make_preconditioner(preconditioner, halfspace, on_face, shift)
+    problem = _Problem(operator, on_face.astype(float), n_face, h_face, force, halfspace.h**2,
+                       preconditioner)
+    state = _State(*_start(problem, on_face, x0, x0_displacement))
+    return _iterate(problem, state, rtol, atol, maxiter, callback)
+
+
+# -- input checks ------------------------------------------------------------------------------
+
+def _checked_inputs(halfspace, face_mask, height, normal_force, shift, x0, rtol, atol, maxiter,
+                    preconditioner):
+    """The arguments of :func:`solve_contact`, checked (see its Raises) and converted.
+
+    Returns
+    -------
+    on_face : ndarray of bool, shape (nx, ny)
+    n_face : int
+        Face pixels, at least one.
+    height : ndarray, shape (nx, ny), m
+    force : float, N
+    shift : ndarray, shape (nx, ny), m/Pa, or None
+        Zero off the face; None if zero everywhere.
+    x0 : ndarray, shape (nx, ny), Pa, or None
+    maxiter : int
+    """
     shape = tuple(halfspace.shape)
-    on_face = np.asarray(face_mask)
-    if on_face.shape != shape:
-        raise ValueError(f"face_mask must have shape {shape}, got {on_face.shape}")
-    if on_face.dtype != bool:
-        raise ValueError(f"face_mask must be a boolean mask, got dtype {on_face.dtype}")
-    n_face = int(on_face.sum())
-    if n_face == 0:
-        raise ValueError("face has no pixel: nothing can carry the load")
+    on_face, n_face = _checked_face(face_mask, shape)
     height = _check_field("height", height, shape)
     if not np.all(np.isfinite(height[on_face])):
         bad = int((~np.isfinite(height[on_face])).sum())
@@ -297,19 +317,42 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     if not (np.isfinite(force) and force >= 0):
         raise ValueError(f"normal_force must be finite and non-negative, got {normal_force!r} N")
     if shift is not None:
-        shift = _check_field("shift", shift, shape)
-        s_face = shift[on_face]
-        if not np.all(np.isfinite(s_face)):
-            raise ValueError("shift must be finite on the face")
-        if s_face.min() < 0:
-            raise ValueError(f"shift must be non-negative, got min {s_face.min()!r} m/Pa")
-        shift = np.where(on_face, shift, 0.0)
-        if not shift.any():
-            shift = None
+        shift = _checked_shift(shift, on_face, shape)
     if x0 is not None:
         x0 = _check_field("x0", x0, shape)
         if not np.all(np.isfinite(x0[on_face])):
             raise ValueError("x0 must be finite on the face")
+    maxiter = _checked_controls(rtol, atol, maxiter, preconditioner, shape)
+    return on_face, n_face, height, force, shift, x0, maxiter
+
+
+def _checked_face(face_mask, shape):
+    """The face as a boolean array of the grid's ``shape``, and its pixel count (at least 1)."""
+    on_face = np.asarray(face_mask)
+    if on_face.shape != shape:
+        raise ValueError(f"face_mask must have shape {shape}, got {on_face.shape}")
+    if on_face.dtype != bool:
+        raise ValueError(f"face_mask must be a boolean mask, got dtype {on_face.dtype}")
+    n_face = int(on_face.sum())
+    if n_face == 0:
+        raise ValueError("face has no pixel: nothing can carry the load")
+    return on_face, n_face
+
+
+def _checked_shift(shift, on_face, shape):
+    """The shift (m/Pa), finite and non-negative on the face, zero off it; None if all zero."""
+    shift = _check_field("shift", shift, shape)
+    s_face = shift[on_face]
+    if not np.all(np.isfinite(s_face)):
+        raise ValueError("shift must be finite on the face")
+    if s_face.min() < 0:
+        raise ValueError(f"shift must be non-negative, got min {s_face.min()!r} m/Pa")
+    shift = np.where(on_face, shift, 0.0)
+    return shift if shift.any() else None
+
+
+def _checked_controls(rtol, atol, maxiter, preconditioner, shape):
+    """Checks the tolerances and the preconditioner; the iteration limit, defaulted, as int."""
     for name, tol in (("rtol", rtol), ("atol", atol)):
         if not (np.isfinite(tol) and tol >= 0):
             raise ValueError(f"{name} must be finite and non-negative, got {tol!r}")
@@ -319,200 +362,438 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         maxiter = max(200, 10 * max(shape))
     if int(maxiter) != maxiter or maxiter < 1:
         raise ValueError(f"maxiter must be a positive integer, got {maxiter!r}")
-    maxiter = int(maxiter)
     if not callable(preconditioner) and preconditioner not in PRECONDITIONERS:
         raise ValueError(f"preconditioner must be one of {sorted(PRECONDITIONERS)} or a "
                          f"callable, got {preconditioner!r}")
+    return int(maxiter)
 
-    area = halfspace.h**2
-    operator = _Operator(halfspace, shift)
-    h_face = np.where(on_face, height, 0.0)
 
-    if force == 0.0:
-        zero = np.zeros(shape)
-        return ContactResult(zero, float(h_face[on_face].min()), zero.copy(), zero.copy(), 0.0,
-                             0, 0.0, np.zeros(1), True, "zero load: no pressure")
+# -- set-up ------------------------------------------------------------------------------------
 
-    if callable(preconditioner):
-        precondition = preconditioner
-    else:
-        precondition = make_preconditioner(preconditioner, halfspace, on_face, shift)
+def _zero_load_result(h_face, on_face):
+    """The result under no load: no pressure, the face touching at its lowest pixel."""
+    zero = np.zeros(h_face.shape)
+    return ContactResult(zero, float(h_face[on_face].min()), zero.copy(), zero.copy(), 0.0,
+                         0, 0.0, np.zeros(1), True, "zero load: no pressure")
 
-    # Initial pressure: the warm start if it carries load, else a rigid estimate.
+
+@dataclasses.dataclass(frozen=True)
+class _Problem:
+    """One checked contact problem under load, as the iteration reads it (never changed).
+
+    Attributes
+    ----------
+    operator : _Operator
+        ``K``, with the shift (m/Pa, or None) and the diagonal of ``K + diag(shift)``.
+    face : ndarray, shape (nx, ny)
+        1.0 on the face pixels, 0.0 off them.
+    n_face : int
+        Face pixels.
+    height : ndarray, shape (nx, ny), m
+        ``h`` on the face, 0 off it.
+    force : float, N
+        Normal force, positive.
+    area : float, m^2
+        Pixel area.
+    precondition : callable or None
+        ``z = precondition(r, active)``, a pressure (Pa) from a gap residual (m);
+        None for plain Polonsky-Keer.
+    """
+
+    operator: _Operator
+    face: np.ndarray
+    n_face: int
+    height: np.ndarray
+    force: float
+    area: float
+    precondition: object
+
+
+def _start(problem, on_face, x0, x0_displacement):
+    """The first iterate: a pressure carrying the load, and its displacement ``K p``.
+
+    The warm start ``x0`` if it carries load, else :func:`_initial_pressure`;
+    ``K p`` from ``x0_displacement`` when that is ``K`` of the same pressure.
+
+    Parameters
+    ----------
+    problem : _Problem
+    on_face : ndarray of bool, shape (nx, ny)
+    x0 : ndarray, shape (nx, ny), Pa, or None
+    x0_displacement : ndarray, shape (nx, ny), m, or None
+        As in :func:`solve_contact`.
+
+    Returns
+    -------
+    p : ndarray, shape (nx, ny), Pa
+    v : ndarray, shape (nx, ny), m
+    """
+    operator = problem.operator
+    shape = tuple(operator.halfspace.shape)
     p = np.zeros(shape)
     if x0 is not None:
         p = np.where(on_face & (x0 > 0), x0, 0.0)
     if p.sum() <= 0:
-        p = _initial_pressure(h_face, on_face, force, halfspace)
+        p = _initial_pressure(problem.height, on_face, problem.force, operator.halfspace)
         x0_displacement = None
-    c = force / (area * p.sum())
+    c = problem.force / (problem.area * p.sum())
     p *= c
-    # v = K p, the elastic displacement; u = v + shift p is formed from it.
     if x0_displacement is not None and np.array_equal(p, c * x0):
         v = c * _check_field("x0_displacement", x0_displacement, shape)
     else:
         v = operator(p)
-    v_max = float(np.abs(v).max())
+    return p, v
 
-    # Work arrays; the loop updates in place.
-    face_f = on_face.astype(float)
-    t = np.zeros(shape)
-    u = np.empty(shape)
-    g = np.empty(shape)
-    r = np.empty(shape)
-    work = np.empty(shape)
+
+# -- the iteration -----------------------------------------------------------------------------
+
+_CONVERGED, _RECOMPUTE, _ITERATE = "converged", "recompute", "iterate"
+
+
+class _State:
+    """The state the iteration carries from one step to the next (arrays updated in place).
+
+    Attributes
+    ----------
+    p : ndarray, shape (nx, ny), Pa
+        Pressure, non-negative, carrying the load.
+    v : ndarray, shape (nx, ny), m
+        ``K p``, updated with each step.
+    v_max : float, m
+        ``max |v|`` at the start or at its last recomputation by FFT, the scale of its
+        round-off.
+    since_full : int
+        Incremental updates of ``v`` since then.
+    verified : bool
+        Whether ``v`` was recomputed for the stopping rule after the last step (a residual
+        within the tolerance is then final).
+    t : ndarray, shape (nx, ny)
+        Conjugate direction: a pressure (Pa), or a gap (m) without a preconditioner.
+    gz_old : float
+        ``r . z`` of the previous direction.
+    restart : bool
+        Whether the next direction is the preconditioned residual alone (a pixel entered).
+    set_changed : bool
+        Whether the active set changed at the last step.
+    """
+
+    __slots__ = ("p", "v", "v_max", "since_full", "verified", "t", "gz_old", "restart",
+                 "set_changed")
+
+    def __init__(self, p, v):
+        self.p = p
+        self.v = v
+        self.v_max = float(np.abs(v).max())
+        self.since_full = 0
+        self.verified = False
+        self.t = np.zeros(p.shape)
+        self.gz_old = 1.0
+        self.restart = True
+        self.set_changed = True
+
+    def recompute_displacement(self, operator):
+        """``v = K p`` afresh by FFT, dropping the round-off of the incremental updates."""
+        self.v = operator(self.p)
+        self.v_max = float(np.abs(self.v).max())
+        self.since_full = 0
+
+
+class _ActiveSet:
+    """The active set ``I = {p > 0}`` in the forms the steps use.
+
+    Attributes
+    ----------
+    mask : ndarray of bool, shape (nx, ny)
+    weight : ndarray, shape (nx, ny)
+        ``mask`` as 1.0 / 0.0.
+    count : float
+        Pixels in the set.
+    off : ndarray, shape (nx, ny)
+        1.0 on the face pixels out of the set, else 0.0.
+    full : bool
+        Whether the set is the whole face.
+    """
+
+    __slots__ = ("mask", "weight", "count", "off", "full")
+
+    def __init__(self, p, face, n_face):
+        self.mask = p > 0
+        self.weight = self.mask.astype(float)
+        self.count = float(self.mask.sum())
+        self.off = face - self.weight
+        self.full = self.count == n_face
+
+
+def _iterate(problem, state, rtol, atol, maxiter, callback):
+    """The constrained conjugate gradient from the first iterate; the result.
+
+    Each iteration: the active set, if it changed (:class:`_ActiveSet`); the
+    approach, gap and residual (:func:`_gap`, :func:`_residual`, :func:`_tolerance`);
+    the stopping rule (:func:`_stopping_rule`); the conjugate direction
+    (:func:`_update_direction`) and the step along it (:func:`_curvature`,
+    :func:`_take_step`); the pixels leaving and entering the set
+    (:func:`_update_active_set`) and the pressure scaled back to the load
+    (:func:`_rescale_to_load`).
+
+    Parameters
+    ----------
+    problem : _Problem
+    state : _State
+        The first iterate, advanced in place.
+    rtol, atol, maxiter, callback
+        As in :func:`solve_contact`, checked.
+
+    Returns
+    -------
+    ContactResult
+    """
+    u, g, r, work = (np.empty(state.p.shape) for _ in range(4))
     history = []
-    gz_old = 1.0
-    restart = True
-    set_changed = True
-    verified = False
-    since_full = 0
     success = False
     message = ""
     it = 0
-    d = float("nan")
-    residual = float("nan")
     while True:
-        if set_changed:
-            active = p > 0
-            active_f = active.astype(float)
-            n_active = float(active.sum())
-            off_f = face_f - active_f
-            full_contact = n_active == n_face
-        if shift is None:
-            u[...] = v
-        else:
-            np.multiply(shift, p, out=u)
-            u += v
-        np.add(u, h_face, out=g)
-        d = _dot(g, active_f) / n_active
-        g -= d                        # the gap, on the face
-        np.multiply(g, active_f, out=r)
-        violation = _dot(r, r)
-        if not full_contact:
-            open_violation = np.minimum(g, 0.0)
-            open_violation *= off_f
-            violation += _dot(open_violation, open_violation)
-        residual = float(np.sqrt(violation / n_face))
-        scale = float(np.sqrt(_dot3(u, u, active_f) / n_active))
-        tolerance = max(rtol * scale, atol)
+        if state.set_changed:
+            active = _ActiveSet(state.p, problem.face, problem.n_face)
+        d = _gap(problem, state, active, u, g, r)
+        residual = _residual(g, r, active, problem.n_face)
+        tolerance = _tolerance(u, active, rtol, atol)
         if not np.isfinite(residual):
             message = f"non-finite residual at iteration {it}"
             history.append(residual)
             break
-        drift = since_full * _ROUNDING_PER_ITERATION * np.finfo(float).eps * v_max
-        if residual <= tolerance and (verified or drift < 1e-3 * tolerance):
-            history.append(residual)
+        verdict = _stopping_rule(residual, tolerance, state)
+        if verdict == _RECOMPUTE:
+            state.recompute_displacement(problem.operator)
+            state.verified = True
+            continue
+        history.append(residual)
+        if verdict == _CONVERGED:
             success = True
             message = (f"converged in {it} iterations: residual {residual:.3e} m "
                        f"<= {tolerance:.3e} m")
             break
-        if (residual <= tolerance and not verified) or since_full >= _REFRESH:
-            # Recompute the incrementally updated displacement (drift).
-            v = operator(p)
-            v_max = float(np.abs(v).max())
-            since_full = 0
-            verified = True
-            continue
-        verified = False
-        history.append(residual)
+        state.verified = False
         if it >= maxiter:
             message = (f"no convergence in {maxiter} iterations: residual {residual:.3e} m "
                        f"> {tolerance:.3e} m")
             break
         it += 1
-
-        # Preconditioned residual, projected to zero mean on the active set
-        # (the load constraint).
-        z = r.copy() if precondition is None else precondition(r, active)
-        z -= np.multiply(active_f, _dot(z, active_f) / n_active, out=work)
-        gz = _dot(r, z)
-        if restart or gz_old == 0:
-            t = z
-        else:
-            t *= gz / gz_old
-            t += z
-            if set_changed:
-                t *= active_f
-                t -= (_dot(t, active_f) / n_active) * active_f
-        gz_old = gz
-        q = operator(t)               # K t; A t = K t + shift t
-        tq = _dot(t, q)
-        if shift is not None:
-            tq += _dot3(t, t, shift)
+        _update_direction(problem, state, r, active, work)
+        q = problem.operator(state.t)
+        tq = _curvature(problem, state.t, q)
         if not tq > 0:
             message = f"breakdown at iteration {it}: non-positive curvature {tq!r}"
             break
-        tau = _dot(r, t) / tq
-        p -= np.multiply(t, tau, out=work)
-        v -= np.multiply(q, tau, out=work)
-        since_full += 1
-
-        # Pixels leaving (negative pressure) and entering (penetrating) the set.
-        leaving = p < 0
-        any_leaving = bool(leaving.any())
-        entering = None
-        if not full_contact:
-            entering = (g < 0) & (off_f > 0)
-        restart = entering is not None and bool(entering.any())
-        set_changed = any_leaving or restart
-        if set_changed:
-            dp = np.zeros(shape)
-            dp[leaving] = -p[leaving]
-            if restart:
-                if precondition is None:
-                    # Polonsky & Keer's rule: the steepest-descent step on those pixels.
-                    dp[entering] = -tau * g[entering]
-                else:
-                    # The same step length, as pressure per gap on the active set,
-                    # capped by the pressure that closes each gap alone.
-                    rate = abs(tau) * np.sqrt(_dot(t, t) / max(_dot(r, r), np.finfo(float).tiny))
-                    diagonal = np.broadcast_to(operator.diagonal, shape)[entering]
-                    dp[entering] = -g[entering] * np.minimum(rate, 1.0 / diagonal)
-            p += dp
-            p[leaving] = 0.0
-            ii, jj = np.nonzero(dp)
-            if ii.size <= _DIRECT_UPDATE_PIXELS:
-                v += operator.columns(ii, jj, dp[ii, jj])
-            else:
-                v = operator(p)
-                v_max = float(np.abs(v).max())
-                since_full = 0
-            total = p.sum()
-            if not total > 0:
-                message = f"all pressure lost at iteration {it}"
-                break
-            c = force / (area * total)
-            p *= c
-            v *= c
+        tau = _dot(r, state.t) / tq
+        _take_step(state, q, tau, work)
+        if (_update_active_set(problem, state, active, g, r, tau)
+                and not _rescale_to_load(problem, state)):
+            message = f"all pressure lost at iteration {it}"
+            break
         if callback is not None:
-            view = p.view()
+            view = state.p.view()
             view.flags.writeable = False
             callback(view)
+    return _result(problem, state, d, it, residual, history, success, message)
 
-    residual_history = np.asarray(history)
+
+def _gap(problem, state, active, u, g, r):
+    """The rigid approach ``d`` (m), the mean of ``u + h`` over the active set.
+
+    Fills the work arrays (m, shape (nx, ny)) ``u = (K + diag(shift)) p``, the gap
+    ``g = u + h - d`` (meaningful on the face) and its restriction ``r`` to the active set.
+    """
+    shift = problem.operator.shift
+    if shift is None:
+        u[...] = state.v
+    else:
+        np.multiply(shift, state.p, out=u)
+        u += state.v
+    np.add(u, problem.height, out=g)
+    d = _dot(g, active.weight) / active.count
+    g -= d
+    np.multiply(g, active.weight, out=r)
+    return d
+
+
+def _residual(g, r, active, n_face):
+    """Rms violation (m) of the contact conditions over the face (:func:`solve_contact`, Notes).
+
+    Parameters
+    ----------
+    g, r : ndarray, shape (nx, ny), m
+        The gap, and the gap on the active set (:func:`_gap`).
+    active : _ActiveSet
+    n_face : int
+    """
+    violation = _dot(r, r)
+    if not active.full:
+        open_violation = np.minimum(g, 0.0)
+        open_violation *= active.off
+        violation += _dot(open_violation, open_violation)
+    return float(np.sqrt(violation / n_face))
+
+
+def _tolerance(u, active, rtol, atol):
+    """The stopping rule's bound (m): ``rtol`` times the rms of ``u`` (m) on the set, or atol."""
+    scale = float(np.sqrt(_dot3(u, u, active.weight) / active.count))
+    return max(rtol * scale, atol)
+
+
+def _stopping_rule(residual, tolerance, state):
+    """What to do with a residual (m) against the tolerance (m).
+
+    ``_CONVERGED`` when it is met on a displacement whose accumulated round-off
+    cannot matter; ``_RECOMPUTE`` (``K p`` by FFT, then the rule again) when it
+    is met on one whose round-off might, or after ``_REFRESH`` incremental
+    updates; else ``_ITERATE``.
+    """
+    drift = state.since_full * _ROUNDING_PER_ITERATION * np.finfo(float).eps * state.v_max
+    if residual <= tolerance and (state.verified or drift < 1e-3 * tolerance):
+        return _CONVERGED
+    if (residual <= tolerance and not state.verified) or state.since_full >= _REFRESH:
+        return _RECOMPUTE
+    return _ITERATE
+
+
+def _update_direction(problem, state, r, active, work):
+    """The next conjugate direction ``state.t`` from the residual ``r`` (m, shape (nx, ny)).
+
+    ``work`` (shape (nx, ny)) is scratch.
+    """
+    precondition = problem.precondition
+    z = r.copy() if precondition is None else precondition(r, active.mask)
+    # Zero mean on the active set, so that a step along it keeps the load.
+    z -= np.multiply(active.weight, _dot(z, active.weight) / active.count, out=work)
+    gz = _dot(r, z)
+    if state.restart or state.gz_old == 0:
+        state.t = z
+    else:
+        t = state.t
+        t *= gz / state.gz_old
+        t += z
+        if state.set_changed:
+            # Pixels left the set: the old direction must neither move them nor the load.
+            t *= active.weight
+            t -= (_dot(t, active.weight) / active.count) * active.weight
+    state.gz_old = gz
+
+
+def _curvature(problem, t, q):
+    """``t . (K + diag(shift)) t`` from ``q = K t``, both of shape (nx, ny)."""
+    tq = _dot(t, q)
+    if problem.operator.shift is not None:
+        tq += _dot3(t, t, problem.operator.shift)
+    return tq
+
+
+def _take_step(state, q, tau, work):
+    """``p -= tau t`` and ``v -= tau q`` with ``q = K t`` (m); ``work`` is scratch."""
+    state.p -= np.multiply(state.t, tau, out=work)
+    state.v -= np.multiply(q, tau, out=work)
+    state.since_full += 1
+
+
+def _update_active_set(problem, state, active, g, r, tau):
+    """Moves the pixels leaving the active set and those entering it; whether any did.
+
+    Pixels with negative pressure leave with zero pressure; face pixels out of the
+    set that penetrate (``g < 0``) enter with :func:`_entering_pressure`.  Sets
+    ``state.restart`` and ``state.set_changed`` and keeps ``state.v = K p``.
+
+    Parameters
+    ----------
+    problem : _Problem
+    state : _State
+    active : _ActiveSet
+        The set of this iteration.
+    g, r : ndarray, shape (nx, ny), m
+        The gap before the step, and its part on the set.
+    tau : float
+        The step length along ``state.t``: dimensionless, or Pa/m without a preconditioner
+        (``t`` then being a gap).
+    """
+    p = state.p
+    leaving = p < 0
+    any_leaving = bool(leaving.any())
+    entering = None
+    if not active.full:
+        entering = (g < 0) & (active.off > 0)
+    state.restart = entering is not None and bool(entering.any())
+    state.set_changed = any_leaving or state.restart
+    if state.set_changed:
+        dp = np.zeros(p.shape)
+        dp[leaving] = -p[leaving]
+        if state.restart:
+            dp[entering] = _entering_pressure(problem, state, g, r, entering, tau)
+        p += dp
+        p[leaving] = 0.0
+        ii, jj = np.nonzero(dp)
+        if ii.size <= _DIRECT_UPDATE_PIXELS:
+            state.v += problem.operator.columns(ii, jj, dp[ii, jj])
+        else:
+            state.recompute_displacement(problem.operator)
+    return state.set_changed
+
+
+def _entering_pressure(problem, state, g, r, entering, tau):
+    """Pressure (Pa) of the pixels ``entering`` the active set, from their gap ``g < 0`` (m)."""
+    if problem.precondition is None:
+        # Polonsky & Keer's rule: the steepest-descent step on those pixels.
+        return -tau * g[entering]
+    # The same step length, as pressure per gap on the active set, capped by the
+    # pressure that closes each gap alone.
+    t = state.t
+    rate = abs(tau) * np.sqrt(_dot(t, t) / max(_dot(r, r), np.finfo(float).tiny))
+    diagonal = np.broadcast_to(problem.operator.diagonal, g.shape)[entering]
+    return -g[entering] * np.minimum(rate, 1.0 / diagonal)
+
+
+def _rescale_to_load(problem, state):
+    """Scales ``p`` and ``v = K p`` back to the load; False if no pressure is left."""
+    total = state.p.sum()
+    if not total > 0:
+        return False
+    c = problem.force / (problem.area * total)
+    state.p *= c
+    state.v *= c
+    return True
+
+
+def _result(problem, state, d, nit, residual, history, success, message):
+    """The :class:`ContactResult` of the last iterate, logged.
+
+    After a failure ``K p`` and the approach ``d`` (m) are recomputed from the
+    pressure, whose displacement may have drifted or missed a cut-short update.
+    """
+    operator, p = problem.operator, state.p
     if not success:
         logger.warning("contact solver failed: %s", message)
         if np.all(np.isfinite(p)):
-            v = operator(p)
+            state.v = operator(p)
             active = p > 0
             if active.any():
-                d = float((v + (0.0 if shift is None else shift * p) + h_face)[active].mean())
+                u = state.v + (0.0 if operator.shift is None else operator.shift * p)
+                d = float((u + problem.height)[active].mean())
     else:
         logger.debug("contact solver: %s (%d operator products)", message, operator.products)
+    v, shift = state.v, operator.shift
     return ContactResult(
         pressure=p,
         approach=float(d),
         displacement=v if shift is None else v + shift * p,
         elastic_displacement=v,
-        contact_fraction=float((p > 0).sum() / n_face),
-        nit=it,
+        contact_fraction=float((p > 0).sum() / problem.n_face),
+        nit=nit,
         residual=residual,
-        residual_history=residual_history,
+        residual_history=np.asarray(history),
         success=success,
         message=message,
     )
 
+
+# -- products ----------------------------------------------------------------------------------
 
 def _dot3(a, b, c):
     """Sum of the elementwise product of three arrays of the same shape (no temporary)."""
