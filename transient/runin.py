@@ -353,6 +353,9 @@ class _Run:
         self.history = {name: [] for name in HISTORY_UNITS}
         self.snap_d, self.snap_h, self.snap_p = [], [], []
         self.pressures = None
+        # Jumps to the steady state taken so far: the stop tests end a run whose
+        # jumps stagnate.
+        self.jumps = 0
         self._worker = None
         self._pending = []
 
@@ -582,27 +585,30 @@ class _Run:
     def loop(self, on_step, on_checkpoint):
         """Step until a stop test says the run is over; return ``(status, message)``.
 
-        Each pass: the stop tests, the choice of a jump or a regular step
-        (landing on the next snapshot), one attempt, then accept it, reject
-        it (error above tolerance: retry shorter) or count a failure (retry
-        at a fraction; give up after ``max_failures`` in a row).
+        Each pass: the stop tests, the choice of a jump (counted: the stop
+        tests end a run whose jumps stagnate) or a regular step (landing on
+        the next snapshot), one attempt, then accept it, reject it (error
+        above tolerance: retry shorter) or count a failure (retry at a
+        fraction, until the stop tests give up).
         """
         o = self.options
-        controller = self.controller
+        controller, stop = self.controller, self.stop
         fixed = controller.fixed
         last_checkpoint = None  # the first checkpoint follows the first accepted step
         checkpoint_cost = 0.0
         consecutive = 0
         while True:
-            stop = self.stop.check(self)
-            if stop is not None:
-                return stop
+            spread = self.history["spread"][-1]
+            ended = stop.check(spread, self.history["shape_rate"][-1], self.s, self.steps)
+            if ended is not None:
+                return ended
             target = self.pending_target()
-            jump = self.stop.jump_due(self, target, fixed)
+            jump = stop.jump_due(spread, target, fixed)
             if jump:
-                stop = self.stop.count_jump(self)
-                if stop is not None:
-                    return stop
+                self.jumps += 1
+                ended = stop.stagnation(self.jumps, spread)
+                if ended is not None:
+                    return ended
             scheme, ds = self.plan(jump, target)
             try:
                 trial, err = self.attempt(scheme, ds, jump)
@@ -611,14 +617,13 @@ class _Run:
                 consecutive += 1
                 logger.info("step of %.3g s* failed (%s); retrying smaller",
                             ds / self.s_star, exc)
-                if consecutive >= o.max_failures or fixed:
-                    return "failed", (f"step of {ds / self.s_star:.3g} s* at s = "
-                                      f"{self.s / self.s_star:.6g} s* failed {consecutive} "
-                                      f"times: {exc}")
+                ended = stop.give_up(consecutive, fixed, ds, self.s, exc)
+                if ended is not None:
+                    return ended
                 self.next_step = controller.after_failure(ds)
                 continue
             consecutive = 0
-            if not fixed and not jump and err > 1.0:
+            if controller.rejects(err, jump):
                 self.rejected += 1
                 self.next_step = controller.after_reject(ds, err, scheme)
                 logger.debug("rejected %.3g s* (err %.3g)", ds / self.s_star, err)
