@@ -14,8 +14,8 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 - :mod:`transient.stepping` -- the registered time integrators;
 - :mod:`transient.control` -- step control and stop tests;
 - :mod:`transient.diagnostics` -- what the history records of the face;
-- :mod:`transient.runin` -- the run loop, steady-state detection, history
-  and checkpoints;
+- :mod:`transient.runin` -- the run loop, its result and the state a
+  resumed run needs, history and checkpoints;
 - :mod:`transient.comparison` -- agreement with the steady face;
 - :mod:`transient.output` -- HDF5 run files;
 - :mod:`transient.scene` -- the ``[transient]`` and ``[initial_face]`` scene
@@ -51,7 +51,7 @@ from .preconditioners import (
     register_preconditioner,
 )
 from .problem import StepFailure, WearProblem
-from .runin import HISTORY_UNITS, RunOptions, RunResult, run_in
+from .runin import HISTORY_UNITS, RunOptions, RunResult, RunState, run_in
 from .scene import (
     InitialFace,
     TransientSettings,
@@ -88,6 +88,7 @@ __all__ = [
     "PRECONDITIONERS",
     "RunOptions",
     "RunResult",
+    "RunState",
     "SCHEMES",
     "SDIRK2",
     "Scheme",
