@@ -205,7 +205,8 @@ class StopTests:
     step) end it as failed.
 
     The tests hold no state of the run: the loop hands them the figures
-    they judge (the jump count stays with the run).
+    they judge (the jump count is part of the run's checkpointed state,
+    :class:`transient.runin.RunState`).
 
     Parameters
     ----------

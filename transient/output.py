@@ -16,7 +16,9 @@ Layout (root group)::
                   approach (m), depth_scale (m), run_in_distance (m),
                   fast_distance (m), pixel_mean_pressure (Pa),
                   reference_slope, previous_step (m, NaN if none),
-                  next_step (m, NaN if none); the unit of attribute ``x``
+                  next_step (m, NaN if none), jumps (jumps to the steady
+                  state so far; files written before it was stored lack
+                  it and are read as 0); the unit of attribute ``x``
                   in ``x_units``; the caller's input attributes (scene...;
                   an attribute given as None is left out)
                   with the face's outline known (every run of this version):
@@ -114,6 +116,8 @@ _SCALARS = {
 }
 # Root attributes of the state (RunState); a step absent is stored as NaN.
 _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
+# Root attributes of the state that files written before them lack: read as these defaults.
+_LATER_STATE_SCALARS = {"jumps": ("1", 0)}
 # Written with the outline; files of disks written before outlines lack them.
 _REFERENCE_UNITS = {"reference_slope_error": "1", "scale": "m", "pixel_size": "m"}
 _DISK_SOURCE = "disk: 4 pbar / (pi E*) (eq. 12)"
@@ -263,6 +267,9 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
         for name, unit in _OPTIONAL_SCALARS.items():
             value = getattr(result.state, name)
             f.attrs[name] = np.nan if value is None else value
+            f.attrs[f"{name}_units"] = unit
+        for name, (unit, _) in _LATER_STATE_SCALARS.items():
+            f.attrs[name] = getattr(result.state, name)
             f.attrs[f"{name}_units"] = unit
         if result.outline is not None:
             _write_outline(f, result)
@@ -468,6 +475,11 @@ def _result(path, datasets, groups):
         for name in _OPTIONAL_SCALARS:
             v = float(attrs[name])
             state[name] = None if math.isnan(v) else v
+        for name, (_, default) in _LATER_STATE_SCALARS.items():
+            value = attrs.get(name, default)
+            if int(value) != value or value < 0:
+                raise ValueError(f"{name} = {value!r} is not a count")
+            state[name] = int(value)
     except (TypeError, ValueError) as err:
         raise DamagedRunFileError(path, f"a root attribute is malformed ({err})") from None
     state.update({name: datasets[f"state/{name}"][0] if f"state/{name}" in datasets else None

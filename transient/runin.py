@@ -60,7 +60,7 @@ Reproducibility
 ---------------
 A run's future depends only on what a checkpoint stores: its
 :class:`RunState` (face, pressure, previous face and rate, next step, the
-warm start's recent pressures) and the distance, counters
+warm start's recent pressures, the jumps taken) and the distance, counters
 and history of the :class:`RunResult` holding it; a resumed run repeats
 the uninterrupted one bit for bit on the same machine and library
 versions.
@@ -246,6 +246,10 @@ class RunState:
         Their elastic displacements ``K p`` as the run holds them (the
         solver's own, which a resumed run needs to repeat the run bit for
         bit).
+    jumps : int
+        Jumps to the steady state taken so far (each counted as it is
+        planned, failed ones too); after
+        :data:`transient.control.MAX_JUMPS` the run stops as stagnating.
     """
 
     height: np.ndarray
@@ -259,6 +263,7 @@ class RunState:
     next_step: float | None = None
     pressure_history: np.ndarray | None = None
     pressure_history_displacement: np.ndarray | None = None
+    jumps: int = 0
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -422,14 +427,12 @@ class _Run:
       ``offset``, ``pressure``, ``approach``, ``prev_height``,
       ``prev_rate``, ``prev_step``, ``next_step``, ``pressures`` (the
       :class:`transient.problem.PressureHistory`, None until the first
-      attempt);
+      attempt), ``jumps``;
     - the progress a :class:`RunResult` reports: ``s`` (m), ``steps``,
       ``rejected``, ``failures``, ``wall_time`` (s, spent before this call),
       ``t0`` (monotonic clock at the start of this call), ``history``
       (lists), the snapshots ``snap_d``, ``snap_h``, ``snap_p`` and
       ``snap_index`` (the next requested one);
-    - ``jumps``, the jumps to the steady state taken so far (the stop tests
-      end a run whose jumps stagnate);
     - the history's worker thread: ``_worker``, ``_estimator_workers``,
       ``_pending``.
 
@@ -486,7 +489,7 @@ class _Run:
             self.pressures = PressureHistory(
                 problem, pressures=state.pressure_history,
                 displacements=state.pressure_history_displacement)
-        self.jumps = 0
+        self.jumps = int(state.jumps)
 
         if resume is None:
             self.s, self.steps, self.rejected, self.failures = 0.0, 0, 0, 0
@@ -598,7 +601,8 @@ class _Run:
             previous_step=self.prev_step, next_step=self.next_step,
             pressure_history=None if self.pressures is None else self.pressures.pressures(),
             pressure_history_displacement=(None if self.pressures is None
-                                           else self.pressures.displacements()))
+                                           else self.pressures.displacements()),
+            jumps=self.jumps)
 
     def result(self, status, message):
         """The run so far as a :class:`RunResult`."""
