@@ -215,6 +215,10 @@ def test_stagnating_jumps_stop_at_the_same_point_after_a_resume(tmp_path):
     assert resumed.message == full.message, \
         f"resumed run ended '{resumed.message}', uninterrupted '{full.message}'"
     _same_result(full, resumed)
+    # Continued as it is, the stagnated run takes no further jump.
+    again = run_in(wear_problem(RODS, (1.0, 1.7), 32), None, options, resume=full)
+    assert again.message == full.message, f"continued stagnated run ended '{again.message}'"
+    _same_result(full, again)
 
 
 def test_run_file_without_jump_count_reads_as_none_taken(tmp_path):

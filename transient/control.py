@@ -263,19 +263,21 @@ class StopTests:
         return not fixed and target is None and spread < self.options.jump_spread
 
     def stagnation(self, jumps, spread):
-        """``(status, message)`` once ``jumps`` (this one counted) exceed ``MAX_JUMPS``, else None.
+        """``(status, message)`` if ``jumps`` jumps have not reached the steady state, else None.
+
+        Asked before a jump: after ``MAX_JUMPS`` of them the next is not taken.
 
         Parameters
         ----------
         jumps : int
-            Jumps planned so far, the one about to be taken included.
+            Jumps taken so far.
         spread : float
             Last recorded wear-rate spread.
         """
-        if jumps > MAX_JUMPS:
+        if jumps >= MAX_JUMPS:
             return "stopped", (f"the wear-rate spread stagnates at "
                                f"{spread:.3g} above spread_tol "
-                               f"{self.options.spread_tol:.3g} after {jumps - 1} "
+                               f"{self.options.spread_tol:.3g} after {jumps} "
                                f"jumps: loosen spread_tol or tighten the contact tolerance")
         return None
 

@@ -247,8 +247,7 @@ class RunState:
         solver's own, which a resumed run needs to repeat the run bit for
         bit).
     jumps : int
-        Jumps to the steady state taken so far (each counted as it is
-        planned, failed ones too); after
+        Jumps to the steady state attempted so far (failed ones too); after
         :data:`transient.control.MAX_JUMPS` the run stops as stagnating.
     """
 
@@ -720,10 +719,10 @@ class _Run:
             target = self.pending_target()
             jump = stop.jump_due(spread, target, fixed)
             if jump:
-                self.jumps += 1
                 ended = stop.stagnation(self.jumps, spread)
                 if ended is not None:
                     return ended
+                self.jumps += 1
             scheme, ds = self.plan(jump, target)
             try:
                 trial, err = self.attempt(scheme, ds, jump)
