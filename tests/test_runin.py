@@ -22,6 +22,7 @@ from steady.accuracy import estimate_rms_slope
 from steady.phases import Voronoi
 from transient import initial_face
 from transient.comparison import compare_with_steady
+from transient.control import MAX_JUMPS
 from transient.output import read_run, write_run
 from transient.problem import StepFailure
 from transient.runin import HISTORY_UNITS, RunOptions, run_in
@@ -190,6 +191,52 @@ def test_resume_from_any_checkpoint_is_bitwise_identical(tmp_path):
         _same_result(full, resumed)
         assert np.array_equal(full.snapshot_height, resumed.snapshot_height, equal_nan=True), \
             f"snapshots differ after resuming from checkpoint {index}"
+
+
+def test_stagnating_jumps_stop_at_the_same_point_after_a_resume(tmp_path):
+    # Jumps of 0.01 s* (implicit Euler steps far too short to reach the
+    # steady state, which the spread approaches over several s*) leave the
+    # spread far above spread_tol: the run stops as stagnating after
+    # MAX_JUMPS of them.  Resumed from a checkpoint written between its
+    # jumps, it must stop where the uninterrupted run does: the jump count
+    # is part of the state a checkpoint carries.
+    options = RunOptions(tol=1e-3, jump_spread=math.inf, jump_step=0.01,
+                         checkpoint_interval=0.0)
+    problem = wear_problem(RODS, (1.0, 1.7), 32)
+    checkpoints = []
+    full = run_in(problem, np.zeros((32, 32)), options, on_checkpoint=checkpoints.append)
+    assert full.status == "stopped" and "stagnates" in full.message, \
+        f"expected a stop for stagnating jumps, got {full.status}: {full.message}"
+    assert full.steps == MAX_JUMPS, f"{full.steps} jumps taken, expected {MAX_JUMPS}"
+    path = tmp_path / "between_jumps.h5"
+    write_run(path, checkpoints[1])  # after two jumps
+    saved, _, _ = read_run(path)
+    resumed = run_in(wear_problem(RODS, (1.0, 1.7), 32), None, options, resume=saved)
+    assert resumed.message == full.message, \
+        f"resumed run ended '{resumed.message}', uninterrupted '{full.message}'"
+    _same_result(full, resumed)
+    # Continued as it is, the stagnated run takes no further jump.
+    again = run_in(wear_problem(RODS, (1.0, 1.7), 32), None, options, resume=full)
+    assert again.message == full.message, f"continued stagnated run ended '{again.message}'"
+    _same_result(full, again)
+
+
+def test_run_file_without_jump_count_reads_as_none_taken(tmp_path):
+    # Run files written before the jump count was stored lack the attribute;
+    # they were written by runs that had not stopped as stagnating, and are
+    # continued as if no jump had been taken.
+    import h5py
+
+    stopped = run_in(wear_problem(RODS, (1.0, 1.7), 32), np.zeros((32, 32)),
+                     RunOptions(tol=1e-3, max_steps=3))
+    path = tmp_path / "old.h5"
+    write_run(path, stopped)
+    with h5py.File(path, "a") as f:
+        for name in ("jumps", "jumps_units", "sha256"):  # an unverified older file
+            del f.attrs[name]
+    back, _, _ = read_run(path)
+    assert back.state.jumps == 0, f"jump count {back.state.jumps} read from a file without one"
+    _same_result(stopped, back)
 
 
 def test_run_file_round_trip(tmp_path):

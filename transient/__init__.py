@@ -14,8 +14,8 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 - :mod:`transient.stepping` -- the registered time integrators;
 - :mod:`transient.control` -- step control and stop tests;
 - :mod:`transient.diagnostics` -- what the history records of the face;
-- :mod:`transient.runin` -- the run loop, steady-state detection, history
-  and checkpoints;
+- :mod:`transient.runin` -- the run loop, its result and the state a
+  resumed run needs, history and checkpoints;
 - :mod:`transient.comparison` -- agreement with the steady face;
 - :mod:`transient.output` -- HDF5 run files;
 - :mod:`transient.options` -- the run options, each declared once for the
@@ -54,7 +54,7 @@ from .preconditioners import (
     register_preconditioner,
 )
 from .problem import StepFailure, WearProblem
-from .runin import HISTORY_UNITS, RunResult, run_in
+from .runin import HISTORY_UNITS, RunResult, RunState, run_in
 from .scene import (
     InitialFace,
     load_transient_scene,
@@ -90,6 +90,7 @@ __all__ = [
     "PRECONDITIONERS",
     "RunOptions",
     "RunResult",
+    "RunState",
     "SCHEMES",
     "SDIRK2",
     "Scheme",

@@ -2,10 +2,13 @@
 
 The run loop (:class:`transient.runin` ``_Run.loop``) asks two objects what
 to do: a :class:`StepController` proposes the length of the next attempt
-(adaptive from the scheme's error estimate, or fixed) and how to go on
-after an accepted, rejected or failed one; :class:`StopTests` says when the
-run is over (steady state, distance or step limits, a stagnating jump) and
-when to jump to the steady state.  The numbers that steer them are named
+(adaptive from the scheme's error estimate, or fixed), says whether an
+attempt is rejected and how to go on after an accepted, rejected or failed
+one; :class:`StopTests` says when the run is over (steady state, distance
+or step limits, stagnating jumps, repeated failures) and when to jump to
+the steady state.  Neither holds any of the run's state: the loop hands
+them the figures they judge, and the counts they test (jumps, failures in
+a row) stay with the run.  The numbers that steer them are named
 below.
 """
 
@@ -174,6 +177,10 @@ class StepController:
                      SAFETY * err ** (-1.0 / (q + 1)) if err > 0 else scheme.max_growth)
         return ds * max(MIN_ACCEPT_FACTOR, growth)
 
+    def rejects(self, err, jump):
+        """Whether an attempt of scaled error ``err`` is rejected (never a jump or a fixed step)."""
+        return not self.fixed and not jump and err > 1.0
+
     @staticmethod
     def after_reject(ds, err, scheme):
         """Retry length after a step rejected with scaled error ``err > 1``."""
@@ -194,7 +201,12 @@ class StopTests:
     (resumable) at ``max_distance`` or ``max_steps``.  Once the spread is
     below ``jump_spread`` and no snapshot is pending it jumps; after
     ``MAX_JUMPS`` jumps without reaching the steady state it stops as
-    stagnating.
+    stagnating.  ``max_failures`` failed attempts in a row (one at a fixed
+    step) end it as failed.
+
+    The tests hold no state of the run: the loop hands them the figures
+    they judge (the jump count is part of the run's checkpointed state,
+    :class:`transient.runin.RunState`).
 
     Parameters
     ----------
@@ -205,44 +217,91 @@ class StopTests:
     def __init__(self, options, s_star):
         self.options = options
         self.s_star = s_star
-        self.jumps = 0
 
-    def check(self, run):
-        """``(status, message)`` if the run at its current point is over, else None.
+    def check(self, spread, shape_rate, distance, steps):
+        """``(status, message)`` if the run is over at its current point, else None.
 
-        ``run`` has ``s`` (m), ``steps`` and ``history`` (lists, ``spread``
-        and ``shape_rate`` last recorded).
+        Parameters
+        ----------
+        spread : float
+            Last recorded wear-rate spread (``(max - min) / mean`` of
+            ``k p^m``; 1 with pixels out of contact).
+        shape_rate : float
+            Last recorded shape change, f* per s*.
+        distance : float, m
+            Sliding distance reached.
+        steps : int
+            Accepted steps so far.
         """
         o, s_star = self.options, self.s_star
-        spread = run.history["spread"][-1]
-        shape_rate = run.history["shape_rate"][-1]
         if spread < o.spread_tol and shape_rate < o.shape_tol:
-            return "steady", (f"steady state at s = {run.s:.6g} m "
-                              f"({run.s / s_star:.6g} s*): wear-rate spread "
+            return "steady", (f"steady state at s = {distance:.6g} m "
+                              f"({distance / s_star:.6g} s*): wear-rate spread "
                               f"{spread:.3g}, shape change {shape_rate:.3g} f*/s*")
-        if run.s >= o.max_distance * s_star * (1 - _DISTANCE_SLACK):
+        if distance >= o.max_distance * s_star * (1 - _DISTANCE_SLACK):
             return "stopped", (f"reached max_distance {o.max_distance:.6g} s* before the "
                                f"steady state (spread {spread:.3g}); resume with a "
                                f"larger max_distance")
-        if run.steps >= o.max_steps:
+        if steps >= o.max_steps:
             return "stopped", (f"reached max_steps {o.max_steps} before the steady state "
-                               f"(s = {run.s / s_star:.6g} s*, spread "
+                               f"(s = {distance / s_star:.6g} s*, spread "
                                f"{spread:.3g}); resume with a larger max_steps")
         return None
 
-    def jump_due(self, run, target, fixed):
-        """Whether the next attempt is a jump (no snapshot ``target`` pending, adaptive)."""
-        return (not fixed and target is None
-                and run.history["spread"][-1] < self.options.jump_spread)
+    def jump_due(self, spread, target, fixed):
+        """Whether the next attempt is a jump.
 
-    def count_jump(self, run):
-        """Count a jump; ``(status, message)`` once the jumps stagnate, else None."""
-        self.jumps += 1
-        if self.jumps > MAX_JUMPS:
+        Parameters
+        ----------
+        spread : float
+            Last recorded wear-rate spread.
+        target : float or None, m
+            Distance of the next pending snapshot (None: none pending).
+        fixed : bool
+            Fixed steps (never a jump).
+        """
+        return not fixed and target is None and spread < self.options.jump_spread
+
+    def stagnation(self, jumps, spread):
+        """``(status, message)`` if ``jumps`` jumps have not reached the steady state, else None.
+
+        Asked before a jump: after ``MAX_JUMPS`` of them the next is not taken.
+
+        Parameters
+        ----------
+        jumps : int
+            Jumps taken so far.
+        spread : float
+            Last recorded wear-rate spread.
+        """
+        if jumps >= MAX_JUMPS:
             return "stopped", (f"the wear-rate spread stagnates at "
-                               f"{run.history['spread'][-1]:.3g} above spread_tol "
-                               f"{self.options.spread_tol:.3g} after {self.jumps - 1} "
+                               f"{spread:.3g} above spread_tol "
+                               f"{self.options.spread_tol:.3g} after {jumps} "
                                f"jumps: loosen spread_tol or tighten the contact tolerance")
+        return None
+
+    def give_up(self, consecutive, fixed, ds, distance, reason):
+        """``(status, message)`` once failed attempts end the run, else None (retry smaller).
+
+        Parameters
+        ----------
+        consecutive : int
+            Failed attempts in a row, the last one included.
+        fixed : bool
+            Fixed steps: a failure cannot be retried smaller.
+        ds : float, m
+            Length of the failed attempt.
+        distance : float, m
+            Where it started.
+        reason : Exception
+            Why it failed (:class:`transient.problem.StepFailure`).
+        """
+        if consecutive >= self.options.max_failures or fixed:
+            s_star = self.s_star
+            return "failed", (f"step of {ds / s_star:.3g} s* at s = "
+                              f"{distance / s_star:.6g} s* failed {consecutive} "
+                              f"times: {reason}")
         return None
 
     def end(self):

@@ -1,11 +1,12 @@
 """HDF5 run files (layout ``runin.transient``, version 2), their checksums and their lock.
 
 A run file holds a run-in, finished or in progress (a checkpoint): the
-state a resumed run needs, the history, the snapshots, the inputs that
-identify the run and, once the run is steady, its agreement with the
-steady face.  It is written whole and atomically by the project's one
-HDF5 writer (:func:`steady.output.atomic_h5`), so a reader never sees half
-a file and a killed run leaves its last checkpoint intact.
+state a resumed run needs (:class:`transient.runin.RunState`), the
+history, the snapshots, the inputs that identify the run and, once the run
+is steady, its agreement with the steady face.  It is written whole and
+atomically by the project's one HDF5 writer (:func:`steady.output.atomic_h5`),
+so a reader never sees half a file and a killed run leaves its last
+checkpoint intact.
 
 Layout (root group)::
 
@@ -15,7 +16,9 @@ Layout (root group)::
                   approach (m), depth_scale (m), run_in_distance (m),
                   fast_distance (m), pixel_mean_pressure (Pa),
                   reference_slope, previous_step (m, NaN if none),
-                  next_step (m, NaN if none); the unit of attribute ``x``
+                  next_step (m, NaN if none), jumps (jumps to the steady
+                  state so far; files written before it was stored lack
+                  it and are read as 0); the unit of attribute ``x``
                   in ``x_units``; the caller's input attributes (scene...;
                   an attribute given as None is left out)
                   with the face's outline known (every run of this version):
@@ -79,7 +82,7 @@ import numpy as np
 from steady.outline import Circle
 from steady.output import atomic_h5, read_outline, write_outline
 
-from .runin import HISTORY_UNITS, RunResult
+from .runin import HISTORY_UNITS, RunResult, RunState
 
 try:
     import fcntl
@@ -111,10 +114,15 @@ _SCALARS = {
     "offset": "m", "approach": "m", "depth_scale": "m", "run_in_distance": "m",
     "fast_distance": "m", "pixel_mean_pressure": "Pa", "reference_slope": "1",
 }
+# Root attributes of the state (RunState); a step absent is stored as NaN.
 _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
+# Root attributes of the state that files written before them lack: read as these defaults.
+_LATER_STATE_SCALARS = {"jumps": ("1", 0)}
 # Written with the outline; files of disks written before outlines lack them.
 _REFERENCE_UNITS = {"reference_slope_error": "1", "scale": "m", "pixel_size": "m"}
 _DISK_SOURCE = "disk: 4 pbar / (pi E*) (eq. 12)"
+# Root attributes that belong to the state (RunState) rather than to the result.
+_STATE_SCALARS = ("offset", "approach")
 _INTEGERS = ("steps", "rejected", "failures", "solves", "iterations")
 _STRINGS = ("status", "message", "scheme")
 _STATE_UNITS = {"height": "m", "initial_height": "m", "previous_height": "m",
@@ -257,8 +265,11 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
             if unit:
                 f.attrs[f"{name}_units"] = unit
         for name, unit in _OPTIONAL_SCALARS.items():
-            value = getattr(result, name)
+            value = getattr(result.state, name)
             f.attrs[name] = np.nan if value is None else value
+            f.attrs[f"{name}_units"] = unit
+        for name, (unit, _) in _LATER_STATE_SCALARS.items():
+            f.attrs[name] = getattr(result.state, name)
             f.attrs[f"{name}_units"] = unit
         if result.outline is not None:
             _write_outline(f, result)
@@ -272,7 +283,7 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
         st = f.create_group("state")
         st.attrs["description"] = "everything a resumed run needs (face up to offset)"
         for name, unit in _STATE_UNITS.items():
-            value = getattr(result, name)
+            value = getattr(result.state, name)
             if value is not None:
                 _put(st, name, value, unit)
         hist = f.create_group("history")
@@ -454,7 +465,8 @@ def _result(path, datasets, groups):
     if missing:
         raise DamagedRunFileError(path, f"it lacks {missing[0]!r}")
     attrs = {k: _plain(v) for k, v in root.items()}
-    kw = {name: attrs[name] for name in _SCALARS}
+    kw = {name: attrs[name] for name in _SCALARS if name not in _STATE_SCALARS}
+    state = {name: attrs[name] for name in _STATE_SCALARS}
     try:
         for name in _INTEGERS:
             kw[name] = int(kw[name])
@@ -462,11 +474,16 @@ def _result(path, datasets, groups):
             kw[name] = str(kw[name])
         for name in _OPTIONAL_SCALARS:
             v = float(attrs[name])
-            kw[name] = None if math.isnan(v) else v
+            state[name] = None if math.isnan(v) else v
+        for name, (_, default) in _LATER_STATE_SCALARS.items():
+            value = attrs.get(name, default)
+            if int(value) != value or value < 0:
+                raise ValueError(f"{name} = {value!r} is not a count")
+            state[name] = int(value)
     except (TypeError, ValueError) as err:
         raise DamagedRunFileError(path, f"a root attribute is malformed ({err})") from None
-    state = {name: datasets[f"state/{name}"][0] if f"state/{name}" in datasets else None
-             for name in _STATE_UNITS}
+    state.update({name: datasets[f"state/{name}"][0] if f"state/{name}" in datasets else None
+                  for name in _STATE_UNITS})
     history = {name[len("history/"):]: value for name, (value, _) in datasets.items()
                if name.startswith("history/")}
     outline = _read_outline(path, datasets, groups, root)
@@ -489,7 +506,7 @@ def _result(path, datasets, groups):
     if source is None:
         source = _DISK_SOURCE if isinstance(outline, Circle) else ""
     result = RunResult(
-        **kw, **state, pressure=datasets["pressure"][0],
+        **kw, state=RunState(**state, pressure=datasets["pressure"][0]),
         history=types.MappingProxyType(history),
         snapshot_distance=datasets["snapshots/distance"][0],
         snapshot_height=datasets["snapshots/height"][0],

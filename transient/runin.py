@@ -58,10 +58,12 @@ solve to ``contact_rtol``.
 
 Reproducibility
 ---------------
-A run's future depends only on the state stored in a checkpoint (face,
-pressure, previous face and rate, next step, counters); a resumed run
-repeats the uninterrupted one bit for bit on the same machine and
-library versions.
+A run's future depends only on what a checkpoint stores: its
+:class:`RunState` (face, pressure, previous face and rate, next step, the
+warm start's recent pressures, the jumps taken) and the distance, counters
+and history of the :class:`RunResult` holding it; a resumed run repeats
+the uninterrupted one bit for bit on the same machine and library
+versions.
 """
 
 from __future__ import annotations
@@ -82,7 +84,7 @@ from .options import RunOptions
 from .problem import PressureHistory, StepFailure
 from .stepping import StepState, get_scheme
 
-__all__ = ["HISTORY_UNITS", "RunOptions", "RunResult", "run_in"]
+__all__ = ["HISTORY_UNITS", "RunOptions", "RunResult", "RunState", "run_in"]
 
 logger = logging.getLogger(__name__)
 
@@ -120,8 +122,71 @@ HISTORY_UNITS = {
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
+class RunState:
+    """What the future of a run depends on beyond its distance, counters, history and snapshots.
+
+    A :class:`RunResult` holds it as :attr:`RunResult.state`; ``run_in(...,
+    resume=result)`` continues from it, and :func:`transient.output.write_run`
+    stores it (the group ``state`` and root attributes).  Arrays are on the
+    problem's grid, shape ``(nx, ny)``; off the face they are NaN in a
+    result (a resumed run reads only the face's pixels).
+
+    Attributes
+    ----------
+    height : ndarray, shape (nx, ny), m
+        Face height (worn depth + initial shape) minus ``offset``.
+    offset : float, m
+        Constant removed from ``height`` (the rigid part of the wear).
+    pressure : ndarray, shape (nx, ny), Pa
+        Contact pressure of the face.
+    approach : float, m
+        Rigid approach, in the frame of ``height``.
+    initial_height : ndarray, shape (nx, ny), m
+        The face the run started from.
+    previous_height : ndarray, shape (nx, ny), m, or None
+        ``height`` at the previous accepted point, in the frame of the
+        current ``offset`` (BDF2's second point); None before the first step.
+    previous_rate : ndarray, shape (nx, ny), 1, or None
+        Wear rate ``k p^m`` at the previous accepted point; None before the
+        first step.
+    previous_step : float or None, m
+        Length of the last accepted step; None before the first.
+    next_step : float or None, m
+        Length the step controller proposes for the next attempt.
+    pressure_history : ndarray, shape (k, nx, ny), Pa, or None
+        The last contact pressures, newest first: the warm start of the
+        next implicit stages (:class:`transient.problem.PressureHistory`);
+        None before the first attempt.
+    pressure_history_displacement : ndarray, shape (k, nx, ny), m, or None
+        Their elastic displacements ``K p`` as the run holds them (the
+        solver's own, which a resumed run needs to repeat the run bit for
+        bit).
+    jumps : int
+        Jumps to the steady state attempted so far (failed ones too); after
+        :data:`transient.control.MAX_JUMPS` the run stops as stagnating.
+    """
+
+    height: np.ndarray
+    offset: float
+    pressure: np.ndarray
+    approach: float
+    initial_height: np.ndarray
+    previous_height: np.ndarray | None = None
+    previous_rate: np.ndarray | None = None
+    previous_step: float | None = None
+    next_step: float | None = None
+    pressure_history: np.ndarray | None = None
+    pressure_history_displacement: np.ndarray | None = None
+    jumps: int = 0
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
 class RunResult:
     """A run-in, finished or in progress (a checkpoint is a ``"running"`` result).
+
+    The face, its pressure and everything else a resumed run needs are in
+    :attr:`state`; :attr:`height`, :attr:`offset`, :attr:`pressure`,
+    :attr:`approach` and :attr:`initial_height` read them from there.
 
     Attributes
     ----------
@@ -137,18 +202,6 @@ class RunResult:
     solves, iterations : int
         Contact solves and contact-solver iterations.
     wall_time : float, s
-    height : ndarray, shape (nx, ny), m
-        Face height (worn depth + initial shape) minus ``offset``.
-    offset : float, m
-        Constant removed from ``height`` (the rigid part of the wear).
-    pressure : ndarray, shape (nx, ny), Pa
-        Contact pressure of the face.
-    approach : float, m
-        Rigid approach, in the frame of ``height``.
-    initial_height : ndarray, shape (nx, ny), m
-    previous_height, previous_rate : ndarray, shape (nx, ny), or None
-        State of the previous accepted point (for resuming).
-    previous_step, next_step : float or None, m
     history : mapping of str to ndarray, shape (steps + 1,)
         See :data:`HISTORY_UNITS` and :mod:`transient.history`: ``rms_slope``
         is the continuum rms slope of the face with its ``rms_slope_error``
@@ -166,13 +219,9 @@ class RunResult:
         face's pixel area (Pa), ``grad_f0`` (the homogeneous face's rms
         slope: ``4 pbar / (pi E*)`` for a disk, eq. 12;
         :func:`steady.normalisation.reference_slope`).
-    pressure_history : ndarray, shape (k, nx, ny), Pa, or None
-        The last contact pressures, newest first: the warm start of the
-        next implicit stages (:class:`transient.problem.PressureHistory`).
-    pressure_history_displacement : ndarray, shape (k, nx, ny), m, or None
-        Their elastic displacements ``K p`` as the run holds them (the
-        solver's own, which a resumed run needs to repeat the run bit for
-        bit).
+    state : RunState
+        The face, its pressure and what else the run's future depends on
+        (NaN off the face).
     outline : outline object or None
         The face's outline (:mod:`steady.outline`); None when unknown (a
         run file written without it).
@@ -192,15 +241,6 @@ class RunResult:
     solves: int
     iterations: int
     wall_time: float
-    height: np.ndarray
-    offset: float
-    pressure: np.ndarray
-    approach: float
-    initial_height: np.ndarray
-    previous_height: np.ndarray | None
-    previous_rate: np.ndarray | None
-    previous_step: float | None
-    next_step: float | None
     history: types.MappingProxyType
     snapshot_distance: np.ndarray
     snapshot_height: np.ndarray
@@ -210,11 +250,35 @@ class RunResult:
     fast_distance: float
     pixel_mean_pressure: float
     reference_slope: float
-    pressure_history: np.ndarray | None = None
-    pressure_history_displacement: np.ndarray | None = None
+    state: RunState
     outline: object = None
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
+
+    @property
+    def height(self):
+        """Face height (worn depth + initial shape) minus :attr:`offset`, m, shape (nx, ny)."""
+        return self.state.height
+
+    @property
+    def offset(self):
+        """Constant removed from :attr:`height` (the rigid part of the wear), m."""
+        return self.state.offset
+
+    @property
+    def pressure(self):
+        """Contact pressure of the face, Pa, shape (nx, ny)."""
+        return self.state.pressure
+
+    @property
+    def approach(self):
+        """Rigid approach in the frame of :attr:`height`, m."""
+        return self.state.approach
+
+    @property
+    def initial_height(self):
+        """The face the run started from, m, shape (nx, ny); NaN off the face."""
+        return self.state.initial_height
 
     @property
     def success(self):
@@ -252,10 +316,54 @@ class RunResult:
         return self.approach - self.height
 
 
-class _Run:
-    """Mutable state of a run in progress, and the loop that advances it."""
+def _initial_face(problem, initial_height):
+    """``initial_height`` (m) checked, on the problem's grid, zero off the face."""
+    face_mask = problem.face_mask
+    h0 = np.where(face_mask, np.asarray(initial_height, dtype=float), 0.0)
+    if h0.shape != problem.shape:
+        raise ValueError(f"initial_height must have shape {problem.shape}, got {h0.shape}")
+    if not np.all(np.isfinite(h0[face_mask])):
+        raise ValueError("initial_height must be finite on the face")
+    return h0
 
-    def __init__(self, problem, options):
+
+class _Run:
+    """A run in progress: its state, and the loop that advances it.
+
+    Every attribute is set by the constructor, from the initial face (a new
+    run: the first contact solve) or from the result it resumes:
+
+    - fixed for the run: ``problem``, ``options``, ``scheme``, ``s_star``,
+      ``f_star``, ``controller`` and ``stop`` (:mod:`transient.control`),
+      ``reference``, ``grad_f0``, ``estimator``;
+    - the state a checkpoint stores (:class:`RunState`; arrays zero off the
+      face), advanced by :meth:`accept`: ``initial_height``, ``height``,
+      ``offset``, ``pressure``, ``approach``, ``prev_height``,
+      ``prev_rate``, ``prev_step``, ``next_step``, ``pressures`` (the
+      :class:`transient.problem.PressureHistory`, None until the first
+      attempt), ``jumps``;
+    - the progress a :class:`RunResult` reports: ``s`` (m), ``steps``,
+      ``rejected``, ``failures``, ``wall_time`` (s, spent before this call),
+      ``t0`` (monotonic clock at the start of this call), ``history``
+      (lists), the snapshots ``snap_d``, ``snap_h``, ``snap_p`` and
+      ``snap_index`` (the next requested one);
+    - the history's worker thread: ``_worker``, ``_estimator_workers``,
+      ``_pending``.
+
+    ``on_step`` callbacks read ``s``, ``s_star``, ``steps`` and ``history``.
+
+    Parameters
+    ----------
+    problem : transient.problem.WearProblem
+    options : RunOptions
+    initial_height : ndarray, shape (nx, ny), m, or None
+        The initial face of a new run (ignored when resuming).
+    resume : RunResult or None
+        The result to continue from.
+    """
+
+    def __init__(self, problem, options, initial_height, resume):
+        self.t0 = time.monotonic()
         self.problem = problem
         self.options = options
         self.scheme = get_scheme(options.scheme)
@@ -265,11 +373,74 @@ class _Run:
         self.stop = StopTests(options, self.s_star)
         self.reference = problem.reference
         self.grad_f0 = self.reference.value
-        self.history = {name: [] for name in HISTORY_UNITS}
-        self.snap_d, self.snap_h, self.snap_p = [], [], []
+        face_mask = problem.face_mask
+        if resume is None:
+            h0 = _initial_face(problem, initial_height)
+            self.estimator = HistoryEstimator.of(problem, h0)
+            state = self._first_state(h0)
+        else:
+            state = resume.state
+            if state.height.shape != problem.shape:
+                raise ValueError(f"checkpoint grid {state.height.shape} does not match the "
+                                 f"problem's {problem.shape}")
+            self.estimator = HistoryEstimator.of(
+                problem, np.where(face_mask, state.initial_height, 0.0))
+
+        def clean(a):
+            return None if a is None else np.where(face_mask, a, 0.0)
+
+        self.initial_height = clean(state.initial_height)
+        self.height = clean(state.height)
+        self.offset = float(state.offset)
+        self.pressure = np.array(state.pressure, dtype=float)
+        self.approach = float(state.approach)
+        self.prev_height = clean(state.previous_height)
+        self.prev_rate = clean(state.previous_rate)
+        self.prev_step = state.previous_step
+        self.next_step = state.next_step
         self.pressures = None
+        if state.pressure_history is not None:
+            self.pressures = PressureHistory(
+                problem, pressures=state.pressure_history,
+                displacements=state.pressure_history_displacement)
+        self.jumps = int(state.jumps)
+
+        if resume is None:
+            self.s, self.steps, self.rejected, self.failures = 0.0, 0, 0, 0
+            self.wall_time = 0.0
+            self.history = {name: [] for name in HISTORY_UNITS}
+            self.snap_d, self.snap_h, self.snap_p = [], [], []
+        else:
+            self.s = float(resume.distance)
+            self.steps, self.rejected = resume.steps, resume.rejected
+            self.failures = resume.failures
+            problem.solves, problem.iterations = resume.solves, resume.iterations
+            self.wall_time = resume.wall_time
+            self.history = {k: list(v.tolist()) for k, v in resume.history.items()}
+            self.snap_d = list(resume.snapshot_distance.tolist())
+            self.snap_h = list(resume.snapshot_height)
+            self.snap_p = list(resume.snapshot_pressure)
+        self.snap_index = len(self.snap_d)
+
         self._worker = None
+        self._estimator_workers = None
         self._pending = []
+
+    def _first_state(self, h0):
+        """The state at ``s = 0`` from the checked initial face ``h0`` (m): first contact solve."""
+        p = self.problem
+        face_mask = p.face_mask
+        offset = float(h0[face_mask].mean())
+        height = np.where(face_mask, h0 - offset, 0.0)
+        res = p.contact(height)
+        return RunState(height=height, offset=offset, pressure=res.pressure,
+                        approach=float(res.approach), initial_height=h0,
+                        next_step=self.controller.first_step(p.halfspace.h, p.scale))
+
+    def begin(self):
+        """Record the starting point of a new run: history at ``s = 0``, snapshots due there."""
+        self.record(0.0, math.inf)
+        self._take_due_snapshots()
 
     # -- recording -----------------------------------------------------
     def record(self, step, shape_rate):
@@ -277,8 +448,6 @@ class _Run:
         p = self.problem
         face_mask = p.face_mask
         hist = self.history
-        if getattr(self, "estimator", None) is None:  # a resumed run builds it here
-            self.estimator = HistoryEstimator.of(p, self.initial_height)
         # The face's figures are computed on a worker thread while the run goes on
         # (they do not steer it); :meth:`result` waits for them.
         if self._worker is None:
@@ -331,23 +500,34 @@ class _Run:
         self.snap_h.append(np.where(face_mask, self.height + self.offset, np.nan))
         self.snap_p.append(self.pressure.copy())
 
+    def current_state(self):
+        """The state at the current point as a :class:`RunState` (copies; NaN off the face)."""
+        face_mask = self.problem.face_mask
+
+        def copy(a):
+            return None if a is None else a.copy()
+
+        return RunState(
+            height=np.where(face_mask, self.height, np.nan), offset=self.offset,
+            pressure=self.pressure.copy(), approach=self.approach,
+            initial_height=np.where(face_mask, self.initial_height, np.nan),
+            previous_height=copy(self.prev_height), previous_rate=copy(self.prev_rate),
+            previous_step=self.prev_step, next_step=self.next_step,
+            pressure_history=None if self.pressures is None else self.pressures.pressures(),
+            pressure_history_displacement=(None if self.pressures is None
+                                           else self.pressures.displacements()),
+            jumps=self.jumps)
+
     def result(self, status, message):
         """The run so far as a :class:`RunResult`."""
         self.collect()
         shape = self.problem.shape
         k = len(self.snap_d)
-        face_mask = self.problem.face_mask
         return RunResult(
             status=status, message=message, scheme=self.scheme.name, distance=self.s,
             steps=self.steps, rejected=self.rejected, failures=self.failures,
             solves=self.problem.solves, iterations=self.problem.iterations,
             wall_time=self.wall_time + (time.monotonic() - self.t0),
-            height=np.where(face_mask, self.height, np.nan), offset=self.offset,
-            pressure=self.pressure.copy(), approach=self.approach,
-            initial_height=np.where(face_mask, self.initial_height, np.nan),
-            previous_height=None if self.prev_height is None else self.prev_height.copy(),
-            previous_rate=None if self.prev_rate is None else self.prev_rate.copy(),
-            previous_step=self.prev_step, next_step=self.next_step,
             history=types.MappingProxyType({k_: np.array(v, dtype=float if k_ != "solves"
                                                          else np.int64)
                                             for k_, v in self.history.items()}),
@@ -357,72 +537,9 @@ class _Run:
             depth_scale=self.f_star, run_in_distance=self.s_star,
             fast_distance=self.problem.fast_distance,
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
-            reference_slope=self.grad_f0,
-            pressure_history=None if self.pressures is None else self.pressures.pressures(),
-            pressure_history_displacement=(None if self.pressures is None
-                                           else self.pressures.displacements()),
+            reference_slope=self.grad_f0, state=self.current_state(),
             outline=self.problem.outline, reference_slope_error=self.reference.error,
             reference_slope_source=self.reference.source)
-
-    # -- set-up --------------------------------------------------------
-    def start(self, initial_height):
-        """Start from ``initial_height`` (m): first contact solve, first record."""
-        p = self.problem
-        face_mask = p.face_mask
-        h0 = np.where(face_mask, np.asarray(initial_height, dtype=float), 0.0)
-        if h0.shape != p.shape:
-            raise ValueError(f"initial_height must have shape {p.shape}, got {h0.shape}")
-        if not np.all(np.isfinite(h0[face_mask])):
-            raise ValueError("initial_height must be finite on the face")
-        self.initial_height = h0
-        self.estimator = HistoryEstimator.of(p, h0)
-        self.offset = float(h0[face_mask].mean())
-        self.height = np.where(face_mask, h0 - self.offset, 0.0)
-        res = p.contact(self.height)
-        self.pressure = res.pressure
-        self.approach = float(res.approach)
-        self.s = 0.0
-        self.steps = self.rejected = self.failures = 0
-        self.wall_time = 0.0
-        self.prev_height = self.prev_rate = None
-        self.prev_step = None
-        self.next_step = self.controller.first_step(p.halfspace.h, p.scale)
-        self.record(0.0, math.inf)
-        self.snap_index = 0
-        self._take_due_snapshots()
-
-    def restore(self, saved):
-        """Continue from a checkpoint (a :class:`RunResult`)."""
-        p = self.problem
-        face_mask = p.face_mask
-        if saved.height.shape != p.shape:
-            raise ValueError(f"checkpoint grid {saved.height.shape} does not match the "
-                             f"problem's {p.shape}")
-
-        def clean(a):
-            return None if a is None else np.where(face_mask, a, 0.0)
-
-        self.initial_height = clean(saved.initial_height)
-        self.height = clean(saved.height)
-        self.offset = float(saved.offset)
-        self.pressure = np.array(saved.pressure, dtype=float)
-        self.approach = float(saved.approach)
-        self.prev_height = clean(saved.previous_height)
-        self.prev_rate = clean(saved.previous_rate)
-        self.prev_step = saved.previous_step
-        self.next_step = saved.next_step
-        self.s = float(saved.distance)
-        self.steps, self.rejected, self.failures = saved.steps, saved.rejected, saved.failures
-        p.solves, p.iterations = saved.solves, saved.iterations
-        self.wall_time = saved.wall_time
-        self.history = {k: list(v.tolist()) for k, v in saved.history.items()}
-        self.snap_d = list(saved.snapshot_distance.tolist())
-        self.snap_h = list(saved.snapshot_height)
-        self.snap_p = list(saved.snapshot_pressure)
-        self.snap_index = len(self.snap_d)
-        if saved.pressure_history is not None:
-            self.pressures = PressureHistory(p, pressures=saved.pressure_history,
-                                             displacements=saved.pressure_history_displacement)
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
@@ -497,27 +614,30 @@ class _Run:
     def loop(self, on_step, on_checkpoint):
         """Step until a stop test says the run is over; return ``(status, message)``.
 
-        Each pass: the stop tests, the choice of a jump or a regular step
-        (landing on the next snapshot), one attempt, then accept it, reject
-        it (error above tolerance: retry shorter) or count a failure (retry
-        at a fraction; give up after ``max_failures`` in a row).
+        Each pass: the stop tests, the choice of a jump (counted: the stop
+        tests end a run whose jumps stagnate) or a regular step (landing on
+        the next snapshot), one attempt, then accept it, reject it (error
+        above tolerance: retry shorter) or count a failure (retry at a
+        fraction, until the stop tests give up).
         """
         o = self.options
-        controller = self.controller
+        controller, stop = self.controller, self.stop
         fixed = controller.fixed
         last_checkpoint = None  # the first checkpoint follows the first accepted step
         checkpoint_cost = 0.0
         consecutive = 0
         while True:
-            stop = self.stop.check(self)
-            if stop is not None:
-                return stop
+            spread = self.history["spread"][-1]
+            ended = stop.check(spread, self.history["shape_rate"][-1], self.s, self.steps)
+            if ended is not None:
+                return ended
             target = self.pending_target()
-            jump = self.stop.jump_due(self, target, fixed)
+            jump = stop.jump_due(spread, target, fixed)
             if jump:
-                stop = self.stop.count_jump(self)
-                if stop is not None:
-                    return stop
+                ended = stop.stagnation(self.jumps, spread)
+                if ended is not None:
+                    return ended
+                self.jumps += 1
             scheme, ds = self.plan(jump, target)
             try:
                 trial, err = self.attempt(scheme, ds, jump)
@@ -526,14 +646,13 @@ class _Run:
                 consecutive += 1
                 logger.info("step of %.3g s* failed (%s); retrying smaller",
                             ds / self.s_star, exc)
-                if consecutive >= o.max_failures or fixed:
-                    return "failed", (f"step of {ds / self.s_star:.3g} s* at s = "
-                                      f"{self.s / self.s_star:.6g} s* failed {consecutive} "
-                                      f"times: {exc}")
+                ended = stop.give_up(consecutive, fixed, ds, self.s, exc)
+                if ended is not None:
+                    return ended
                 self.next_step = controller.after_failure(ds)
                 continue
             consecutive = 0
-            if not fixed and not jump and err > 1.0:
+            if controller.rejects(err, jump):
                 self.rejected += 1
                 self.next_step = controller.after_reject(ds, err, scheme)
                 logger.debug("rejected %.3g s* (err %.3g)", ds / self.s_star, err)
@@ -565,8 +684,9 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
         :mod:`transient.initial_face`.
     options : RunOptions, optional
     resume : RunResult, optional
-        A checkpoint (or a stopped run) to continue from; ``initial_height``
-        is then taken from it.
+        A checkpoint (or a stopped run) to continue from: its
+        :attr:`RunResult.state`, distance, counters, history and snapshots;
+        ``initial_height`` is then taken from it.
     on_step : callable, optional
         ``on_step(run)`` after each accepted step, with attributes ``s``,
         ``s_star``, ``steps`` and ``history`` (for progress displays).
@@ -609,14 +729,11 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     True
     """
     options = RunOptions() if options is None else options
-    run = _Run(problem, options)
-    run.t0 = time.monotonic()
+    run = _Run(problem, options, initial_height, resume)
     try:
         if resume is None:
-            run.start(initial_height)
-        else:
-            run.restore(resume)
-        if resume is not None and resume.status == "steady":
+            run.begin()
+        elif resume.status == "steady":
             return run.result("steady", resume.message)
         status, message = run.loop(on_step, on_checkpoint)
         log = logger.info if status == "steady" else logger.warning
