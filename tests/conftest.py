@@ -22,6 +22,7 @@ from steady.halfspace import HalfSpace
 from steady.outline import Annulus, Circle, Ellipse, FaceGrid, Rectangle, as_outline
 from steady.phases import Homogeneous, Rods, Voronoi
 from steady.problem import FacePhases, Problem
+from steady.wear import PowerLaw
 from transient.problem import WearProblem
 
 RADIUS = 4e-3      # m, the paper's epoxy cylinder (Fig. 6)
@@ -93,15 +94,17 @@ def problem(labels_or_geometry, wear, *, n=None, outline=RADIUS, force=FORCE, E_
     return Problem(FacePhases(grid, labels, n_phases), wear, force, E_star)
 
 
-def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, **options):
+def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, *, exponent=1.0, **options):
     """Wear problem of a gallery geometry (a name, or a geometry object).
 
-    ``ratios`` are the wear coefficients in units of :data:`K1`; ``options``
-    go to the :class:`~transient.problem.WearProblem` constructor.
+    ``ratios`` are the wear coefficients in units of :data:`K1`, of the
+    power law of ``exponent`` (default 1, Archard); ``options`` go to the
+    :class:`~transient.problem.WearProblem` constructor.
     """
     if isinstance(geometry, str):
         geometry = GEOMETRIES[geometry]
-    return WearProblem(problem(geometry, [K1 * r for r in ratios], n=n), **options)
+    wear = PowerLaw([K1 * r for r in ratios], exponent=exponent)
+    return WearProblem(problem(geometry, wear, n=n), **options)
 
 
 _MAPS = {

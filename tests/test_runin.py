@@ -33,7 +33,7 @@ VORONOI = GEOMETRIES["voronoi"]
 
 def run_and_compare(geometry, ratios, n, *, initial=None, exponent=1.0, options=FAST):
     problem = wear_problem(geometry, ratios, n, exponent=exponent)
-    h0 = np.zeros((n, n)) if initial is None else initial(n)
+    h0 = np.zeros((n, n)) if initial is None else initial(problem.grid)
     result = run_in(problem, h0, options)
     assert result.status == "steady", result.message
     return result, compare_with_steady(result, problem.solve_steady(), problem)
@@ -54,7 +54,7 @@ CASES = {
     "voronoi_0.3_k0.01": (VORONOI, (1.0, 1e-2), None),
     "rods": (RODS, (1.0, 1.7), None),
     "tilted": (VORONOI, (1.0, 10.0),
-               lambda n: initial_face.tilted(n, RADIUS, 3 * CRITICAL_TILT)),
+               lambda grid: initial_face.tilted(grid, 3 * CRITICAL_TILT)),
 }
 
 
@@ -331,11 +331,11 @@ def test_stopped_run_resumes_to_steady():
 
 
 @pytest.mark.parametrize("field,value,match", [
-    ("tol", 0.0, "tol must be a positive"),
-    ("spread_tol", -1.0, "spread_tol must be a positive"),
-    ("max_steps", 0, "max_steps must be a positive integer"),
-    ("snapshots", (-1.0,), "snapshots must be non-negative"),
-    ("step", math.inf, "step must be a positive distance"),
+    ("tol", 0.0, r"tol must be a number > 0 \(f\*\), got 0.0"),
+    ("spread_tol", -1.0, r"spread_tol must be a number > 0 \(1\), got -1.0"),
+    ("max_steps", 0, r"max_steps must be an integer >= 1, got 0"),
+    ("snapshots", (-1.0,), r"snapshots must be an array of numbers each >= 0 \(s\*\)"),
+    ("step", math.inf, r"step must be a number > 0 \(s\*\), got inf"),
 ])
 def test_bad_options_are_named(field, value, match):
     with pytest.raises(ValueError, match=match):

@@ -33,7 +33,16 @@ N_EXACT = 12
 DISTANCE = 0.5     # s*, end of the compared run-in (spread still ~0.3 there)
 
 
-def make_problem(n, ratio, *, exponent=1.0, rtol=1e-13):
+#: Contact tolerance of these runs: the schemes' own errors are measured.
+RTOL = 1e-13
+
+
+def run_options(**options):
+    """Run options of these tests: every contact solved to :data:`RTOL`."""
+    return RunOptions(contact_rtol=RTOL, **options)
+
+
+def make_problem(n, ratio, *, exponent=1.0, rtol=RTOL):
     """The 9-seed Voronoi map (fits n = 12) with wear ratio ``ratio``."""
     wear = PowerLaw([K1 * r for r in (1.0, ratio)], exponent=exponent)
     return WearProblem(problem(GEOMETRIES["voronoi_small"], wear, n=n), contact_rtol=rtol)
@@ -84,7 +93,7 @@ def shape_error(result, idx, w_exact):
 
 def fixed_run(scheme, steps, h0):
     problem = make_problem(N_EXACT, 10.0)
-    options = RunOptions(scheme=scheme, step=DISTANCE / steps, max_distance=DISTANCE,
+    options = run_options(scheme=scheme, step=DISTANCE / steps, max_distance=DISTANCE,
                          spread_tol=1e-300, shape_tol=1e-300)
     result = run_in(problem, h0, options)
     assert result.status == "stopped", result.message
@@ -103,7 +112,7 @@ ADAPTIVE_BOUND = {1: 1e-3, 2: 1.5e-4, 3: 2e-5}
 def test_adaptive_scheme_matches_exact_run_in(name, exact):
     h0, idx, w_exact = exact
     problem = make_problem(N_EXACT, 10.0)
-    options = RunOptions(scheme=name, tol=1e-5, max_distance=DISTANCE, spread_tol=1e-300,
+    options = run_options(scheme=name, tol=1e-5, max_distance=DISTANCE, spread_tol=1e-300,
                          shape_tol=1e-300)
     result = run_in(problem, h0, options)
     assert result.status == "stopped", result.message
@@ -177,14 +186,14 @@ def test_explicit_euler_refuses_steps_beyond_stability_limit():
         ExplicitEuler().step(problem, state, 1.5 * limit)
     ExplicitEuler().step(problem, state, 0.99 * limit)
     with pytest.raises(ValueError, match="stability limit"):
-        run_in(problem, h0, RunOptions(scheme="explicit_euler",
+        run_in(problem, h0, run_options(scheme="explicit_euler",
                                        step=2 * limit / problem.run_in_distance))
 
 
 def test_adaptive_explicit_euler_stays_below_its_limit():
     problem = make_problem(16, 100.0)
     result = run_in(problem, uniform_pressure_face(problem),
-                    RunOptions(scheme="explicit_euler", tol=1e-2, max_steps=200))
+                    run_options(scheme="explicit_euler", tol=1e-2, max_steps=200))
     limit = problem.stable_step(result.pressure)
     assert np.max(result.history["step"]) <= 0.9 * limit * (1 + 1e-12), \
         "adaptive explicit Euler exceeded 0.9 x its stability limit"
@@ -250,7 +259,7 @@ def fine_run(scheme, steps, exponent):
     """Fixed-step run at n = 32, k2/k1 = 10 (h / (k_max E*) = s*/160), from w0 = -K pbar."""
     problem = make_problem(32, 10.0, exponent=exponent)
     r = run_in(problem, uniform_pressure_face(problem),
-               RunOptions(scheme=scheme, step=FINE_DISTANCE / steps, max_distance=FINE_DISTANCE,
+               run_options(scheme=scheme, step=FINE_DISTANCE / steps, max_distance=FINE_DISTANCE,
                           spread_tol=1e-300, shape_tol=1e-300))
     assert r.status == "stopped", r.message
     return (r.height + r.offset)[problem.face_mask], r.depth_scale

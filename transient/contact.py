@@ -261,10 +261,11 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     ``F / (2 a E*)`` of the continuum punch up to the staircase of the rim.
 
     >>> import numpy as np
-    >>> from steady import HalfSpace, face_mask, pixel_size, reference
+    >>> from steady import Circle, HalfSpace, reference
     >>> n, a, E_star, force = 64, 4e-3, 1.3e6, 10.0
-    >>> halfspace = HalfSpace(n, pixel_size(n, a), E_star)
-    >>> res = solve_contact(halfspace, face_mask(n), np.zeros((n, n)), force)
+    >>> grid = Circle(a).grid(n)
+    >>> halfspace = HalfSpace(grid.shape, grid.h, E_star)
+    >>> res = solve_contact(halfspace, grid.mask, np.zeros((n, n)), force)
     >>> res.success, res.contact_fraction
     (True, 1.0)
     >>> print(f"load {res.pressure.sum() * halfspace.h**2:.9f} N")

@@ -84,7 +84,8 @@ class RunOptions:
         between them (:func:`transient.control.checkpoint_due`) (flag).
     contact_rtol : float
         Relative tolerance of every contact solve, the floor of the solves
-        of a regular step (default 1e-10).
+        of a regular step (default 1e-10); the run sets its problem's
+        :attr:`transient.problem.WearProblem.contact_rtol` to it.
     """
 
     scheme: str = _option("esdirk3", Key(

@@ -49,7 +49,9 @@ class WearProblem:
         The phase map on the face's grid, the wear law, the load and ``E*``
         (checked there); its half-space operator is the one of the run.
     contact_rtol : float, optional
-        Relative tolerance of every contact solve (default 1e-10).
+        Relative tolerance of every contact solve (default 1e-10);
+        :func:`transient.runin.run_in` sets it to its options'
+        ``contact_rtol``.
     contact_maxiter : int, optional
         Iteration cap of every contact solve (default: the solver's).
     newton_rtol : float, optional
@@ -135,9 +137,10 @@ class WearProblem:
         Parameters
         ----------
         scene : steady.scene.Scene
-            As read by :func:`transient.scene.load_transient_scene` (or
-            :func:`steady.scene.load_scene`); its ``[transient]``
-            ``contact_rtol`` is used when present.
+            As read by :func:`steady.scene.load_scene` or
+            :func:`transient.scene.load_transient_scene`.  (A run's contact
+            tolerance is its option ``contact_rtol``, which
+            :func:`transient.runin.run_in` applies.)
         n : int, optional
             Grid size; default ``scene.n``.  The phase geometry is rasterised
             at this size.
@@ -166,9 +169,6 @@ class WearProblem:
         >>> problem.n, problem.n_phases
         (40, 2)
         """
-        run_options = scene.extra.get("transient")
-        if run_options is not None:
-            options.setdefault("contact_rtol", run_options.contact_rtol)
         return cls(Problem.from_scene(scene, n=n), **options)
 
     @property

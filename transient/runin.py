@@ -84,7 +84,7 @@ from .options import RunOptions
 from .problem import PressureHistory, StepFailure
 from .stepping import StepState, get_scheme
 
-__all__ = ["HISTORY_UNITS", "RunOptions", "RunResult", "RunState", "run_in"]
+__all__ = ["HISTORY_UNITS", "RunResult", "RunState", "run_in"]
 
 logger = logging.getLogger(__name__)
 
@@ -364,6 +364,8 @@ class _Run:
 
     def __init__(self, problem, options, initial_height, resume):
         self.t0 = time.monotonic()
+        # The run's contact solves stop at its options' tolerance (the floor of a step's).
+        problem.contact_rtol = float(options.contact_rtol)
         self.problem = problem
         self.options = options
         self.scheme = get_scheme(options.scheme)
