@@ -27,10 +27,11 @@ phase geometries are in m in the file and in units of the outline's scale
 side of the bounding box).
 
 Every key is checked; unknown sections and keys are errors, so that a typo
-cannot pass silently.  Other packages can add sections through
-``extra_sections``; this module knows nothing of their contents.  The
-sections of the run-in (:data:`RUN_IN_SECTIONS`), when no parser is given
-for them, are recorded in ``Scene.ignored_sections`` and otherwise left
+cannot pass silently.  Another package reads sections of its own: it names
+them in ``extra_sections``, finds their tables in ``Scene.extra`` and
+parses them itself (this module knows nothing of their contents and calls
+nothing back).  The sections of the run-in (:data:`RUN_IN_SECTIONS`), when
+not named, are recorded in ``Scene.ignored_sections`` and otherwise left
 alone, so that one scene file serves the steady and the run-in commands.
 """
 
@@ -76,9 +77,9 @@ SECTIONS = {
 #: Every section a scene file has: those of :data:`SECTIONS` and the ones that name a kind.
 CORE_SECTIONS = ("punch", "load", "counterbody", "grid", "wear", "phases")
 
-#: Sections read by the run-in command (package ``transient``).  Without a
-#: parser for them in ``extra_sections`` they are skipped, not refused: the
-#: steady state does not depend on them.  Only the names are known here.
+#: Sections read by the run-in command (package ``transient``).  Unless named
+#: in ``extra_sections`` they are skipped, not refused: the steady state does
+#: not depend on them.  Only the names are known here.
 RUN_IN_SECTIONS = ("initial_face", "transient")
 
 
@@ -107,10 +108,12 @@ class Scene:
     text : str
         The TOML text as read.
     extra : mapping
-        Parsed extra sections, by name (only those present in the file).
+        The tables of the sections named in ``extra_sections``, by name
+        (only those present in the file), as read from it: their reader
+        checks them.
     ignored_sections : tuple of str
         Run-in sections (:data:`RUN_IN_SECTIONS`) present in the file but
-        not parsed (no ``extra_sections`` parser for them), sorted.
+        not named in ``extra_sections``, sorted.
     """
 
     outline: object
@@ -195,7 +198,7 @@ def _geometry(table, outline, base_dir, n):
         raise ValueError(message if where in message else f"{where}: {message}") from None
 
 
-def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
+def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
     """Parse and check the text of a scene file.
 
     Parameters
@@ -204,12 +207,11 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
         TOML text.
     base_dir : str or path-like
         Directory against which relative paths in the scene are resolved.
-    extra_sections : mapping of str to callable, optional
-        ``name -> parse(table, base_dir)`` for sections beyond the core
-        ones; each result is kept in ``Scene.extra[name]``.  Sections
-        absent from the file are not called.  Run-in sections
-        (:data:`RUN_IN_SECTIONS`) without a parser here are skipped and
-        listed in ``Scene.ignored_sections``.
+    extra_sections : collection of str, optional
+        Sections beyond the core ones that the caller reads itself: their
+        tables are kept in ``Scene.extra`` (they must be tables).  Run-in
+        sections (:data:`RUN_IN_SECTIONS`) not named here are skipped and
+        listed in ``Scene.ignored_sections``; any other section is an error.
     source_path : path-like, optional
         Recorded in ``Scene.source_path``.
 
@@ -223,7 +225,7 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
         Malformed TOML, unknown or missing section or key, bad value (the
         message names the key and the value), missing map file.
     """
-    extra_sections = dict(extra_sections or {})
+    extra_sections = tuple(extra_sections)
     clash = sorted(set(extra_sections) & set(CORE_SECTIONS))
     if clash:
         raise ValueError(f"extra section {clash[0]!r} clashes with a core section")
@@ -239,7 +241,7 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     for name in CORE_SECTIONS:
         if name not in doc:
             raise ValueError(f"missing section [{name}]")
-    for name in (*CORE_SECTIONS, *ignored):
+    for name in (*CORE_SECTIONS, *ignored, *(n for n in extra_sections if n in doc)):
         if not isinstance(doc[name], dict):
             raise ValueError(f"[{name}] must be a table, got {shorten(doc[name])}")
     values = {name: read_table(doc[name], f"[{name}]", keys, base_dir)
@@ -260,15 +262,7 @@ def parse_scene(text, base_dir, *, extra_sections=None, source_path=None):
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
 
-    extra = {}
-    for name, parse in extra_sections.items():
-        if name in doc:
-            try:
-                extra[name] = parse(doc[name], base_dir)
-            except ValueError as err:
-                message = str(err)
-                raise ValueError(message if f"[{name}]" in message
-                                 else f"[{name}]: {message}") from None
+    extra = {name: doc[name] for name in extra_sections if name in doc}
     return Scene(outline=outline, normal_force=values["load"]["normal_force"],
                  E_star=values["counterbody"]["E_star"], n=n, wear=wear, geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
@@ -285,7 +279,7 @@ def _toml(text):
         raise ValueError("malformed TOML: arrays or tables nested too deeply") from None
 
 
-def load_scene(path, *, extra_sections=None):
+def load_scene(path, *, extra_sections=()):
     """Read and check a scene file.
 
     Parameters
@@ -293,7 +287,7 @@ def load_scene(path, *, extra_sections=None):
     path : str or path-like
         The ``.toml`` file; relative paths inside it are resolved against
         its directory.
-    extra_sections : mapping of str to callable, optional
+    extra_sections : collection of str, optional
         As in :func:`parse_scene`.
 
     Returns

@@ -584,7 +584,6 @@ def test_command_line_refuses_a_grid_too_coarse_for_the_outline(tmp_path, scene_
 
 def test_shipped_tread_block_run_in_scene():
     scene = load_scene(ROOT / "studies" / "scenes" / "tread_block_transient.toml",
-                       extra_sections={"transient": lambda t, d: t,
-                                       "initial_face": lambda t, d: t})
+                       extra_sections=("transient", "initial_face"))
     assert scene.outline == Rectangle(4e-3, 12e-3) and scene.grid().shape == (64, 192)
     assert scene.geometry.min_grid(scene.outline) <= scene.n

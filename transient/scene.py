@@ -1,7 +1,8 @@
 """Scene sections of the run-in: ``[transient]`` and ``[initial_face]``.
 
-They are registered with :func:`steady.scene.load_scene` through its
-``extra_sections`` (``steady`` knows nothing of them)::
+:func:`load_transient_scene` asks :func:`steady.scene.load_scene` to keep
+their tables (``extra_sections``; ``steady`` knows nothing of them) and
+parses them itself::
 
     [transient]
     scheme = "esdirk3"          # registered integrator (transient.stepping.SCHEMES)
@@ -28,7 +29,7 @@ import pathlib
 import types
 
 from steady.array_files import npy_header
-from steady.scene import load_scene
+from steady.scene import RUN_IN_SECTIONS, load_scene
 from steady.schema import Context
 from steady.text import one_line
 
@@ -90,13 +91,13 @@ class InitialFace:
             raise ValueError(f"[initial_face]: {one_line(err, 300)}") from None
 
 
-def parse_transient(table, base_dir):
-    """Parse a ``[transient]`` table (``extra_sections`` callback).
+def parse_transient(table, base_dir="."):
+    """Parse a ``[transient]`` table.
 
     Parameters
     ----------
     table : dict
-    base_dir : pathlib.Path
+    base_dir : path-like, optional
         Unused (no paths in this section).
 
     Returns
@@ -112,7 +113,7 @@ def parse_transient(table, base_dir):
 
 
 def parse_initial_face(table, base_dir):
-    """Parse an ``[initial_face]`` table (``extra_sections`` callback).
+    """Parse an ``[initial_face]`` table.
 
     Parameters
     ----------
@@ -161,8 +162,13 @@ def load_transient_scene(path):
     >>> initial.kind, initial.height(scene.grid()).shape
     ('tilted', (64, 64))
     """
-    scene = load_scene(path, extra_sections={"transient": parse_transient,
-                                             "initial_face": parse_initial_face})
-    options = scene.extra.get("transient", RunOptions())
-    initial = scene.extra.get("initial_face", InitialFace())
+    scene = load_scene(path, extra_sections=RUN_IN_SECTIONS)
+    base_dir = pathlib.Path(path).parent
+    try:
+        options = (parse_transient(scene.extra["transient"], base_dir)
+                   if "transient" in scene.extra else RunOptions())
+        initial = (parse_initial_face(scene.extra["initial_face"], base_dir)
+                   if "initial_face" in scene.extra else InitialFace())
+    except ValueError as err:
+        raise ValueError(f"{path}: {err}") from None
     return scene, options, initial
