@@ -21,7 +21,7 @@ bottom floor up:
   laws;
 - :mod:`steady.problem` -- the one checked problem definition;
 - :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
-- :mod:`steady.accuracy` -- the energy-corrected rms slope and its error
+- :mod:`steady.rms_slope` -- the energy-corrected rms slope and its error
   bar; :mod:`steady.normalisation` -- the reference slope of each outline;
   :mod:`steady.relief` -- rms heights;
 - :mod:`steady.scene` -- TOML scene files;
@@ -69,8 +69,8 @@ _MODULE_OF = {
     "Rods": "phases",
     "Scene": "scene",
     "Segmentation": "micrograph",
-    "SlopeEnergy": "accuracy",
-    "SlopeEstimate": "accuracy",
+    "SlopeEnergy": "rms_slope",
+    "SlopeEstimate": "rms_slope",
     "SteadyResult": "solution",
     "StoredResult": "output",
     "SweepSlopes": "basis",
@@ -79,7 +79,7 @@ _MODULE_OF = {
     "atomic_h5": "output",
     "cross_section": "profiles",
     "differential_profile": "profiles",
-    "estimate_rms_slope": "accuracy",
+    "estimate_rms_slope": "rms_slope",
     "fit_face": "fit",
     "fit_scene": "fit",
     "load_micrograph": "micrograph",

@@ -5,7 +5,7 @@ is a linear combination of the faces of the phase indicators,
 ``f_inf = sum_i p_i K chi_i`` (eq. 9), and the mean-square slope is a
 quadratic form in the phase pressures.  A :class:`PhaseBasis` transforms
 each phase once; afterwards the face, the rms slope (plain and
-energy-corrected, :mod:`steady.accuracy`) and the phase pressures for any
+energy-corrected, :mod:`steady.rms_slope`) and the phase pressures for any
 number of wear-coefficient sets cost no transform at all.  This is what
 makes maps over the wear ratio (paper Fig. 4b, 5b) cheap.
 """
@@ -16,11 +16,11 @@ import dataclasses
 
 import numpy as np
 
-from .accuracy import SlopeEnergy
 from .halfspace import HalfSpace
 from .normalisation import reference_slope
 from .pressures import phase_pressures
 from .problem import FacePhases
+from .rms_slope import SlopeEnergy
 
 __all__ = ["PhaseBasis", "SweepSlopes"]
 
@@ -70,7 +70,7 @@ class PhaseBasis:
     Notes
     -----
     Cost: for ``P`` phases, ``P`` transforms of the face and the
-    energy-corrected slope integrals (:meth:`steady.accuracy.SlopeEnergy.gram`).
+    energy-corrected slope integrals (:meth:`steady.rms_slope.SlopeEnergy.gram`).
 
     Examples
     --------

@@ -147,21 +147,22 @@ def _influence_quadrant(cx, cy, asinh_yx, asinh_xy):
     return _corner_sum(cx[:, None] * asinh_yx + cy[None, :] * asinh_xy)
 
 
-def grid_shape(n):
-    """``(nx, ny)`` of a grid given as ``n`` (square) or ``(nx, ny)``, checked.
+def grid_shape(shape):
+    """``(nx, ny)`` of a grid given as ``(nx, ny)`` or one ``n`` (square), checked.
 
     Raises
     ------
     ValueError
         If a size is not an integer of at least 2.
     """
-    shape = (n, n) if np.ndim(n) == 0 else tuple(n)
+    given = shape
+    shape = (shape, shape) if np.ndim(shape) == 0 else tuple(shape)
     if len(shape) != 2:
-        raise ValueError(f"grid shape must be n or (nx, ny), got {n!r}")
+        raise ValueError(f"grid shape must be n or (nx, ny), got {given!r}")
     out = []
     for v in shape:
         if isinstance(v, (bool, np.bool_)) or int(v) != v or int(v) < 2:
-            raise ValueError(f"grid sizes must be integers of at least 2, got {n!r}")
+            raise ValueError(f"grid sizes must be integers of at least 2, got {given!r}")
         out.append(int(v))
     return tuple(out)
 
@@ -175,9 +176,10 @@ class HalfSpace:
 
     Parameters
     ----------
-    n : int or (int, int)
-        Pixels along each axis: ``n`` for a square ``n x n`` grid, or
-        ``(nx, ny)`` (x along axis 0, y along axis 1).
+    shape : int or (int, int)
+        Pixels along each axis: ``(nx, ny)`` (x along axis 0, y along axis
+        1), or one ``n`` for a square ``n x n`` grid (a face's grid:
+        ``HalfSpace(grid.shape, grid.h, E_star)``).
     h : float, m
         Pixel side (pixels are square).
     E_star : float, Pa
@@ -209,8 +211,8 @@ class HalfSpace:
     1.002
     """
 
-    def __init__(self, n, h, E_star, *, workers=-1):
-        self.shape = grid_shape(n)
+    def __init__(self, shape, h, E_star, *, workers=-1):
+        self.shape = grid_shape(shape)
         if not (np.isfinite(h) and h > 0):
             raise ValueError(f"pixel size h must be positive and finite, got {h!r} m")
         if not (np.isfinite(E_star) and E_star > 0):
@@ -229,20 +231,6 @@ class HalfSpace:
         # would map and fault in page by page at every call).
         self._rows = np.zeros((nx, 2 * ny))
         self._work = np.empty((2 * nx, ny + 1), dtype=complex)
-
-    @property
-    def n(self):
-        """Pixels along each axis of a square grid (``shape`` is ``(n, n)``).
-
-        Raises
-        ------
-        ValueError
-            On a rectangular grid, which has no single size: use :attr:`shape`.
-        """
-        nx, ny = self.shape
-        if nx != ny:
-            raise ValueError(f"the grid is {nx} x {ny}, not square: use HalfSpace.shape")
-        return nx
 
     # -- spectra -------------------------------------------------------
     # The circulant 2nx x 2ny embeddings of the kernels are even (influence)

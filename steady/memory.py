@@ -166,7 +166,7 @@ def product_memory(n):
 def slope_estimator_memory(n):
     """Bytes of the energy-corrected slope estimator of grid ``n``: kept, and while applied.
 
-    :class:`steady.accuracy.SlopeEnergy` convolves on a fine box of FFT
+    :class:`steady.rms_slope.SlopeEnergy` convolves on a fine box of FFT
     size ``S`` (about ``2.2 n``) and a coarse one of size ``S_c`` (about
     ``1.2 n``), the same arithmetic as its constructor with the default
     margin ``max(8, n // 16)``, coarsening 8 and far radius 8.
@@ -208,7 +208,7 @@ def steady_memory(n, *, slope_error=True):
       (:func:`product_memory`, 112 bytes per pixel);
     - with ``slope_error`` (the default of the command): the labels and
       pressure of the finest grid of the ladder (17 bytes per pixel) and
-      the slope estimator of :mod:`steady.accuracy`, kept and applied
+      the slope estimator of :mod:`steady.rms_slope`, kept and applied
       (:func:`slope_estimator_memory`, about 250 bytes per pixel), the
       peak.
 

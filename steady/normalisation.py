@@ -9,13 +9,13 @@ slope is ``S pbar / E*`` with a factor ``S`` that depends only on the
 outline's shape (the displacement is ``pbar / E*`` times a function of the
 position in units of the outline's size).  ``S`` comes from
 
-- the disk: ``4 / pi`` (eq. 12; :func:`steady.reference.cylinder_rms_slope`
+- the disk: ``4 / pi`` (eq. 12; :func:`steady.reference.disk_normalised_rms_slope`
   shows that the continuum value is exactly that);
 - the rectangle: quadrature of Love's closed-form gradient
   (:func:`steady.reference.rectangle_rms_slope`);
 - the annulus: superposed disks (:func:`steady.reference.annulus_rms_slope`);
 - any other outline (ellipse, mask): the corrected rms-slope estimator of
-  :mod:`steady.accuracy` on the homogeneous face, with its error bar, on a
+  :mod:`steady.rms_slope` on the homogeneous face, with its error bar, on a
   grid of :data:`REFERENCE_GRID` pixels along the longer side (a mask: the
   smallest multiple of its size at least that fine).
 
@@ -30,9 +30,9 @@ import functools
 import math
 
 from . import reference
-from .accuracy import estimate_rms_slope
 from .outline import Annulus, Circle, MaskOutline, Rectangle
 from .phases import Homogeneous
+from .rms_slope import estimate_rms_slope
 
 __all__ = ["REFERENCE_GRID", "ReferenceSlope", "reference_slope", "slope_factor"]
 
@@ -132,7 +132,7 @@ def reference_slope(outline, normal_force, E_star):
     -------
     ReferenceSlope
         For a disk, ``4 pbar / (pi E*)`` with ``pbar = F_N / (pi a^2)``,
-        exactly as :func:`steady.reference.reference_slope`.
+        exactly as :func:`steady.reference.disk_reference_slope`.
 
     Examples
     --------
@@ -142,8 +142,8 @@ def reference_slope(outline, normal_force, E_star):
     0.194848 198943.68
     """
     if isinstance(outline, Circle):
-        pbar = reference.mean_pressure(normal_force, outline.radius)
-        value = reference.reference_slope(pbar, E_star)
+        pbar = reference.disk_mean_pressure(normal_force, outline.radius)
+        value = reference.disk_reference_slope(pbar, E_star)
     else:
         pbar = normal_force / outline.area
     factor, error, source = slope_factor(outline)

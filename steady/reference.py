@@ -16,79 +16,43 @@ __all__ = [
     "annulus_face",
     "annulus_face_slope",
     "annulus_rms_slope",
-    "cylinder_face",
-    "cylinder_face_slope",
-    "cylinder_rms_slope",
     "disk_face",
     "disk_face_slope",
+    "disk_mean_pressure",
+    "disk_normalised_rms_slope",
+    "disk_reference_slope",
     "disk_rms_slope",
     "fine_grain_rms_slope",
     "flat_punch_approach",
     "flat_punch_pressure",
     "hertz",
-    "mean_pressure",
     "pillars_rms_slope",
     "rectangle_face",
     "rectangle_face_gradient",
     "rectangle_rms_slope",
-    "reference_slope",
 ]
 
 
-def mean_pressure(normal_force, radius):
-    """Mean pressure ``pbar = F_N / (pi a^2)`` on the punch face, Pa.
+def disk_mean_pressure(normal_force, radius):
+    """Mean pressure ``pbar = F_N / (pi a^2)`` on a disk of radius ``a``, Pa.
 
-    The paper prints ``(pi a)^2``; that is a typo.
+    The paper prints ``(pi a)^2``; that is a typo.  (Any outline's is
+    ``F_N / A``: :attr:`steady.problem.Problem.mean_pressure`.)
     """
     return normal_force / (np.pi * radius**2)
 
 
-def reference_slope(mean_pressure, E_star):
-    """Reference slope ``grad_f0 = 4 pbar / (pi E*)`` (eq. 12), dimensionless."""
+def disk_reference_slope(mean_pressure, E_star):
+    """Reference slope of a disk ``grad_f0 = 4 pbar / (pi E*)`` (eq. 12), dimensionless.
+
+    The homogeneous disk's rms slope (:func:`disk_rms_slope`); any outline's
+    is :func:`steady.normalisation.reference_slope`.
+    """
     return 4.0 * mean_pressure / (np.pi * E_star)
 
 
-def cylinder_face(r, radius, mean_pressure, E_star):
-    """Limiting worn face of a homogeneous cylinder (eq. 10).
-
-    Parameters
-    ----------
-    r : array_like, m
-        Distance from the axis, ``0 <= r <= radius``.
-    radius : float, m
-    mean_pressure : float, Pa
-    E_star : float, Pa
-
-    Returns
-    -------
-    ndarray, m
-        ``f_inf(r) = 4 pbar a / (pi E*) E(r/a)``; ``E`` is the complete
-        elliptic integral of the second kind with modulus ``r/a``
-        (:func:`scipy.special.ellipe` takes the parameter ``(r/a)^2``).
-        NaN outside the face.
-    """
-    rho = np.asarray(r, dtype=float) / radius
-    inside = rho <= 1.0
-    m = np.where(inside, rho**2, 0.0)
-    return np.where(inside, 4 * mean_pressure * radius / (np.pi * E_star) * special.ellipe(m),
-                    np.nan)
-
-
-def cylinder_face_slope(r, radius, mean_pressure, E_star):
-    """Radial derivative of :func:`cylinder_face`, dimensionless.
-
-    ``dE/dk = (E(k) - K(k)) / k``; log-singular at the rim.  Zero on the axis.
-    """
-    rho = np.asarray(r, dtype=float) / radius
-    inside = rho < 1.0
-    k = np.where(inside & (rho > 0), rho, 0.5)
-    d = (special.ellipe(k**2) - special.ellipk(k**2)) / k
-    d = np.where(rho > 0, d, 0.0)
-    return np.where(inside, reference_slope(mean_pressure, E_star) * d, np.nan)
-
-
-def cylinder_rms_slope():
-    """Continuum rms slope of the eq. 10 face over the disk, in units of ``grad_f0``.
+def disk_normalised_rms_slope():
+    """Continuum rms slope of the eq. 10 face over the disk, in units of ``grad_f0``, by quadrature.
 
     Quadrature of ``2 int_0^1 ((E(k) - K(k)) / k)^2 k dk``; the integrand is
     log-squared singular at ``k = 1``.  The value is 1 to quadrature
@@ -159,7 +123,7 @@ def pillars_rms_slope(mean_pressure, E_star, hard_fill_factor):
     derivation averages over the pillars only; for the rms over the whole
     face see :func:`fine_grain_rms_slope`.
     """
-    return reference_slope(mean_pressure, E_star) / _hard_fill_factor(hard_fill_factor)
+    return disk_reference_slope(mean_pressure, E_star) / _hard_fill_factor(hard_fill_factor)
 
 
 def fine_grain_rms_slope(fill_factors, wear_coefficients, *, exponent=1.0):
@@ -184,7 +148,7 @@ def fine_grain_rms_slope(fill_factors, wear_coefficients, *, exponent=1.0):
     Notes
     -----
     Over the whole plane ``int |grad u|^2 dA = (4 / E*^2) int p^2 dA``
-    (Parseval; :mod:`steady.accuracy`).  Split the steady pressure into its
+    (Parseval; :mod:`steady.rms_slope`).  Split the steady pressure into its
     mean ``pbar`` and the fluctuation ``p - pbar``.  The mean gives the
     homogeneous face (normalised rms slope 1, the fraction ``4 / pi^2`` of
     its plane integral on the face).  When the grains are much smaller than
@@ -240,7 +204,7 @@ def disk_rms_slope():
 
     Under a uniform pressure ``pbar`` on a disk, the rms slope of the face
     over the disk is ``S pbar / E* = 4 pbar / (pi E*)``, the reference slope
-    of eq. 12 (:func:`reference_slope`); :func:`cylinder_rms_slope` is the
+    of eq. 12 (:func:`disk_reference_slope`); :func:`disk_normalised_rms_slope` is the
     quadrature that shows it (1 in units of the reference slope).  The
     disk's counterpart of :func:`rectangle_rms_slope` and
     :func:`annulus_rms_slope`.
@@ -280,8 +244,8 @@ def disk_face(r, radius, pressure, E_star):
         of the first and second kind written with the modulus (scipy takes
         the parameter, the modulus squared).  Continuous at the rim, where
         ``u = 4 p a / (pi E*)``; ``2 p a / E*`` at the centre; ``F / (pi E* r)``
-        far away (``F = pi a^2 p``).  Inside the disk this is
-        :func:`cylinder_face` (eq. 10).
+        far away (``F = pi a^2 p``).  Inside the disk this is the limiting
+        face of the homogeneous cylinder (eq. 10).
 
     Raises
     ------
@@ -306,7 +270,7 @@ def disk_face(r, radius, pressure, E_star):
     """
     r = _distance(r)
     a = _positive_length(radius, "radius")
-    # The rim value; inside, the expression of cylinder_face, to the bit.
+    # The rim value; inside, eq. 10 as written.
     rim = 4 * pressure * a / (np.pi * _positive_modulus(E_star))
     inside = r <= a
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -334,7 +298,7 @@ def disk_face_slope(r, radius, pressure, E_star):
     -------
     ndarray, shape of ``r``, dimensionless
         ``du/dr = 4 p / (pi E*) (E(k) - K(k)) / k`` with ``k = r / a``
-        inside (:func:`cylinder_face_slope`) and
+        inside and
         ``du/dr = 4 p / (pi E*) (E(k) - K(k))`` with ``k = a / r`` outside;
         zero at the centre, ``-inf`` at the rim (log-singular from both
         sides), ``-F / (pi E* r^2)`` far away.

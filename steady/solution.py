@@ -17,7 +17,7 @@ Normalisation (eq. 12, 15): with ``pbar = F_N / (pi a^2)`` and
 only on the phase geometry, the wear ratios and the exponent.  For a
 homogeneous cylinder the normalised face is ``E(r/a)`` (eq. 10) and the
 normalised rms slope tends to 1 under refinement
-(:func:`steady.reference.cylinder_rms_slope`).  A face of another outline
+(:func:`steady.reference.disk_normalised_rms_slope`).  A face of another outline
 (:mod:`steady.outline`) is normalised the same way by its own homogeneous
 face: ``pbar = F_N / A`` and ``grad_f0`` that face's rms slope
 (:mod:`steady.normalisation`), with lengths in units of the outline's
@@ -32,10 +32,10 @@ import math
 
 import numpy as np
 
-from .accuracy import estimate_rms_slope
 from .normalisation import reference_slope
 from .problem import Problem
 from .relief import rms_height
+from .rms_slope import estimate_rms_slope
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
 
@@ -61,7 +61,7 @@ class SteadyResult:
         Magnitude of the gradient of ``f_inf``; NaN off the face.
     rms_slope : float, dimensionless
         Best estimate of the rms slope over the face: the energy-corrected
-        value of :mod:`steady.accuracy` where ``rms_slope_error`` is set,
+        value of :mod:`steady.rms_slope` where ``rms_slope_error`` is set,
         else ``rms_slope_plain``.
     reference_slope : float, dimensionless
         ``grad_f0``, the rms slope of the homogeneous face of the same
@@ -265,7 +265,7 @@ def solve_scene(scene, *, n=None, slope_error=True):
         geometry is rasterised at this size.
     slope_error : bool, optional
         Replace the plain pixel rms slope by the energy-corrected one with
-        its error estimate (:func:`steady.accuracy.estimate_rms_slope`,
+        its error estimate (:func:`steady.rms_slope.estimate_rms_slope`,
         default True).  Costs a few solves of the same grid.
 
     Returns

@@ -23,11 +23,11 @@ import functools
 
 import numpy as np
 
-from .accuracy import grid_ladder, ladder_error
 from .basis import PhaseBasis
 from .outline import UNIT_DISK
 from .phases import Voronoi
 from .problem import FacePhases
+from .rms_slope import grid_ladder, ladder_error
 from .sweep import run_sweep
 
 __all__ = [
@@ -70,10 +70,10 @@ def voronoi_slopes(point, *, n, ratios):
     Returns
     -------
     dict
-        ``grids`` (G,) the ladder of :func:`steady.accuracy.grid_ladder`;
+        ``grids`` (G,) the ladder of :func:`steady.rms_slope.grid_ladder`;
         ``rms_slope`` (G, K) energy-corrected ``rms / grad_f0`` on each grid;
         ``rms_slope_plain`` (K,) plain pixel value on grid ``n``;
-        ``error`` (K,) :func:`steady.accuracy.ladder_error` of the value on grid ``n`` (for the
+        ``error`` (K,) :func:`steady.rms_slope.ladder_error` of the value on grid ``n`` (for the
         ladder ``n, 2n``: ``2 |S_2n - S_n|``, its first-order error);
         ``fill_factor`` realised ``rho_2`` on grid ``n``.
     """
@@ -117,7 +117,7 @@ def voronoi_sweep(path, *, n, ratios, n_seeds, fill_factors, seeds, executor=Non
         ``ratios``, so that sweeps over other coarseness levels, fill
         factors or realisations with the same grid and ratios share it.
     n : int
-        Grid of the values (:func:`steady.accuracy.grid_ladder` adds coarser ones).
+        Grid of the values (:func:`steady.rms_slope.grid_ladder` adds coarser ones).
     ratios : sequence of float
         Wear ratios ``k_2 / k_1``.
     n_seeds, fill_factors, seeds : sequences

@@ -30,11 +30,11 @@ import numpy as np
 import study_io
 from matplotlib.colors import ListedColormap
 
-from steady.accuracy import estimate_rms_slope
 from steady.normalisation import reference_slope
 from steady.outline import Annulus, Circle, Rectangle
 from steady.phases import Voronoi
 from steady.problem import FacePhases, Problem
+from steady.rms_slope import estimate_rms_slope
 from steady.solution import solve
 
 NAME = "face_outlines"

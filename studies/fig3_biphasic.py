@@ -24,11 +24,11 @@ import numpy as np
 import study_io
 from matplotlib.colors import ListedColormap
 
-from steady.accuracy import grid_ladder, ladder_error
 from steady.basis import PhaseBasis
 from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
 from steady.problem import FacePhases
+from steady.rms_slope import grid_ladder, ladder_error
 
 NAME = "fig3_biphasic"
 PARAMS = {"n": 512, "n_seeds": 1600, "fill_factor": 0.5, "seed": 2718, "ratio": 10.0}

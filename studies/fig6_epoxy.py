@@ -38,8 +38,8 @@ def compute(path, params):
     scene = load_scene(SCENE)
     res = solve_scene(scene, n=params["n"])
     a = scene.outline.radius
-    pbar = reference.mean_pressure(scene.normal_force, a)
-    rim = float(reference.cylinder_face(a, a, pbar, scene.E_star))
+    pbar = reference.disk_mean_pressure(scene.normal_force, a)
+    rim = float(reference.disk_face(a, a, pbar, scene.E_star))
     sections = []
     for deg in params["angles_deg"]:
         t = np.radians(deg)
@@ -47,7 +47,7 @@ def compute(path, params):
         s, f = cross_section(res.face, a, -d, d, params["points"])
         sections.append(f - rim)
     s = s - a  # position along the section, from -a to a
-    exact = reference.cylinder_face(np.abs(s), a, pbar, scene.E_star) - rim
+    exact = reference.disk_face(np.abs(s), a, pbar, scene.E_star) - rim
     sections = np.asarray(sections)
     dev = np.nanmax(np.abs(sections - exact[None]))
     # The face's slope is log-singular at the rim, where the last pixel

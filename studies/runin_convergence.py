@@ -67,7 +67,7 @@ def _scene(case):
 
 def run_case(point, *, tol, distances):
     """One run-in from the flat face on one grid (sweep task)."""
-    from steady.accuracy import SlopeEnergy
+    from steady.rms_slope import SlopeEnergy
     from steady.solution import solve_scene
     from transient.history import rim_layer_excess
     from transient.initial_face import flat

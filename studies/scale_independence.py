@@ -31,9 +31,9 @@ import numpy as np
 import study_io
 import voronoi_study
 
-from steady.accuracy import SlopeEnergy
 from steady.phases import Voronoi
 from steady.reference import fine_grain_rms_slope
+from steady.rms_slope import SlopeEnergy
 from steady.wear import pressure_field
 
 NAME = "scale_independence"

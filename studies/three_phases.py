@@ -35,12 +35,12 @@ import numpy as np
 import study_io
 from matplotlib.colors import ListedColormap
 
-from steady.accuracy import grid_ladder, ladder_error
 from steady.basis import PhaseBasis
 from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
 from steady.problem import FacePhases
 from steady.reference import fine_grain_rms_slope
+from steady.rms_slope import grid_ladder, ladder_error
 
 NAME = "three_phases"
 PHASES = ("matrix", "hard", "soft")

@@ -33,12 +33,12 @@ import sys
 import numpy as np
 import study_io
 
-from steady.accuracy import grid_ladder, ladder_error
 from steady.basis import PhaseBasis
 from steady.outline import UNIT_DISK
 from steady.phases import Voronoi
 from steady.problem import FacePhases
 from steady.reference import fine_grain_rms_slope
+from steady.rms_slope import grid_ladder, ladder_error
 
 NAME = "wear_exponent"
 PARAMS = {"n": 512, "exponents": [0.5, 1.0, 2.0, 3.0],
@@ -73,7 +73,7 @@ def exponent_slopes(geometry, n, ratios, exponents):
     rms : ndarray, shape (E, K)
         Energy-corrected ``rms / grad_f0`` on grid ``n`` at exponent ``m``.
     error : ndarray, shape (E, K)
-        Its ladder error (:func:`steady.accuracy.ladder_error`).
+        Its ladder error (:func:`steady.rms_slope.ladder_error`).
     archard : ndarray, shape (E, K)
         ``m = 1`` value at the effective ratio ``r^(1/m)``, grid ``n``.
     fill : float

@@ -72,7 +72,7 @@ from steady.scene import Scene
 from steady.wear import PowerLaw
 from transient.comparison import compare_with_steady
 from transient.contact import solve_contact
-from transient.history import HistoryEstimator
+from transient.history import FaceEstimator
 from transient.initial_face import flat
 from transient.options import RunOptions
 from transient.problem import WearProblem
@@ -202,7 +202,7 @@ def run_baseline(n, distances, end):
     per = math.ceil(1e-4 / limit)          # steps per 1e-4 s*, so steps land on distances
     ds = 1e-4 / per * s_star
     w = np.zeros((n, n))
-    estimator = HistoryEstimator(problem, w)
+    estimator = FaceEstimator(problem, w)
     slopes = np.full(len(distances), np.nan)
     targets = [round(d / 1e-4) * per for d in distances]
     steps_end = round(end / 1e-4) * per

@@ -53,7 +53,7 @@ def test_steady_state_is_eq10(model):
     """
     state = model.state(30 * model.run_in_distance)
     pbar = model.mean_pressure
-    exact = reference.cylinder_face(model.centres, model.radius, pbar, model.E_star)
+    exact = reference.disk_face(model.centres, model.radius, pbar, model.E_star)
     diff = state.face - exact
     relief = exact.max() - exact.min()
     assert np.ptp(diff) / relief < 1e-7, f"steady face off eq. 10 by {np.ptp(diff) / relief:.2e}"

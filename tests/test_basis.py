@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from steady.accuracy import SlopeEnergy
 from steady.basis import PhaseBasis
 from steady.outline import Circle
 from steady.phases import Voronoi
 from steady.problem import FacePhases, Problem
+from steady.rms_slope import SlopeEnergy
 from steady.solution import solve
 
 

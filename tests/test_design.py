@@ -12,11 +12,11 @@ import pytest
 
 import steady
 from steady import reference
-from steady.accuracy import estimate_rms_slope, grid_ladder, ladder_error
 from steady.cli.design import main
 from steady.design import DEFAULT_TABLE, TABLE_FORMAT, DesignTable
 from steady.phases import Voronoi
 from steady.reference import fine_grain_rms_slope
+from steady.rms_slope import estimate_rms_slope, grid_ladder, ladder_error
 from steady.voronoi_sweep import voronoi_slopes
 
 
@@ -64,13 +64,13 @@ def test_fine_grain_closed_form_matches_fine_maps(seed):
 
 
 def test_ladder_matches_estimate_rms_slope():
-    """Where n/4 and n/2 are admissible the ladder and its error are those of steady.accuracy."""
+    """Where n/4 and n/2 are admissible the ladder and its error are those of steady.rms_slope."""
     geometry = Voronoi(400, (0.6, 0.4), 2291)
     assert grid_ladder(geometry, 256) == [64, 128, 256], "ladder n/4, n/2, n"
     out = voronoi_slopes({"n_seeds": 400, "fill_factor": 0.4, "seed": 2291}, n=256,
                          ratios=[10.0])
     est = estimate_rms_slope(geometry, [1.0, 10.0], np.pi, 1.0, 1.0, 256)
-    g0 = reference.reference_slope(1.0, 1.0)
+    g0 = reference.disk_reference_slope(1.0, 1.0)
     assert out["rms_slope"][-1, 0] * g0 == pytest.approx(est.rms_slope, rel=1e-12), "value"
     assert out["error"][0] * g0 == pytest.approx(est.error, rel=1e-9), "error estimate"
 

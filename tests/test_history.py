@@ -21,7 +21,7 @@ from transient.history import (
     SOURCE_CONTACT,
     SOURCE_INITIAL,
     SOURCE_PARTIAL_CONTACT,
-    HistoryEstimator,
+    FaceEstimator,
     face_statistics,
     rim_layer_excess,
 )
@@ -29,7 +29,7 @@ from transient.runin import RunOptions, run_in
 
 FAST = RunOptions(tol=1e-3)
 VORONOI = GEOMETRIES["voronoi"]
-G0 = reference.reference_slope(reference.mean_pressure(FORCE, RADIUS), 1.3e6)
+G0 = reference.disk_reference_slope(reference.disk_mean_pressure(FORCE, RADIUS), 1.3e6)
 
 
 @pytest.mark.parametrize("n", [32, 33])
@@ -119,7 +119,7 @@ def test_partial_contact_estimate_is_the_face_slope(n):
     sphere = 1.5 * RADIUS
     problem = wear_problem("homogeneous", (1.0,), n)
     height = initial_face.crowned(problem.grid, sphere)
-    estimator = HistoryEstimator(problem, height)
+    estimator = FaceEstimator(problem, height)
     contact = problem.contact(height)
     figures = estimator.figures(1e-12, height, contact.pressure, contact.approach)
     exact = initial_face.exact_statistics("crowned", RADIUS, sphere_radius=sphere).rms_slope
@@ -153,7 +153,7 @@ def test_history_of_a_resumed_run_is_the_same():
 
 def test_map_error_is_nan_free_on_small_grids():
     problem = wear_problem(VORONOI, (1.0, 10.0), 32)
-    estimator = HistoryEstimator(problem, np.zeros((32, 32)))
+    estimator = FaceEstimator(problem, np.zeros((32, 32)))
     assert np.isfinite(estimator.map_error) and estimator.map_error > 0, estimator.map_error
 
 

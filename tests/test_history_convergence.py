@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from conftest import GEOMETRIES, wear_problem
 
-from steady.accuracy import SlopeEnergy
+from steady.rms_slope import SlopeEnergy
 from transient.axisymmetric import reference_history
 from transient.runin import RunOptions, run_in
 

@@ -4,7 +4,7 @@ The implicit stages of the run-in solve ``(K + ds diag(k)) p = d - w`` with a
 shift that differs from phase to phase.  The stitched Fourier preconditioner
 (:class:`transient.preconditioners.FourierPreconditioner`) is checked against
 dense spectra of the preconditioned operator, and the warm start
-(:class:`transient.problem.PressureHistory`) against the linearity of the
+(:class:`transient.problem.WarmStart`) against the linearity of the
 full-contact problem.
 """
 
@@ -21,7 +21,7 @@ from transient.preconditioners import (
     make_preconditioner,
     shift_levels,
 )
-from transient.problem import PressureHistory
+from transient.problem import WarmStart
 from transient.runin import RunOptions, run_in
 
 
@@ -208,7 +208,7 @@ def test_galerkin_warm_start_is_exact_on_the_span():
     heights = [np.zeros((n, n)), 2e-4 * (r / n) ** 2]   # m, a third of f*
     solves = [solve_contact(hs, face, h, FORCE, shift=shift, rtol=1e-12) for h in heights]
     assert all(s.contact_fraction == 1.0 for s in solves), "the test needs full contact"
-    history = PressureHistory(problem)
+    history = WarmStart(problem)
     for s in solves:
         history.push(s.pressure)
     for theta in (0.3, 1.7):
@@ -231,11 +231,11 @@ def test_history_restored_from_its_pressures_predicts_bit_for_bit():
     n = 33
     problem = wear_problem("voronoi", (1.0, 10.0), n)
     rng = np.random.default_rng(7919)
-    history = PressureHistory(problem, size=3)
+    history = WarmStart(problem, size=3)
     for _ in range(5):
         history.push(np.where(problem.face_mask, 1e5 * (1 + 0.01 * rng.random((n, n))), 0.0))
     assert len(history) == 3, f"{len(history)} pressures kept, expected 3"
-    again = PressureHistory(problem, size=3, pressures=history.pressures())
+    again = WarmStart(problem, size=3, pressures=history.pressures())
     height = 1e-7 * rng.random((n, n))
     shift = 1e-3 * problem.run_in_distance * problem.coefficient_field
     for a, b in zip(history.predict(height, shift), again.predict(height, shift), strict=True):
@@ -269,7 +269,7 @@ def test_kept_gram_matrices_give_the_galerkin_combination():
     problem = wear_problem("voronoi", (1.0, 10.0), n)
     face = problem.face_mask
     rng = np.random.default_rng(104729)
-    history = PressureHistory(problem, size=4)
+    history = WarmStart(problem, size=4)
     base = np.where(face, 1e5, 0.0)
     height = 1e-7 * rng.random((n, n))
     c = 1e-3 * problem.run_in_distance
@@ -285,7 +285,7 @@ def test_kept_gram_matrices_give_the_galerkin_combination():
             assert err < 2e-10, f"push {step}, {kind}: off the Galerkin minimiser by {err:.2e}"
             assert np.allclose(displacement, problem.halfspace.displacement(guess), rtol=0,
                                atol=1e-12 * np.abs(displacement).max()), f"{kind}: K x0"
-    again = PressureHistory(problem, size=4, pressures=history.pressures(),
+    again = WarmStart(problem, size=4, pressures=history.pressures(),
                             displacements=history.displacements())
     for a, b in zip(history.predict(height, shift_scale=c), again.predict(height, shift_scale=c),
                     strict=True):

@@ -42,7 +42,7 @@ def test_ring_average_and_differential_profile_of_homogeneous_face():
     n = 128
     res = _face(n, Homogeneous(), [1e-13])
     r_ring, mean = ring_average(res.face, RADIUS, n // 2)
-    exact = reference.cylinder_face(r_ring, RADIUS, res.mean_pressure, 1.3e6)
+    exact = reference.disk_face(r_ring, RADIUS, res.mean_pressure, 1.3e6)
     relief = np.nanmax(res.face) - np.nanmin(res.face)
     # Rings one pixel wide average eq. 10 to within the grid error of the
     # face (measured at most 0.30 % of the relief).

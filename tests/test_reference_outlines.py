@@ -177,16 +177,20 @@ def test_disk_face_continuity_centre_far_field():
 
 
 def test_disk_inside_is_the_cylinder():
+    """Inside the disk: eq. 10 and its derivative, written out with Legendre's integrals."""
     a = 2e-3
     r = np.linspace(0.0, a, 41)
     face = reference.disk_face(r, a, PRESSURE, E_STAR)
-    cylinder = reference.cylinder_face(r, a, PRESSURE, E_STAR)
-    assert np.array_equal(face, cylinder), "disk_face inside differs from cylinder_face"
-    slope = reference.disk_face_slope(r[:-1], a, PRESSURE, E_STAR)
-    want = reference.cylinder_face_slope(r[:-1], a, PRESSURE, E_STAR)
+    unit = reference.disk_reference_slope(PRESSURE, E_STAR)  # 4 p / (pi E*)
+    cylinder = 4 * PRESSURE * a / (np.pi * E_STAR) * special.ellipe((r / a) ** 2)
+    assert np.array_equal(face, cylinder), "disk_face inside differs from eq. 10"
+    k = r[1:-1] / a
+    slope = reference.disk_face_slope(r[1:-1], a, PRESSURE, E_STAR)
+    want = unit * (special.ellipe(k**2) - special.ellipk(k**2)) / k
     # Carlson's R_D against E - K: measured 4e-15 of the reference slope.
-    err = np.max(np.abs(slope - want)) / reference.reference_slope(PRESSURE, E_STAR)
-    assert err < 1e-13, f"disk_face_slope inside differs from cylinder_face_slope by {err:.1e}"
+    err = np.max(np.abs(slope - want)) / unit
+    assert err < 1e-13, f"disk_face_slope inside differs from (E - K) / k by {err:.1e}"
+    assert reference.disk_face_slope(0.0, a, PRESSURE, E_STAR) == 0.0, "zero on the axis"
     assert reference.disk_face_slope(a, a, PRESSURE, E_STAR) == -np.inf, "rim slope is -inf"
 
 
@@ -199,7 +203,7 @@ def test_disk_slope_is_the_derivative(rho):
     got = reference.disk_face_slope(r, a, PRESSURE, E_STAR)
     # Measured below 2.5e-10 of 4 p / (pi E*) (round-off over 2 step; truncation
     # ~ step^2 / |r - a|^2 near the rim).
-    unit = reference.reference_slope(PRESSURE, E_STAR)
+    unit = reference.disk_reference_slope(PRESSURE, E_STAR)
     assert abs(got - fd) < 2e-9 * unit, f"r = {rho} a: slope {got:.6e}, differences {fd:.6e}"
 
 
@@ -394,8 +398,9 @@ def test_annulus_factor():
     for ratio in (1e-2, 1e-3, 1e-4):
         got = reference.annulus_rms_slope(ratio)
         assert 0 < 1 - got / (4 / math.pi) < 0.5 * ratio**2, f"ratio {ratio}: {got!r}"
-    assert reference.disk_rms_slope() == pytest.approx(4 / math.pi * reference.cylinder_rms_slope(),
-                                                       rel=1e-14), "disk factor against eq. 12"
+    quadrature = reference.disk_normalised_rms_slope()
+    assert reference.disk_rms_slope() == pytest.approx(4 / math.pi * quadrature, rel=1e-14), \
+        "disk factor against eq. 12"
     # A thin ring is a strip bent round: S -> 2 / sqrt(3) (measured 5e-8 above at 0.9999).
     thin = reference.annulus_rms_slope(0.9999)
     assert 0 < thin - STRIP < 1e-6, f"thin ring {thin!r} against the strip {STRIP!r}"

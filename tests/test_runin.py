@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from conftest import CRITICAL_TILT, E_STAR, FORCE, GEOMETRIES, K1, RADIUS, RODS, wear_problem
 
-from steady.accuracy import estimate_rms_slope
 from steady.phases import Voronoi
+from steady.rms_slope import estimate_rms_slope
 from transient import initial_face
 from transient.comparison import compare_with_steady
 from transient.control import MAX_JUMPS

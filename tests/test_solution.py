@@ -39,7 +39,7 @@ def test_homogeneous_face_converges_to_eq10():
     for n in REFINEMENT:
         res = steady(Homogeneous().labels(n), [1e-13])
         r, _ = grid(n).polar()
-        exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
+        exact = reference.disk_face(r, RADIUS, res.mean_pressure, E_STAR)
         on_face = grid(n).mask
         relief = exact[on_face].max() - exact[on_face].min()
         errors.append(np.abs(res.face - exact)[on_face].max() / relief)
@@ -54,7 +54,7 @@ def test_homogeneous_face_converges_to_eq10():
 
 
 def test_homogeneous_rms_slope_converges_to_quadrature():
-    target = reference.cylinder_rms_slope()
+    target = reference.disk_normalised_rms_slope()
     assert abs(target - 1.0) < 1e-12, f"quadrature reference {target} should be 1"
     gaps = []
     for n in REFINEMENT:
@@ -261,10 +261,10 @@ def test_homogeneous_convergence_continues_on_fine_grids():
     for n in ns:
         res = steady(Homogeneous().labels(n), [1e-13])
         r, _ = grid(n).polar()
-        exact = reference.cylinder_face(r, RADIUS, res.mean_pressure, E_STAR)
+        exact = reference.disk_face(r, RADIUS, res.mean_pressure, E_STAR)
         on_face = grid(n).mask
         errors.append(np.abs(res.face - exact)[on_face].max() / np.ptp(exact[on_face]))
-        gaps.append(reference.cylinder_rms_slope() - res.normalised_rms_slope)
+        gaps.append(reference.disk_normalised_rms_slope() - res.normalised_rms_slope)
     assert np.all(np.diff(errors) < 0), f"face errors must decrease: {errors}"
     assert np.all(np.diff(gaps) < 0), f"rms gaps must decrease: {gaps}"
     for name, values, low in (("face", errors, 0.7), ("rms", gaps, 0.75)):

@@ -40,12 +40,12 @@ import pytest
 from conftest import E_STAR, FORCE, K1, RADIUS
 from conftest import problem as face_problem
 
-from steady.accuracy import estimate_rms_slope
 from steady.halfspace import HalfSpace
 from steady.normalisation import reference_slope
 from steady.outline import Annulus, Circle, Ellipse, MaskOutline, Rectangle
 from steady.phases import Homogeneous, Rods, Voronoi
 from steady.relief import PlaneFit
+from steady.rms_slope import estimate_rms_slope
 from steady.scene import load_scene
 from steady.solution import solve
 from transient import initial_face

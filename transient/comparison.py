@@ -15,10 +15,10 @@ import math
 
 import numpy as np
 
-from steady.accuracy import estimate_map_rms_slope
+from steady.rms_slope import estimate_map_rms_slope
 
 from .diagnostics import face_rms_slope
-from .history import HistoryEstimator
+from .history import FaceEstimator
 
 __all__ = ["SteadyComparison", "compare_with_steady"]
 
@@ -36,14 +36,14 @@ class SteadyComparison:
         Rms of the same difference with the least-squares constant, / relief.
     rms_slope, rms_slope_uncertainty : float
         The run's final rms slope, the converged estimate the history
-        records (:class:`transient.history.HistoryEstimator`), and its error
+        records (:class:`transient.history.FaceEstimator`), and its error
         bar.
     steady_rms_slope, steady_rms_slope_uncertainty : float
         The steady face's corrected rms slope and its error bar: those of
         the steady result when it carries them
         (:func:`steady.solution.solve_scene`), else the corrected estimate
         on its grid with the error of its own map's ladder
-        (:func:`steady.accuracy.estimate_map_rms_slope`).
+        (:func:`steady.rms_slope.estimate_map_rms_slope`).
     rms_slope_error : float
         ``rms_slope / steady_rms_slope - 1``.
     rms_slope_agrees : bool
@@ -126,7 +126,7 @@ def compare_with_steady(result, steady, problem):
     height = np.where(face_mask, result.height, 0.0)
     plain = face_rms_slope(problem.halfspace, face_mask, height, result.pressure,
                            result.approach)
-    estimator = HistoryEstimator.of(problem, np.where(face_mask, result.initial_height, 0.0))
+    estimator = FaceEstimator.of(problem, np.where(face_mask, result.initial_height, 0.0))
     final = estimator.figures(result.distance, height, result.pressure, result.approach)
     if math.isfinite(steady.rms_slope_error):
         steady_rms, steady_error = float(steady.rms_slope), float(steady.rms_slope_error)

@@ -1,14 +1,14 @@
 """The friction proxy along the run-in: the worn face's rms slope, its error bar, its rms height.
 
 The run loop (:mod:`transient.runin`) records at every accepted step what a
-:class:`HistoryEstimator` measures of the face (docs/model.md, "The run-in
+:class:`FaceEstimator` measures of the face (docs/model.md, "The run-in
 history"):
 
 ``rms_slope``
     The continuum rms slope of the worn face ``f = d - w`` over the face.
     In contact ``f = K p`` up to a constant, so its mean-square slope is that
     of the half-space surface under the run's pressure, which the
-    energy-corrected estimator of :mod:`steady.accuracy` gives (the same as
+    energy-corrected estimator of :mod:`steady.rms_slope` gives (the same as
     the steady module's ``rms_slope``).  Off the contact (partial contact)
     the pixel quadrature of ``|grad f|^2 - |grad K p|^2``, ``f`` by finite
     differences (it is smooth there), is added.  At ``s = 0`` the value is
@@ -17,7 +17,7 @@ history"):
 ``rms_slope_error``
     Its estimated discretisation error: the uncertainty of the rim-layer
     correction (below) and the estimator's error on the run's own phase map
-    (:func:`steady.accuracy.estimate_map_rms_slope`, relative, carried along
+    (:func:`steady.rms_slope.estimate_map_rms_slope`, relative, carried along
     the history), added in quadrature.
 ``rms_height``
     Rms of ``f`` over the face after removing its least-squares plane
@@ -71,9 +71,9 @@ import weakref
 
 import numpy as np
 
-from steady.accuracy import SlopeEnergy, estimate_map_rms_slope
 from steady.halfspace import HalfSpace
 from steady.relief import PlaneFit, rms_height
+from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope
 
 from .contact import solve_contact
 from .diagnostics import face_rms_slope, masked_gradient
@@ -85,7 +85,7 @@ __all__ = [
     "SOURCE_INITIAL",
     "SOURCE_PARTIAL_CONTACT",
     "FaceStatistics",
-    "HistoryEstimator",
+    "FaceEstimator",
     "face_statistics",
     "rim_layer_excess",
 ]
@@ -204,11 +204,11 @@ def face_statistics(face, face_mask, h):
                           rms_height=rms_height(face, face_mask, h))
 
 
-# The estimator of each live problem (HistoryEstimator.of), with its initial face.
+# The estimator of each live problem (FaceEstimator.of), with its initial face.
 _ESTIMATORS = weakref.WeakKeyDictionary()
 
 
-class HistoryEstimator:
+class FaceEstimator:
     """What the history records of the worn face at every step (see module notes).
 
     Built once per run: the corrected estimator of the grid, the rim pixels
@@ -232,7 +232,7 @@ class HistoryEstimator:
         Of the initial face (:func:`face_statistics`).
     map_error : float
         Relative error of the corrected estimator on the run's phase map at
-        the steady state (:func:`steady.accuracy.estimate_map_rms_slope`),
+        the steady state (:func:`steady.rms_slope.estimate_map_rms_slope`),
         NaN on grids too small for a ladder.
 
     Examples
@@ -242,7 +242,7 @@ class HistoryEstimator:
     >>> from transient.scene import load_transient_scene
     >>> scene, _, _ = load_transient_scene("studies/scenes/voronoi_transient.toml")
     >>> problem = WearProblem.from_scene(scene, n=40)
-    >>> estimator = HistoryEstimator(problem, np.zeros((40, 40)))
+    >>> estimator = FaceEstimator(problem, np.zeros((40, 40)))
     >>> res = problem.contact(np.zeros((40, 40)))
     >>> fig = estimator.figures(0.0, np.zeros((40, 40)), res.pressure, res.approach)
     >>> fig["rms_slope"], fig["rms_slope_error"], fig["rms_height"]

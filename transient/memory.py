@@ -27,11 +27,11 @@ def run_in_memory(n, snapshots=0):
     - the problem's fields: labels, face mask, wear coefficient (17);
     - the run state: face, initial face, pressure, previous face and rate
       (40);
-    - the history's slope estimator (:class:`transient.history.HistoryEstimator`:
-      :class:`steady.accuracy.SlopeEnergy`), kept (about 100,
+    - the history's slope estimator (:class:`transient.history.FaceEstimator`:
+      :class:`steady.rms_slope.SlopeEnergy`), kept (about 100,
       :func:`steady.memory.slope_estimator_memory`);
     - the pressure history of the warm starts
-      (:class:`transient.problem.PressureHistory`: six pressures and their
+      (:class:`transient.problem.WarmStart`: six pressures and their
       products, 96, and the differences of five consecutive ones of each,
       80): 176;
     - the larger of one step and the slope estimator's work: a step of

@@ -24,7 +24,7 @@ from steady.solution import solve
 from .contact import solve_contact
 from .preconditioners import ScaledShift
 
-__all__ = ["PressureHistory", "StepFailure", "WearProblem"]
+__all__ = ["WarmStart", "StepFailure", "WearProblem"]
 
 
 # Eigenvalues of the predictor's Gram matrix below this fraction of the
@@ -369,9 +369,9 @@ class WearProblem:
         x0 : ndarray, shape (nx, ny), Pa
             Pressure guess (warm start and first linearisation point), used
             when ``history`` holds no pressure.
-        history : PressureHistory, optional
+        history : WarmStart, optional
             Recent pressures of the run: the warm start is their Galerkin
-            combination (:meth:`PressureHistory.predict`), and the stage's
+            combination (:meth:`WarmStart.predict`), and the stage's
             pressure joins them.
         atol : float, m, optional
             Absolute tolerance of the contact solve (default 0; see
@@ -422,7 +422,7 @@ class WearProblem:
         return w, res
 
 
-class PressureHistory:
+class WarmStart:
     """The last few contact pressures of a run: the warm start of its implicit stages.
 
     Holds up to ``size`` pressures ``v_j`` (newest first), each with its

@@ -79,16 +79,16 @@ import numpy as np
 
 from .control import DIVERGENCE_RELIEF, StepController, StopTests, checkpoint_due, contact_tolerance
 from .diagnostics import shape_rms, wear_rate_spread
-from .history import HistoryEstimator
+from .history import FaceEstimator
 from .options import RunOptions
-from .problem import PressureHistory, StepFailure
+from .problem import StepFailure, WarmStart
 from .stepping import StepState, get_scheme
 
 __all__ = ["HISTORY_UNITS", "RunResult", "RunState", "run_in"]
 
 logger = logging.getLogger(__name__)
 
-# History datasets filled by transient.history.HistoryEstimator.figures.
+# History datasets filled by transient.history.FaceEstimator.figures.
 _FACE_FIGURES = ("rms_slope", "rms_slope_error", "rms_slope_source", "rms_slope_plain",
                  "rim_layer_pixels", "rms_height", "normalised_rms_slope",
                  "normalised_rms_height")
@@ -155,7 +155,7 @@ class RunState:
         Length the step controller proposes for the next attempt.
     pressure_history : ndarray, shape (k, nx, ny), Pa, or None
         The last contact pressures, newest first: the warm start of the
-        next implicit stages (:class:`transient.problem.PressureHistory`);
+        next implicit stages (:class:`transient.problem.WarmStart`);
         None before the first attempt.
     pressure_history_displacement : ndarray, shape (k, nx, ny), m, or None
         Their elastic displacements ``K p`` as the run holds them (the
@@ -340,7 +340,7 @@ class _Run:
       face), advanced by :meth:`accept`: ``initial_height``, ``height``,
       ``offset``, ``pressure``, ``approach``, ``prev_height``,
       ``prev_rate``, ``prev_step``, ``next_step``, ``pressures`` (the
-      :class:`transient.problem.PressureHistory`, None until the first
+      :class:`transient.problem.WarmStart`, None until the first
       attempt), ``jumps``;
     - the progress a :class:`RunResult` reports: ``s`` (m), ``steps``,
       ``rejected``, ``failures``, ``wall_time`` (s, spent before this call),
@@ -378,14 +378,14 @@ class _Run:
         face_mask = problem.face_mask
         if resume is None:
             h0 = _initial_face(problem, initial_height)
-            self.estimator = HistoryEstimator.of(problem, h0)
+            self.estimator = FaceEstimator.of(problem, h0)
             state = self._first_state(h0)
         else:
             state = resume.state
             if state.height.shape != problem.shape:
                 raise ValueError(f"checkpoint grid {state.height.shape} does not match the "
                                  f"problem's {problem.shape}")
-            self.estimator = HistoryEstimator.of(
+            self.estimator = FaceEstimator.of(
                 problem, np.where(face_mask, state.initial_height, 0.0))
 
         def clean(a):
@@ -402,7 +402,7 @@ class _Run:
         self.next_step = state.next_step
         self.pressures = None
         if state.pressure_history is not None:
-            self.pressures = PressureHistory(
+            self.pressures = WarmStart(
                 problem, pressures=state.pressure_history,
                 displacements=state.pressure_history_displacement)
         self.jumps = int(state.jumps)
@@ -446,7 +446,7 @@ class _Run:
 
     # -- recording -----------------------------------------------------
     def record(self, step, shape_rate):
-        """Append the current point to the history (:class:`transient.history.HistoryEstimator`)."""
+        """Append the current point to the history (:class:`transient.history.FaceEstimator`)."""
         p = self.problem
         face_mask = p.face_mask
         hist = self.history
@@ -573,7 +573,7 @@ class _Run:
         p = self.problem
         face_mask = p.face_mask
         if self.pressures is None:
-            self.pressures = PressureHistory(p, pressures=self.pressure[None])
+            self.pressures = WarmStart(p, pressures=self.pressure[None])
         # A jump starts from the closed-form steady pressure, its limit; every
         # other stage from the Galerkin combination of the recent pressures,
         # and solves to what the step's error and the spread need.

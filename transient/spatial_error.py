@@ -9,7 +9,7 @@ plainest measure of what the grid does is the same run on a coarser grid:
 (or the coarsest admissible grid above it), runs it with the same options,
 and returns, at every recorded distance of the main run, the first-order
 error ``|S_n - S_m| * m / (n - m)`` (``= |S_n - S_n/2|`` for ``m = n/2``;
-:func:`steady.accuracy.ladder_error`).  It costs about a quarter of the
+:func:`steady.rms_slope.ladder_error`).  It costs about a quarter of the
 main run.
 """
 
@@ -21,8 +21,8 @@ import types
 
 import numpy as np
 
-from steady.accuracy import ladder_error
 from steady.outline import FaceGrid
+from steady.rms_slope import ladder_error
 
 from .problem import WearProblem
 from .runin import run_in

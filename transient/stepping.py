@@ -127,7 +127,7 @@ class StepState:
         ``k p^m`` there.
     previous_step : float, m, or None
         The step that led from there to here.
-    history : transient.problem.PressureHistory or None
+    history : transient.problem.WarmStart or None
         Recent pressures of the run, the warm start of every implicit stage
         (:meth:`transient.problem.WearProblem.implicit`); None: each stage
         starts from the pressure before it.

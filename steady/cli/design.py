@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 from ..design import DEFAULT_TABLE, DesignTable
-from ..reference import fine_grain_rms_slope, reference_slope
+from ..reference import disk_reference_slope, fine_grain_rms_slope
 from .common import ArgumentParser, program_name, run_command
 
 __all__ = ["main"]
@@ -62,7 +62,7 @@ def _answer(args):
               f"n = {table.attrs.get('n', '?')}")
     if args.target_slope is not None:
         res = table.fill_factor_for(args.pbar_over_estar, args.wear_ratio, args.target_slope)
-        g0 = reference_slope(args.pbar_over_estar, 1.0)  # grad_f0 of eq. 12
+        g0 = disk_reference_slope(args.pbar_over_estar, 1.0)  # grad_f0 of eq. 12
         lo, hi = res.fill_factor_range
         print(f"fill factor rho_2 = {res.fill_factor:.4g} "
               f"(realisation scatter: {lo:.4g}..{hi:.4g})")
@@ -76,7 +76,7 @@ def _answer(args):
         if not np.isfinite(args.fill_factor):
             raise ValueError(f"fill factor must be finite, got {args.fill_factor!r}")
         value, sd = table.rms_slope(args.pbar_over_estar, args.wear_ratio, args.fill_factor)
-        g0 = reference_slope(args.pbar_over_estar, 1.0)
+        g0 = disk_reference_slope(args.pbar_over_estar, 1.0)
         fine = fine_grain_rms_slope([1 - args.fill_factor, args.fill_factor],
                                     [1.0, args.wear_ratio])
         print(f"rms slope = {value:.4g} +- {sd:.2g} (realisation scatter); "

@@ -127,7 +127,7 @@ def best_time(run, repeat):
 
 def fft_unit(hs, repeat=7):
     """Best wall time (s) of one padded FFT pair, ``hs.displacement``, on a random field."""
-    p = np.random.default_rng(8191).random((hs.n, hs.n))
+    p = np.random.default_rng(8191).random(hs.shape)
     return best_time(lambda: hs.displacement(p), repeat)[0]
 
 
@@ -151,7 +151,7 @@ def run_ours(hs, face, height, force, tol, preconditioner="auto", shift=None):
     """
     hs.pairs = 0
     res = solve_contact(hs, face, height, force, rtol=tol, shift=shift,
-                        preconditioner=preconditioner, maxiter=20 * hs.n)
+                        preconditioner=preconditioner, maxiter=20 * hs.shape[0])
     if not res.success:
         raise RuntimeError(res.message)
     return res.pressure, res.nit, hs.pairs

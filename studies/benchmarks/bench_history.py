@@ -2,7 +2,7 @@
 
 For the shipped Voronoi run-in scene (``studies/scenes/voronoi_transient.toml``)
 on n = 128, 256, 512: the time of one call of
-:meth:`transient.history.HistoryEstimator.figures` (what the history records
+:meth:`transient.history.FaceEstimator.figures` (what the history records
 at every accepted step: the corrected rms slope with its error bar, the
 plain pixel value, the rms height), of building the estimator once per run,
 and of one warm shifted contact solve (an implicit stage); then a real run
@@ -51,8 +51,8 @@ def measure(n, distance):
                                              "voronoi_transient.toml")
     problem = WearProblem.from_scene(scene, n=n)
     h0 = initial.height(problem.grid)
-    build = _median(lambda: history.HistoryEstimator(problem, h0), 3)
-    estimator = history.HistoryEstimator(problem, h0)
+    build = _median(lambda: history.FaceEstimator(problem, h0), 3)
+    estimator = history.FaceEstimator(problem, h0)
     # A state in the middle of the run-in: 0.1 s*.
     mid = run_in(problem, h0, RunOptions(tol=1e-4, snapshots=(0.1,), max_distance=0.1,
                                          jump_spread=0.0))
@@ -63,7 +63,7 @@ def measure(n, distance):
     solve = _median(lambda: problem.contact(height, shift=shift, x0=pressure), 3)
     # A whole run with the estimator's calls timed.
     spent = []
-    original = history.HistoryEstimator.figures
+    original = history.FaceEstimator.figures
 
     def timed(self, *args):
         t = time.perf_counter()
@@ -71,14 +71,14 @@ def measure(n, distance):
         spent.append(time.perf_counter() - t)
         return out
 
-    history.HistoryEstimator.figures = timed
+    history.FaceEstimator.figures = timed
     try:
         fresh = WearProblem.from_scene(scene, n=n)
         t = time.perf_counter()
         result = run_in(fresh, h0, RunOptions(tol=1e-4, max_distance=distance, jump_spread=0.0))
         wall = time.perf_counter() - t
     finally:
-        history.HistoryEstimator.figures = original
+        history.FaceEstimator.figures = original
     return dict(n=n, build=build, call=call, solve=solve, wall=wall, steps=result.steps,
                 solves=result.solves, recorded=len(spent), in_estimator=float(np.sum(spent)))
 

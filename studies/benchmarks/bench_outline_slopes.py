@@ -1,7 +1,7 @@
 """Accuracy and error bar of the corrected rms-slope estimator on other face outlines.
 
-The energy-corrected rms slope of :mod:`steady.accuracy`
-(:func:`steady.accuracy.estimate_rms_slope`: the value on the finest grid of
+The energy-corrected rms slope of :mod:`steady.rms_slope`
+(:func:`steady.rms_slope.estimate_rms_slope`: the value on the finest grid of
 the ladder ``n/4, n/2, n`` and its error bar) measured as the disk's is in
 docs/benchmarks.md ("Rms slope accuracy"), on the faces of
 :mod:`steady.outline`:
@@ -180,8 +180,8 @@ def fft_pair_time(shape, repeats):
 
 def estimate(geometry, k, outline, n, repeats):
     """``(SlopeEstimate, seconds, seconds per FFT pair)`` of one timed estimate."""
-    from steady.accuracy import estimate_rms_slope
     from steady.outline import FaceGrid
+    from steady.rms_slope import estimate_rms_slope
 
     seconds, est = _best(lambda: estimate_rms_slope(geometry, k, FORCE, outline, E_STAR, n),
                          repeats)

@@ -7,7 +7,7 @@ zero-padded real FFT pair of the same grid (``rfft2`` + ``irfft2`` of a
 
 Accuracy: the eq. 10 face and the homogeneous rms slope against their
 closed forms, and the rms slope of Voronoi maps (plain pixel estimate and
-energy-corrected estimate of :mod:`steady.accuracy`, with its error bar)
+energy-corrected estimate of :mod:`steady.rms_slope`, with its error bar)
 against a fine-grid reference.
 
 Run::
@@ -108,7 +108,7 @@ def _steady_homogeneous(n):
     grid = UNIT_DISK.grid(n)
     res = solve(Problem(FacePhases(grid, Homogeneous().labels(grid), 1), [1.0], np.pi, 1.0))
     r = grid.radii
-    exact = reference.cylinder_face(r, 1.0, 1.0, 1.0)
+    exact = reference.disk_face(r, 1.0, 1.0, 1.0)
     on = ~np.isnan(res.face)
     relief = np.nanmax(exact) - np.nanmin(exact)
     face_err = np.max(np.abs(res.face[on] - exact[on])) / relief
@@ -128,11 +128,11 @@ def accuracy(grids, reference_grid, seeds):
         Voronoi seed counts, one table each.
     """
     from steady import reference
-    from steady.accuracy import estimate_rms_slope
     from steady.phases import Homogeneous, Voronoi
+    from steady.rms_slope import estimate_rms_slope
 
     g0 = 4 / np.pi
-    exact = reference.cylinder_rms_slope()
+    exact = reference.disk_normalised_rms_slope()
     print("Homogeneous cylinder (eq. 10): face error (max over the face / relief), rms slope "
           "error (plain pixel estimate, corrected estimate, reported error bar), "
           "in units of grad_f0.\n")

@@ -9,7 +9,7 @@ What it reproduces
     - contact solves (:meth:`transient.problem.WearProblem.contact`: the
       solver, its preconditioner and its FFT products);
     - the rest of the implicit stages: the warm start
-      (:meth:`transient.problem.PressureHistory.predict`) and the face
+      (:meth:`transient.problem.WarmStart.predict`) and the face
       rebuilt from the pressure (``WearProblem._rebuild``, one FFT product);
     - the figures recorded after every step (``transient.runin._Run.record``:
       rms slope and the other diagnostics of the history);
@@ -60,7 +60,7 @@ N = 512
 PARTS = {
     "contact solves": [("transient.problem", "WearProblem.contact")],
     "stages outside the solver (warm start, face rebuild)": [
-        ("transient.problem", "PressureHistory.predict"),
+        ("transient.problem", "WarmStart.predict"),
         ("transient.problem", "WearProblem._rebuild")],
     "per-step diagnostics (history figures)": [("transient.runin", "_Run.record")],
     "checkpoints and run file (HDF5)": [("transient.output", "write_run"),

@@ -11,14 +11,14 @@ import pytest
 from scipy import integrate
 
 from steady import reference
-from steady.accuracy import (
+from steady.outline import Annulus, FaceGrid, Rectangle
+from steady.phases import Homogeneous, Rods, Voronoi
+from steady.rms_slope import (
     SlopeEnergy,
     estimate_rms_slope,
     monopole_tail,
     second_moment_tail,
 )
-from steady.outline import Annulus, FaceGrid, Rectangle
-from steady.phases import Homogeneous, Rods, Voronoi
 from steady.wear import pressure_field
 
 A = 4e-3       # m, the scale L of every outline (the epoxy cylinder's radius)
