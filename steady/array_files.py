@@ -19,7 +19,8 @@ import numpy as np
 
 from .text import format_bytes
 
-__all__ = ["input_file_size", "npy_header", "png_size", "read_face_mask", "read_npy"]
+__all__ = ["array_suffix", "input_file_size", "npy_header", "png_size", "read_face_mask",
+           "read_npy", "read_png"]
 
 
 def input_file_size(path, what):
@@ -188,11 +189,7 @@ def read_face_mask(path):
     """
     path = pathlib.Path(path)
     what = "face mask"
-    suffix = path.suffix.lower()
-    if suffix not in (".npy", ".png"):
-        input_file_size(path, what)
-        raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
-    if suffix == ".npy":
+    if array_suffix(path, what) == ".npy":
         a = read_npy(path, what=what, square=False)
         if a.dtype == bool:
             mask = a
@@ -202,14 +199,7 @@ def read_face_mask(path):
             raise ValueError(f"{what} {str(path)!r} must hold booleans (True on the face) or "
                              f"integers (-1 off the face), got dtype {a.dtype}")
     else:
-        import matplotlib.image  # deferred: only PNG files need it
-
-        input_file_size(path, what)
-        png_size(path, what)
-        try:
-            img = matplotlib.image.imread(path)
-        except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
-            raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+        img = read_png(path, what)
         if img.ndim != 3 or img.shape[2] not in (2, 4):
             raise ValueError(f"{what} {str(path)!r} has no alpha channel: the face is the "
                              f"non-transparent pixels of a PNG (or use a .npy array)")
@@ -233,3 +223,51 @@ def png_size(path, what):
     if len(head) < 24 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
         raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
     return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+def array_suffix(path, what):
+    """``".npy"`` or ``".png"``, the suffix of an array file; ``ValueError`` for any other.
+
+    A file that does not exist is named as missing rather than as of the
+    wrong kind.
+    """
+    suffix = pathlib.Path(path).suffix.lower()
+    if suffix not in (".npy", ".png"):
+        input_file_size(path, what)
+        raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
+    return suffix
+
+
+def read_png(path, what, check_size=None):
+    """The pixels of a PNG image, checked from its header before it is decoded.
+
+    Parameters
+    ----------
+    path : str or path-like
+    what : str
+        How messages name the file (e.g. ``"phase map"``).
+    check_size : callable, optional
+        ``check_size((width, height))``, called with the header's size
+        before the image is decoded; raises ``ValueError`` to refuse it.
+
+    Returns
+    -------
+    ndarray, shape (rows, cols) or (rows, cols, channels)
+        As :func:`matplotlib.image.imread` decodes it (floats in [0, 1]).
+
+    Raises
+    ------
+    ValueError
+        Missing, empty or unreadable file, no PNG signature, a size refused
+        by ``check_size``, or a decoder failure.
+    """
+    import matplotlib.image  # deferred: only PNG files need it
+
+    input_file_size(pathlib.Path(path), what)
+    size = png_size(path, what)
+    if check_size is not None:
+        check_size(size)
+    try:
+        return matplotlib.image.imread(path)
+    except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
+        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None

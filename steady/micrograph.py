@@ -37,7 +37,7 @@ import pathlib
 import numpy as np
 from scipy import ndimage
 
-from .array_files import input_file_size, npy_header, png_size
+from .array_files import input_file_size, npy_header, read_png
 from .outline import MIN_SIDE_PIXELS, Circle, FaceGrid, as_outline
 from .phases import PHASE_MAPS, check_resolution
 from .schema import Key
@@ -342,17 +342,13 @@ def read_grey(path):
             raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
     if suffix != ".png":
         raise ValueError(f"{what} {str(path)!r} must be a .png or .npy file")
-    import matplotlib.image  # deferred: only PNG micrographs need it
 
-    size = png_size(path, what)
-    if size[0] * size[1] > MAX_PIXELS:
-        raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more than "
-                         f"the {MAX_PIXELS} read")
-    try:
-        img = matplotlib.image.imread(path)
-    except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
-        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
-    img = np.asarray(img, dtype=np.float64)
+    def check_size(size):
+        if size[0] * size[1] > MAX_PIXELS:
+            raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more "
+                             f"than the {MAX_PIXELS} read")
+
+    img = np.asarray(read_png(path, what, check_size), dtype=np.float64)
     if img.ndim == 3:
         if img.shape[2] >= 3:
             img = img[..., :3] @ np.asarray(_LUMINANCE)

@@ -54,7 +54,7 @@ import pathlib
 import numpy as np
 from scipy import spatial
 
-from .array_files import input_file_size, png_size, read_npy
+from .array_files import array_suffix, read_npy, read_png
 from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size
 from .schema import Key, Registry
@@ -543,10 +543,7 @@ def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
     """
     path = pathlib.Path(path)
     what = "phase map"
-    suffix = path.suffix.lower()
-    if suffix not in (".npy", ".png"):
-        input_file_size(path, what)
-        raise ValueError(f"{what} {str(path)!r} must be a .npy or .png file")
+    suffix = array_suffix(path, what)
     square = outline is None or outline.aspect == (1.0, 1.0)
     if suffix == ".npy":
         a = read_npy(path, what=what, max_side=max_size, square=square)
@@ -556,22 +553,19 @@ def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
 
 
 def _png_labels(path, max_phases, max_size=None, outline=None):
-    import matplotlib.image  # deferred: only PNG maps need it
-
     what = "phase map"
-    input_file_size(path, what)
-    size = png_size(path, what)
     square = outline is None or outline.aspect == (1.0, 1.0)
-    if square and size[0] != size[1]:
-        raise ValueError(f"{what} {str(path)!r} must be square, got {size[0]} x {size[1]} "
-                         f"pixels")
-    if max_size is not None and max(size) > max_size:
-        raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more than "
-                         f"the grid's n = {max_size} (n must be a multiple of the map's size)")
-    try:
-        img = matplotlib.image.imread(path)
-    except Exception as err:  # noqa: BLE001 -- any decoder failure of a damaged image
-        raise ValueError(f"cannot read {what} {str(path)!r}: {str(err)[:200]}") from None
+
+    def check_size(size):
+        if square and size[0] != size[1]:
+            raise ValueError(f"{what} {str(path)!r} must be square, got {size[0]} x {size[1]} "
+                             f"pixels")
+        if max_size is not None and max(size) > max_size:
+            raise ValueError(f"{what} {str(path)!r} has {size[0]} x {size[1]} pixels, more "
+                             f"than the grid's n = {max_size} (n must be a multiple of the "
+                             f"map's size)")
+
+    img = read_png(path, what, check_size)
     if img.ndim == 3:
         img = img[..., :3]  # drop alpha
     if square and img.shape[0] != img.shape[1]:
