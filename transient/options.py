@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import math
 
 from steady.schema import Key, read_table
 from steady.text import shorten
@@ -133,17 +132,14 @@ class RunOptions:
         """Check every option against its key; store the snapshots sorted and without repeats."""
         get_scheme(self.scheme)
         for field in dataclasses.fields(self):
-            value = getattr(self, field.name)
+            value, key = getattr(self, field.name), field.metadata["key"]
             if value is None and field.default is None:
                 continue
-            if field.name == "snapshots":
-                value = list(value) if isinstance(value, (tuple, list)) else value
-            elif isinstance(value, (int, float)) and not isinstance(value, bool):
-                if field.type in ("float", "float | None"):
-                    value = float(value)
-                elif isinstance(value, float) and value == int(value) and math.isfinite(value):
-                    value = int(value)  # max_steps = 1e3 from Python
-            field.metadata["key"].parse(value, "")
+            if key.type == "integer" and isinstance(value, float) and value.is_integer():
+                value = int(value)  # max_steps = 1e3 from Python
+            elif key.type == "numbers" and isinstance(value, tuple):
+                value = list(value)  # the scene's array, given as a tuple from Python
+            key.parse(value, "")
         snaps = tuple(float(s) for s in self.snapshots)
         object.__setattr__(self, "snapshots", tuple(sorted(set(snaps))))
 
@@ -206,7 +202,7 @@ def add_option_flags(parser, choices=None):
             continue
         key = field.metadata["key"]
         flag = "--" + field.name.replace("_", "-")
-        unit = f"{key.unit}; " if key.unit and key.unit != "1" else ""
+        unit = f"{key.unit}; " if key.unit not in ("", "1") and key.unit not in key.doc else ""
         help_text = f"{key.doc} ({unit}overrides [transient] {field.name})"
         if field.name in choices:
             parser.add_argument(flag, choices=choices[field.name], help=help_text)
