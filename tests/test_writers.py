@@ -1,4 +1,4 @@
-"""Writers of one output at once (issue 24).
+"""Writers of one output at once, and the backup of a finished run (issue 24).
 
 Every writer -- the steady result, the run file, the fit file, sweep and
 study files -- publishes its file so that a file another process wrote
@@ -6,10 +6,14 @@ after the writer's check is never replaced without ``--force``: the
 writer is refused (exit status 2, one line, nothing written, no temporary
 file left).  The other writer is simulated in-process, at the moment that
 matters: after the command's check and before its file is published.
+
+A run that ends steady removes its backup ``RUN.h5.prev`` once its final
+file reads back intact; a stopped, failed or interrupted run keeps it.
 """
 
 import os
 import pathlib
+import stat
 import sys
 
 import h5py
@@ -28,7 +32,7 @@ from steady.output import (
     read_result,
 )
 from steady.sweep import SweepFile
-from transient.output import backup_path, lock_path, read_run
+from transient.output import DamagedRunFileError, backup_path, lock_path, read_run
 
 STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
@@ -257,6 +261,82 @@ def test_run_replaces_the_file_it_started_from(tmp_path, scene, capsys):
     status, _, err = run_cli(transient_cli, [scene, "-o", out, "--resume",
                                              "--checkpoint-interval", "0"], capsys)
     assert status == 0 and read_run(out)[0].status == "steady", f"--resume: exit {status}: {err}"
+
+
+# -- the backup of a finished run -------------------------------------------------------
+def test_finished_run_drops_its_backup(tmp_path, scene, capsys):
+    out = tmp_path / "run.h5"
+    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--checkpoint-interval", "0"],
+                             capsys)
+    assert status == 0, f"exit {status}: {err}"
+    assert read_run(out)[0].status == "steady", "the finished run is in place"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.h5", "scene.toml"], \
+        f"files beside the finished run: {sorted(p.name for p in tmp_path.iterdir())}"
+
+
+def test_stopped_run_keeps_its_backup_until_it_ends(tmp_path, scene, capsys):
+    """A stopped run keeps its backup (with the umask's permissions); resumed to the end, not."""
+    out = tmp_path / "run.h5"
+    old = os.umask(0o027)
+    try:
+        status, _, err = run_cli(transient_cli, [scene, "-o", out, "--max-steps", "3",
+                                                 "--checkpoint-interval", "0"], capsys)
+    finally:
+        os.umask(old)
+    assert status == 1, f"exit {status}: {err}"
+    kept = read_run(backup_path(out))[0]
+    assert (kept.steps, kept.status) == (3, "running"), "the last checkpoint is kept"
+    mode = stat.S_IMODE(backup_path(out).stat().st_mode)
+    assert mode == 0o640, f"backup mode {oct(mode)}, expected 0o640 (umask 027)"
+    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--resume"], capsys)
+    assert status == 0, f"resume: exit {status}: {err}"
+    assert not backup_path(out).exists(), "the backup outlives the finished run"
+
+
+def test_interrupted_run_keeps_its_backup(tmp_path, scene, capsys, monkeypatch):
+    out = tmp_path / "run.h5"
+    real = transient.output.write_run
+    calls = {"n": 0}
+
+    def write_run(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(transient.output, "write_run", write_run)
+    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--checkpoint-interval", "0"],
+                             capsys)
+    assert status == 130, f"exit {status}: {err}"
+    assert read_run(backup_path(out))[0].steps == 2, "the checkpoint before the last is kept"
+
+
+def test_final_file_that_does_not_read_back_keeps_the_backup(tmp_path, scene, capsys,
+                                                             monkeypatch):
+    out = tmp_path / "run.h5"
+
+    def damaged(path):
+        raise DamagedRunFileError(path, "dataset 'pressure' does not match its checksum")
+
+    monkeypatch.setattr(transient.output, "verify_run", damaged, raising=False)
+    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--checkpoint-interval", "0"],
+                             capsys)
+    line = one_error_line(err)
+    assert status == 1, f"exit {status}: {err}"
+    assert "the finished run does not read back as written" in line, line
+    assert f"the previous checkpoint {str(backup_path(out))!r} (step " in line, line
+    assert line.endswith(f"is kept: rename it to {str(out)!r} and --resume"), line
+    assert read_run(backup_path(out))[0].status == "running", "the backup is kept"
+
+
+def test_verify_run_names_the_damage(tmp_path, scene, capsys):
+    out = tmp_path / "run.h5"
+    assert run_cli(transient_cli, [scene, "-o", out], capsys)[0] == 0, "the run"
+    transient.output.verify_run(out)  # intact: no exception
+    with h5py.File(out, "r+") as f:
+        f["history/distance"][0] += 1.0
+    with pytest.raises(DamagedRunFileError, match="dataset 'history/distance' does not match"):
+        transient.output.verify_run(out)
 
 
 # -- sweep and study files ----------------------------------------------------------------

@@ -103,6 +103,7 @@ __all__ = [
     "lock_path",
     "read_run",
     "remove_temporaries",
+    "verify_run",
     "write_run",
 ]
 
@@ -416,6 +417,51 @@ def _verify(path, datasets, groups):
 
 def _plain(value):
     return value.item() if isinstance(value, np.generic) else value
+
+
+def verify_run(path):
+    """Check every checksum of a run file, one dataset at a time.
+
+    What :func:`read_run` verifies, without holding the whole file in
+    memory (the largest dataset at most): for a file just written, whose
+    contents are still in memory.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Raises
+    ------
+    DamagedRunFileError
+        The file cannot be read, is not a run file, carries no checksums,
+        or a part of it does not match its checksum (the message names it).
+    """
+    path = pathlib.Path(path)
+    damage = (OSError, RuntimeError, KeyError, TypeError, IndexError, ValueError)
+    try:
+        with h5py.File(path, "r") as f:
+            if _plain(f.attrs.get("format")) != FORMAT:
+                raise DamagedRunFileError(path, "it is not a run file")
+            if _CHECKSUM not in f.attrs:
+                raise DamagedRunFileError(path, "it carries no checksums")
+            names = []
+            f.visit(names.append)
+            for name in ["", *sorted(names)]:
+                obj = f[name] if name else f
+                attrs = dict(obj.attrs)
+                stored = attrs.get(_CHECKSUM)
+                if isinstance(obj, h5py.Dataset):
+                    if stored is None or _dataset_digest(obj[()], attrs) != stored:
+                        raise DamagedRunFileError(
+                            path, f"dataset {name!r} does not match its checksum")
+                elif stored is None or _attrs_digest(attrs) != stored:
+                    what = "the root attributes" if not name else f"the attributes of group " \
+                                                                   f"{name!r}"
+                    raise DamagedRunFileError(path, f"{what} do not match their checksum")
+    except damage as err:
+        if isinstance(err, DamagedRunFileError):
+            raise
+        raise DamagedRunFileError(path, f"cannot be read ({str(err)[:200]})") from None
 
 
 def read_run(path):

@@ -3,7 +3,8 @@
 A run writes its file at a time under the run file's lock
 (:class:`transient.output.RunLock`).  :class:`RunFile` writes every
 checkpoint atomically with the run's inputs (:func:`run_inputs`); the file
-it replaces is kept as ``RUN.h5.prev`` while the run goes on.  A
+it replaces is kept as ``RUN.h5.prev`` while the run goes on, and removed
+once the run has ended steady and its final file reads back intact.  A
 checkpoint replaces only the run's own previous checkpoint, or the file
 that was there when the run started (``--resume``, ``--force``): a file
 another writer put at the run's path meanwhile is refused
@@ -21,6 +22,7 @@ what is on disk.
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import signal
 import threading
@@ -125,6 +127,7 @@ class RunFile:
         self.saved = None  # (steps, distance in s*) of the checkpoint on disk
         # The file at ``path`` the next write may replace (None: none); see atomic_h5.
         self.replaces = None
+        self._kept = None  # what saved_text() says when the final file failed its check
 
     def start(self):
         """A new run: one part, from step 0.
@@ -200,13 +203,17 @@ class RunFile:
     def write(self, result, comparison=None, extra_attrs=None):
         """Write a checkpoint or the final run; the file it replaces becomes the backup.
 
+        The backup of a run that ends steady is removed once the final file
+        reads back with every checksum; it is kept after a stop or a failure.
+
         Raises
         ------
         steady.output.OutputAppearedError
             (a ``ValueError``) Another writer put a file at ``path`` since
             the run's previous write (or its start): nothing is written.
         OSError
-            The file cannot be written.
+            The file cannot be written, or the final file does not read back
+            (its backup is kept).
         """
         self.history[-1].update(to_step=result.steps, to_distance=result.distance,
                                 status=result.status)
@@ -226,10 +233,32 @@ class RunFile:
                 # A backup beside a new run belongs to the run this one replaced.
                 output.backup_path(self.path).unlink(missing_ok=True)
             self.ours = True
-            self.saved = (result.steps, result.distance / result.run_in_distance)
+            previous, self.saved = self.saved, (result.steps,
+                                                result.distance / result.run_in_distance)
+            if result.success:
+                self._drop_backup(previous)
+
+    def _drop_backup(self, previous):
+        """Remove the backup of a finished run once its final file reads back intact."""
+        backup = output.backup_path(self.path)
+        try:
+            output.verify_run(self.path)
+        except output.DamagedRunFileError as err:
+            if previous is not None and backup.exists():
+                self._kept = (f"the previous checkpoint {str(backup)!r} ({at_text(*previous)}) "
+                              f"is kept: rename it to {str(self.path)!r} and --resume")
+            else:
+                self._kept = "no intact checkpoint is left; start over with --force"
+            raise OSError(errno.EIO, f"the finished run does not read back as written: "
+                                     f"{err}") from None
+        # Another writer's file in its place (with --force) leaves the backup as the run's.
+        if file_identity(self.path) == self.replaces:
+            backup.unlink(missing_ok=True)
 
     def saved_text(self):
         """What can be continued, for a message."""
+        if self._kept is not None:
+            return self._kept
         if self.saved is None:
             return "nothing was saved (no checkpoint had been written)"
         return (f"the checkpoint in {str(self.path)!r} ({at_text(*self.saved)}) can be continued "
