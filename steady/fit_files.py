@@ -368,7 +368,7 @@ class StoredFit:
     version: int = FIT_FORMAT_VERSION
 
 
-def write_fit(path, result, scene=None, *, force=False):
+def write_fit(path, result, scene=None, *, force=False, checked=False):
     """Write a fit to an HDF5 file (layout ``runin.fit``), atomically.
 
     Parameters
@@ -380,6 +380,9 @@ def write_fit(path, result, scene=None, *, force=False):
         Its TOML text and source path are stored.
     force : bool, optional
         Overwrite an existing file (default False).
+    checked : bool, optional
+        The caller checked ``path`` before the fit: a file found now was
+        written meanwhile (see :func:`steady.output.atomic_h5`).
 
     Returns
     -------
@@ -388,7 +391,9 @@ def write_fit(path, result, scene=None, *, force=False):
     Raises
     ------
     ValueError
-        ``path`` exists and ``force`` is False, or is a directory.
+        ``path`` exists and ``force`` is False (an
+        :class:`steady.output.OutputAppearedError` if another writer wrote
+        it meanwhile: nothing is written), or is a directory.
     """
     path = pathlib.Path(path)
     values = {
@@ -430,7 +435,8 @@ def write_fit(path, result, scene=None, *, force=False):
         "fit_mask": result.fit_mask.astype(np.int8),
         "phase": result.phase.astype(np.int8 if result.n_phases < 127 else np.int16),
     }
-    with atomic_h5(path, format=FIT_FORMAT, version=FIT_FORMAT_VERSION, force=force) as f:
+    with atomic_h5(path, format=FIT_FORMAT, version=FIT_FORMAT_VERSION, force=force,
+                   checked=checked) as f:
         for name, unit in _ATTRIBUTES.items():
             f.attrs[name] = values[name]
             f.attrs[f"{name}_units"] = unit

@@ -1,10 +1,11 @@
 """HDF5 files: the atomic writer of the project and the steady result files.
 
 :func:`atomic_h5` writes every HDF5 file that is written whole: a
-temporary file beside the target, renamed into place when complete, with
-the layout name and version in the root attributes ``format`` and
-``format_version``.  (Sweep files, which grow point by point, have their
-own mechanism: :mod:`steady.sweep`.)
+temporary file beside the target, put in place when complete (linked, so
+that a file another writer put there meanwhile is not replaced, or
+renamed over the file it may replace), with the layout name and version in
+the root attributes ``format`` and ``format_version``.  (Sweep files, which
+grow point by point, have their own mechanism: :mod:`steady.sweep`.)
 
 Steady result files (layout ``runin.steady``, version 2)::
 
@@ -62,6 +63,7 @@ import contextlib
 import dataclasses
 import os
 import pathlib
+import socket
 import tempfile
 
 import h5py
@@ -71,7 +73,8 @@ from .micrograph import Micrograph
 from .outline import OUTLINES, Circle, MaskOutline
 from .solution import SteadyResult
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "atomic_h5", "read_outline",
+__all__ = ["FORMAT", "FORMAT_VERSION", "AtomicH5", "FileIdentity", "OutputAppearedError",
+           "OutputExistsError", "StoredResult", "atomic_h5", "file_identity", "read_outline",
            "read_result", "write_outline", "write_result"]
 
 FORMAT = "runin.steady"
@@ -151,6 +154,53 @@ def _write_error(err, tmp, path):
     return OSError(code, f"cannot write {str(path)!r}: {reason}")
 
 
+def _temporary(target):
+    """A new temporary file beside ``target``: ``(fd, path)``, named for this process.
+
+    The name ``.<name>.<host>.<pid>.<random>.tmp`` says which process made
+    it, so that a later writer can tell the file of a killed writer (its
+    process has ended) from that of a live one (:func:`_remove_dead_temporaries`).
+    """
+    host = socket.gethostname().replace(os.sep, "_") or "host"
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.{host}.{os.getpid()}.",
+                               suffix=".tmp")
+    return fd, pathlib.Path(tmp)
+
+
+def _remove_dead_temporaries(target):
+    """Remove the temporary files beside ``target`` whose writer, on this host, has ended.
+
+    A writer killed (SIGKILL) while it wrote leaves its temporary file; no
+    writer can use it any more.  A file whose process is alive, runs on
+    another host, or whose name does not say (:func:`_temporary`), is left.
+    """
+    host = socket.gethostname().replace(os.sep, "_") or "host"
+    prefix = f".{target.name}.{host}."
+    try:
+        names = [p.name for p in target.parent.iterdir()]
+    except OSError:
+        return
+    for name in names:
+        if not (name.startswith(prefix) and name.endswith(".tmp")):
+            continue
+        pid = name[len(prefix):].split(".", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
+            continue
+        with contextlib.suppress(OSError):
+            (target.parent / name).unlink()
+
+
+def _alive(pid):
+    """Whether process ``pid`` exists (a zombie, not yet waited for, counts as alive)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # PermissionError: another user's process
+        return True
+    return True
+
+
 def _keep_backup(path, backup):
     """Make ``backup`` a copy of ``path`` (a hard link where possible), atomically."""
     if backup.exists() and os.path.samefile(path, backup):
@@ -158,9 +208,8 @@ def _keep_backup(path, backup):
         # link of the file itself; renaming a third link over it would do
         # nothing (POSIX) and leave the temporary name behind.
         return
-    fd, tmp = tempfile.mkstemp(dir=backup.parent, prefix=f".{backup.name}.", suffix=".tmp")
+    fd, tmp = _temporary(backup)
     os.close(fd)
-    tmp = pathlib.Path(tmp)
     try:
         tmp.unlink()
         try:
@@ -175,13 +224,110 @@ def _keep_backup(path, backup):
         raise
 
 
-@contextlib.contextmanager
-def atomic_h5(path, *, format, version, force=False, backup=None):
-    """Write an HDF5 file atomically: a temporary file, then :func:`os.replace`.
+@dataclasses.dataclass(frozen=True)
+class FileIdentity:
+    """Which file a path names: device, inode, size and modification time.
+
+    Two identities are equal when the path still names the same, unchanged
+    file (the size and time tell a new file that reuses a freed inode).
+    Returned by :func:`file_identity` and :attr:`AtomicH5.identity`; given
+    to :func:`atomic_h5` as the file it may replace (``replaces``).
+    """
+
+    device: int
+    inode: int
+    size: int
+    mtime_ns: int
+
+    @classmethod
+    def of(cls, st):
+        """The identity of an :func:`os.stat` result."""
+        return cls(st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+
+
+def file_identity(path):
+    """The :class:`FileIdentity` of the file ``path`` names, None if there is none.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    FileIdentity or None
+    """
+    try:
+        return FileIdentity.of(os.stat(path))
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+
+
+class OutputExistsError(ValueError):
+    """An output that may not be replaced (no ``force``) exists.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+    """
+
+    def __init__(self, path, message=None):
+        super().__init__(message or f"output {str(path)!r} exists (use --force to overwrite)")
+        self.path = pathlib.Path(path)
+
+
+class OutputAppearedError(OutputExistsError):
+    """Another writer wrote the output after it was checked: nothing was written.
+
+    Raised when the file is about to be published (or, for a caller that
+    checked the output before its work, when the writing starts), so that a
+    result computed while another process wrote the same output never
+    silently replaces it.
+    """
+
+    def __init__(self, path, replaced=False):
+        what = ("was replaced meanwhile by another process" if replaced
+                else "appeared meanwhile (another process wrote it)")
+        super().__init__(path, f"output {str(path)!r} {what}; nothing was written (use "
+                               f"--force to overwrite)")
+
+
+class AtomicH5:
+    """The context manager :func:`atomic_h5` returns.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The target.
+    identity : FileIdentity or None
+        After the block: the identity of the file written (None before,
+        or if nothing was written).  Give it as ``replaces`` to the next
+        write of the same path to replace this file and no other.
+    """
+
+    def __init__(self, path, **options):
+        self.path = pathlib.Path(path)
+        self.identity = None
+        self._options = options
+        self._writer = None
+
+    def __enter__(self):
+        """Check the target, open the temporary file; return the :class:`h5py.File`."""
+        self._writer = _write_atomically(self, self.path, **self._options)
+        return self._writer.__enter__()
+
+    def __exit__(self, *exc):
+        """Publish the file, or drop it on an exception."""
+        return self._writer.__exit__(*exc)
+
+
+def atomic_h5(path, *, format, version, force=False, backup=None, replaces=None,
+              checked=False):
+    """Write an HDF5 file atomically: a temporary file, then a link or a rename.
 
     Every HDF5 file of the project that is written whole goes through this
-    helper, so that a reader never sees half a file and an interrupted
-    write leaves nothing behind.
+    helper, so that a reader never sees half a file, an interrupted
+    write leaves nothing behind, and a file another writer wrote meanwhile
+    is never replaced without ``force``.
 
     Parameters
     ----------
@@ -192,25 +338,46 @@ def atomic_h5(path, *, format, version, force=False, backup=None):
     version : int
         Layout version, stored in the root attribute ``format_version``.
     force : bool, optional
-        Replace an existing file (default False).
+        Replace whatever file ``path`` names when the new one is complete
+        (default False).
     backup : str or path-like, optional
         Keep the file that ``path`` held before as ``backup`` (replacing
         it), a hard link where the file system allows, else a copy.
         Default: the replaced file is dropped.
+    replaces : FileIdentity, optional
+        Without ``force``: the file ``path`` may hold, and that the new one
+        replaces (e.g. the writer's own previous file, or the file it
+        checked before a long computation).  Default None: ``path`` must
+        not exist.
+    checked : bool, optional
+        The caller checked ``path`` before its work (a command's
+        :func:`steady.cli.common.prepare_output`, or ``replaces``): a file
+        that is not the expected one is then reported as written meanwhile
+        (:class:`OutputAppearedError`), not as an existing file.
 
-    Yields
-    ------
-    h5py.File
-        The temporary file, open for writing, with ``format`` and
+    Returns
+    -------
+    AtomicH5
+        A context manager that yields the :class:`h5py.File` to fill: the
+        temporary file, open for writing, with ``format`` and
         ``format_version`` set.  On leaving the block without an exception
-        it is flushed to disk and renamed to ``path``; on any exception
+        it is flushed to disk and published as ``path``; on any exception
         (including ``KeyboardInterrupt``) it is removed and the exception
-        propagates, leaving an existing ``path`` untouched.
+        propagates, leaving an existing ``path`` untouched.  Its
+        :attr:`~AtomicH5.identity` is then that of the file written.
 
     Raises
     ------
     ValueError
-        ``path`` is a directory, or exists and ``force`` is False.
+        ``path`` is a directory.
+    OutputExistsError
+        (a ``ValueError``) ``path`` exists, is not the file ``replaces``
+        names, and ``force`` is False: on entering the block.
+    OutputAppearedError
+        (an :class:`OutputExistsError`) The same found when the new file is
+        complete, or on entering the block with ``checked`` or ``replaces``:
+        another writer wrote ``path`` in the meantime.  Nothing is written,
+        the temporary file is removed.
     OSError
         The file cannot be written; the message names ``path`` (not the
         temporary file) and the reason.
@@ -218,11 +385,22 @@ def atomic_h5(path, *, format, version, force=False, backup=None):
     Notes
     -----
     The file is built in memory (HDF5's ``core`` driver) and written to
-    the temporary file ``.<name>.<random>.tmp`` in the directory of
-    ``path`` (a rename across file systems is not atomic) with ordinary
-    writes, so that an operating-system error is an :class:`OSError` and
-    never a truncated file.  The temporary name is unique, so concurrent
-    writers do not collide (the last rename wins).
+    the temporary file ``.<name>.<host>.<pid>.<random>.tmp`` in the
+    directory of ``path`` (a rename across file systems is not atomic) with
+    ordinary writes, so that an operating-system error is an
+    :class:`OSError` and never a truncated file.  Temporary files that
+    killed writers of ``path`` on this host left are removed first.
+
+    Publishing: without ``force`` and with nothing to replace, the new file
+    is hard-linked as ``path`` (:func:`os.link` fails if ``path`` exists,
+    atomically, so of two writers exactly one wins), and the temporary
+    name removed; on a file system without hard links, ``path`` is
+    checked and the file renamed.  With ``replaces``, ``path`` is checked
+    to be that file and the new one renamed over it.  With ``force``, it is
+    renamed over whatever ``path`` is.  The check and a rename are two
+    steps: a writer that renames a file over ``path`` between them (within
+    microseconds; only one given ``force`` or ``replaces`` can) is not
+    noticed.
     The new file gets the permissions of a file created normally
     (``0o666`` less the umask), not the ``0o600`` of
     :func:`tempfile.mkstemp`.
@@ -236,17 +414,58 @@ def atomic_h5(path, *, format, version, force=False, backup=None):
     >>> sorted(p.name for p in path.parent.iterdir())
     ['example.h5']
     """
-    path = pathlib.Path(path)
+    return AtomicH5(path, format=format, version=version, force=force, backup=backup,
+                    replaces=replaces, checked=checked)
+
+
+def _refused(force, replaces, found):
+    """Whether a path that names ``found`` (None: nothing) may not be replaced."""
+    return not force and found is not None and found != replaces
+
+
+def _publish(tmp, path, *, force, replaces, backup):
+    """Put the complete temporary file in place as ``path`` (see :func:`atomic_h5`)."""
+    found = file_identity(path)
+    if _refused(force, replaces, found):
+        raise OutputAppearedError(path, replaced=replaces is not None)
+    if backup is not None and found is not None and path.is_file():
+        _keep_backup(path, pathlib.Path(backup))
+    if force or found is not None:
+        os.replace(tmp, path)
+        return
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        raise OutputAppearedError(path, replaced=replaces is not None) from None
+    except OSError as err:
+        import errno as errno_codes
+
+        if err.errno not in (errno_codes.EPERM, errno_codes.EOPNOTSUPP, errno_codes.ENOTSUP,
+                             errno_codes.EMLINK, errno_codes.ENOSYS):
+            raise
+        # No hard links here: check and rename (the window of the Notes).
+        if file_identity(path) is not None:
+            raise OutputAppearedError(path, replaced=replaces is not None) from None
+        os.replace(tmp, path)
+        return
+    tmp.unlink()
+
+
+@contextlib.contextmanager
+def _write_atomically(receipt, path, *, format, version, force, backup, replaces, checked):
+    """The work of :func:`atomic_h5`; the identity written goes to ``receipt.identity``."""
     if path.is_dir():
         raise ValueError(f"output {str(path)!r} is a directory")
-    if path.exists() and not force:
-        raise ValueError(f"output {str(path)!r} exists (use force to overwrite)")
+    if _refused(force, replaces, file_identity(path)):
+        if checked or replaces is not None:
+            raise OutputAppearedError(path, replaced=replaces is not None)
+        raise OutputExistsError(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        _remove_dead_temporaries(path)
+        fd, tmp = _temporary(path)
     except OSError as err:
         raise _write_error(err, None, path) from None
-    tmp = pathlib.Path(tmp)
     in_caller = False
     try:
         with open(fd, "wb") as out:
@@ -268,15 +487,17 @@ def atomic_h5(path, *, format, version, force=False, backup=None):
             del image
             out.flush()
             os.fsync(out.fileno())
-        if backup is not None and path.is_file():
-            _keep_backup(path, pathlib.Path(backup))
-        os.replace(tmp, path)
+            # A link or a rename keeps the inode, size and time: this is what
+            # ``path`` names once published.
+            written = FileIdentity.of(os.fstat(out.fileno()))
+        _publish(tmp, path, force=force, replaces=replaces, backup=backup)
     except BaseException as err:
         tmp.unlink(missing_ok=True)
         # The caller's own OSErrors pass unchanged; those of this file name it.
         if isinstance(err, OSError) and (not in_caller or tmp.name in str(err)):
             raise _write_error(err, tmp, path) from None
         raise
+    receipt.identity = written
     try:  # make the rename itself durable; not every file system allows it
         fd = os.open(path.parent, os.O_RDONLY)
         try:
@@ -287,7 +508,7 @@ def atomic_h5(path, *, format, version, force=False, backup=None):
         pass
 
 
-def write_result(path, result, scene=None, *, force=False):
+def write_result(path, result, scene=None, *, force=False, checked=False):
     """Write a steady result (and its scene) to an HDF5 file, atomically.
 
     See :func:`atomic_h5`: a reader never sees half a file; missing parent
@@ -301,6 +522,9 @@ def write_result(path, result, scene=None, *, force=False):
         Its TOML text and source path are stored.
     force : bool, optional
         Overwrite an existing file (default False).
+    checked : bool, optional
+        The caller checked ``path`` before the solve: a file found now was
+        written meanwhile (see :func:`atomic_h5`).
 
     Returns
     -------
@@ -309,10 +533,15 @@ def write_result(path, result, scene=None, *, force=False):
     Raises
     ------
     ValueError
-        If ``path`` exists and ``force`` is False, or is a directory.
+        ``path`` is a directory.
+    OutputExistsError
+        (a ``ValueError``) ``path`` exists and ``force`` is False; an
+        :class:`OutputAppearedError` if another writer wrote it while this
+        result was written (nothing is written then).
     """
     path = pathlib.Path(path)
-    with atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=force) as f:
+    with atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=force,
+                   checked=checked) as f:
         _write(f, result, scene)
     return path
 

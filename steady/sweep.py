@@ -10,6 +10,10 @@ point to the sweep file as soon as it arrives, so that
 - an interrupted sweep leaves a readable file with every point finished so
   far (each point is written under a temporary name and renamed when
   complete; the file is closed between points);
+- two sweeps on one file share it: the file is created whole and linked
+  into place (:func:`steady.output.atomic_h5`), so that the second never
+  truncates what the first has written, and each point is written under
+  HDF5's file lock;
 - running the same sweep again skips the points already in the file
   (resume), and a larger sweep with the same settings adds only the new
   points.
@@ -42,6 +46,8 @@ import time
 
 import h5py
 import numpy as np
+
+from .output import OutputExistsError, atomic_h5
 
 __all__ = [
     "DEFAULT_WORKERS",
@@ -140,30 +146,42 @@ class SweepFile:
     def __init__(self, path, settings=None):
         self.path = pathlib.Path(path)
         self.settings_text = None if settings is None else point_key(settings)
-        if self.path.exists():
-            with self._open("r") as f:
-                if f.attrs.get("format") != FORMAT:
-                    raise ValueError(f"{str(self.path)!r} is not a sweep file "
-                                     f"(format {f.attrs.get('format')!r})")
-                version = int(f.attrs.get("format_version", -1))
-                if version != FORMAT_VERSION:
-                    raise ValueError(f"{str(self.path)!r} has sweep layout version {version}, "
-                                     f"this code reads version {FORMAT_VERSION}")
-                stored = str(f.attrs["settings"])
-            if self.settings_text is not None and stored != self.settings_text:
-                raise ValueError(f"sweep file {str(self.path)!r} was written with settings "
-                                 f"{stored}, not {self.settings_text}; use another file")
-            self.settings_text = stored
-        elif settings is None:
-            raise ValueError(f"sweep file {str(self.path)!r} does not exist")
-        else:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            with self._open("w") as f:
-                f.attrs["format"] = FORMAT
-                f.attrs["format_version"] = FORMAT_VERSION
+        if not self.path.exists():
+            if settings is None:
+                raise ValueError(f"sweep file {str(self.path)!r} does not exist")
+            self._create()
+        self._check_settings()
+        self._drop_incomplete()
+
+    def _create(self):
+        """Create the empty file; join it if another sweep created it meanwhile.
+
+        Created whole and linked into place (:func:`steady.output.atomic_h5`):
+        a sweep that starts beside another one on the same file never
+        truncates the points the other one has written.
+        """
+        try:
+            with atomic_h5(self.path, format=FORMAT, version=FORMAT_VERSION) as f:
                 f.attrs["settings"] = self.settings_text
                 f.create_group("points")
-        self._drop_incomplete()
+        except OutputExistsError:
+            logger.info("%s: created by another sweep meanwhile; joining it", self.path)
+
+    def _check_settings(self):
+        """Refuse a file that is not a sweep file of these settings."""
+        with self._open("r") as f:
+            if f.attrs.get("format") != FORMAT:
+                raise ValueError(f"{str(self.path)!r} is not a sweep file "
+                                 f"(format {f.attrs.get('format')!r})")
+            version = int(f.attrs.get("format_version", -1))
+            if version != FORMAT_VERSION:
+                raise ValueError(f"{str(self.path)!r} has sweep layout version {version}, "
+                                 f"this code reads version {FORMAT_VERSION}")
+            stored = str(f.attrs["settings"])
+        if self.settings_text is not None and stored != self.settings_text:
+            raise ValueError(f"sweep file {str(self.path)!r} was written with settings "
+                             f"{stored}, not {self.settings_text}; use another file")
+        self.settings_text = stored
 
     @property
     def settings(self):

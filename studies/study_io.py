@@ -8,10 +8,13 @@ alone, so that a figure can be redrawn without recomputing (``--plot-only``).
 Command line of every study::
 
     python studies/<study>.py [--quick] [-o OUT.h5] [--png OUT.png] [--plot-only]
-                              [--workers N] [--scheduler ADDRESS] [-v]
+                              [--force] [--workers N] [--scheduler ADDRESS] [-v]
 
 Defaults: ``out/<study>.h5`` and ``docs/figures/<study>.png`` for the full
 run; ``out/quick/<study>.h5`` and ``out/quick/<study>.png`` with ``--quick``.
+A run replaces the HDF5 file an earlier run left, but not one that another
+process wrote while this one computed (two runs of a study on one output
+at once): that is refused, exit status 2, unless ``--force`` is given.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from steady.output import atomic_h5
+from steady.output import atomic_h5, file_identity
 
 __all__ = ["FORMAT_VERSION", "ROOT", "figure", "plain_log_ticks", "read_study", "run_study",
            "save_figure", "write_study"]
@@ -41,12 +44,20 @@ FORMAT_VERSION = 1
 #: The repository root (studies/ is one level below it).
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
+# The outputs :func:`run_study` checked before computing, by resolved path:
+# the identity of the file found then (None: none), or _ANY with --force.
+_checked = {}
+_ANY = object()
+
 
 def write_study(path, name, params, datasets, attrs=None):
     """Write a study's numbers to HDF5, replacing an earlier run's file.
 
     Written atomically (:func:`steady.output.atomic_h5`): an interrupted run
-    leaves the previous file, not half a file.
+    leaves the previous file, not half a file.  Under :func:`run_study`,
+    only the file found at ``path`` when the study started is replaced (any
+    file with ``--force``): one another process wrote meanwhile is refused.
+    Called outside it, whatever file ``path`` names is replaced.
 
     Parameters
     ----------
@@ -63,10 +74,22 @@ def write_study(path, name, params, datasets, attrs=None):
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    steady.output.OutputAppearedError
+        (a ``ValueError``) Under :func:`run_study` without ``--force``:
+        another process wrote ``path`` since the study started; nothing is
+        written.
     """
     path = pathlib.Path(path)
+    found = _checked.get(path.resolve(), _ANY)
+    if found is _ANY:
+        options = {"force": True}
+    else:
+        options = {"replaces": found, "checked": True}
     with atomic_h5(path, format=f"runin.study.{name}", version=FORMAT_VERSION,
-                   force=True) as f:
+                   **options) as f:
         f.attrs["params"] = json.dumps(params, sort_keys=True, default=_jsonable)
         for key, (value, unit) in (attrs or {}).items():
             f.attrs[key] = value
@@ -185,6 +208,9 @@ def run_study(name, doc, compute, plot, params, quick_params, argv=None, *, para
     parser.add_argument("--png", help="figure to draw")
     parser.add_argument("--plot-only", action="store_true",
                         help="redraw the figure from an existing HDF5 file")
+    parser.add_argument("--force", action="store_true",
+                        help="replace the HDF5 file even if another process wrote it while "
+                             "this run computed (an earlier run's file is always replaced)")
     if parallel:
         parser.add_argument("--workers", type=int, default=None,
                             help="local worker processes (default: 2)")
@@ -209,6 +235,9 @@ def run_study(name, doc, compute, plot, params, quick_params, argv=None, *, para
         out = pathlib.Path(args.output or default_output or ROOT / "out" / f"{name}.h5")
         png = pathlib.Path(args.png or ROOT / "docs" / "figures" / f"{name}.png")
         run_params = dict(params)
+    checked = out.resolve()
+    # What the study may replace: the file there now (see write_study).
+    _checked[checked] = _ANY if args.force else file_identity(out)
     try:
         if not args.plot_only:
             t0 = time.perf_counter()
@@ -227,4 +256,6 @@ def run_study(name, doc, compute, plot, params, quick_params, argv=None, *, para
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    finally:
+        del _checked[checked]
     return 0

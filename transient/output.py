@@ -64,7 +64,11 @@ writer's process id; a second writer is refused at once with
 so a lock file left by a killed run is taken over (its pid is reported).
 ``write_run(..., backup=True)`` keeps the file it replaces as
 ``RUN.h5.prev`` (:func:`backup_path`): a checkpoint damaged after it was
-written can be replaced by the one before it.
+written can be replaced by the one before it.  Without ``force``,
+``write_run`` replaces only the file it is told it may (``replaces``, the
+identity it returned for the previous checkpoint), so that a file another
+writer put at the run's path meanwhile is refused, not replaced
+(:func:`steady.output.atomic_h5`).
 """
 
 from __future__ import annotations
@@ -99,6 +103,7 @@ __all__ = [
     "lock_path",
     "read_run",
     "remove_temporaries",
+    "verify_run",
     "write_run",
 ]
 
@@ -235,7 +240,8 @@ def _seal_groups(f):
 
 
 # -- writing ----------------------------------------------------------------
-def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=False):
+def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=False,
+              force=True, replaces=None, checked=False):
     """Write a run (or a checkpoint) to HDF5, atomically, replacing ``path``.
 
     Parameters
@@ -252,14 +258,34 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     backup : bool, optional
         Keep the file that ``path`` held as :func:`backup_path` (default
         False: it is replaced).
+    force : bool, optional
+        Replace whatever file ``path`` names (default True).  False: only
+        the file ``replaces`` names, or none.
+    replaces : steady.output.FileIdentity, optional
+        With ``force`` False: the file this one may replace, e.g. the
+        identity this function returned for the previous checkpoint.
+    checked : bool, optional
+        ``path`` was checked before the run: a file found in the place of
+        the expected one was written meanwhile (see
+        :func:`steady.output.atomic_h5`).
+
+    Returns
+    -------
+    steady.output.FileIdentity
+        The identity of the file written.
 
     Raises
     ------
     OSError
         The file cannot be written; the message names ``path``.
+    steady.output.OutputAppearedError
+        (a ``ValueError``) Without ``force``: ``path`` names another file
+        than ``replaces`` (another writer wrote it); nothing is written.
     """
-    with atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=True,
-                   backup=backup_path(path) if backup else None) as f:
+    writer = atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=force,
+                       replaces=replaces, checked=checked,
+                       backup=backup_path(path) if backup else None)
+    with writer as f:
         for name, unit in _SCALARS.items():
             f.attrs[name] = getattr(result, name)
             if unit:
@@ -305,6 +331,7 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
                 else:
                     g.attrs[fld.name] = value
         _seal_groups(f)
+    return writer.identity
 
 
 def _write_outline(f, result):
@@ -390,6 +417,51 @@ def _verify(path, datasets, groups):
 
 def _plain(value):
     return value.item() if isinstance(value, np.generic) else value
+
+
+def verify_run(path):
+    """Check every checksum of a run file, one dataset at a time.
+
+    What :func:`read_run` verifies, without holding the whole file in
+    memory (the largest dataset at most): for a file just written, whose
+    contents are still in memory.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Raises
+    ------
+    DamagedRunFileError
+        The file cannot be read, is not a run file, carries no checksums,
+        or a part of it does not match its checksum (the message names it).
+    """
+    path = pathlib.Path(path)
+    damage = (OSError, RuntimeError, KeyError, TypeError, IndexError, ValueError)
+    try:
+        with h5py.File(path, "r") as f:
+            if _plain(f.attrs.get("format")) != FORMAT:
+                raise DamagedRunFileError(path, "it is not a run file")
+            if _CHECKSUM not in f.attrs:
+                raise DamagedRunFileError(path, "it carries no checksums")
+            names = []
+            f.visit(names.append)
+            for name in ["", *sorted(names)]:
+                obj = f[name] if name else f
+                attrs = dict(obj.attrs)
+                stored = attrs.get(_CHECKSUM)
+                if isinstance(obj, h5py.Dataset):
+                    if stored is None or _dataset_digest(obj[()], attrs) != stored:
+                        raise DamagedRunFileError(
+                            path, f"dataset {name!r} does not match its checksum")
+                elif stored is None or _attrs_digest(attrs) != stored:
+                    what = "the root attributes" if not name else f"the attributes of group " \
+                                                                   f"{name!r}"
+                    raise DamagedRunFileError(path, f"{what} do not match their checksum")
+    except damage as err:
+        if isinstance(err, DamagedRunFileError):
+            raise
+        raise DamagedRunFileError(path, f"cannot be read ({str(err)[:200]})") from None
 
 
 def read_run(path):

@@ -92,7 +92,7 @@ def run(args):
     result = fit_scene(scene, measured, n=args.n, search_shift=args.shift,
                        max_shift=args.max_shift, rim_margin=args.rim_margin,
                        reference_phase=args.reference_phase, confidence=args.confidence)
-    write_fit(args.output, result, scene, force=args.force)
+    write_fit(args.output, result, scene, force=args.force, checked=True)
     lines = result.summary_lines() + [f"result           {args.output}"]
     if args.plot:
         plot_fit(args.output, args.plot, force=args.force)

@@ -116,7 +116,7 @@ def run(args):
         lines = summary_lines(result)
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
-        write_result(args.output, result, scene, force=args.force)
+        write_result(args.output, result, scene, force=args.force, checked=True)
         saved = args.output
         lines.append(f"result           {args.output}")
         if args.plot:

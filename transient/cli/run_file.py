@@ -3,7 +3,12 @@
 A run writes its file at a time under the run file's lock
 (:class:`transient.output.RunLock`).  :class:`RunFile` writes every
 checkpoint atomically with the run's inputs (:func:`run_inputs`); the file
-it replaces is kept as ``RUN.h5.prev`` while the run goes on.  A resumed
+it replaces is kept as ``RUN.h5.prev`` while the run goes on, and removed
+once the run has ended steady and its final file reads back intact.  A
+checkpoint replaces only the run's own previous checkpoint, or the file
+that was there when the run started (``--resume``, ``--force``): a file
+another writer put at the run's path meanwhile is refused
+(:class:`steady.output.OutputAppearedError`), not replaced.  A resumed
 run continues only the run of the same problem (:func:`check_same_inputs`:
 face, grid, load, phases, wear law, initial face), from a file whose
 checksums hold (:func:`read_resume`, which names the previous checkpoint
@@ -17,12 +22,14 @@ what is on disk.
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import signal
 import threading
 
 import numpy as np
 
+from steady.output import file_identity
 from steady.text import shorten
 
 from .. import output
@@ -118,10 +125,20 @@ class RunFile:
         # Whether ``path`` holds a checkpoint of this run (then it becomes the backup).
         self.ours = False
         self.saved = None  # (steps, distance in s*) of the checkpoint on disk
+        # The file at ``path`` the next write may replace (None: none); see atomic_h5.
+        self.replaces = None
+        self._kept = None  # what saved_text() says when the final file failed its check
 
     def start(self):
-        """A new run: one part, from step 0."""
+        """A new run: one part, from step 0.
+
+        Called under the run's lock, once ``path`` has been checked: the
+        file it names now (one ``--force`` replaces) is the one the first
+        checkpoint may replace; a file another writer puts there later is
+        refused.
+        """
         self.history = [self._part(0, 0.0, [])]
+        self.replaces = file_identity(self.path)
 
     def resume(self, stored, stored_attrs):
         """Continue ``stored`` (a verified :class:`RunResult` read from :attr:`path`).
@@ -137,6 +154,7 @@ class RunFile:
         s_star = stored.run_in_distance
         here = stored.distance / s_star
         self.ours = True
+        self.replaces = file_identity(self.path)
         self.saved = (stored.steps, here)
         try:
             self.history = json.loads(stored_attrs.get("settings_history", "[]"))
@@ -183,7 +201,20 @@ class RunFile:
                 "snapshots_missing": missing}
 
     def write(self, result, comparison=None, extra_attrs=None):
-        """Write a checkpoint or the final run; the file it replaces becomes the backup."""
+        """Write a checkpoint or the final run; the file it replaces becomes the backup.
+
+        The backup of a run that ends steady is removed once the final file
+        reads back with every checksum; it is kept after a stop or a failure.
+
+        Raises
+        ------
+        steady.output.OutputAppearedError
+            (a ``ValueError``) Another writer put a file at ``path`` since
+            the run's previous write (or its start): nothing is written.
+        OSError
+            The file cannot be written, or the final file does not read back
+            (its backup is kept).
+        """
         self.history[-1].update(to_step=result.steps, to_distance=result.distance,
                                 status=result.status)
         attrs = dict(self.attrs, **(extra_attrs or {}))
@@ -195,16 +226,39 @@ class RunFile:
             "snapshots_missing": np.asarray(self.missing, dtype=float),
             "snapshots_missing_units": "m"})
         with interrupt_held():  # what saved_text() says must be what is on disk
-            output.write_run(self.path, result, attrs=attrs, arrays=self.arrays,
-                             comparison=comparison, backup=self.ours)
+            self.replaces = output.write_run(
+                self.path, result, attrs=attrs, arrays=self.arrays, comparison=comparison,
+                backup=self.ours, force=False, replaces=self.replaces, checked=True)
             if not self.ours:
                 # A backup beside a new run belongs to the run this one replaced.
                 output.backup_path(self.path).unlink(missing_ok=True)
             self.ours = True
-            self.saved = (result.steps, result.distance / result.run_in_distance)
+            previous, self.saved = self.saved, (result.steps,
+                                                result.distance / result.run_in_distance)
+            if result.success:
+                self._drop_backup(previous)
+
+    def _drop_backup(self, previous):
+        """Remove the backup of a finished run once its final file reads back intact."""
+        backup = output.backup_path(self.path)
+        try:
+            output.verify_run(self.path)
+        except output.DamagedRunFileError as err:
+            if previous is not None and backup.exists():
+                self._kept = (f"the previous checkpoint {str(backup)!r} ({at_text(*previous)}) "
+                              f"is kept: rename it to {str(self.path)!r} and --resume")
+            else:
+                self._kept = "no intact checkpoint is left; start over with --force"
+            raise OSError(errno.EIO, f"the finished run does not read back as written: "
+                                     f"{err}") from None
+        # Another writer's file in its place (with --force) leaves the backup as the run's.
+        if file_identity(self.path) == self.replaces:
+            backup.unlink(missing_ok=True)
 
     def saved_text(self):
         """What can be continued, for a message."""
+        if self._kept is not None:
+            return self._kept
         if self.saved is None:
             return "nothing was saved (no checkpoint had been written)"
         return (f"the checkpoint in {str(self.path)!r} ({at_text(*self.saved)}) can be continued "
