@@ -30,6 +30,13 @@ quantile.  Ratio intervals are Fieller's intervals for ``p_ref / p_i``
 is not distinguished from zero), raised to the power ``m``.  See
 ``docs/model.md``, "Wear ratios from a measured face".
 
+Units: the fit runs on the heights over a power of two near the largest
+one (:class:`_HeightUnit`), exactly, and scales its results back: the same
+bits as a fit in metres where that neither overflows nor underflows, the
+same ratios for heights in any unit, and a refusal naming the heights'
+range when a result (the pressures' covariance, in Pa^2, first) cannot be
+a floating-point number in SI units.
+
 Distance to the rim (``rim_margin``, and the part of the face that every
 trial shift of the search sees): closed forms for the disk, the rectangle
 and the annulus; for other outlines (ellipse, mask) the Euclidean distance
@@ -161,7 +168,8 @@ class FitResult:
         Pixels along the longer side of the model grid (across the diameter
         of a disk).
     success : bool
-        All fitted phase pressures are positive.
+        All fitted phase pressures are positive, every ratio is bounded
+        (its interval is not ``[0, inf]``) and every figure is finite.
     message : str
         Why the fit failed, and notes (unbounded intervals, a shift at the
         search limit, a residual correlated over the whole window).
@@ -258,7 +266,16 @@ def _fieller(a, b, vaa, vbb, vab, t):
 
     The set ``{r : (a - r b)^2 <= t^2 (vaa - 2 r vab + r^2 vbb)}``,
     intersected with the positive reals; its hull when that is two pieces.
+    The set does not change when ``a, b`` are scaled by ``c`` and the
+    variances by ``c^2``: they are, by a power of two near their size (exact),
+    so that the discriminant, of degree 4 in them, neither overflows nor
+    underflows.
     """
+    size = max(abs(a), abs(b), math.sqrt(max(vaa, 0.0)), math.sqrt(max(vbb, 0.0)))
+    if 0 < size < math.inf:
+        e = -math.frexp(size)[1]
+        a, b = math.ldexp(a, e), math.ldexp(b, e)
+        vaa, vbb, vab = math.ldexp(vaa, 2 * e), math.ldexp(vbb, 2 * e), math.ldexp(vab, 2 * e)
     qa = b * b - t * t * vbb
     qb = a * b - t * t * vab
     qc = a * a - t * t * vaa
@@ -783,7 +800,14 @@ class FaceModel:
         erosion = rim_margin + (max_shift if search_shift else 0.0)
         X, Y, mask, window = self._fitted_pixels(measured, start, rim_margin, erosion,
                                                  rim_margin or search_shift)
-        x, y, z = X[mask], Y[mask], measured.heights[mask]
+        x, y, heights = X[mask], Y[mask], measured.heights[mask]
+        # The fit is linear in the heights: it runs on the heights over a power of two
+        # near their largest magnitude (exact, no rounding), so that the squares it forms
+        # (least squares, the residual's covariance, Fieller's quadratic) neither overflow
+        # nor underflow whatever the heights' unit; the results are scaled back exactly
+        # (to the same bits as a fit in metres, where that does not overflow).
+        units = _HeightUnit(heights)
+        z = units.normalise(heights)
         self._check_determined(self._design(x, y, start),
                                self.phases_at(x - start[0], y - start[1]), min_phase_pixels)
         at_limit = False
@@ -801,38 +825,64 @@ class FaceModel:
                                     scale, self.n_phases + 3, confidence)
         P, m = self.n_phases, self.exponent
         p, v = beta[:P], stats.covariance[:P, :P]
+        # Ratios and their intervals do not depend on the heights' unit.
         ratios, intervals, notes = _ratios(p, v, ref, m, stats.t)
+        load = float(self.areas @ p)
+        load_sd = math.sqrt(max(float(self.areas @ v @ self.areas), 0.0))
+        fitted, phase = self._maps(measured, X, Y, start, beta)
+        # Back to metres and pascals.
+        beta = units.restore(beta, 1, "fitted pressures")
+        covariance = units.restore(v, 2, "covariance of the pressures")
+        errors = units.restore(np.sqrt(np.maximum(np.diag(v), 0.0)), 1,
+                               "standard errors of the pressures")
+        residual_rms = units.restore(math.sqrt(np.mean(residual**2)), 1, "residual rms")
+        relief = units.restore(float(np.ptp(columns[:, :P] @ p)), 1, "relief")
+        load_interval = tuple(units.restore(load + sign * stats.t * load_sd, 1, "load scale")
+                              for sign in (-1, 1))
+        load = units.restore(load, 1, "load scale")
+        fitted = units.restore(fitted, 1, "fitted face")
+        residual_map = units.restore(residual_map, 1, "residual")
+        units.check(measured)
+        p = beta[:P]
+        load_scale = load / self.normal_force
+        load_scale_interval = (load_interval[0] / self.normal_force,
+                               load_interval[1] / self.normal_force)
+        with np.errstate(over="ignore", divide="ignore"):
+            implied_E_star = self.E_star / load_scale if load_scale > 0 else math.nan
         failures = _failures(p)
+        failures += _not_finite(ratios, intervals, p, ref, {
+            "standard errors of the pressures": errors,
+            "residual rms": residual_rms,
+            "load scale": load_scale,
+            "load scale interval": load_scale_interval,
+            "implied E*": implied_E_star if load_scale > 0 else 0.0,
+            "offset and tilt": beta[P:],
+            "effective samples": stats.effective_samples,
+        })
         if at_limit:
             notes.append(f"the shift lies at the search limit {max_shift:.4g} m")
         notes += stats.notes()
-        load = float(self.areas @ p)
-        load_sd = math.sqrt(max(float(self.areas @ v @ self.areas), 0.0))
-        load_scale = load / self.normal_force
-        fitted, phase = self._maps(measured, X, Y, start, beta)
         logger.info("fit: %d pixels (%.0f effective), residual rms %.3g m, ratios %s",
-                    stats.samples, stats.effective_samples, math.sqrt(np.mean(residual**2)),
-                    ratios.tolist())
+                    stats.samples, stats.effective_samples, residual_rms, ratios.tolist())
         return FitResult(
             ratios=ratios,
             ratio_intervals=intervals,
             phase_pressures=p,
-            phase_pressure_errors=np.sqrt(np.maximum(np.diag(v), 0.0)),
-            pressure_covariance=v,
+            phase_pressure_errors=errors,
+            pressure_covariance=covariance,
             offset=float(beta[P]),
             tilt=(float(beta[P + 1]), float(beta[P + 2])),
             shift=(float(start[0]), float(start[1])),
-            residual_rms=float(math.sqrt(np.mean(residual**2))),
-            relief=float(np.ptp(columns[:, :P] @ p)),
+            residual_rms=residual_rms,
+            relief=relief,
             samples=stats.samples,
             effective_samples=float(stats.effective_samples),
             correlation_length=float(stats.correlation.length),
             degrees_of_freedom=float(stats.dof),
             load_scale=load_scale,
-            load_scale_interval=((load - stats.t * load_sd) / self.normal_force,
-                                 (load + stats.t * load_sd) / self.normal_force),
+            load_scale_interval=load_scale_interval,
             implied_normal_force=load,
-            implied_E_star=self.E_star / load_scale if load_scale > 0 else math.nan,
+            implied_E_star=implied_E_star,
             confidence=confidence,
             reference_phase=ref,
             exponent=m,
@@ -959,6 +1009,101 @@ class _ResidualStatistics:
         return notes
 
 
+class _HeightUnit:
+    """The fit's working unit of height: a power of two near the largest measured height.
+
+    Dividing by a power of two is exact, and so is multiplying back: a fit
+    in this unit gives the bits of a fit in metres wherever the latter
+    neither overflows nor underflows, and stays finite for any finite
+    heights.  :meth:`restore` notes what cannot be represented in metres and
+    pascals; :meth:`check` refuses the map then.
+
+    Parameters
+    ----------
+    heights : ndarray, m
+        The fitted heights (finite).
+    """
+
+    def __init__(self, heights):
+        largest = float(np.max(np.abs(heights), initial=0.0))
+        #: ``heights / 2**exponent`` lies within (-1, 1).
+        self.exponent = int(np.frexp(largest)[1]) if largest > 0 else 0
+        self.range = ((float(np.min(heights)), float(np.max(heights))) if heights.size
+                      else (math.nan, math.nan))
+        self.lost = []
+
+    def normalise(self, heights):
+        """Heights in the working unit."""
+        return np.ldexp(heights, -self.exponent)
+
+    def restore(self, value, power, name):
+        """A result of the fit (of degree ``power`` in the heights) back in SI units.
+
+        Notes ``name`` when it overflows (to infinity) or its largest
+        magnitude underflows (below the smallest normal number).
+        """
+        value = np.asarray(value, dtype=float)
+        with np.errstate(over="ignore", under="ignore"):
+            out = np.ldexp(value, power * self.exponent)
+        finite = np.isfinite(value)
+        if np.any(np.isinf(out) & finite):
+            self.lost.append(f"{name} beyond {np.finfo(float).max:.3g}")
+        elif (np.max(np.abs(value[finite]), initial=0.0) > 0
+              and np.max(np.abs(out[finite]), initial=0.0) < np.finfo(float).tiny):
+            self.lost.append(f"{name} below {np.finfo(float).tiny:.3g}")
+        return out if out.ndim else float(out)
+
+    def check(self, measured):
+        """Refuse the map when a result could not be represented (:meth:`restore`).
+
+        Raises
+        ------
+        ValueError
+            Naming the map, the heights' range and what left the range of
+            floating-point numbers.
+        """
+        if self.lost:
+            lo, hi = self.range
+            raise ValueError(f"measured map {measured.source}: heights from {lo:.3g} to "
+                             f"{hi:.3g} m are out of the range the fit can report in metres "
+                             f"and pascals ({self.lost[0]}); check the heights' unit "
+                             f"(height scale)")
+
+
+def _not_finite(ratios, intervals, p, ref, figures):
+    """Why the fit's figures make no answer: what is not finite, and ratios it leaves open.
+
+    Parameters
+    ----------
+    ratios, intervals, p, ref
+        As :func:`_ratios` and the pressures (Pa); a ratio of a pressure
+        that is not positive is left to :func:`_failures`.
+    figures : dict of str to float or array
+        Further figures that must be finite.
+
+    Returns
+    -------
+    list of str
+    """
+    reasons = []
+    for i, ratio in enumerate(ratios):
+        if i == ref:
+            continue
+        lo, hi = intervals[i]
+        if p[ref] > 0 and p[i] > 0 and not math.isfinite(ratio):
+            reasons.append(f"k{i}/k{ref} = {ratio} is not finite")
+        if math.isnan(lo) or math.isnan(hi) or math.isinf(lo):
+            reasons.append(f"the interval of k{i}/k{ref}, [{lo:.4g}, {hi:.4g}], is not finite")
+        elif lo == 0.0 and math.isinf(hi):
+            reasons.append(f"k{i}/k{ref} is not determined by the map: its interval is "
+                           f"[0, inf] (phase {i}'s pressure is not told from zero against "
+                           f"the noise)")
+    for name, value in figures.items():
+        if not np.all(np.isfinite(value)):
+            reasons.append(f"the {name} {np.round(value, 6).tolist()} is not finite")
+    return reasons
+
+
 def _ratios(p, v, ref, m, t):
     """Ratios ``(p_ref / p_i)^m`` with Fieller intervals, and notes on one-sided ones."""
     P = len(p)
@@ -973,6 +1118,8 @@ def _ratios(p, v, ref, m, t):
             ratios[i] = (p[ref] / p[i]) ** m
         lo, hi = _fieller(p[ref], p[i], v[ref, ref], v[i, i], v[ref, i], t)
         intervals[i] = (lo**m, hi**m)
+        if lo == 0.0 and math.isinf(hi):
+            continue  # no bound at all: a failure (_not_finite), not a note
         if math.isinf(hi):
             notes.append(f"k{i}/k{ref} is bounded only from below: phase {i}'s pressure is "
                          f"not distinguished from zero")
@@ -1036,13 +1183,17 @@ def fit_face(measured, problem, **options):
     -------
     FitResult
         ``success`` is False (with the reason in ``message``) when a
-        fitted phase pressure is not positive.
+        fitted phase pressure is not positive, a ratio's interval is
+        ``[0, inf]`` (the map does not determine it) or a figure is not
+        finite.  Ratios and intervals do not depend on the heights' unit.
 
     Raises
     ------
     ValueError
         The map cannot cover the face (names both sizes), the rim margin
-        leaves nothing to fit, bad options, or
+        leaves nothing to fit, bad options, heights so large or small
+        that a result cannot be represented in metres and pascals (names
+        their range), or
         the fit is not determined: a phase covers too few fitted pixels, or
         its face is a combination of the other columns (names the phase).
 

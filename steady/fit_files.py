@@ -82,6 +82,7 @@ import pathlib
 import h5py
 import numpy as np
 
+from .array_files import input_file_size, npy_header, read_npy
 from .outline import Circle
 from .output import atomic_h5, read_outline, write_outline
 
@@ -152,10 +153,21 @@ class MeasuredFace:
 
     def __post_init__(self):
         """Check the array and the pixel size; store them read-only."""
-        h = np.array(self.heights, dtype=float)
+        raw = np.asarray(self.heights)
+        # float() of a complex array keeps the real part with a bare numpy warning,
+        # of a boolean one makes heights of 0 and 1: neither is a measured face.
+        if raw.dtype.kind in "cb":
+            kind = "complex numbers" if raw.dtype.kind == "c" else "booleans"
+            raise ValueError(f"measured map {self.source} holds {kind} ({raw.dtype}); heights "
+                             f"must be real numbers")
+        try:
+            h = np.array(raw, dtype=float)
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"measured map {self.source} must hold real numbers: "
+                             f"{str(err)[:200]}") from None
         if h.ndim != 2 or min(h.shape) < 2:
-            raise ValueError(f"measured map {self.source} must be a 2-d array, got shape "
-                             f"{h.shape}")
+            raise ValueError(f"measured map {self.source} must be a 2-d array of at least 2 x 2 "
+                             f"pixels, got shape {h.shape}")
         if np.any(np.isinf(h)):
             raise ValueError(f"measured map {self.source} holds infinite heights")
         if not np.any(np.isfinite(h)):
@@ -187,16 +199,85 @@ class MeasuredFace:
         return (np.arange(nx) - 0.5 * (nx - 1)) * dx, (np.arange(ny) - 0.5 * (ny - 1)) * dy
 
 
+#: Leading bytes of file formats a measured map is sometimes mistaken for, and their names.
+_SIGNATURES = (
+    (b"\x93NUMPY", "a .npy array"),
+    (b"\x89HDF\r\n\x1a\n", "an HDF5 file"),
+    (b"\x89PNG\r\n\x1a\n", "a PNG image"),
+    (b"PK\x03\x04", "a zip archive (an .npz, an x3p?)"),
+    (b"\x1f\x8b", "a gzip-compressed file"),
+    (b"%PDF", "a PDF document"),
+    (b"II*\x00", "a TIFF image"),
+    (b"MM\x00*", "a TIFF image"),
+    (b"\xff\xd8\xff", "a JPEG image"),
+    *((bytes([0x80, protocol]), "pickled Python data") for protocol in range(2, 6)),
+)
+
+
+def _file_kind(path):
+    """What a file's first bytes say it is (``"an HDF5 file"``), or None if unknown."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(16)
+    except OSError as err:
+        raise ValueError(f"cannot read measured map {str(path)!r}: "
+                         f"{err.strerror or err}") from None
+    for signature, kind in _SIGNATURES:
+        if head.startswith(signature):
+            return kind
+    return None
+
+
+def _read_npy(path):
+    """A 2-d ``.npy`` array of real numbers, checked from its header before the data."""
+    kind = _file_kind(path)
+    if kind != "a .npy array":
+        # Never handed to numpy's loader, which would take a foreign file for pickled
+        # data and advise unpickling it.
+        found = f"is {kind}" if kind else "has no NumPy header"
+        raise ValueError(f"measured map {str(path)!r} {found}, not a .npy array")
+    shape, dtype = npy_header(path, what="measured map")
+    if dtype.kind == "c":
+        raise ValueError(f"measured map {str(path)!r} holds complex numbers ({dtype}); "
+                         f"heights must be real numbers")
+    if dtype.kind not in "iuf":
+        raise ValueError(f"measured map {str(path)!r} must hold real numbers, got dtype "
+                         f"{dtype}")
+    if len(shape) != 2:
+        raise ValueError(f"measured map {str(path)!r} must be a 2-d array, got shape {shape}")
+    return read_npy(path, what="measured map", square=False)
+
+
 def _text_grid(path):
     """A text grid, whitespace or comma separated (decided by its first data line)."""
-    delimiter = None
-    with open(path, encoding="utf-8", errors="replace") as f:
-        for line in f:
-            stripped = line.strip()
-            if stripped and not stripped.startswith("#"):
-                delimiter = "," if "," in stripped else None
-                break
-    return np.loadtxt(path, delimiter=delimiter, ndmin=2, dtype=float)
+    kind = _file_kind(path)
+    if kind is not None:
+        raise ValueError(f"measured map {str(path)!r} is {kind}, not a text grid")
+    try:
+        with open(path, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except UnicodeDecodeError as err:
+        raise ValueError(f"measured map {str(path)!r} is not a text grid: byte "
+                         f"{err.object[err.start]:#04x} at offset {err.start} is not UTF-8 "
+                         f"text") from None
+    except OSError as err:
+        raise ValueError(f"cannot read measured map {str(path)!r}: "
+                         f"{err.strerror or err}") from None
+    data = [line for line in lines if line.strip() and not line.lstrip().startswith("#")]
+    if not data:
+        raise ValueError(f"measured map {str(path)!r} holds no numbers (only blank lines or "
+                         f"# comments)")
+    if any("\x00" in line for line in data[:100]):
+        raise ValueError(f"measured map {str(path)!r} is not a text grid: it holds NUL bytes")
+    delimiter = "," if "," in data[0] else None
+    try:
+        # All the lines, so that numpy's row numbers are the file's.
+        return np.loadtxt(lines, delimiter=delimiter, ndmin=2, dtype=float, comments="#")
+    except ValueError as err:
+        # numpy's advice (``usecols``) is for its callers, not for the user.
+        reason = str(err).split("; use `usecols`", 1)[0]
+        raise ValueError(f"cannot read measured map {str(path)!r} as a text grid: "
+                         f"{reason[:200]}") from None
 
 
 def _surface_topography(path, pixel_size):
@@ -220,11 +301,16 @@ def _surface_topography(path, pixel_size):
         if channel.unit is None:
             kwargs["unit"] = "m"
         topography = reader.topography(**kwargs).to_unit("m")
-    except ValueError:
+    except ValueError as err:
+        if "pickle" in str(err):
+            raise ValueError(f"SurfaceTopography cannot read {str(path)!r}: not a format it "
+                             f"knows") from None
         raise
     except Exception as err:  # the readers raise many kinds for a file they cannot parse
-        raise ValueError(f"SurfaceTopography cannot read {str(path)!r}: "
-                         f"{type(err).__name__}: {err}") from None
+        # A reader's advice to unpickle a file is never passed on.
+        reason = "not a format it knows" if "pickle" in str(err) else \
+            f"{type(err).__name__}: {str(err)[:200]}"
+        raise ValueError(f"SurfaceTopography cannot read {str(path)!r}: {reason}") from None
     if topography.dim != 2:
         raise ValueError(f"{str(path)!r} is a line scan ({topography.dim}-d); the fit needs "
                          f"a 2-d height map")
@@ -263,9 +349,14 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
     Raises
     ------
     ValueError
-        Missing or unreadable file, not a 2-d map, missing pixel size, or
-        a profilometer file without SurfaceTopography installed (the
-        message says how to install it).
+        Missing file, a directory, an empty file, a file of another format
+        than its suffix says (named when known: an HDF5 file, pickled data
+        -- never unpickled), a damaged or truncated ``.npy``, a text grid
+        that is not UTF-8 text or holds no numbers, heights that are not
+        real numbers (complex, boolean) or overflow when scaled, not a 2-d
+        map, missing pixel size, or a profilometer file without
+        SurfaceTopography installed (the message says how to install it).
+        Each message names the file and what is wrong.
 
     Examples
     --------
@@ -278,9 +369,11 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
     ((2, 3), (0.0001, 0.0001), 1)
     """
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise ValueError(f"measured map {str(path)!r} does not exist")
-    scale = float(height_scale)
+    input_file_size(path, "measured map")  # exists, a regular file, not empty
+    try:
+        scale = float(height_scale)
+    except (TypeError, ValueError):
+        scale = math.nan
     if not (math.isfinite(scale) and scale > 0):
         raise ValueError(f"height scale must be a positive finite number (m per file unit), "
                          f"got {height_scale!r}")
@@ -289,18 +382,19 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
         if pixel_size is None:
             raise ValueError(f"the pixel size of {str(path)!r} is unknown: give it "
                              f"(--pixel-size, m)")
-        try:
-            heights = (np.load(path, allow_pickle=False) if suffix == ".npy"
-                       else _text_grid(path))
-        except (OSError, ValueError) as err:
-            raise ValueError(f"cannot read measured map {str(path)!r}: {err}") from None
-        if not np.issubdtype(np.asarray(heights).dtype, np.number):
-            raise ValueError(f"measured map {str(path)!r} must hold numbers, got dtype "
-                             f"{np.asarray(heights).dtype}")
+        heights = _read_npy(path) if suffix == ".npy" else _text_grid(path)
         pixel = pixel_size
     else:
         heights, pixel = _surface_topography(path, pixel_size)
-    return MeasuredFace(np.asarray(heights, dtype=float) * scale, pixel, source=repr(str(path)))
+    heights = np.asarray(heights, dtype=float)
+    with np.errstate(over="ignore"):
+        scaled = heights * scale
+    overflow = np.isinf(scaled) & np.isfinite(heights)
+    if np.any(overflow):
+        raise ValueError(f"measured map {str(path)!r}: heights of up to "
+                         f"{np.max(np.abs(heights[overflow])):.3g} file units times the height "
+                         f"scale {scale:.3g} m exceed the largest floating-point number")
+    return MeasuredFace(scaled, pixel, source=repr(str(path)))
 
 
 _DATASETS = {"measured": "m", "fitted": "m", "residual": "m", "fit_mask": "1", "phase": "1"}

@@ -2,7 +2,8 @@
 
 :func:`steady_memory` estimates the peak memory of a steady solve from the
 arrays it allocates (:func:`halfspace_memory`, :func:`product_memory`,
-:func:`slope_estimator_memory` count its parts); :func:`check_memory`
+:func:`slope_estimator_memory` count its parts), :func:`fit_memory` that of
+a wear-ratio fit (:mod:`steady.fit`); :func:`check_memory`
 compares an estimate with the memory available (:func:`available_memory`)
 or with a given limit and refuses a computation that does not fit.
 :func:`keep_freed_memory` sets the C allocator of the process to keep freed
@@ -25,6 +26,7 @@ from .text import format_bytes
 __all__ = [
     "available_memory",
     "check_memory",
+    "fit_memory",
     "halfspace_memory",
     "keep_freed_memory",
     "product_memory",
@@ -245,3 +247,60 @@ def steady_memory(n, *, slope_error=True):
     else:
         peak += product_memory(n)
     return int(_MARGIN * peak) + _BASE
+
+
+def fit_memory(model_shape, n_phases, measured_shape):
+    """Estimated peak memory of a wear-ratio fit (:mod:`steady.fit`, ``runin-fit``), bytes.
+
+    Counted from the arrays :class:`steady.fit.FaceModel` and its
+    :meth:`~steady.fit.FaceModel.fit` allocate, with ``P`` phases, ``K = P +
+    3`` columns of the design matrix, ``M`` pixels of the model grid padded by
+    four on every side and ``N`` measured pixels (every one taken as fitted):
+
+    - the model while its faces are computed: the padded labels, the
+      half-space operator of the padded grid (:func:`halfspace_memory`, 96
+      bytes per pixel), one product's transforms and its unit pressure
+      (about 90), and the ``P`` padded faces twice (list and array): ``(200 +
+      16 P) M`` bytes;
+    - the model kept during the fit: the padded spline coefficients, the
+      faces, the phase map extended off the face, the rim distance, the
+      coordinate grids: ``(16 P + 64) M`` bytes;
+    - the fit: the map, its coordinates and masks, the fitted values and
+      the design matrix with its scaled copy and the least-squares copies
+      (``64 + 32 K`` bytes per measured pixel); the residual's covariance
+      on a zero-padded box of about ``4.4 N`` pixels: the spectra of the
+      residual and of the fitted-pixel mask, of the ``K`` columns and of the
+      two pair sums (complex, about 38 bytes per measured pixel each) and
+      the transforms of one convolution (about 110): ``(260 + 38 K) N``
+      bytes, with ``16 K N`` more for the covariance applied to the columns.
+
+    The sum is multiplied by 1.25 (allocator overhead, short-lived copies
+    not listed) and 16 MiB are added for what does not grow with the grids,
+    as :func:`steady_memory`.  ``tests/test_fit_inputs.py`` measures it
+    against the peak of a run.
+
+    Parameters
+    ----------
+    model_shape : (int, int)
+        Pixels of the model grid (the scene's grid at ``--n``).
+    n_phases : int
+    measured_shape : (int, int)
+        Pixels of the measured map.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> print(format_bytes(fit_memory((256, 256), 2, (256, 256))))
+    82.9 MiB
+    """
+    P = int(n_phases)
+    K = P + 3
+    padded = (int(model_shape[0]) + 8) * (int(model_shape[1]) + 8)
+    measured = int(measured_shape[0]) * int(measured_shape[1])
+    build = (200 + 16 * P) * padded
+    kept = (16 * P + 64) * padded
+    fit = (64 + 32 * K) * measured + (260 + 38 * K) * measured + 16 * K * measured
+    return int(_MARGIN * max(build, kept + fit)) + _BASE

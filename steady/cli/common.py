@@ -54,6 +54,7 @@ __all__ = [
     "CommandError",
     "add_memory_limit",
     "check_distinct",
+    "check_png_path",
     "configure_logging",
     "describe_os_error",
     "note",
@@ -256,6 +257,37 @@ def check_distinct(named):
         if key in seen:
             raise ValueError(f"{what} and {seen[key]} name the same file {str(path)!r}")
         seen[key] = what
+
+
+def check_png_path(path, what="--plot"):
+    """Refuse a figure path without the suffix ``.png``, before any work.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Where a command will draw its figure.
+    what : str, optional
+        How messages name it (default ``"--plot"``).
+
+    Raises
+    ------
+    ValueError
+        The suffix is not ``.png`` (any case); the message names the path
+        and the suffix found.
+
+    Examples
+    --------
+    >>> check_png_path("out/fit.PNG")
+    >>> try:
+    ...     check_png_path("out/fit.txt")
+    ... except ValueError as err:
+    ...     print(err)
+    --plot 'out/fit.txt' must name a .png file, not '.txt'
+    """
+    suffix = pathlib.Path(path).suffix
+    if suffix.lower() != ".png":
+        found = f"{suffix!r}" if suffix else "a name without a suffix"
+        raise ValueError(f"{what} {str(path)!r} must name a .png file, not {found}")
 
 
 def prepare_output(path, *, force, what="output"):
