@@ -646,8 +646,9 @@ class Annulus(_Outline):
 
 
 @OUTLINES.register("mask", (Key("path", "path", required=True,
-                                doc=".npy: booleans, True on the face, or integers, -1 off it; "
-                                    ".png: the non-transparent pixels"),
+                                doc=".npy: booleans, True on the face, or integers: only 0 "
+                                    "and 1 (1 on the face), or -1 off the face and values "
+                                    ">= 0 on it; .png: the non-transparent pixels"),
                             Key("pixel_size", "number", unit="m", low=0.0, required=True,
                                 doc="side of the mask's pixels")),
                    doc="any face, as pixels")
