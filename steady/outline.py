@@ -63,6 +63,7 @@ __all__ = [
     "Rectangle",
     "as_grid",
     "as_outline",
+    "describe_change",
     "grid_size",
     "outline_from_table",
 ]
@@ -830,6 +831,53 @@ def as_grid(grid):
     if isinstance(grid, FaceGrid):
         return grid
     return FaceGrid(UNIT_DISK, grid_size(grid))
+
+
+def describe_change(old, new):
+    """How a face ``new`` differs from ``old``, in words: ``"<old>, the scene has the <new>"``.
+
+    For messages that refuse to continue work done on another face (a
+    resumed run).  Two faces that differ below the six digits of
+    ``describe()``, or masks with other pixels, would read the same; then
+    the words say what differs: how many of the mask's pixels, or which
+    length (to all its digits).
+
+    Parameters
+    ----------
+    old, new : outline objects
+        The face the work was done on, and the scene's.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> mask = np.ones((6, 8), dtype=bool)
+    >>> edited = mask.copy()
+    >>> edited[0, :3] = False
+    >>> print(describe_change(MaskOutline(mask, 1e-3, "'m.npy'"),
+    ...                       MaskOutline(edited, 1e-3, "'m.npy'")))
+    mask face 'm.npy' (6 x 8 pixels of 1 mm) with other pixels: 3 of its 48 pixels differ from
+    the scene's
+    >>> print(describe_change(Circle(4e-3), Circle(4.0000001e-3)))
+    circle face (radius 4 mm) with radius 0.004 m, the scene has 0.0040000001 m
+    """
+    was, now = old.describe(), new.describe()
+    if was != now or type(old) is not type(new):
+        return f"{was}, the scene has the {now}"
+    if isinstance(old, MaskOutline) and old.mask.shape == new.mask.shape:
+        differ = int(np.count_nonzero(old.mask != new.mask))
+        if differ:
+            return (f"{was} with other pixels: {differ} of its {old.mask.size} pixels differ "
+                    f"from the scene's")
+    changed = [f"{name} {value!r} {unit}, the scene has {new.parameters()[name][0]!r} {unit}"
+               for name, (value, unit) in old.parameters().items()
+               if new.parameters().get(name, (None,))[0] != value]
+    if changed:
+        return f"{was} with {'; '.join(changed)}"
+    return f"{was}, the scene has another {now}"
 
 
 def outline_from_table(table, base_dir="."):
