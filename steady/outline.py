@@ -65,6 +65,7 @@ __all__ = [
     "as_outline",
     "describe_change",
     "grid_size",
+    "grid_size_text",
     "outline_from_table",
 ]
 
@@ -110,6 +111,17 @@ def grid_size(n):
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
         raise ValueError(f"grid size n must be an integer, got {shorten(n)}")
     return int(n)
+
+
+def grid_size_text(n):
+    """A grid size for messages: the integer, or 3 digits of one beyond 10^9 (never allocated).
+
+    Examples
+    --------
+    >>> grid_size_text(512), grid_size_text(8 * 10**60)
+    ('512', '8e+60')
+    """
+    return str(n) if n < 10**9 else f"{float(n):.3g}"
 
 
 def _disk_mask(n):
@@ -273,7 +285,7 @@ class _Outline:
         low = self.min_grid()
         if n < low:
             raise ValueError(f"grid too coarse for the {self.describe()}: n = {n}, the minimum "
-                             f"is n = {low}")
+                             f"is n = {grid_size_text(low)}")
         return n
 
     def encloses_disk(self, centre, radius):

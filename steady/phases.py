@@ -56,7 +56,7 @@ from scipy import spatial
 
 from .array_files import array_suffix, read_npy, read_png
 from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
-from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size
+from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size, grid_size_text
 from .schema import Key, Registry
 
 __all__ = [
@@ -89,7 +89,8 @@ def check_resolution(grid, minimum, what):
     """
     n = grid.n if isinstance(grid, FaceGrid) else grid_size(grid)
     if n < minimum:
-        raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = {minimum}")
+        raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = "
+                         f"{grid_size_text(minimum)}")
     return n
 
 
