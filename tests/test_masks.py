@@ -167,3 +167,13 @@ def test_an_empty_phase_map_is_named_as_empty(tmp_path):
     message = str(info.value)
     assert "is empty: an array of shape (0, 0)" in message, message
     assert "too coarse" not in message and "n = 0" not in message, message
+
+
+def test_the_command_names_an_empty_phase_map(tmp_path, capsys):
+    np.save(tmp_path / "p.npy", np.zeros((0, 0), dtype=np.int64))
+    (tmp_path / "s.toml").write_text(scene_text("steady", map="file", path="p.npy"))
+    status = steady_cli.main([str(tmp_path / "s.toml"), "-o", str(tmp_path / "out.h5")])
+    _, err = capsys.readouterr()
+    assert status == 2, f"exit {status}: {err!r}"
+    assert "[phases] map: phase map" in err and "p.npy' is empty: an array of shape (0, 0)" in err, \
+        err
