@@ -159,8 +159,7 @@ def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=Non
     """
     F, E = float(normal_force), float(E_star)
     names = input_names(outline, F, E, n, wear) if names is None else names
-    params = outline.parameters()
-    for name, (value, unit) in params.items():
+    for name, (value, unit) in outline.parameters().items():
         if unit == "m":
             check_scale(float(value), None, "m", (name,), names)
     check_scale(F, None, "N", ("normal_force",), names)
@@ -170,11 +169,11 @@ def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=Non
         check_scale(2.0 * L / n, "the pixel h = 2 L / n", "m", ("outline", "n"), names)
     pbar = F / outline.area
     check_scale(pbar, "the mean pressure pbar = F_N / A", "Pa", ("normal_force", "outline"),
-              names)
+                names)
     check_scale(4.0 * pbar / (math.pi * E), "the reference slope grad_f0 = 4 pbar / (pi E*)",
-              "1", ("normal_force", "outline", "E_star"), names)
+                "1", ("normal_force", "outline", "E_star"), names)
     check_scale(pbar * L / E, "the depth scale f* = pbar L / E*", "m",
-              ("normal_force", "outline", "E_star"), names)
+                ("normal_force", "outline", "E_star"), names)
     if wear is None:
         return
     wear = as_wear_law(wear)
@@ -184,7 +183,7 @@ def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=Non
     for i, kappa in enumerate(np.atleast_1d(rate_constants)):
         check_scale(float(kappa), f"the rate constant of phase {i}, dg/dp at pbar "
                     f"(k m pbar^(m-1) for the power law)", "1/Pa",
-                  ("wear", "normal_force", "outline"), names)
+                    ("wear", "normal_force", "outline"), names)
     if counts is None or n is None:
         return
     h = 2.0 * L / n
@@ -193,11 +192,10 @@ def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=Non
         rates = np.asarray(wear.rate(pressures, k), dtype=float)
     for i, p in enumerate(pressures):
         check_scale(float(p), f"the steady pressure of phase {i} (eq. 7)", "Pa",
-                  ("wear", "normal_force", "outline"), names)
+                    ("wear", "normal_force", "outline"), names)
     for i, rate in enumerate(rates):
         check_scale(float(rate), f"the steady wear rate of phase {i}, g_i(p_i) (k p^m for "
-                    f"the power law)", "1",
-                  ("wear", "normal_force", "outline"), names)
+                    f"the power law)", "1", ("wear", "normal_force", "outline"), names)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -78,11 +78,12 @@ def check_run_in_scales(problem, names=None):
     k = np.asarray(problem.wear.coefficients, dtype=float)
     mean = F / (float(problem.face_mask.sum()) * h * h)
     with np.errstate(all="ignore"):
-        slow, fast = (float(problem.wear.rate_constant(np.float64(v), np.float64(mean)))
+        # In numpy's floats: an underflow to 0 divides to inf rather than raising.
+        slow, fast = (np.float64(problem.wear.rate_constant(np.float64(v), np.float64(mean)))
                       for v in (k.min(), k.max()))
         peak = float(problem.wear.rate(np.float64(F / (h * h)), np.float64(k.max())))
-        s_star = problem.outline.scale / (slow * E)
-        fastest = h / (fast * E)
+        s_star = float(problem.outline.scale / (slow * E))
+        fastest = float(h / (fast * E))
     inputs = ("wear", "normal_force", "outline", "E_star")
     check_scale(s_star, "the run-in distance s* = L / (k m pbar^(m-1) E*) of the slowest "
                 "phase", "m", inputs, names)
