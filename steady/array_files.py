@@ -19,8 +19,8 @@ import numpy as np
 
 from .text import format_bytes
 
-__all__ = ["array_suffix", "input_file_size", "npy_header", "png_size", "read_face_mask",
-           "read_npy", "read_png"]
+__all__ = ["array_suffix", "input_file_size", "integer_face", "npy_header", "png_size",
+           "read_face_mask", "read_npy", "read_png"]
 
 
 def input_file_size(path, what):
@@ -172,8 +172,12 @@ def read_face_mask(path):
     Parameters
     ----------
     path : str or path-like
-        ``.npy``: a 2-d boolean array (``True`` on the face) or integer
-        array (the face is where it is not -1, e.g. a phase map).
+        ``.npy``: a 2-d array, either booleans (``True`` on the face) or
+        integers in one of two forms (:func:`integer_face`): only 0 and 1
+        (1 on the face, a 0/1 image), or -1 off the face and values
+        ``>= 0`` on it (a phase map with -1 off its face is its own mask).
+        Any other integers are refused, with the values found: nothing
+        else says unambiguously which pixels are off the face.
         ``.png``: an image with an alpha channel; the face is its
         non-transparent pixels.  Rows run along x, as in phase maps.
 
@@ -185,19 +189,22 @@ def read_face_mask(path):
     ------
     ValueError
         Missing, empty, truncated or unreadable file, an unsupported
-        suffix or dtype, a PNG without alpha channel, no face pixel.
+        suffix or dtype, integers of neither form, a PNG without alpha
+        channel, no face pixel.
     """
     path = pathlib.Path(path)
     what = "face mask"
     if array_suffix(path, what) == ".npy":
         a = read_npy(path, what=what, square=False)
+        if a.size == 0:
+            raise ValueError(f"{what} {str(path)!r} is empty: an array of shape {a.shape}")
         if a.dtype == bool:
             mask = a
         elif np.issubdtype(a.dtype, np.integer):
-            mask = a != -1
+            mask = integer_face(a, f"{what} {str(path)!r}")
         else:
             raise ValueError(f"{what} {str(path)!r} must hold booleans (True on the face) or "
-                             f"integers (-1 off the face), got dtype {a.dtype}")
+                             f"integers (0/1, or -1 off the face), got dtype {a.dtype}")
     else:
         img = read_png(path, what)
         if img.ndim != 3 or img.shape[2] not in (2, 4):
@@ -207,6 +214,61 @@ def read_face_mask(path):
     if mask.ndim != 2 or not mask.any():
         raise ValueError(f"{what} {str(path)!r} has no face pixel")
     return np.ascontiguousarray(mask)
+
+
+def integer_face(values, what="face mask"):
+    """The face pixels an integer mask marks: ``True`` on the face.
+
+    The rule (README, ``[punch] shape = "mask"``): an integer mask holds
+    either only 0 and 1, 1 on the face (a 0/1 image), or -1 off the face
+    and values ``>= 0`` on it (a phase map with -1 off its face, the
+    convention of phase-map files, is its own mask).  Any other set of
+    values -- ``{0, 2, 7}``, ``{0, -2}``, ``{-1, -2, 0}`` -- does not say
+    which pixels are off the face and is refused with the values found,
+    rather than read as a face of every pixel.
+
+    Parameters
+    ----------
+    values : ndarray of int, shape (mx, my)
+    what : str, optional
+        How the message names the mask (e.g. ``"face mask 'm.npy'"``).
+
+    Returns
+    -------
+    ndarray of bool, shape (mx, my)
+
+    Raises
+    ------
+    ValueError
+        Integers of neither form; the message lists the distinct values
+        (the first and last few of many).
+
+    Examples
+    --------
+    >>> integer_face(np.array([[0, 1], [1, 1]], dtype=np.uint8)).tolist()
+    [[False, True], [True, True]]
+    >>> integer_face(np.array([[-1, 0], [2, 1]])).tolist()
+    [[False, True], [True, True]]
+    >>> try:
+    ...     integer_face(np.array([[0, 2], [7, 7]]))
+    ... except ValueError as err:
+    ...     print(err)
+    face mask holds the integer values [0, 2, 7]: an integer mask must hold only 0 and 1 (1 on
+    the face) or -1 off the face and values >= 0 on it; use a boolean array (True on the face)
+    """
+    values = np.asarray(values)
+    found = np.unique(values)
+    if found.size and found[0] >= 0 and found[-1] <= 1:
+        return values == 1
+    if found.size and found[0] == -1 and (found.size == 1 or found[1] >= 0):
+        return values != -1
+    shown = found.tolist()
+    listed = (str(shown) if len(shown) <= 12
+              else f"[{', '.join(map(str, shown[:6]))}, ..., {', '.join(map(str, shown[-3:]))}]"
+                   f" ({len(shown)} distinct values)")
+    raise ValueError(f"{what} holds the integer values {listed}: an integer mask must hold "
+                     f"only 0 and 1 (1 on the face) or -1 off the face and values >= 0 on it; "
+                     f"use a boolean array (True on the face)")
 
 
 def png_size(path, what):

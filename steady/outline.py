@@ -63,7 +63,9 @@ __all__ = [
     "Rectangle",
     "as_grid",
     "as_outline",
+    "describe_change",
     "grid_size",
+    "grid_size_text",
     "outline_from_table",
 ]
 
@@ -109,6 +111,17 @@ def grid_size(n):
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
         raise ValueError(f"grid size n must be an integer, got {shorten(n)}")
     return int(n)
+
+
+def grid_size_text(n):
+    """A grid size for messages: the integer, or 3 digits of one beyond 10^9 (never allocated).
+
+    Examples
+    --------
+    >>> grid_size_text(512), grid_size_text(8 * 10**60)
+    ('512', '8e+60')
+    """
+    return str(n) if n < 10**9 else f"{float(n):.3g}"
 
 
 def _disk_mask(n):
@@ -272,7 +285,7 @@ class _Outline:
         low = self.min_grid()
         if n < low:
             raise ValueError(f"grid too coarse for the {self.describe()}: n = {n}, the minimum "
-                             f"is n = {low}")
+                             f"is n = {grid_size_text(low)}")
         return n
 
     def encloses_disk(self, centre, radius):
@@ -646,8 +659,9 @@ class Annulus(_Outline):
 
 
 @OUTLINES.register("mask", (Key("path", "path", required=True,
-                                doc=".npy: booleans, True on the face, or integers, -1 off it; "
-                                    ".png: the non-transparent pixels"),
+                                doc=".npy: booleans, True on the face, or integers: only 0 "
+                                    "and 1 (1 on the face), or -1 off the face and values "
+                                    ">= 0 on it; .png: the non-transparent pixels"),
                             Key("pixel_size", "number", unit="m", low=0.0, required=True,
                                 doc="side of the mask's pixels")),
                    doc="any face, as pixels")
@@ -829,6 +843,53 @@ def as_grid(grid):
     if isinstance(grid, FaceGrid):
         return grid
     return FaceGrid(UNIT_DISK, grid_size(grid))
+
+
+def describe_change(old, new):
+    """How a face ``new`` differs from ``old``, in words: ``"<old>, the scene has the <new>"``.
+
+    For messages that refuse to continue work done on another face (a
+    resumed run).  Two faces that differ below the six digits of
+    ``describe()``, or masks with other pixels, would read the same; then
+    the words say what differs: how many of the mask's pixels, or which
+    length (to all its digits).
+
+    Parameters
+    ----------
+    old, new : outline objects
+        The face the work was done on, and the scene's.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> mask = np.ones((6, 8), dtype=bool)
+    >>> edited = mask.copy()
+    >>> edited[0, :3] = False
+    >>> print(describe_change(MaskOutline(mask, 1e-3, "'m.npy'"),
+    ...                       MaskOutline(edited, 1e-3, "'m.npy'")))
+    mask face 'm.npy' (6 x 8 pixels of 1 mm) with other pixels: 3 of its 48 pixels differ from
+    the scene's
+    >>> print(describe_change(Circle(4e-3), Circle(4.0000001e-3)))
+    circle face (radius 4 mm) with radius 0.004 m, the scene has 0.0040000001 m
+    """
+    was, now = old.describe(), new.describe()
+    if was != now or type(old) is not type(new):
+        return f"{was}, the scene has the {now}"
+    if isinstance(old, MaskOutline) and old.mask.shape == new.mask.shape:
+        differ = int(np.count_nonzero(old.mask != new.mask))
+        if differ:
+            return (f"{was} with other pixels: {differ} of its {old.mask.size} pixels differ "
+                    f"from the scene's")
+    changed = [f"{name} {value!r} {unit}, the scene has {new.parameters()[name][0]!r} {unit}"
+               for name, (value, unit) in old.parameters().items()
+               if new.parameters().get(name, (None,))[0] != value]
+    if changed:
+        return f"{was} with {'; '.join(changed)}"
+    return f"{was}, the scene has another {now}"
 
 
 def outline_from_table(table, base_dir="."):

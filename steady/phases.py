@@ -56,7 +56,7 @@ from scipy import spatial
 
 from .array_files import array_suffix, read_npy, read_png
 from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
-from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size
+from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size, grid_size_text
 from .schema import Key, Registry
 
 __all__ = [
@@ -89,7 +89,8 @@ def check_resolution(grid, minimum, what):
     """
     n = grid.n if isinstance(grid, FaceGrid) else grid_size(grid)
     if n < minimum:
-        raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = {minimum}")
+        raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = "
+                         f"{grid_size_text(minimum)}")
     return n
 
 
@@ -390,8 +391,9 @@ class Rods:
 
 @PHASE_MAPS.register("file", (
     Key("path", "path", required=True,
-        doc=".npy: phase index per pixel (any value, e.g. -1, off the face); .png: one phase "
-            "per grey level or colour on the face, by increasing value"),),
+        doc=".npy: phase index per pixel, 0..P-1 on the face; off the face any value, "
+            "a negative one (e.g. -1) only there; .png: one phase per grey level or colour "
+            "on the face, by increasing value"),),
     doc="a phase map read from a file, rows along x")
 @dataclasses.dataclass(frozen=True, eq=False)
 class ArrayMap:
@@ -404,7 +406,9 @@ class ArrayMap:
         ``n0 = max(mx, my)`` pixels along its longer side (for a disk the
         ``n0 x n0`` grid over ``[-a, a]^2``).  On the face the labels must
         be ``0..P-1`` with every phase present; off the face any value is
-        ignored (``-1`` is customary).
+        ignored (``-1`` is customary).  The face is the outline's: a
+        negative value marks a pixel off it and is refused on it (the rule
+        of face masks too, :func:`steady.array_files.integer_face`).
     source : str, optional
         Where the map came from (for messages).
     outline : outline object, optional
@@ -432,6 +436,8 @@ class ArrayMap:
                              f"got shape {a.shape}")
         if not (a.dtype == bool or np.issubdtype(a.dtype, np.integer)):
             raise ValueError(f"phase map {self.source} must hold integers, got dtype {a.dtype}")
+        if a.size == 0:
+            raise ValueError(f"phase map {self.source} is empty: an array of shape {a.shape}")
         a = a.astype(np.int64)
         n0 = max(a.shape)
         check_resolution(n0, MIN_SIDE_PIXELS, f"phase map {self.source}")
@@ -445,6 +451,13 @@ class ArrayMap:
                              f"the grid of the {outline.describe()} with {n0} pixels along "
                              f"its longer side has {expected[0]} x {expected[1]}")
         on_face = grid.mask
+        negative = on_face & (a < 0)
+        if negative.any():
+            i, j = (int(v[0]) for v in np.nonzero(negative))
+            raise ValueError(f"phase map {self.source}: phase label {int(a[i, j])} found on "
+                             f"the face at pixel ({i}, {j}) ({int(negative.sum())} face "
+                             f"pixel(s) negative): a negative value marks a pixel off the face, "
+                             f"and the face is the {outline.describe()}'s")
         n_phases = int(a[on_face].max()) + 1
         try:
             validate_labels(np.where(on_face, a, -1), n_phases, face_mask=on_face)
@@ -512,8 +525,9 @@ def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
     Parameters
     ----------
     path : str or path-like
-        ``.npy``: a 2-d integer array, phase index per pixel (any value off
-        the face, e.g. -1).  ``.png``: an image; each distinct grey level
+        ``.npy``: a 2-d integer array, phase index per pixel: ``0..P-1`` on
+        the face, any value off it (a negative one, e.g. -1, only off it).
+        ``.png``: an image; each distinct grey level
         (or colour) inside the face is one phase, numbered by increasing
         value (colours compare as ``(R, G, B)`` tuples; the alpha channel is
         ignored).  Array rows (image rows) run along x.  The map covers the

@@ -38,10 +38,23 @@ import numpy as np
 from .halfspace import HalfSpace
 from .labels import validate_labels
 from .outline import FaceGrid
+from .schema import SCALE_RANGE as _SCALE_RANGE
 from .text import shorten
 from .wear import as_wear_law
 
-__all__ = ["FacePhases", "Problem"]
+__all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_scale", "check_scales",
+           "input_names"]
+
+#: The range of every scale of a problem, in SI units (m, N, Pa, 1/Pa, 1): the
+#: lengths of the face and its pixel, the force, the modulus, the mean and phase
+#: pressures, the slope and depth scales, the wear rate and the rate constants
+#: (and a run-in's distances, :mod:`transient.problem`).  Physical problems lie
+#: far inside it; within it, products of up to ten scales -- the slope energies
+#: square pressures, areas and moduli together -- stay within double precision
+#: (about 1e+-308), while beyond it a problem ends in overflow, underflow to 0
+#: or NaN.  A scale outside it is refused up front, naming its inputs (the
+#: scene's keys declare it too: :data:`steady.schema.SCALE_RANGE`).
+SCALE_RANGE = _SCALE_RANGE
 
 
 def _positive(value, name, unit):
@@ -57,6 +70,132 @@ def _positive(value, name, unit):
         raise ValueError(f"{name} must be a positive finite number ({unit}), got "
                          f"{shorten(value)}")
     return v
+
+
+def input_names(outline, normal_force, E_star, n=None, wear=None):
+    """How messages name a problem's inputs in Python: ``name -> text``.
+
+    The keys are ``"outline"``, one per length of the outline (its
+    ``parameters()`` in m), ``"normal_force"``, ``"E_star"``, ``"n"`` and
+    ``"wear"``; :meth:`steady.scene.Scene.input_names` gives the same keys
+    the words of a scene file (``"[load] normal_force = 10.0"``).
+    """
+    lengths = {name: value for name, (value, unit) in outline.parameters().items()
+               if unit == "m"}
+    names = {name: f"{type(outline).__name__} {name} = {value!r}"
+             for name, value in lengths.items()}
+    names["outline"] = (f"{type(outline).__name__}("
+                        + ", ".join(f"{k}={v!r}" for k, v in lengths.items()) + ")")
+    names.update(normal_force=f"normal_force = {normal_force!r}", E_star=f"E_star = {E_star!r}",
+                 n=f"n = {n!r}", wear=getattr(wear, "describe", lambda: repr(wear))())
+    return names
+
+
+def _shown(value):
+    """A scale's value for messages: 3 digits, ``inf``, ``0``, ``nan``."""
+    return f"{value:.3g}" if math.isfinite(value) and value != 0 else str(value)
+
+
+def check_scale(value, what, unit, inputs, names):
+    """``ValueError`` unless ``value`` lies in :data:`SCALE_RANGE`.
+
+    Parameters
+    ----------
+    value : float
+    what : str or None
+        The scale in words with its formula (``"the mean pressure pbar =
+        F_N / A"``); None for an input itself, named by ``names[inputs[0]]``.
+    unit : str
+    inputs : sequence of str
+        The keys of ``names`` the scale comes from.
+    names : mapping
+        How the message names each input (:func:`input_names`).
+    """
+    low, high = SCALE_RANGE
+    if low <= value <= high:  # NaN is not
+        return
+    span = f"outside [{low:g}, {high:g}] {unit}, the range of every scale of a problem (SI units)"
+    if what is None:  # an input itself
+        raise ValueError(f"{names[inputs[0]]} {unit} is {span}")
+    given = " and ".join(names[key] for key in inputs)
+    raise ValueError(f"{given}: {what} = {_shown(value)} {unit} is {span}")
+
+
+def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=None,
+                 names=None):
+    """Refuse a problem whose scales leave :data:`SCALE_RANGE`, naming the inputs of each.
+
+    Checked in order (each only when its inputs are given): the lengths of
+    the outline, the normal force and the modulus themselves; the pixel
+    ``h = 2 L / n``; the mean pressure ``pbar = F_N / A``, the reference
+    slope ``grad_f0 = 4 pbar / (pi E*)`` (the disk's, the scale of every
+    outline's) and the depth scale ``f* = pbar L / E*``; the wear law's rate
+    constant ``dg/dp`` at ``pbar`` of every phase (``k m pbar^(m-1)`` for
+    the power law); with the pixel ``counts`` of the phases, the steady
+    phase pressures of eq. 7 (``k^(-1/m)`` of extreme ratios underflows)
+    and the steady wear rate ``k_i p_i^m``.  Every value is computed as the
+    solvers compute it, in double precision: an overflow is ``inf``, an
+    underflow 0, and both are out of range.
+
+    Parameters
+    ----------
+    outline : outline object
+    normal_force : float, N
+    E_star : float, Pa
+    n : int, optional
+        Grid size, pixels along the longer side.
+    wear : wear law, optional
+    counts : array_like of int, shape (P,), optional
+        Face pixels of each phase (needs ``n`` and ``wear``).
+    names : mapping, optional
+        How the message names each input (:func:`input_names`, the
+        default, or a scene's keys).
+
+    Raises
+    ------
+    ValueError
+        The first scale out of range: its formula, value and unit, the
+        range, and the inputs it comes from.
+    """
+    F, E = float(normal_force), float(E_star)
+    names = input_names(outline, F, E, n, wear) if names is None else names
+    for name, (value, unit) in outline.parameters().items():
+        if unit == "m":
+            check_scale(float(value), None, "m", (name,), names)
+    check_scale(F, None, "N", ("normal_force",), names)
+    check_scale(E, None, "Pa", ("E_star",), names)
+    L = outline.scale
+    if n is not None:
+        check_scale(2.0 * L / n, "the pixel h = 2 L / n", "m", ("outline", "n"), names)
+    pbar = F / outline.area
+    check_scale(pbar, "the mean pressure pbar = F_N / A", "Pa", ("normal_force", "outline"),
+                names)
+    check_scale(4.0 * pbar / (math.pi * E), "the reference slope grad_f0 = 4 pbar / (pi E*)",
+                "1", ("normal_force", "outline", "E_star"), names)
+    check_scale(pbar * L / E, "the depth scale f* = pbar L / E*", "m",
+                ("normal_force", "outline", "E_star"), names)
+    if wear is None:
+        return
+    wear = as_wear_law(wear)
+    k = np.asarray(wear.coefficient_field(np.arange(wear.n_phases)), dtype=float)
+    with np.errstate(all="ignore"):
+        rate_constants = np.asarray(wear.rate_constant(k, np.float64(pbar)), dtype=float)
+    for i, kappa in enumerate(np.atleast_1d(rate_constants)):
+        check_scale(float(kappa), f"the rate constant of phase {i}, dg/dp at pbar "
+                    f"(k m pbar^(m-1) for the power law)", "1/Pa",
+                    ("wear", "normal_force", "outline"), names)
+    if counts is None or n is None:
+        return
+    h = 2.0 * L / n
+    with np.errstate(all="ignore"):
+        pressures = np.asarray(wear.phase_pressures(counts, F, h * h), dtype=float)
+        rates = np.asarray(wear.rate(pressures, k), dtype=float)
+    for i, p in enumerate(pressures):
+        check_scale(float(p), f"the steady pressure of phase {i} (eq. 7)", "Pa",
+                    ("wear", "normal_force", "outline"), names)
+    for i, rate in enumerate(rates):
+        check_scale(float(rate), f"the steady wear rate of phase {i}, g_i(p_i) (k p^m for "
+                    f"the power law)", "1", ("wear", "normal_force", "outline"), names)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -154,7 +293,9 @@ class Problem:
     ------
     ValueError
         A wear law for another number of phases, a force or modulus that is
-        not positive and finite; the message names the value.
+        not positive and finite, or a scale of the problem outside
+        :data:`SCALE_RANGE` (:func:`check_scales`); the message names the
+        value.
     """
 
     phases: FacePhases
@@ -175,6 +316,8 @@ class Problem:
         object.__setattr__(self, "normal_force",
                            _positive(self.normal_force, "normal_force", "N"))
         object.__setattr__(self, "E_star", _positive(self.E_star, "E_star", "Pa"))
+        check_scales(self.outline, self.normal_force, self.E_star, n=self.n, wear=wear,
+                     counts=self.phases.counts)
 
     @classmethod
     def from_scene(cls, scene, *, n=None):
@@ -190,12 +333,19 @@ class Problem:
         Raises
         ------
         ValueError
-            A grid too coarse for the outline or the geometry, or a phase
+            A grid too coarse for the outline or the geometry, a phase
             without a pixel on the face at this grid (named, with what to
-            change).
+            change), or a scale out of range (:func:`check_scales`, naming
+            the scene's keys).
         """
         grid = scene.grid(n)
         phases = FacePhases(grid, scene.phase_labels(grid), scene.geometry.n_phases)
+        try:
+            check_scales(scene.outline, scene.normal_force, scene.E_star, n=grid.n,
+                         wear=scene.wear, counts=phases.counts, names=scene.input_names())
+        except ValueError as err:
+            where = "" if scene.source_path is None else f"{scene.source_path}: "
+            raise ValueError(f"{where}{err}") from None
         return cls(phases, scene.wear, scene.normal_force, scene.E_star)
 
     # -- the grid --------------------------------------------------------

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 
 import numpy as np
 import scipy.fft
@@ -629,9 +630,12 @@ class SlopeEstimate:
     Attributes
     ----------
     rms_slope : float, dimensionless
-        Energy-corrected rms slope on the finest grid in ``grids``.
+        Energy-corrected rms slope on the finest grid in ``grids`` (for
+        :func:`estimate_map_rms_slope`: on the map's own grid, which a
+        refined grid may follow).
     error : float, dimensionless
-        Estimated absolute discretisation error of ``rms_slope``.
+        Estimated absolute discretisation error of ``rms_slope``; infinite
+        where none could be estimated (no bound).
     rms_slope_plain : float, dimensionless
         Plain pixel rms slope on that grid, for comparison.
     grids : tuple of int
@@ -885,6 +889,16 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
     1024^2 references of continuous geometries (docs/benchmarks.md,
     "Run-in history"), the estimate is of the size of the error or larger.
 
+    When no coarser grid keeps every phase (a phase of a few pixels
+    vanishes in the resampling: a single-pixel phase, or rods of the
+    smallest radius at their minimum grid), the map is refined instead, as
+    the steady module refines a pixel map at its own size
+    (:func:`grid_ladder`): each pixel becomes 2 x 2 pixels of the grid
+    ``2n``, and the first-order error of the value on ``n`` is
+    ``2 |S_2n - S_n|`` (``S_n - S = (S_n - S_2n) * 2n / (2n - n)``).  If
+    even that is impossible, ``error`` is infinite: no bound, a marker
+    that callers report as "no error bar", never NaN.
+
     Parameters
     ----------
     labels : ndarray of int, shape (nx, ny)
@@ -904,8 +918,9 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
     Returns
     -------
     SlopeEstimate
-        Value on ``n``; ``error`` is :func:`ladder_error` of the ladder, NaN
-        if no coarser grid is usable.
+        Value on ``n``; ``error`` is :func:`ladder_error` of the ladder, or
+        with the refined grid ``2n`` (then the last of ``grids``) the error
+        of the value on ``n``; infinite if neither can be had.
     """
     labels = np.asarray(labels)
     outline = as_outline(outline)
@@ -942,6 +957,22 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
         grids.append(m)
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)
-    error = float(ladder_error(grids, values)) if len(grids) > 1 else float("nan")
-    return SlopeEstimate(rms_slope=values[-1], error=error, rms_slope_plain=plain,
+    if len(grids) > 1:
+        return SlopeEstimate(rms_slope=values[-1], error=float(ladder_error(grids, values)),
+                             rms_slope_plain=plain, grids=tuple(grids), values=tuple(values))
+    # No coarser grid keeps every phase: refine, as the steady module does with
+    # a pixel map at its own size, and carry the difference back to n.
+    error = math.inf
+    try:
+        fine = FaceGrid(outline, 2 * n)
+        lab = resample_labels(labels, 2 * n, outline)
+        pressure, _, _ = pressure_field(lab, wear, normal_force, fine.pixel_area)
+    except ValueError:
+        logger.debug("no grid beside n = %d keeps every phase: no error estimate", n)
+    else:
+        refined = float(SlopeEnergy(fine.shape, fine.h, E_star)(pressure, lab >= 0).rms_slope)
+        error = 2.0 * abs(refined - values[0])
+        grids.append(2 * n)
+        values.append(refined)
+    return SlopeEstimate(rms_slope=values[0], error=error, rms_slope_plain=plain,
                          grids=tuple(grids), values=tuple(values))

@@ -53,6 +53,7 @@ from . import inclusions, micrograph  # noqa: F401 -- they register their map ki
 from .labels import validate_labels
 from .outline import FaceGrid, outline_from_table
 from .phases import PHASE_MAPS, Voronoi
+from .problem import check_scales
 from .schema import Context, Key, read_table
 from .text import one_line, shorten
 from .wear import wear_law_from_table
@@ -133,6 +134,10 @@ class Scene:
         """Number of phases of the geometry."""
         return self.geometry.n_phases
 
+    def input_names(self):
+        """The scene's keys and values, by input, for messages (see :func:`input_names`)."""
+        return input_names(self.outline, self.normal_force, self.E_star, self.n, self.wear)
+
     @property
     def scale(self):
         """The outline's length scale ``L``, m (the radius of a disk)."""
@@ -182,6 +187,28 @@ class Scene:
                              f"n = {n}")
         validate_labels(labels, self.n_phases, face_mask=grid.mask)
         return labels
+
+
+def input_names(outline, normal_force, E_star, n, wear=None):
+    """How messages name a scene's inputs: its keys and values (``"[load] normal_force = 10.0"``).
+
+    The keys of :func:`steady.problem.input_names`: ``"outline"`` (the
+    ``[punch]`` lengths), each ``[punch]`` length by name,
+    ``"normal_force"``, ``"E_star"``, ``"n"`` and ``"wear"``.
+    """
+    lengths = {name: value for name, (value, unit) in outline.parameters().items()
+               if unit == "m"}
+    names = {name: f"[punch] {name} = {value!r}" for name, value in lengths.items()}
+    names["outline"] = "[punch] " + ", ".join(f"{k} = {v!r}" for k, v in lengths.items())
+    names.update(normal_force=f"[load] normal_force = {normal_force!r}",
+                 E_star=f"[counterbody] E_star = {E_star!r}", n=f"[grid] n = {n!r}")
+    if wear is not None:
+        k = getattr(wear, "coefficients", None)
+        words = "" if k is None else f"coefficients = {shorten(list(k))}"
+        if getattr(wear, "kind", None) == "power":
+            words += f", exponent = {wear.exponent!r}"
+        names["wear"] = f"[wear] {words or wear.describe()}"
+    return names
 
 
 def _geometry(table, outline, base_dir, n):
@@ -251,20 +278,25 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
         raise ValueError("missing key 'map' in [phases]")
     outline = outline_from_table(doc["punch"], base_dir)
     n = values["grid"]["n"]
+    force, E_star = values["load"]["normal_force"], values["counterbody"]["E_star"]
+    # The scales of the face and the load, before a phase map is drawn on it.
+    check_scales(outline, force, E_star, n=n, names=input_names(outline, force, E_star, n))
     try:
         outline.check_grid(n)
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
     geometry = _geometry(doc["phases"]["map"], outline, base_dir, n)
     wear = wear_law_from_table(doc["wear"], base_dir, n_phases=geometry.n_phases)
+    check_scales(outline, force, E_star, n=n, wear=wear,
+                 names=input_names(outline, force, E_star, n, wear))
     try:
         geometry.check_grid(FaceGrid(outline, n))
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
 
     extra = {name: doc[name] for name in extra_sections if name in doc}
-    return Scene(outline=outline, normal_force=values["load"]["normal_force"],
-                 E_star=values["counterbody"]["E_star"], n=n, wear=wear, geometry=geometry,
+    return Scene(outline=outline, normal_force=force, E_star=E_star, n=n, wear=wear,
+                 geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored)
 

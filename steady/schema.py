@@ -34,10 +34,19 @@ import pathlib
 
 from .text import shorten
 
-__all__ = ["Context", "Key", "Registry", "read_table"]
+__all__ = ["SCALE_RANGE", "SCALE_UNITS", "Context", "Key", "Registry", "read_table"]
 
 #: Types a key may hold.
 TYPES = ("number", "integer", "string", "path", "numbers", "integers", "pairs", "pair")
+
+#: The range of every scale of a problem, in SI units: lengths, forces,
+#: moduli and what follows from them (:func:`steady.problem.check_scales`).
+#: Physical problems lie far inside it; beyond it double precision overflows.
+SCALE_RANGE = (1e-30, 1e30)
+
+#: Units of the scales a key may hold: a positive number (``low = 0``) in one
+#: of them -- a length, a force, a modulus -- must lie in :data:`SCALE_RANGE`.
+SCALE_UNITS = ("m", "N", "Pa")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,6 +81,13 @@ class Key:
         The values a string may take.
     finite : bool, optional
         Whether a number must be finite (default True).
+
+    Notes
+    -----
+    A positive number (``low = 0``) in a unit of :data:`SCALE_UNITS` (a
+    length, a force, a modulus) must also lie in :data:`SCALE_RANGE`: a
+    value beyond it is refused with the range, not met later as an
+    overflow.
     """
 
     name: str
@@ -140,11 +156,29 @@ class Key:
             item = {"numbers": "number", "integers": "integer", "pairs": "pair"}[self.type]
             single = dataclasses.replace(self, type=item)
             try:
-                return tuple(single._scalar(v, name, value, base_dir) for v in value)
+                values = tuple(single._scalar(v, name, value, base_dir) for v in value)
             except ValueError:
                 raise ValueError(f"{name} must be {self.describe()}, got "
                                  f"{shorten(value)}") from None
-        return self._scalar(value, name, value, base_dir)
+            self._check_scale(values, name, value)
+            return values
+        parsed = self._scalar(value, name, value, base_dir)
+        self._check_scale((parsed,), name, value)
+        return parsed
+
+    def _check_scale(self, values, name, shown):
+        """Refuse a length, force or modulus outside :data:`SCALE_RANGE` (see Notes)."""
+        if self.unit not in SCALE_UNITS or self.low != 0.0 or self.type not in (
+                "number", "numbers"):
+            return
+        low, high = SCALE_RANGE
+        for v in values:
+            if not low <= v <= high:
+                given = (f"{shorten(shown)} {self.unit}" if len(values) == 1 and
+                         not isinstance(shown, list)
+                         else f"{shorten(shown)}: {v!r} {self.unit}")
+                raise ValueError(f"{name} = {given} is outside [{low:g}, {high:g}] {self.unit}, "
+                                 f"the range of every scale of a problem (SI units)")
 
     def _scalar(self, value, name, shown, base_dir):
         """One value; messages show ``shown`` (the whole list for a list's item)."""

@@ -48,7 +48,10 @@ class SteadyComparison:
         ``rms_slope / steady_rms_slope - 1``.
     rms_slope_agrees : bool
         ``|rms_slope - steady_rms_slope|`` is within the sum of the two error
-        bars.
+        bars.  Where either bar is not finite (no error could be estimated:
+        :attr:`rms_slope_compared` is False) it is True: nothing bounds
+        the difference, so no disagreement is claimed, and :meth:`summary`
+        says "no error bar" rather than "within".
     rms_slope_plain, steady_rms_slope_plain : float
         Plain pixel rms slopes of the run's face and of ``f_inf`` (exact
         kernel gradient at the pixel centres of the face): the same
@@ -79,16 +82,30 @@ class SteadyComparison:
     steady_phase_pressures: np.ndarray
     phase_pressure_error: float
 
+    @property
+    def rms_slope_compared(self):
+        """Whether both rms slopes carry a finite error bar, so that they can be compared."""
+        return bool(math.isfinite(self.rms_slope_uncertainty)
+                    and math.isfinite(self.steady_rms_slope_uncertainty))
+
     def summary(self):
         """One line per figure, for the terminal."""
         pp = ", ".join(f"{a:.6g}/{b:.6g}" for a, b in
                        zip(self.phase_pressures, self.steady_phase_pressures, strict=True))
-        verdict = "within" if self.rms_slope_agrees else "OUTSIDE"
+        if not self.rms_slope_compared:
+            missing = [name for name, bar in (("the run's", self.rms_slope_uncertainty),
+                                              ("the steady", self.steady_rms_slope_uncertainty))
+                       if not math.isfinite(bar)]
+            verdict = (f"no error bar: {' and '.join(missing)} discretisation error could not "
+                       f"be estimated, not compared")
+        else:
+            verdict = ("within the error bars" if self.rms_slope_agrees
+                       else "OUTSIDE the error bars")
         return (f"face shape error (max, / steady relief): {self.face_error:.3e}\n"
                 f"face shape error (rms, / steady relief): {self.face_rms_error:.3e}\n"
                 f"rms slope: {self.rms_slope:.6g} +- {self.rms_slope_uncertainty:.2g} vs steady "
                 f"{self.steady_rms_slope:.6g} +- {self.steady_rms_slope_uncertainty:.2g} "
-                f"(relative {self.rms_slope_error:+.3e}, {verdict} the error bars)\n"
+                f"(relative {self.rms_slope_error:+.3e}, {verdict})\n"
                 f"rms slope, plain pixel: {self.rms_slope_plain:.6g} vs steady "
                 f"{self.steady_rms_slope_plain:.6g}\n"
                 f"rms height: {self.rms_height:.6g} m vs steady {self.steady_rms_height:.6g} m\n"
@@ -143,7 +160,9 @@ def compare_with_steady(result, steady, problem):
         rms_slope=rms, rms_slope_uncertainty=error,
         steady_rms_slope=steady_rms, steady_rms_slope_uncertainty=steady_error,
         rms_slope_error=rms / steady_rms - 1.0,
-        rms_slope_agrees=bool(abs(rms - steady_rms) <= error + steady_error),
+        # No finite bar (none could be estimated) bounds nothing: no disagreement.
+        rms_slope_agrees=bool(abs(rms - steady_rms) <= error + steady_error
+                              or not (math.isfinite(error) and math.isfinite(steady_error))),
         rms_slope_plain=plain, steady_rms_slope_plain=float(steady.rms_slope_plain),
         rms_height=final["rms_height"], steady_rms_height=float(steady.rms_height),
         phase_pressures=pp, steady_phase_pressures=np.asarray(steady.phase_pressures),

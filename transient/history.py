@@ -18,7 +18,9 @@ history"):
     Its estimated discretisation error: the uncertainty of the rim-layer
     correction (below) and the estimator's error on the run's own phase map
     (:func:`steady.rms_slope.estimate_map_rms_slope`, relative, carried along
-    the history), added in quadrature.
+    the history), added in quadrature.  Never NaN: where the map's error
+    cannot be estimated it is infinite, which the comparison with the
+    steady face reports as "no error bar".
 ``rms_height``
     Rms of ``f`` over the face after removing its least-squares plane
     (:mod:`steady.relief`).
@@ -232,8 +234,11 @@ class FaceEstimator:
         Of the initial face (:func:`face_statistics`).
     map_error : float
         Relative error of the corrected estimator on the run's phase map at
-        the steady state (:func:`steady.rms_slope.estimate_map_rms_slope`),
-        NaN on grids too small for a ladder.
+        the steady state (:func:`steady.rms_slope.estimate_map_rms_slope`:
+        from coarser grids, or from the map refined where a phase vanishes
+        on every coarser one); infinite where no error can be estimated,
+        and then the history's ``rms_slope_error`` is infinite too (no
+        bound: never NaN).
 
     Examples
     --------
@@ -289,7 +294,9 @@ class FaceEstimator:
         self._rim_weight = self._rim_weights(h0)
         estimate = estimate_map_rms_slope(problem.labels, problem.wear, problem.normal_force,
                                           problem.outline, hs.E_star, energy=self.energy)
-        self.map_error = estimate.error / estimate.rms_slope
+        self.map_error = (estimate.error / estimate.rms_slope
+                          if math.isfinite(estimate.error) and estimate.rms_slope > 0
+                          else math.inf)
 
     def _rim_weights(self, h0):
         """Squared rim stress intensity of each rim pixel relative to the flat punch's.
@@ -402,6 +409,8 @@ class FaceEstimator:
         else:
             slope = math.sqrt(max(mean_square, 0.0))
             rim_error = slope - math.sqrt(max(mean_square - excess, 0.0))
-        out.update(rms_slope=slope, rms_slope_error=math.hypot(rim_error, self.map_error * slope),
+        # An infinite map error is no bound, also on a zero slope (inf * 0 is NaN).
+        map_part = self.map_error * slope if math.isfinite(self.map_error) else math.inf
+        out.update(rms_slope=slope, rms_slope_error=math.hypot(rim_error, map_part),
                    rms_slope_source=source)
         return out

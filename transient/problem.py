@@ -18,13 +18,19 @@ import functools
 import numpy as np
 
 from steady.normalisation import reference_slope
-from steady.problem import Problem
+from steady.problem import Problem, check_scale, input_names
 from steady.solution import solve
 
 from .contact import solve_contact
 from .preconditioners import ScaledShift
 
-__all__ = ["WarmStart", "StepFailure", "WearProblem"]
+__all__ = ["PEAK_RATE_LIMIT", "WarmStart", "StepFailure", "WearProblem", "check_run_in_scales"]
+
+#: Largest wear rate ``g(p)`` (m/m) a run may meet at a pixel that carries the
+#: whole load, ``p = F_N / h^2``: the rate, its slope and their products with
+#: distances and coefficients are computed at every step, and must not
+#: overflow (about 1e308) on the way.
+PEAK_RATE_LIMIT = 1e200
 
 
 # Eigenvalues of the predictor's Gram matrix below this fraction of the
@@ -38,6 +44,57 @@ class StepFailure(RuntimeError):
     Raised when the contact solver fails, values turn non-finite or the
     power-law Newton iteration does not converge.
     """
+
+
+def check_run_in_scales(problem, names=None):
+    """Refuse a run-in whose scales leave :data:`steady.problem.SCALE_RANGE`, naming the inputs.
+
+    Beyond the problem's own (:func:`steady.problem.check_scales`, checked
+    when it was built), a run-in has its distances: the run-in distance
+    ``s* = L / (k_min' E*)`` and the fastest relaxation distance
+    ``h / (k_max' E*)`` (``k'`` the law's rate constant at the pixel mean
+    pressure, ``k m pbar^(m-1)``), both in range; and the wear rate of a
+    pixel that carries the whole load, ``g(F_N / h^2)`` of the fastest
+    phase, below :data:`PEAK_RATE_LIMIT` (a large exponent overflows
+    ``p^m`` at the rim's pressures long before at ``pbar``).  Computed as
+    the run computes them: an overflow is ``inf``, an underflow 0.
+
+    Parameters
+    ----------
+    problem : steady.problem.Problem
+    names : mapping, optional
+        How the message names each input (default
+        :func:`steady.problem.input_names`; a scene's keys).
+
+    Raises
+    ------
+    ValueError
+        The first scale out of range, with its inputs.
+    """
+    F, E = problem.normal_force, problem.E_star
+    names = (input_names(problem.outline, F, E, problem.n, problem.wear) if names is None
+             else names)
+    h = problem.grid.h
+    k = np.asarray(problem.wear.coefficients, dtype=float)
+    mean = F / (float(problem.face_mask.sum()) * h * h)
+    with np.errstate(all="ignore"):
+        # In numpy's floats: an underflow to 0 divides to inf rather than raising.
+        slow, fast = (np.float64(problem.wear.rate_constant(np.float64(v), np.float64(mean)))
+                      for v in (k.min(), k.max()))
+        peak = float(problem.wear.rate(np.float64(F / (h * h)), np.float64(k.max())))
+        s_star = float(problem.outline.scale / (slow * E))
+        fastest = float(h / (fast * E))
+    inputs = ("wear", "normal_force", "outline", "E_star")
+    check_scale(s_star, "the run-in distance s* = L / (k m pbar^(m-1) E*) of the slowest "
+                "phase", "m", inputs, names)
+    check_scale(fastest, "the fastest relaxation distance h / (k m pbar^(m-1) E*)", "m",
+                (*inputs, "n"), names)
+    if not peak < PEAK_RATE_LIMIT:  # NaN is not
+        given = " and ".join(names[key] for key in ("wear", "normal_force", "outline", "n"))
+        raise ValueError(f"{given}: the wear rate of a pixel carrying the whole load, "
+                         f"g(F_N / h^2) of the fastest phase, is {peak:.3g}, above "
+                         f"{PEAK_RATE_LIMIT:g}: the run's rates would overflow (a smaller "
+                         f"exponent, or a coarser grid)")
 
 
 class WearProblem:
@@ -104,6 +161,7 @@ class WearProblem:
         if not isinstance(problem, Problem):
             raise ValueError(f"WearProblem takes a steady.problem.Problem, got "
                              f"{type(problem).__name__}")
+        check_run_in_scales(problem)
         grid = problem.grid
         self.problem = problem
         self.wear = problem.wear
@@ -157,8 +215,9 @@ class WearProblem:
         ------
         ValueError
             A grid too coarse for the outline or the phase geometry (the
-            message names ``n`` and the minimum), or a phase without a pixel
-            on the face at this grid.
+            message names ``n`` and the minimum), a phase without a pixel
+            on the face at this grid, or a scale out of range
+            (:func:`check_run_in_scales`, naming the scene's keys).
 
         Examples
         --------
@@ -169,7 +228,13 @@ class WearProblem:
         >>> problem.n, problem.n_phases
         (40, 2)
         """
-        return cls(Problem.from_scene(scene, n=n), **options)
+        problem = Problem.from_scene(scene, n=n)
+        try:
+            check_run_in_scales(problem, scene.input_names())
+        except ValueError as err:
+            where = "" if scene.source_path is None else f"{scene.source_path}: "
+            raise ValueError(f"{where}{err}") from None
+        return cls(problem, **options)
 
     @property
     def n_phases(self):

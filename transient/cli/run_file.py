@@ -29,6 +29,7 @@ import threading
 
 import numpy as np
 
+from steady.outline import describe_change
 from steady.output import file_identity
 from steady.text import shorten
 
@@ -54,9 +55,9 @@ def run_inputs(scene, problem):
 def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, outline):
     """Refuse to resume a run of another problem (face, grid, load, phases, wear law, start)."""
     if stored.outline is None or stored.outline != outline:
-        was = "an unknown face" if stored.outline is None else stored.outline.describe()
-        raise ValueError(f"{str(path)!r} was run on {was}, the scene has the "
-                         f"{outline.describe()}; use --force to start over")
+        change = (f"an unknown face, the scene has the {outline.describe()}"
+                  if stored.outline is None else describe_change(stored.outline, outline))
+        raise ValueError(f"{str(path)!r} was run on {change}; use --force to start over")
     for key in ("n", "normal_force", "E_star", "exponent"):
         if stored_attrs.get(key) != attrs[key]:
             raise ValueError(f"{str(path)!r} was run with {key} = "
