@@ -35,6 +35,7 @@ compares a command's memory estimate with.
 
 from __future__ import annotations
 
+import _thread
 import argparse
 import logging
 import os
@@ -155,7 +156,8 @@ def configure_logging(verbose):
     Python warnings (e.g. numpy's overflow warnings on a hostile input,
     which the solvers detect and report themselves) and exceptions Python
     can only ignore (in destructors) go to the log too, so that by default
-    a failure is the command's one ``error:`` line.
+    a failure is the command's one ``error:`` line; a Ctrl-C that landed
+    there is delivered again to the command.
 
     Parameters
     ----------
@@ -171,6 +173,11 @@ def configure_logging(verbose):
 
 
 def _log_unraisable(unraisable):
+    if issubclass(unraisable.exc_type, KeyboardInterrupt):
+        # Ctrl-C landed where Python cannot raise it (a destructor, a weakref callback):
+        # deliver it again, to the command's own flow.
+        _thread.interrupt_main()
+        return
     logger.debug("ignored in %r: %s: %s", unraisable.object,
                  type(unraisable.exc_value).__name__, unraisable.exc_value)
 

@@ -11,7 +11,10 @@ shipped in the package by default).
 
 from __future__ import annotations
 
-import sys
+if __name__ == "__main__":  # python -m steady.cli.design: Ctrl-C handled from here on
+    from .entry import runin_design
+
+    raise SystemExit(runin_design())
 
 import numpy as np
 
@@ -23,7 +26,10 @@ __all__ = ["main"]
 
 
 def main(argv=None):
-    """Command line ``runin-design``: fill factor for a target rms slope, or the reverse.
+    """The command ``runin-design``: fill factor for a target rms slope, or the reverse.
+
+    Entered through :mod:`steady.cli.entry` (``python -m steady.cli.design``
+    too), which handles Ctrl-C while the modules load.
 
     Parameters
     ----------
@@ -85,6 +91,3 @@ def _answer(args):
     print(source)
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

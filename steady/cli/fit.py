@@ -14,8 +14,12 @@ prints the ratios with their intervals.
 
 from __future__ import annotations
 
+if __name__ == "__main__":  # python -m steady.cli.fit: Ctrl-C handled from here on
+    from .entry import runin_fit
+
+    raise SystemExit(runin_fit())
+
 import pathlib
-import sys
 
 from ..fit import fit_scene
 from ..fit_files import plot_fit, read_measured, write_fit
@@ -122,6 +126,3 @@ def main(argv=None):
     configure_logging(args.verbose)
     return run_command(run, args, verbose=args.verbose)
 
-
-if __name__ == "__main__":
-    sys.exit(main())
