@@ -20,7 +20,7 @@ import numpy as np
 
 from ..design import DEFAULT_TABLE, DesignTable
 from ..reference import disk_reference_slope, fine_grain_rms_slope
-from .common import ArgumentParser, program_name, run_command
+from .common import EXIT_STATUS_EPILOG, ArgumentParser, program_name, run_command
 
 __all__ = ["main"]
 
@@ -39,15 +39,16 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0; 2 for bad input or an unreadable table (one line
-        ``error: ...`` on stderr); 130 when interrupted.
+        Exit status: 0; 1 when the operating system refuses to read the
+        table; 2 for bad input or an unreadable table (one line ``error:
+        ...`` on stderr); 130 when interrupted.
     """
     parser = ArgumentParser(
         prog=program_name("python -m steady.cli.design"),
         description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
                     "rho_2 of phase 2 that gives a target rms slope, or the rms slope of a "
                     "fill factor.  Phase 2 is the hard phase when the wear ratio is below 1.",
-        epilog="exit status: 0 done, 2 bad input or an unreadable table, 130 interrupted")
+        epilog=EXIT_STATUS_EPILOG)
     parser.add_argument("--pbar-over-estar", type=float, required=True,
                         help="mean pressure over the effective modulus, pbar/E*")
     parser.add_argument("--wear-ratio", type=float, required=True,
