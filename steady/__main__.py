@@ -1,8 +1,12 @@
-"""``python -m steady``: the command ``runin-steady`` (:mod:`steady.cli.solve`)."""
+"""``python -m steady``: the command ``runin-steady`` (:mod:`steady.cli.solve`).
+
+Entered through :func:`steady.cli.entry.launch`, which handles Ctrl-C
+before the command's heavy imports.
+"""
 
 import sys
 
-from .cli.solve import main
+from .cli.entry import runin_steady
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(runin_steady())

@@ -47,8 +47,7 @@ def result_figure(stored):
     extent = (-hx_mm, hx_mm, -hy_mm, hy_mm)
     n_phases = res.n_phases
     colours = [_PHASE_COLOURS[i % len(_PHASE_COLOURS)] for i in range(n_phases)]
-    cmap = ListedColormap(colours)
-    cmap.set_bad("white")
+    cmap = ListedColormap(colours).with_extremes(bad="white")
     norm = BoundaryNorm(np.arange(n_phases + 1) - 0.5, n_phases)
     phase = np.ma.masked_less(res.labels, 0)
 
@@ -132,7 +131,7 @@ def save_png(fig, png_path, *, force=False, dpi=120):
     """
     png_path = pathlib.Path(png_path)
     if png_path.exists() and not force:
-        raise ValueError(f"output {str(png_path)!r} exists (use force to overwrite)")
+        raise ValueError(f"output {str(png_path)!r} exists (pass force=True to overwrite)")
     png_path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(png_path, dpi=dpi)
     logger.info("figure written to %s", png_path)

@@ -353,6 +353,6 @@ def test_plot_suffix_is_checked_before_any_work(case, capsys, name):
                            "--plot", face_path.parent / name)
     line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
-    assert line.startswith(f"error: --plot '{face_path.parent / name}' must name a .png file"), \
+    assert line.startswith(f"error: --plot '{face_path.parent / name}': the figure is a PNG"), \
         line
     assert not out_h5.exists() and not out, "refused before the fit: nothing written"

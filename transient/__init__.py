@@ -28,97 +28,76 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 
 The command ``runin-transient`` (``python -m transient``,
 :mod:`transient.__main__`) runs the run-in of a scene file.
+
+The names below are imported from their modules on first use, so that
+``import transient`` is quick: the command installs its Ctrl-C handling
+before numpy, scipy and h5py load (:mod:`steady.cli.entry`).
 """
 
-from .comparison import SteadyComparison, compare_with_steady
-from .contact import ContactResult, solve_contact
-from .control import StepController, StopTests
-from .diagnostics import face_rms_slope, wear_rate_spread
-from .initial_face import (
-    INITIAL_FACES,
-    crowned,
-    flat,
-    from_array,
-    from_file,
-    initial_height,
-    tilted,
-)
-from .options import RunOptions
-from .output import FORMAT, FORMAT_VERSION, read_run, write_run
-from .preconditioners import (
-    PRECONDITIONERS,
-    AMGPreconditioner,
-    FourierPreconditioner,
-    JacobiPreconditioner,
-    make_preconditioner,
-    register_preconditioner,
-)
-from .problem import StepFailure, WearProblem
-from .runin import HISTORY_UNITS, RunResult, RunState, run_in
-from .scene import (
-    InitialFace,
-    load_transient_scene,
-    parse_initial_face,
-    parse_transient,
-)
-from .stepping import (
-    BDF2,
-    SCHEMES,
-    SDIRK2,
-    ExplicitEuler,
-    ImplicitEuler,
-    Scheme,
-    StepState,
-    Trial,
-    get_scheme,
-    register_scheme,
-)
+import importlib
 
-__all__ = [
-    "AMGPreconditioner",
-    "BDF2",
-    "ContactResult",
-    "ExplicitEuler",
-    "FORMAT",
-    "FORMAT_VERSION",
-    "FourierPreconditioner",
-    "HISTORY_UNITS",
-    "INITIAL_FACES",
-    "ImplicitEuler",
-    "InitialFace",
-    "JacobiPreconditioner",
-    "PRECONDITIONERS",
-    "RunOptions",
-    "RunResult",
-    "RunState",
-    "SCHEMES",
-    "SDIRK2",
-    "Scheme",
-    "SteadyComparison",
-    "StepController",
-    "StepFailure",
-    "StepState",
-    "StopTests",
-    "Trial",
-    "WearProblem",
-    "compare_with_steady",
-    "crowned",
-    "face_rms_slope",
-    "flat",
-    "from_array",
-    "from_file",
-    "get_scheme",
-    "initial_height",
-    "load_transient_scene",
-    "make_preconditioner",
-    "parse_initial_face",
-    "parse_transient",
-    "read_run",
-    "register_preconditioner",
-    "register_scheme",
-    "run_in",
-    "solve_contact",
-    "tilted",
-    "wear_rate_spread",
-    "write_run",
-]
+#: Public names and the module of each.
+_MODULE_OF = {
+    "AMGPreconditioner": "preconditioners",
+    "BDF2": "stepping",
+    "ContactResult": "contact",
+    "ExplicitEuler": "stepping",
+    "FORMAT": "output",
+    "FORMAT_VERSION": "output",
+    "FourierPreconditioner": "preconditioners",
+    "HISTORY_UNITS": "runin",
+    "INITIAL_FACES": "initial_face",
+    "ImplicitEuler": "stepping",
+    "InitialFace": "scene",
+    "JacobiPreconditioner": "preconditioners",
+    "PRECONDITIONERS": "preconditioners",
+    "RunOptions": "options",
+    "RunResult": "runin",
+    "RunState": "runin",
+    "SCHEMES": "stepping",
+    "SDIRK2": "stepping",
+    "Scheme": "stepping",
+    "SteadyComparison": "comparison",
+    "StepController": "control",
+    "StepFailure": "problem",
+    "StepState": "stepping",
+    "StopTests": "control",
+    "Trial": "stepping",
+    "WearProblem": "problem",
+    "compare_with_steady": "comparison",
+    "crowned": "initial_face",
+    "face_rms_slope": "diagnostics",
+    "flat": "initial_face",
+    "from_array": "initial_face",
+    "from_file": "initial_face",
+    "get_scheme": "stepping",
+    "initial_height": "initial_face",
+    "load_transient_scene": "scene",
+    "make_preconditioner": "preconditioners",
+    "parse_initial_face": "scene",
+    "parse_transient": "scene",
+    "read_run": "output",
+    "register_preconditioner": "preconditioners",
+    "register_scheme": "stepping",
+    "run_in": "runin",
+    "solve_contact": "contact",
+    "tilted": "initial_face",
+    "wear_rate_spread": "diagnostics",
+    "write_run": "output",
+}
+
+__all__ = sorted(_MODULE_OF)
+
+
+def __getattr__(name):
+    """A public name, imported from its module on first use (PEP 562)."""
+    if name not in _MODULE_OF:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_MODULE_OF[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    """The module's names, the lazily imported ones included."""
+    return sorted(set(globals()) | set(__all__))

@@ -163,9 +163,9 @@ class RunLockedError(ValueError):
         The writer's process id, if it has recorded it.
     """
 
-    def __init__(self, path, pid):
+    def __init__(self, path, pid, message=None):
         who = "pid not yet recorded" if pid is None else f"pid {pid}"
-        super().__init__(f"another run is writing {str(path)!r} ({who})")
+        super().__init__(message or f"another run is writing {str(path)!r} ({who})")
         self.pid = pid
 
 
@@ -618,6 +618,26 @@ def remove_temporaries(path):
     return removed
 
 
+def _running(pid):
+    """Whether process ``pid`` exists and has not ended (a zombie, not yet reaped, has)."""
+    if pid <= 0:  # os.kill would signal a process group
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    except (OSError, OverflowError, ValueError):  # not a process id
+        return False
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            state = f.read().rpartition(b")")[2].split()[:1]
+    except OSError:  # no /proc: it exists
+        return True
+    return state not in ([b"Z"], [b"X"])
+
+
 class RunLock:
     """Exclusive lock of a run file, so that two runs never write it at once.
 
@@ -627,7 +647,9 @@ class RunLock:
     :class:`RunLockedError`, naming the pid.  The kernel releases the lock
     of a process that dies, so a lock file left by a killed run does not
     block: it is taken over and :attr:`previous_pid` names the dead writer.
-    :meth:`release` removes the file.
+    A free lock whose file names a process that is still running (a lock
+    file copied, or written on another machine) is refused too: that
+    process may be writing the run.  :meth:`release` removes the file.
 
     Parameters
     ----------
@@ -691,6 +713,12 @@ class RunLock:
             os.close(fd)
         previous = self._pid(fd)
         self.previous_pid = previous if previous not in (None, os.getpid()) else None
+        if self.previous_pid is not None and _running(self.previous_pid):
+            os.close(fd)
+            raise RunLockedError(self.run_path, previous, (
+                f"the lock {str(self.path)!r} names process {previous}, which is running though "
+                f"it does not hold the lock; if no run is writing {str(self.run_path)!r}, remove "
+                f"the lock file"))
         os.ftruncate(fd, 0)
         os.lseek(fd, 0, os.SEEK_SET)
         os.write(fd, f"{os.getpid()}\n".encode())

@@ -8,5 +8,7 @@
   steady.cli.design``): the design rule;
 - :mod:`steady.cli.common` -- what every command shares (exit statuses,
   one-line errors, output checks, ``--memory-limit``), also for
-  ``runin-transient``.
+  ``runin-transient``;
+- :mod:`steady.cli.entry` -- the entry points of the commands, which handle
+  Ctrl-C before the heavy modules load.
 """

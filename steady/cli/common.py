@@ -19,22 +19,28 @@ A command that cannot do what it was asked ends with one line
 130    interrupted (Ctrl-C)
 =====  ==============================================================
 
+Every command's ``--help`` ends with this table (:data:`EXIT_STATUS_EPILOG`).
 :func:`run_command` turns exceptions into these lines and statuses;
-:class:`ArgumentParser` reports argument errors the same way.  Values
-echoed in messages are shortened (:func:`steady.text.shorten`).
+:class:`ArgumentParser` reports argument errors the same way, a null byte
+in an argument included.  Values echoed in messages are shortened
+(:func:`steady.text.shorten`).  Ctrl-C before the command's own handling
+is in place, while numpy, scipy and h5py load, is handled by the entry
+points (:mod:`steady.cli.entry`).
 
 Outputs and memory
 ------------------
 :func:`prepare_output` checks an output path before the work starts (not a
 directory, not a device, not existing without ``--force``, in a writable
 directory, which it creates if missing); :func:`check_distinct` refuses an
-output that names an input or another output.  ``--memory-limit``
+output that names an input or another output; :func:`check_png_path`
+refuses a figure name that is not a ``.png``.  ``--memory-limit``
 (:func:`add_memory_limit`) is the limit :func:`steady.memory.check_memory`
 compares a command's memory estimate with.
 """
 
 from __future__ import annotations
 
+import _thread
 import argparse
 import logging
 import os
@@ -50,6 +56,7 @@ __all__ = [
     "EXIT_FAILED",
     "EXIT_INTERRUPTED",
     "EXIT_OK",
+    "EXIT_STATUS_EPILOG",
     "ArgumentParser",
     "CommandError",
     "add_memory_limit",
@@ -73,6 +80,11 @@ EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 #: Interrupted (128 + SIGINT, the shell's convention).
 EXIT_INTERRUPTED = 130
+
+#: The end of every command's ``--help``: the table of exit statuses.
+EXIT_STATUS_EPILOG = ("exit status: 0 done; 1 a run stopped or failed (it can be resumed) or the "
+                      "operating system refused a read or a write (the message says what is "
+                      "saved); 2 bad input or refused, nothing written; 130 interrupted")
 
 
 def program_name(module_command):
@@ -141,13 +153,28 @@ def describe_os_error(err):
 class ArgumentParser(argparse.ArgumentParser):
     """:class:`argparse.ArgumentParser` whose errors are one line, exit status 2.
 
-    ``error: <what is wrong> (see '<prog> --help')`` on stderr.
+    ``error: <what is wrong> (see '<prog> --help')`` on stderr.  An argument
+    with a null byte (which no path may hold; only a caller of ``main(argv)``
+    can pass one) is such an error, naming the argument, before the
+    operating system sees it.
     """
 
     def error(self, message):
         """Print one ``error:`` line and exit with :data:`EXIT_BAD_INPUT`."""
         self.exit(EXIT_BAD_INPUT,
                   f"error: {one_line(message)} (see '{self.prog} --help')\n")
+
+    def parse_known_args(self, args=None, namespace=None):
+        """Parse as argparse does, then refuse a value with a null byte, naming its argument."""
+        parsed, extras = super().parse_known_args(args, namespace)
+        for action in self._actions:
+            value = getattr(parsed, action.dest, None)
+            for item in value if isinstance(value, (list, tuple)) else [value]:
+                if isinstance(item, (str, os.PathLike)) and "\0" in os.fspath(item):
+                    name = "/".join(action.option_strings) or action.metavar or action.dest
+                    self.error(f"argument {name}: {shorten(os.fspath(item))} holds a null "
+                               f"byte, which no file name may hold")
+        return parsed, extras
 
 
 def configure_logging(verbose):
@@ -156,7 +183,8 @@ def configure_logging(verbose):
     Python warnings (e.g. numpy's overflow warnings on a hostile input,
     which the solvers detect and report themselves) and exceptions Python
     can only ignore (in destructors) go to the log too, so that by default
-    a failure is the command's one ``error:`` line.
+    a failure is the command's one ``error:`` line; a Ctrl-C that landed
+    there is delivered again to the command.
 
     Parameters
     ----------
@@ -172,6 +200,11 @@ def configure_logging(verbose):
 
 
 def _log_unraisable(unraisable):
+    if issubclass(unraisable.exc_type, KeyboardInterrupt):
+        # Ctrl-C landed where Python cannot raise it (a destructor, a weakref callback):
+        # deliver it again, to the command's own flow.
+        _thread.interrupt_main()
+        return
     logger.debug("ignored in %r: %s: %s", unraisable.object,
                  type(unraisable.exc_value).__name__, unraisable.exc_value)
 
@@ -259,37 +292,6 @@ def check_distinct(named):
         seen[key] = what
 
 
-def check_png_path(path, what="--plot"):
-    """Refuse a figure path without the suffix ``.png``, before any work.
-
-    Parameters
-    ----------
-    path : str or path-like
-        Where a command will draw its figure.
-    what : str, optional
-        How messages name it (default ``"--plot"``).
-
-    Raises
-    ------
-    ValueError
-        The suffix is not ``.png`` (any case); the message names the path
-        and the suffix found.
-
-    Examples
-    --------
-    >>> check_png_path("out/fit.PNG")
-    >>> try:
-    ...     check_png_path("out/fit.txt")
-    ... except ValueError as err:
-    ...     print(err)
-    --plot 'out/fit.txt' must name a .png file, not '.txt'
-    """
-    suffix = pathlib.Path(path).suffix
-    if suffix.lower() != ".png":
-        found = f"{suffix!r}" if suffix else "a name without a suffix"
-        raise ValueError(f"{what} {str(path)!r} must name a .png file, not {found}")
-
-
 def prepare_output(path, *, force, what="output"):
     """Check an output path before the work starts; create its directory.
 
@@ -356,6 +358,41 @@ def prepare_output(path, *, force, what="output"):
         raise ValueError(f"{what} {str(path)!r}: cannot write into {str(parent)!r}: "
                          f"{err.strerror or err}") from None
     return path
+
+
+def check_png_path(path, what="--plot"):
+    """Refuse a figure file name whose suffix is not ``.png``, before any work.
+
+    The figures are PNG images; another suffix would be refused (``.txt``)
+    or give another format (``.pdf``) only once the figure is drawn, after
+    the work, and no suffix would write ``NAME.png`` beside the name checked.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The figure's file.
+    what : str, optional
+        How messages name it (default ``"--plot"``).
+
+    Raises
+    ------
+    ValueError
+        The suffix is not ``.png`` (in any case); the message names it.
+
+    Examples
+    --------
+    >>> check_png_path("out/run.PNG")
+    >>> try:
+    ...     check_png_path("out/run.txt")
+    ... except ValueError as err:
+    ...     print(err)
+    --plot 'out/run.txt': the figure is a PNG image: expected the suffix .png, got '.txt'
+    """
+    suffix = pathlib.PurePath(os.fspath(path)).suffix
+    if suffix.lower() != ".png":
+        got = shorten(suffix) if suffix else "none"
+        raise ValueError(f"{what} {shorten(str(path))}: the figure is a PNG image: expected the "
+                         f"suffix .png, got {got}")
 
 
 def add_memory_limit(parser):

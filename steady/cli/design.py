@@ -11,19 +11,25 @@ shipped in the package by default).
 
 from __future__ import annotations
 
-import sys
+if __name__ == "__main__":  # python -m steady.cli.design: Ctrl-C handled from here on
+    from .entry import runin_design
+
+    raise SystemExit(runin_design())
 
 import numpy as np
 
 from ..design import DEFAULT_TABLE, DesignTable
 from ..reference import disk_reference_slope, fine_grain_rms_slope
-from .common import ArgumentParser, program_name, run_command
+from .common import EXIT_STATUS_EPILOG, ArgumentParser, program_name, run_command
 
 __all__ = ["main"]
 
 
 def main(argv=None):
-    """Command line ``runin-design``: fill factor for a target rms slope, or the reverse.
+    """The command ``runin-design``: fill factor for a target rms slope, or the reverse.
+
+    Entered through :mod:`steady.cli.entry` (``python -m steady.cli.design``
+    too), which handles Ctrl-C while the modules load.
 
     Parameters
     ----------
@@ -33,15 +39,16 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0; 2 for bad input or an unreadable table (one line
-        ``error: ...`` on stderr); 130 when interrupted.
+        Exit status: 0; 1 when the operating system refuses to read the
+        table; 2 for bad input or an unreadable table (one line ``error:
+        ...`` on stderr); 130 when interrupted.
     """
     parser = ArgumentParser(
         prog=program_name("python -m steady.cli.design"),
         description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
                     "rho_2 of phase 2 that gives a target rms slope, or the rms slope of a "
                     "fill factor.  Phase 2 is the hard phase when the wear ratio is below 1.",
-        epilog="exit status: 0 done, 2 bad input or an unreadable table, 130 interrupted")
+        epilog=EXIT_STATUS_EPILOG)
     parser.add_argument("--pbar-over-estar", type=float, required=True,
                         help="mean pressure over the effective modulus, pbar/E*")
     parser.add_argument("--wear-ratio", type=float, required=True,
@@ -85,6 +92,3 @@ def _answer(args):
     print(source)
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

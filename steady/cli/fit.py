@@ -21,8 +21,12 @@ still writes its file and prints its summary on stdout, then one line
 
 from __future__ import annotations
 
+if __name__ == "__main__":  # python -m steady.cli.fit: Ctrl-C handled from here on
+    from .entry import runin_fit
+
+    raise SystemExit(runin_fit())
+
 import pathlib
-import sys
 
 from ..fit import fit_scene
 from ..fit_files import plot_fit, read_measured, write_fit
@@ -165,6 +169,3 @@ def main(argv=None):
     configure_logging(args.verbose)
     return run_command(run, args, verbose=args.verbose)
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -13,8 +13,10 @@ be checked is checked before the solve: the scene, the output paths (a
 directory, an existing file without ``--force``, an unwritable place) and
 the memory the grid needs (:func:`steady.memory.steady_memory`).
 A failure prints one line ``error: ...`` on stderr; exit status 0, 1 for an
-operating-system error, 2 for bad input, 130 when interrupted
-(:mod:`steady.cli.common`).
+operating-system error or a figure that could not be drawn (the message
+says the result is saved), 2 for bad input (nothing written), 130 when
+interrupted (:mod:`steady.cli.common`).  The suffix of ``--plot`` is
+checked before the solve too (:func:`steady.cli.common.check_png_path`).
 """
 
 from __future__ import annotations
@@ -31,10 +33,12 @@ from .common import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    EXIT_STATUS_EPILOG,
     ArgumentParser,
     CommandError,
     add_memory_limit,
     check_distinct,
+    check_png_path,
     configure_logging,
     describe_os_error,
     note,
@@ -45,16 +49,12 @@ from .common import (
 
 __all__ = ["build_parser", "main", "summary_lines"]
 
-_EPILOG = ("exit status: 0 done, 1 operating-system error (the message says what is saved), "
-           "2 bad input (nothing written), 130 interrupted")
-
-
 def build_parser():
     """The argument parser of ``runin-steady`` (``python -m steady``)."""
     parser = ArgumentParser(
         prog=program_name("python -m steady"),
         description="Limiting worn face of a multi-phase punch on an elastic half-space.",
-        epilog=_EPILOG)
+        epilog=EXIT_STATUS_EPILOG)
     parser.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
     parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
                         help="HDF5 result file to write (missing directories are created)")
@@ -98,8 +98,31 @@ def summary_lines(result):
 
 def run(args):
     """Do the work for parsed arguments; return the exit status."""
-    # Everything that can fail is checked before the solve, not after it.
+    saved = None
+    try:
+        scene = _check(args)
+        result = solve_scene(scene, slope_error=args.slope_error)
+        lines = summary_lines(result)
+        if isinstance(scene.geometry, Micrograph):
+            lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
+        write_result(args.output, result, scene, force=args.force, checked=True)
+        saved = args.output
+        lines.append(f"result           {args.output}")
+        if args.plot:
+            _plot(args)
+            lines.append(f"figure           {args.plot}")
+    except KeyboardInterrupt:
+        where = "nothing was written" if saved is None else f"the result is in {str(saved)!r}"
+        raise CommandError(f"interrupted; {where}", EXIT_INTERRUPTED) from None
+    print("\n".join(lines))
+    return EXIT_OK
+
+
+def _check(args):
+    """Everything that can fail, checked before the solve, not after it; the scene."""
     check_distinct([("the scene", args.scene), ("-o", args.output), ("--plot", args.plot)])
+    if args.plot is not None:
+        check_png_path(args.plot)
     scene = load_scene(args.scene)
     prepare_output(args.output, force=args.force)
     if args.plot is not None:
@@ -110,33 +133,28 @@ def run(args):
     check_memory(steady_memory(scene.grid().shape, slope_error=args.slope_error),
                  f"a steady solve at n = {scene.n}", args.memory_limit)
     scene.phase_labels()  # names a phase without a face pixel before the solve
-    saved = None
-    try:
-        result = solve_scene(scene, slope_error=args.slope_error)
-        lines = summary_lines(result)
-        if isinstance(scene.geometry, Micrograph):
-            lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
-        write_result(args.output, result, scene, force=args.force, checked=True)
-        saved = args.output
-        lines.append(f"result           {args.output}")
-        if args.plot:
-            from ..plotting import plot_file  # deferred: matplotlib is slow to import
+    return scene
 
-            try:
-                plot_file(args.output, args.plot, force=args.force)
-            except OSError as err:
-                raise CommandError(f"cannot draw the figure: {describe_os_error(err)}; the "
-                                   f"result is saved in {str(saved)!r}", EXIT_FAILED) from None
-            lines.append(f"figure           {args.plot}")
-    except KeyboardInterrupt:
-        where = "nothing was written" if saved is None else f"the result is in {str(saved)!r}"
-        raise CommandError(f"interrupted; {where}", EXIT_INTERRUPTED) from None
-    print("\n".join(lines))
-    return EXIT_OK
+
+def _plot(args):
+    """Draw the figure of the result just written; the result is saved whatever happens here."""
+    from ..plotting import plot_file  # deferred: matplotlib is slow to import
+
+    saved = f"the result is saved in {str(args.output)!r}"
+    if args.plot.exists() and not args.force:  # it was not there before the solve
+        raise CommandError(f"--plot {str(args.plot)!r} appeared during the solve (use --force "
+                           f"to overwrite); {saved}", EXIT_FAILED)
+    try:
+        plot_file(args.output, args.plot, force=args.force)
+    except OSError as err:
+        raise CommandError(f"cannot draw the figure: {describe_os_error(err)}; {saved}",
+                           EXIT_FAILED) from None
+    except ValueError as err:
+        raise CommandError(f"cannot draw the figure: {err}; {saved}", EXIT_FAILED) from None
 
 
 def main(argv=None):
-    """Entry point of ``runin-steady`` and ``python -m steady``.
+    """The command ``runin-steady`` (``python -m steady``; entered through :mod:`steady.cli.entry`).
 
     Parameters
     ----------
@@ -146,8 +164,9 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0, 1 for an operating-system error, 2 for bad input,
-        130 when interrupted.
+        Exit status: 0, 1 for an operating-system error or a figure that
+        could not be drawn (the result is saved), 2 for bad input, 130 when
+        interrupted.
     """
     args = build_parser().parse_args(argv)
     configure_logging(args.verbose)

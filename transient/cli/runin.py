@@ -37,14 +37,18 @@ what every scheme continues from.  Each part of the run is recorded with
 its settings in the root attribute ``settings_history`` (JSON, one entry
 per part: steps, distances, status, settings); snapshots requested at
 distances the run had already passed are listed in ``snapshots_missing``
-and on stderr.  ``--force`` starts over.
+and on stderr.  ``--force`` starts over.  ``--resume --spatial-error`` on a
+finished run that lacks its spatial error runs the companion and stores it;
+one that holds it is left untouched.
 
 Exit status: 0 steady state reached; 1 run stopped or failed (resumable),
-or an operating-system error (the message names the last checkpoint);
-2 bad input (``error: ...`` on stderr, nothing written), including a run
-whose first contact solve fails and a run file another run is writing or
-that is damaged; 130 interrupted (the message says whether a checkpoint can
-be continued).
+an operating-system error (the message names the last checkpoint), a
+companion run of ``--spatial-error`` that failed or a figure that could not
+be drawn (the run is saved); 2 bad input (``error: ...`` on stderr, nothing
+written), including a run whose first contact solve fails, an unsupported
+``--plot`` suffix and a run file another run is writing or that is damaged;
+130 interrupted (the message says whether a checkpoint can be continued).
+The scene file opens every message about its ``[initial_face]``.
 
 A flag that overrides a :class:`transient.options.RunOptions` field comes
 from the field's declaration (``flag``).  One that adds a computation
@@ -69,10 +73,12 @@ from steady.cli.common import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    EXIT_STATUS_EPILOG,
     ArgumentParser,
     CommandError,
     add_memory_limit,
     check_distinct,
+    check_png_path,
     configure_logging,
     describe_os_error,
     note,
@@ -91,16 +97,12 @@ __all__ = ["build_parser", "main"]
 
 logger = logging.getLogger(__name__)
 
-_EPILOG = ("exit status: 0 steady state reached, 1 run stopped or failed (resume it) or an "
-           "operating-system error, 2 bad input (nothing written), 130 interrupted")
-
-
 def build_parser():
     """The argument parser of ``runin-transient`` (``python -m transient``)."""
     p = ArgumentParser(prog=program_name("python -m transient"),
                        description="Run-in wear of a multi-phase punch on an elastic "
                                    "half-space, from its initial face to the steady state.",
-                       epilog=_EPILOG)
+                       epilog=EXIT_STATUS_EPILOG)
     p.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
     p.add_argument("-o", "--output", type=pathlib.Path, required=True,
                    help="HDF5 run file (checkpointed while running; missing directories "
@@ -143,6 +145,8 @@ def _check_outputs(args):
     check_distinct([("the scene", args.scene), ("-o", out),
                     ("the run file's backup", backup_path(out)),
                     ("the run file's lock", lock_path(out)), ("--plot", args.plot)])
+    if args.plot is not None:
+        check_png_path(args.plot)
     # Existence is checked again under the run's lock.
     prepare_output(out, force=True)
     if args.plot is not None:
@@ -150,7 +154,7 @@ def _check_outputs(args):
         prepare_output(args.plot, force=args.force or args.resume, what="--plot")
 
 
-def _first_solve_failed(err, job):
+def _first_solve_failed(err, job, scene_path):
     """The message of a run whose initial contact solve fails, naming the likely cause."""
     face = job.initial_height[job.problem.face_mask]
     relief = float(np.ptp(face)) if np.all(np.isfinite(face)) else math.inf
@@ -164,7 +168,7 @@ def _first_solve_failed(err, job):
     else:
         cause = (f"check [transient] contact_rtol = {rtol:g} and the [initial_face] (kind "
                  f"{job.initial.kind!r}, relief {relief_f:.3g} f*)")
-    return f"the first contact solve failed: {cause} ({err})"
+    return f"{scene_path}: the first contact solve failed: {cause} ({err})"
 
 
 def _report(result, comparison):
@@ -202,6 +206,10 @@ class _Job:
     resume: object
     run_file: RunFile
     companion_grid: int | None = None  # --spatial-error: the companion run's grid
+    # A finished run with nothing to add: not written again.
+    finished: bool = False
+    # Why --spatial-error's companion run failed (the run is written without its error).
+    companion_failure: str | None = None
 
 
 def _prepare(args, lock, scene, initial, options):
@@ -210,9 +218,9 @@ def _prepare(args, lock, scene, initial, options):
     from ..problem import WearProblem
 
     out = args.output
-    if lock.previous_pid is not None:
+    if lock.previous_pid is not None:  # RunLock refuses the lock of a process still running
         note(f"took over the lock of {str(out)!r} left by process {lock.previous_pid}, which "
-              f"has ended")
+             f"has ended")
     for tmp in remove_temporaries(out):
         logger.info("removed %s, left by a killed writer", tmp)
     if out.exists() and not (args.resume or args.force):
@@ -223,19 +231,26 @@ def _prepare(args, lock, scene, initial, options):
                          f"{str(backup_path(out))!r} does: rename it to {str(out)!r} to "
                          f"continue from it, or use --force to start over")
     problem = WearProblem.from_scene(scene)
-    h0 = initial.height(problem.grid)
+    try:
+        h0 = initial.height(problem.grid)
+    except ValueError as err:  # "[initial_face]: ...": the scene file first, as when loading
+        raise ValueError(f"{args.scene}: {err}") from None
     attrs, arrays = run_inputs(scene, problem)
     run_file = RunFile(out, attrs, arrays, options.settings(), options)
-    resume = None
+    resume, finished = None, False
     if args.resume and out.exists():
         resume, stored_attrs, stored_arrays = read_resume(out)
         check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
                            problem.outline)
         if "sha256" not in stored_attrs:
             note(f"{str(out)!r} carries no checksums; resumed without verification")
-        if resume.status == "steady":
+        finished = resume.status == "steady" and not _lacks_spatial_error(args, resume)
+        if finished:
             note(f"{str(out)!r} holds a finished run; nothing to continue")
         else:
+            if resume.status == "steady":
+                note(f"{str(out)!r} holds a finished run without its spatial error: "
+                     f"running the companion run of --spatial-error and storing it")
             notes, snapshots = run_file.resume(resume, stored_attrs)
             for text in notes:
                 note(text)
@@ -246,21 +261,33 @@ def _prepare(args, lock, scene, initial, options):
         if args.resume:
             note(f"{str(out)!r} does not exist; starting a new run")
         run_file.start()
-    grid = _companion_grid(scene, initial, problem.n) if args.spatial_error else None
+    grid = (_companion_grid(args.scene, scene, initial, problem.n)
+            if args.spatial_error and not finished else None)
     return _Job(scene, initial, problem, h0, options, resume, run_file,
-                companion_grid=grid)
+                companion_grid=grid, finished=finished)
 
 
-def _companion_grid(scene, initial, n):
+def _lacks_spatial_error(args, stored):
+    """Whether ``--spatial-error`` asks for the error a finished stored run does not hold."""
+    from ..spatial_error import DATASET
+
+    error = np.asarray(stored.history.get(DATASET, ()), dtype=float)
+    return args.spatial_error and error.shape != np.shape(stored.history["distance"])
+
+
+def _companion_grid(scene_path, scene, initial, n):
     """The grid of ``--spatial-error``'s companion run; refused before the run if none exists."""
     from ..spatial_error import companion_grid
 
-    m = companion_grid(scene.geometry, n, scene.outline)  # ValueError names the minimum grid
+    try:
+        m = companion_grid(scene.geometry, n, scene.outline)  # names the minimum grid
+    except ValueError as err:
+        raise ValueError(f"{scene_path}: --spatial-error: {err}") from None
     try:
         initial.height(scene.grid(m))
-    except ValueError as err:
-        raise ValueError(f"--spatial-error needs the initial face on the companion grid "
-                         f"n = {m}: {err}") from None
+    except ValueError as err:  # "[initial_face]: ...": the scene file first
+        raise ValueError(f"{scene_path}: --spatial-error needs the initial face on the companion "
+                         f"grid n = {m}: {err}") from None
     return m
 
 
@@ -270,20 +297,23 @@ def run(args):
     from ..scene import load_transient_scene
 
     out = args.output
-    scene, options, initial = load_transient_scene(args.scene)
-    options = options_from_flags(options, args)
-    _check_outputs(args)
-    grid = scene.grid()  # load_scene has checked n against the outline
-    check_memory(run_in_memory(grid.shape, len(options.snapshots)),
-                 _run_in_text(grid, len(options.snapshots)), args.memory_limit)
-    scene.phase_labels()  # names a phase without a face pixel before the run
+    not_started = "interrupted before the run started; nothing was written"
+    try:
+        scene, options, initial = load_transient_scene(args.scene)
+        options = options_from_flags(options, args)
+        _check_outputs(args)
+        grid = scene.grid()  # load_scene has checked n against the outline
+        check_memory(run_in_memory(grid.shape, len(options.snapshots)),
+                     _run_in_text(grid, len(options.snapshots)), args.memory_limit)
+        scene.phase_labels()  # names a phase without a face pixel before the run
+    except KeyboardInterrupt:
+        raise CommandError(not_started, EXIT_INTERRUPTED) from None
 
     with RunLock(out) as lock:
         try:
             job = _prepare(args, lock, scene, initial, options)
         except KeyboardInterrupt:
-            raise CommandError("interrupted before the run started; nothing was written",
-                               EXIT_INTERRUPTED) from None
+            raise CommandError(not_started, EXIT_INTERRUPTED) from None
         try:
             result, comparison = _run(job)
         except KeyboardInterrupt:
@@ -293,15 +323,23 @@ def run(args):
             raise CommandError(f"{describe_os_error(err)}; {job.run_file.saved_text()}",
                                EXIT_FAILED) from None
         except _StepFailureAtStart as err:
-            raise CommandError(_first_solve_failed(err.__cause__, job),
+            raise CommandError(_first_solve_failed(err.__cause__, job, args.scene),
                                EXIT_BAD_INPUT) from None
+        except ValueError as err:  # once the run has started: not "nothing written"
+            saved = job.run_file.saved is not None
+            raise CommandError(f"{err}; {job.run_file.saved_text()}",
+                               EXIT_FAILED if saved else EXIT_BAD_INPUT) from None
         print("\n".join(_report(result, comparison)))
         status = EXIT_OK if result.success else EXIT_FAILED
         at = at_text(result.steps, result.distance / result.run_in_distance)
         stop = f"run {result.status} at {at}: {result.message}; continue with --resume"
+        if job.companion_failure is not None:
+            status = EXIT_FAILED
+            stop = (f"{job.companion_failure}; the run is saved in {str(out)!r} without its "
+                    f"spatial error: --resume --spatial-error computes it")
         del job, result, comparison  # the figure is drawn from the file
         if args.plot is not None:
-            _plot(out, args.plot)
+            _plot(out, args.plot, may_replace=args.force or args.resume)
     if status != EXIT_OK:
         print(f"error: {stop}", file=sys.stderr)
     return status
@@ -318,7 +356,7 @@ def _run(job):
     from ..runin import run_in
 
     problem, resume = job.problem, job.resume
-    finished = resume is not None and resume.status == "steady"
+    finished = job.finished  # a finished run lacking its spatial error is not: it gets it
     bar = Progress(0 if resume is None else resume.steps)
     try:
         result = run_in(problem, job.initial_height, job.options, resume=resume, on_step=bar,
@@ -339,13 +377,22 @@ def _run(job):
 
 
 def _companion(job, result):
-    """The run on about half the grid beside it: the history's spatial error bar."""
+    """The run on about half the grid beside it: the history's spatial error bar.
+
+    If the companion run fails, the main run is returned as it is (and
+    written: it is finished) and :attr:`_Job.companion_failure` says why.
+    """
+    from ..problem import StepFailure
     from ..spatial_error import spatial_error
 
     bar = Progress(0)
     try:
         companion = spatial_error(job.scene, job.initial, job.options, result,
                                   grid=job.companion_grid, on_step=bar)
+    except (ValueError, StepFailure) as err:
+        job.companion_failure = (f"{job.scene.source_path or 'the scene'}: --spatial-error: "
+                                 f"the companion run on n = {job.companion_grid} failed: {err}")
+        return result
     finally:
         bar.close()
     result = companion.attach(result)
@@ -355,15 +402,25 @@ def _companion(job, result):
     return result
 
 
-def _plot(out, png):
-    """Draw the run file's figure; the run is saved whatever happens here."""
+def _plot(out, png, *, may_replace):
+    """Draw the run file's figure; the run is saved whatever happens here.
+
+    ``may_replace``: whether an existing figure may be replaced (``--force``,
+    ``--resume``); without it one that exists now appeared during the run.
+    """
     from ..plotting import plot_run  # deferred: matplotlib is slow to import
 
+    saved = f"the run is saved in {str(out)!r}"
+    if png.exists() and not may_replace:
+        raise CommandError(f"--plot {str(png)!r} appeared during the run (use --force to "
+                           f"overwrite); {saved}", EXIT_FAILED)
     try:
         plot_run(out, png)
     except OSError as err:
-        raise CommandError(f"cannot draw the figure: {describe_os_error(err)}; the run is "
-                           f"saved in {str(out)!r}", EXIT_FAILED) from None
+        raise CommandError(f"cannot draw the figure: {describe_os_error(err)}; {saved}",
+                           EXIT_FAILED) from None
+    except ValueError as err:
+        raise CommandError(f"cannot draw the figure: {err}; {saved}", EXIT_FAILED) from None
     except KeyboardInterrupt:
         raise CommandError(f"interrupted while drawing the figure; the run is saved in "
                            f"{str(out)!r}", EXIT_INTERRUPTED) from None
@@ -371,7 +428,10 @@ def _plot(out, png):
 
 
 def main(argv=None):
-    """Entry point of ``runin-transient`` and ``python -m transient``.
+    """The command ``runin-transient`` (``python -m transient``).
+
+    Entered through :mod:`transient.__main__`, which handles Ctrl-C while
+    the modules load.
 
     Parameters
     ----------
@@ -382,8 +442,8 @@ def main(argv=None):
     -------
     int
         Exit status: 0 steady state reached, 1 run stopped or failed
-        (resumable) or an operating-system error, 2 bad input, 130
-        interrupted.
+        (resumable), an operating-system error or a failed companion run or
+        figure (the run is saved), 2 bad input, 130 interrupted.
     """
     args = build_parser().parse_args(argv)
     # The summary and the error line say how a run ended: library warnings (a failed
