@@ -279,10 +279,7 @@ def test_a_failed_first_solve_names_the_scene_file(tmp_path, scene_file, capsys)
 
 # -- the exit-status table -------------------------------------------------------------------
 @pytest.mark.parametrize("module", [
-    "steady.cli.solve", "transient.cli.runin", "steady.cli.design",
-    pytest.param("steady.cli.fit", marks=pytest.mark.xfail(
-        reason="runin-fit's --help gets the table with the runin-fit class of issue 24")),
-])
+    "steady.cli.solve", "transient.cli.runin", "steady.cli.design", "steady.cli.fit"])
 def test_every_help_states_the_exit_statuses(module, capsys):
     with pytest.raises(SystemExit) as done:
         launch(module, ["--help"])

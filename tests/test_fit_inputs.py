@@ -262,8 +262,8 @@ def test_help_states_the_exit_statuses():
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     text = " ".join(proc.stdout.split())
-    assert "exit status: 0 done, 1 the fit failed" in text, text
-    assert "2 bad input (nothing written), 130 interrupted" in text, text
+    assert "exit status: 0 done; 1" in text and "a fit failed (its file is written" in text, text
+    assert "2 bad input or refused, nothing written; 130 interrupted" in text, text
     assert "--memory-limit GIB" in text, "the option the memory advice names"
 
 

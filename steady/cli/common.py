@@ -82,9 +82,10 @@ EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 
 #: The end of every command's ``--help``: the table of exit statuses.
-EXIT_STATUS_EPILOG = ("exit status: 0 done; 1 a run stopped or failed (it can be resumed) or the "
-                      "operating system refused a read or a write (the message says what is "
-                      "saved); 2 bad input or refused, nothing written; 130 interrupted")
+EXIT_STATUS_EPILOG = ("exit status: 0 done; 1 a run stopped or failed (it can be resumed), a fit "
+                      "failed (its file is written, the reason on stderr) or the operating "
+                      "system refused a read or a write (the message says what is saved); 2 bad "
+                      "input or refused, nothing written; 130 interrupted")
 
 
 def program_name(module_command):

@@ -36,6 +36,7 @@ from .common import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    EXIT_STATUS_EPILOG,
     ArgumentParser,
     CommandError,
     add_memory_limit,
@@ -51,8 +52,6 @@ from .common import (
 
 __all__ = ["build_parser", "main"]
 
-_EPILOG = ("exit status: 0 done, 1 the fit failed (its file is written, the reason on stderr) "
-           "or an operating-system error, 2 bad input (nothing written), 130 interrupted")
 
 
 def build_parser():
@@ -61,7 +60,7 @@ def build_parser():
         prog=program_name("python -m steady.cli.fit"),
         description="Wear-coefficient ratios that best explain a measured worn face "
                     "(least squares over the phase pressures of the steady face, eq. 7, 9).",
-        epilog=_EPILOG)
+        epilog=EXIT_STATUS_EPILOG)
     parser.add_argument("scene", type=pathlib.Path,
                         help="scene file (.toml): face outline, phase map, E*, load, exponent")
     parser.add_argument("measured", type=pathlib.Path,

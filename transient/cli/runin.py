@@ -87,6 +87,7 @@ from steady.cli.common import (
     run_command,
 )
 from steady.memory import check_memory, keep_freed_memory
+from steady.output import OutputAppearedError
 
 from ..memory import run_in_memory
 from ..options import add_option_flags, options_from_flags
@@ -325,6 +326,8 @@ def run(args):
         except _StepFailureAtStart as err:
             raise CommandError(_first_solve_failed(err.__cause__, job, args.scene),
                                EXIT_BAD_INPUT) from None
+        except OutputAppearedError as err:  # the file is another writer's: not ours to resume
+            raise CommandError(str(err), EXIT_BAD_INPUT) from None
         except ValueError as err:  # once the run has started: not "nothing written"
             saved = job.run_file.saved is not None
             raise CommandError(f"{err}; {job.run_file.saved_text()}",
