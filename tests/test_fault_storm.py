@@ -1,4 +1,4 @@
-"""A storm of faults at random moments: two writers on one output, SIGINT and SIGKILL (issue 24).
+"""A storm of faults at random moments: two writers on one output, SIGINT and SIGKILL.
 
 Real processes, in a random order at random moments (seeds explicit):
 
@@ -16,7 +16,7 @@ stderr; every exit status is 0, 1, 2 or 130 (a SIGKILL'd process aside);
 and a resumed run-in ends identical, bit for bit, to an uninterrupted one.
 
 A Ctrl-C during the interpreter's start-up (heavy imports before the
-commands handle interrupts) is another class of issue 24, fixed apart:
+commands handle interrupts) is a class of its own, fixed apart:
 where that alone goes wrong, the test is an expected failure.
 """
 
@@ -43,8 +43,8 @@ STUDIES = ROOT / "studies"
 #: Exit statuses of the README's table.
 STATUSES = (0, 1, 2, 130)
 
-START_UP = ("Ctrl-C in the first half second (issue 24, 'Tracebacks and crashes behind the "
-            "catch-all': exit 130 with one line, at any moment): SIGINT before the command "
+START_UP = ("Ctrl-C in the first half second (exit 130 with one line, at any moment): "
+            "SIGINT before the command "
             "handles it (a KeyboardInterrupt traceback from the imports) or after (killed "
             "silently while the interpreter shuts down)")
 

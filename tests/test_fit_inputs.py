@@ -1,6 +1,6 @@
-"""``runin-fit`` against bad inputs and faults (issue 24): refused, never garbage or a traceback.
+"""``runin-fit`` against bad inputs and faults: refused, never garbage or a traceback.
 
-Each class of the issue that concerns the fit: outputs that name an input,
+Each class of bad input or fault that concerns the fit: outputs that name an input,
 heights that are not real or out of range, a fit whose figures are not
 finite, unreadable measured maps (empty, a directory, a foreign format --
 never the advice to unpickle), failures reported on stderr, the memory

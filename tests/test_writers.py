@@ -1,4 +1,4 @@
-"""Writers of one output at once, and the backup of a finished run (issue 24).
+"""Writers of one output at once, and the backup of a finished run.
 
 Every writer -- the steady result, the run file, the fit file, sweep and
 study files -- publishes its file so that a file another process wrote
