@@ -43,7 +43,7 @@ The names below are imported from their modules on first use, so that
 file or a figure is asked for.
 """
 
-import importlib
+from .lazy import lazy_names
 
 #: Public names and the module of each.
 _MODULE_OF = {
@@ -106,16 +106,4 @@ _MODULE_OF = {
 __all__ = sorted(_MODULE_OF)
 
 
-def __getattr__(name):
-    """A public name, imported from its module on first use (PEP 562)."""
-    if name not in _MODULE_OF:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    module = importlib.import_module(f".{_MODULE_OF[name] or name}", __name__)
-    value = module if _MODULE_OF[name] is None else getattr(module, name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    """The module's names, the lazily imported ones included."""
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(__name__, _MODULE_OF)

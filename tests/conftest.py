@@ -11,10 +11,13 @@ Tests draw their scenes from here rather than carrying inline copies:
 - :data:`SCENES` and :func:`scene_text` -- scene files (TOML) by name, with
   keys overridden where a test needs it (the phase map too: homogeneous,
   Voronoi, rods or a file); the fixture ``scene_file`` writes one into the
-  test's directory.
+  test's directory;
+- :func:`run_cli`, :func:`one_error_line`, :func:`temporaries` -- a command
+  run in-process, its one ``error:`` line, the temporary files it left.
 """
 
 import math
+import pathlib
 
 import pytest
 
@@ -198,3 +201,27 @@ def scene_file(tmp_path):
         path.write_text(scene_text(name, **overrides))
         return path
     return write
+
+
+def run_cli(module, argv, capsys):
+    """Exit status, stdout and stderr of ``module.main(argv)`` (a command, in-process)."""
+    try:
+        status = module.main([str(a) for a in argv])
+    except SystemExit as done:  # argument errors exit from the parser
+        status = done.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def one_error_line(err):
+    """The one ``error:`` line of stderr (notes allowed before it); fails otherwise."""
+    assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
+    lines = [line for line in err.splitlines() if not line.startswith("note: ")]
+    assert len(lines) == 1 and lines[0].startswith("error: "), \
+        f"expected one 'error:' line, got {lines!r}"
+    return lines[0]
+
+
+def temporaries(directory):
+    """Temporary files (``*.tmp``) a writer left in ``directory``."""
+    return sorted(p.name for p in pathlib.Path(directory).iterdir() if p.name.endswith(".tmp"))

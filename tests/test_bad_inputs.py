@@ -13,7 +13,7 @@ import re
 import numpy as np
 import numpy.lib.format as npy_format
 import pytest
-from conftest import scene_text
+from conftest import run_cli, scene_text
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
@@ -24,15 +24,9 @@ PRECIOUS = b"a result someone cares about"
 BASE = {"steady": scene_text("steady"), "transient": scene_text("runin")}
 
 
-def run_cli(command, argv, capsys):
-    """Exit status, stdout and stderr of ``main(argv)`` of a command."""
-    module = steady_cli if command == "steady" else transient_cli
-    try:
-        status = module.main([str(a) for a in argv])
-    except SystemExit as done:  # argument errors exit from the parser
-        status = done.code
-    out, err = capsys.readouterr()
-    return status, out, err
+def run_command(command, argv, capsys):
+    """Exit status, stdout and stderr of the command ``"steady"`` or ``"transient"``."""
+    return run_cli(steady_cli if command == "steady" else transient_cli, argv, capsys)
 
 
 def write(d, name, text):
@@ -280,7 +274,7 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, command):
         if "--force" not in args and "--resume" not in args:
             args.append("--force")
     before = {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()}
-    status, out, err = run_cli(command, args, capsys)
+    status, out, err = run_command(command, args, capsys)
     fragment = FRAGMENTS.get((case.name, command), case.fragment)
     lines = err.splitlines()
     assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
@@ -306,7 +300,7 @@ def test_every_case_names_what_is_bad():
 def test_memory_override_lets_a_scene_run(tmp_path, capsys):
     """``--memory-limit inf`` skips the check; a scene that fits runs as before."""
     (tmp_path / "s.toml").write_text(BASE["steady"])
-    status, out, err = run_cli("steady", [tmp_path / "s.toml", "-o", tmp_path / "r.h5",
+    status, out, err = run_command("steady", [tmp_path / "s.toml", "-o", tmp_path / "r.h5",
                                           "--memory-limit", "inf", "--no-slope-error"], capsys)
     assert status == 0 and err == "", f"exit {status}: {err!r}"
     assert "rms / grad_f0" in out, f"summary {out!r}"

@@ -21,31 +21,13 @@ import sys
 import h5py
 import numpy as np
 import pytest
+from conftest import one_error_line, run_cli
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
 from steady.cli.common import EXIT_STATUS_EPILOG
 from steady.cli.entry import launch
 from transient.output import lock_path, read_run
-
-
-def run_cli(module, argv, capsys):
-    """Exit status, stdout and stderr of ``module.main(argv)``."""
-    try:
-        status = module.main([str(a) for a in argv])
-    except SystemExit as done:  # argument errors exit from the parser
-        status = done.code
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def error_line(err):
-    """The one ``error:`` line of stderr (notes allowed before it)."""
-    assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
-    lines = [line for line in err.splitlines() if not line.startswith("note: ")]
-    assert len(lines) == 1 and lines[0].startswith("error: "), \
-        f"expected one 'error:' line, got {lines!r}"
-    return lines[0]
 
 
 @pytest.fixture
@@ -64,7 +46,7 @@ def test_steady_refuses_a_plot_suffix_before_the_solve(tmp_path, steady_scene, c
     out = tmp_path / "r.h5"
     status, _, err = run_cli(steady_cli, [steady_scene, "-o", out, "--plot", tmp_path / name],
                              capsys)
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
     assert line.startswith("error: --plot ") and "expected the suffix .png" in line, line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["steady.toml"], \
@@ -76,7 +58,7 @@ def test_runin_refuses_a_plot_suffix_before_the_run(tmp_path, runin_scene, capsy
     out = tmp_path / "run.h5"
     status, stdout, err = run_cli(transient_cli, [runin_scene, "-o", out, "--plot",
                                                   tmp_path / name], capsys)
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
     assert line.startswith("error: --plot ") and "expected the suffix .png" in line, line
     assert stdout == "", f"no run may start: {stdout!r}"
@@ -150,7 +132,7 @@ def test_a_null_byte_names_its_argument(tmp_path, steady_scene, runin_scene, cap
     except SystemExit as done:
         status = done.code
     err = capsys.readouterr().err
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
     assert line.startswith(f"error: argument {name}: ") and "null byte" in line, line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["runin.toml", "steady.toml"], \
@@ -165,7 +147,7 @@ def test_the_lock_of_a_live_process_is_not_taken_over(tmp_path, runin_scene, cap
         out = tmp_path / "run.h5"
         lock_path(out).write_text(f"{live.pid}\n")  # a lock file copied from elsewhere, say
         status, stdout, err = run_cli(transient_cli, [runin_scene, "-o", out], capsys)
-        line = error_line(err)
+        line = one_error_line(err)
         assert status == 2, f"exit {status}: {err}"
         assert "ended" not in err and f"process {live.pid}, which is running" in line, line
         assert "remove the lock file" in line, f"the way out is named: {line}"
@@ -216,7 +198,7 @@ def test_steady_plot_that_appears_during_the_solve(tmp_path, steady_scene, capsy
     monkeypatch.setattr(steady_cli, "solve_scene", solve_while_someone_writes_the_figure)
     status, _, err = run_cli(steady_cli, [steady_scene, "-o", tmp_path / "r.h5", "--plot", png,
                                           "--no-slope-error"], capsys)
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 1, f"exit {status}: {err}"
     assert "(use --force to overwrite)" in line and "use force " not in line, line
     assert f"the result is saved in {str(tmp_path / 'r.h5')!r}" in line, line
@@ -236,7 +218,7 @@ def test_runin_plot_that_appears_during_the_run(tmp_path, runin_scene, capsys, m
     monkeypatch.setattr(runin, "_run", run_while_someone_writes_the_figure)
     out = tmp_path / "run.h5"
     status, _, err = run_cli(transient_cli, [runin_scene, "-o", out, "--plot", png], capsys)
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 1, f"exit {status}: {err}"
     assert "(use --force to overwrite)" in line and f"saved in {str(out)!r}" in line, line
     assert png.read_bytes() == b"precious", "the figure that appeared is not replaced"
@@ -262,7 +244,7 @@ def test_initial_face_errors_start_with_the_scene_file(tmp_path, scene_file, cap
     for what, (scene, extra, fragment) in cases.items():
         out = tmp_path / f"{scene.stem}.h5"
         status, _, err = run_cli(transient_cli, [scene, "-o", out, *extra], capsys)
-        line = error_line(err)
+        line = one_error_line(err)
         assert status == 2, f"{what}: exit {status}: {err}"
         assert line.startswith(f"error: {scene}: "), f"{what}: no scene file first: {line}"
         assert fragment in line, f"{what}: {line!r} lacks {fragment!r}"
@@ -272,7 +254,7 @@ def test_initial_face_errors_start_with_the_scene_file(tmp_path, scene_file, cap
 def test_a_failed_first_solve_names_the_scene_file(tmp_path, scene_file, capsys):
     scene = scene_file("runin", transient={"contact_rtol": 1e-300})
     status, _, err = run_cli(transient_cli, [scene, "-o", tmp_path / "run.h5"], capsys)
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
     assert line.startswith(f"error: {scene}: the first contact solve failed: "), line
 
@@ -304,7 +286,7 @@ def test_a_failed_companion_run_keeps_the_finished_run(tmp_path, scene_file, cap
     scene = scene_file("runin", n=48, transient={"tol": 1e-3})
     out = tmp_path / "run.h5"
     status, _, err = run_cli(transient_cli, [scene, "-o", out, "--spatial-error"], capsys)
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 1, f"exit {status}: {err}"
     assert line.startswith(f"error: {scene}: --spatial-error: the companion run on n = 24 "
                            f"failed: "), line
@@ -327,6 +309,6 @@ def test_ctrl_c_before_the_work_says_nothing_was_written(tmp_path, steady_scene,
         monkeypatch.setattr(transient.scene, "load_transient_scene", interrupted)
         module, scene = transient_cli, runin_scene
     status, _, err = run_cli(module, [scene, "-o", tmp_path / "out.h5"], capsys)
-    line = error_line(err)
+    line = one_error_line(err)
     assert status == 130, f"exit {status}: {err}"
     assert "nothing was written" in line, line

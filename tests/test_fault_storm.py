@@ -29,7 +29,7 @@ import time
 import h5py
 import numpy as np
 import pytest
-from conftest import scene_text
+from conftest import scene_text, temporaries
 
 from steady.output import read_result
 from transient.output import backup_path, lock_path, read_run
@@ -60,10 +60,6 @@ def finish(proc, timeout=300):
     _, err = proc.communicate(timeout=timeout)
     return proc.returncode, err
 
-
-def temporaries(directory):
-    """Temporary files beside the outputs of ``directory``."""
-    return sorted(p.name for p in pathlib.Path(directory).iterdir() if p.name.endswith(".tmp"))
 
 
 def start_up_interrupt(status, err):

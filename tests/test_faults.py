@@ -21,6 +21,7 @@ import time
 import h5py
 import numpy as np
 import pytest
+from conftest import one_error_line, run_cli
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as cli
@@ -35,23 +36,6 @@ def scene(scene_file):
     return scene_file("runin")
 
 
-def run_cli(argv, capsys, module=cli):
-    """Exit status, stdout and stderr of ``main(argv)``."""
-    try:
-        status = module.main([str(a) for a in argv])
-    except SystemExit as done:
-        status = done.code
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def one_error_line(err):
-    """The one ``error:`` line of stderr (notes allowed before it); fails otherwise."""
-    assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
-    lines = [line for line in err.splitlines() if not line.startswith("note: ")]
-    assert len(lines) == 1 and lines[0].startswith("error: "), \
-        f"expected one 'error:' line, got {lines!r}"
-    return lines[0]
 
 
 def leftovers(directory):
@@ -71,11 +55,11 @@ def test_new_directories_and_same_permissions(tmp_path, scene, capsys):
     """Missing directories are created; result, run file, backup and figure honour the umask."""
     old = os.umask(0o027)
     try:
-        status, _, err = run_cli([scene, "-o", tmp_path / "runs" / "run.h5", "--plot",
+        status, _, err = run_cli(cli, [scene, "-o", tmp_path / "runs" / "run.h5", "--plot",
                                   tmp_path / "figures" / "run.png"], capsys)
         assert status == 0, f"exit {status}: {err}"
-        status, _, err = run_cli([scene, "-o", tmp_path / "steady" / "result.h5",
-                                  "--no-slope-error"], capsys, steady_cli)
+        status, _, err = run_cli(steady_cli, [scene, "-o", tmp_path / "steady" / "result.h5",
+                                              "--no-slope-error"], capsys)
         assert status == 0, f"exit {status}: {err}"
     finally:
         os.umask(old)
@@ -105,7 +89,7 @@ def _failing_fsync(monkeypatch, fail_at):
 def test_write_error_names_the_last_checkpoint(tmp_path, scene, capsys, monkeypatch):
     out = tmp_path / "run.h5"
     _failing_fsync(monkeypatch, fail_at=4)  # the fourth checkpoint
-    status, _, err = run_cli([scene, "-o", out, "--checkpoint-interval", "0"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--checkpoint-interval", "0"], capsys)
     line = one_error_line(err)
     assert status == 1, f"exit {status}: {err}"
     assert f"cannot write {str(out)!r}: No space left on device" in line, line
@@ -117,7 +101,7 @@ def test_write_error_names_the_last_checkpoint(tmp_path, scene, capsys, monkeypa
 
 def test_write_error_before_any_checkpoint(tmp_path, scene, capsys, monkeypatch):
     _failing_fsync(monkeypatch, fail_at=1)
-    status, _, err = run_cli([scene, "-o", tmp_path / "run.h5"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", tmp_path / "run.h5"], capsys)
     line = one_error_line(err)
     assert status == 1, f"exit {status}: {err}"
     assert "No space left on device; nothing was saved" in line, line
@@ -151,7 +135,7 @@ def test_plot_failure_keeps_the_run(tmp_path, scene, capsys, monkeypatch):
 
     monkeypatch.setattr(transient.plotting, "plot_run", fail)
     out = tmp_path / "run.h5"
-    status, _, err = run_cli([scene, "-o", out, "--plot", tmp_path / "run.png"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--plot", tmp_path / "run.png"], capsys)
     line = one_error_line(err)
     assert status == 1, f"exit {status}: {err}"
     assert "cannot draw the figure" in line and f"the run is saved in {str(out)!r}" in line, line
@@ -161,7 +145,7 @@ def test_plot_failure_keeps_the_run(tmp_path, scene, capsys, monkeypatch):
 def test_leftover_temporary_files_are_removed(tmp_path, scene, capsys):
     stray = tmp_path / ".run.h5.k1ll3d.tmp"
     stray.write_bytes(b"half a file of a killed writer")
-    status, _, err = run_cli([scene, "-o", tmp_path / "run.h5"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", tmp_path / "run.h5"], capsys)
     assert status == 0, f"exit {status}: {err}"
     assert not stray.exists(), "the killed writer's temporary file is still there"
 
@@ -177,7 +161,7 @@ def test_first_checkpoint_follows_the_first_step(tmp_path, scene, capsys, monkey
         return real(path, result, **kw)
 
     monkeypatch.setattr(transient.output, "write_run", record)
-    status, _, err = run_cli([scene, "-o", tmp_path / "run.h5"], capsys)  # interval 10 s
+    status, _, err = run_cli(cli, [scene, "-o", tmp_path / "run.h5"], capsys)  # interval 10 s
     assert status == 0, f"exit {status}: {err}"
     assert steps[0] == 1, f"first checkpoint at step {steps[0]}, expected 1 (all: {steps})"
 
@@ -198,7 +182,7 @@ def _interrupt_at_solve(monkeypatch, k):
 
 def test_interrupt_before_the_first_checkpoint(tmp_path, scene, capsys, monkeypatch):
     _interrupt_at_solve(monkeypatch, 1)
-    status, _, err = run_cli([scene, "-o", tmp_path / "run.h5"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", tmp_path / "run.h5"], capsys)
     line = one_error_line(err)
     assert status == 130, f"exit {status}: {err}"
     assert line == "error: interrupted; nothing was saved (no checkpoint had been written)", line
@@ -208,7 +192,7 @@ def test_interrupt_before_the_first_checkpoint(tmp_path, scene, capsys, monkeypa
 def test_interrupt_after_checkpoints_then_resume(tmp_path, scene, capsys, monkeypatch):
     out = tmp_path / "run.h5"
     _interrupt_at_solve(monkeypatch, 12)
-    status, _, err = run_cli([scene, "-o", out, "--checkpoint-interval", "0"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--checkpoint-interval", "0"], capsys)
     line = one_error_line(err)
     saved = read_run(out)[0]
     assert status == 130, f"exit {status}: {err}"
@@ -219,7 +203,7 @@ def test_interrupt_after_checkpoints_then_resume(tmp_path, scene, capsys, monkey
         assert [f[f"snapshots/{name}"].compression for name in ("height", "pressure")] \
             == [None, None], "a checkpoint's snapshots are not compressed"
     monkeypatch.undo()
-    status, _, err = run_cli([scene, "-o", out, "--resume", "--checkpoint-interval", "0"],
+    status, _, err = run_cli(cli, [scene, "-o", out, "--resume", "--checkpoint-interval", "0"],
                              capsys)
     assert status == 0 and err == "", f"exit {status}: {err!r}"
     assert read_run(out)[0].status == "steady", "the resumed run must finish"
@@ -234,8 +218,8 @@ def test_steady_interrupt(tmp_path, capsys, monkeypatch, scene_file):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(steady_cli, "solve_scene", interrupted)
-    status, _, err = run_cli([scene_file("steady"), "-o", tmp_path / "r.h5"], capsys,
-                             steady_cli)
+    status, _, err = run_cli(steady_cli, [scene_file("steady"), "-o", tmp_path / "r.h5"],
+                             capsys)
     assert status == 130, f"exit {status}: {err}"
     assert one_error_line(err) == "error: interrupted; nothing was written", err
     assert not (tmp_path / "r.h5").exists(), "no result after an interrupt"
@@ -280,7 +264,7 @@ def test_second_writer_is_refused(tmp_path, scene, capsys):
     out.write_bytes(b"another run's checkpoint")
     with RunLock(out):
         for flag in ("--force", "--resume"):
-            status, _, err = run_cli([scene, "-o", out, flag], capsys)
+            status, _, err = run_cli(cli, [scene, "-o", out, flag], capsys)
             line = one_error_line(err)
             assert status == 2, f"{flag}: exit {status}: {err}"
             assert line == f"error: another run is writing {str(out)!r} (pid {os.getpid()})", \
@@ -314,7 +298,7 @@ def test_a_dead_writer_lock_is_taken_over(tmp_path, scene, capsys):
     pid = int(dead.stdout)
     out = tmp_path / "run.h5"
     lock_path(out).write_text(f"{pid}\n")  # left by a killed run
-    status, _, err = run_cli([scene, "-o", out], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out], capsys)
     assert status == 0, f"exit {status}: {err}"
     assert err == (f"note: took over the lock of {str(out)!r} left by process {pid}, which has "
                    f"ended\n"), f"stderr {err!r}"
@@ -326,7 +310,7 @@ def test_a_dead_writer_lock_is_taken_over(tmp_path, scene, capsys):
 def stopped_run(tmp_path, scene, capsys):
     """A run stopped after 3 steps, checkpointed after each (so a backup exists)."""
     out = tmp_path / "run.h5"
-    status, _, err = run_cli([scene, "-o", out, "--max-steps", "3", "--checkpoint-interval",
+    status, _, err = run_cli(cli, [scene, "-o", out, "--max-steps", "3", "--checkpoint-interval",
                               "0"], capsys)
     assert status == 1 and backup_path(out).exists(), f"exit {status}: {err}"
     return scene, out
@@ -369,7 +353,7 @@ def test_damaged_run_file_is_refused(stopped_run, capsys, damage, fragment):
     scene, out = stopped_run
     damage(out)
     damaged = out.read_bytes()
-    status, _, err = run_cli([scene, "-o", out, "--resume"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--resume"], capsys)
     line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
     assert line.startswith(f"error: run file {str(out)!r} is damaged: {fragment}"), line
@@ -378,7 +362,7 @@ def test_damaged_run_file_is_refused(stopped_run, capsys, damage, fragment):
         line
     assert out.read_bytes() == damaged, "the damaged file must be left as it is"
     backup_path(out).replace(out)  # what the message says to do
-    status, _, err = run_cli([scene, "-o", out, "--resume"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--resume"], capsys)
     assert status == 0, f"resuming from the backup: exit {status}: {err}"
 
 
@@ -386,7 +370,7 @@ def test_damaged_run_file_without_backup(stopped_run, capsys):
     scene, out = stopped_run
     backup_path(out).unlink()
     _damage_state(out)
-    status, _, err = run_cli([scene, "-o", out, "--resume"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--resume"], capsys)
     line = one_error_line(err)
     assert status == 2 and line.endswith("no intact previous checkpoint is left; start over "
                                          "with --force"), line
@@ -394,10 +378,10 @@ def test_damaged_run_file_without_backup(stopped_run, capsys):
 
 def test_other_file_as_run_file(tmp_path, scene, capsys, scene_file):
     out = tmp_path / "result.h5"
-    assert run_cli([scene_file("steady", filename="st.toml"), "-o", out, "--no-slope-error"],
-                   capsys, steady_cli)[0] == 0, "steady result"
+    assert run_cli(steady_cli, [scene_file("steady", filename="st.toml"), "-o", out,
+                                "--no-slope-error"], capsys)[0] == 0, "steady result"
     before = out.read_bytes()
-    status, _, err = run_cli([scene, "-o", out, "--resume"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--resume"], capsys)
     line = one_error_line(err)
     assert status == 2 and f"{str(out)!r} is not a run file (format 'runin.steady'" in line, line
     assert out.read_bytes() == before and read_result(out).result.n == 40, "file untouched"
@@ -406,7 +390,7 @@ def test_other_file_as_run_file(tmp_path, scene, capsys, scene_file):
 # -- what a resume continues with ----------------------------------------------------------
 def test_resume_with_another_scheme_is_recorded(stopped_run, capsys):
     scene, out = stopped_run
-    status, _, err = run_cli([scene, "-o", out, "--resume", "--scheme", "bdf2"], capsys)
+    status, _, err = run_cli(cli, [scene, "-o", out, "--resume", "--scheme", "bdf2"], capsys)
     assert status == 0, f"exit {status}: {err}"
     notes = err.splitlines()
     assert len(notes) == 1 and notes[0].startswith(
@@ -425,11 +409,11 @@ def test_resume_with_another_scheme_is_recorded(stopped_run, capsys):
 def test_passed_snapshots_are_reported_missing(tmp_path, scene_file, capsys):
     first = scene_file("runin", filename="a.toml", transient={"tol": 1e-3, "snapshots": (1.0,)})
     out = tmp_path / "run.h5"
-    status, _, err = run_cli([first, "-o", out, "--max-distance", "0.5"], capsys)
+    status, _, err = run_cli(cli, [first, "-o", out, "--max-distance", "0.5"], capsys)
     assert status == 1, f"exit {status}: {err}"
     more = scene_file("runin", filename="b.toml",
                       transient={"tol": 1e-3, "snapshots": (0.1, 1.0)})
-    status, _, err = run_cli([more, "-o", out, "--resume"], capsys)
+    status, _, err = run_cli(cli, [more, "-o", out, "--resume"], capsys)
     assert status == 0, f"exit {status}: {err}"
     assert "note: snapshots at 0.1 s* were passed before this resume (at s = 0.5" in err and \
         "are not in the file (listed in the attribute snapshots_missing)" in err, err
@@ -445,9 +429,9 @@ def test_passed_snapshots_are_reported_missing(tmp_path, scene_file, capsys):
 
 def test_resume_of_a_finished_run_leaves_it_untouched(tmp_path, scene, capsys):
     out = tmp_path / "run.h5"
-    assert run_cli([scene, "-o", out], capsys)[0] == 0, "first run"
+    assert run_cli(cli, [scene, "-o", out], capsys)[0] == 0, "first run"
     files = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
-    status, stdout, err = run_cli([scene, "-o", out, "--resume", "--scheme", "bdf2"], capsys)
+    status, stdout, err = run_cli(cli, [scene, "-o", out, "--resume", "--scheme", "bdf2"], capsys)
     assert status == 0, f"exit {status}: {err}"
     assert err == f"note: {str(out)!r} holds a finished run; nothing to continue\n", err
     assert "agreement with the steady face" in stdout, stdout
@@ -460,7 +444,7 @@ def test_a_lone_backup_is_not_dropped(stopped_run, capsys):
     out.unlink()
     backup = backup_path(out).read_bytes()
     for flag in ([], ["--resume"]):
-        status, _, err = run_cli([scene, "-o", out, *flag], capsys)
+        status, _, err = run_cli(cli, [scene, "-o", out, *flag], capsys)
         line = one_error_line(err)
         assert status == 2, f"{flag}: exit {status}: {err}"
         assert line == (f"error: {str(out)!r} does not exist but its backup "

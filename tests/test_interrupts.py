@@ -173,7 +173,8 @@ def test_entry_points_import_nothing_heavy():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=ROOT, check=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
     loaded = set(proc.stdout.split())
-    light = {"steady", "steady.cli", "steady.cli.entry", "transient", "transient.__main__"}
+    light = {"steady", "steady.lazy", "steady.cli", "steady.cli.entry", "transient",
+             "transient.__main__"}
     heavy = sorted(name for name in loaded
                    if name.split(".")[0] in ("numpy", "scipy", "h5py", "matplotlib")
                    or (name.split(".")[0] in ("steady", "transient") and name not in light))

@@ -19,6 +19,7 @@ import sys
 import h5py
 import numpy as np
 import pytest
+from conftest import one_error_line, run_cli, temporaries
 
 import steady.cli.fit as fit_cli
 import steady.cli.solve as steady_cli
@@ -40,28 +41,7 @@ STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 OTHER = b"the other writer's finished result"
 
 
-def run_cli(module, argv, capsys):
-    """Exit status, stdout and stderr of ``module.main(argv)``."""
-    try:
-        status = module.main([str(a) for a in argv])
-    except SystemExit as done:
-        status = done.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
-
-def one_error_line(err):
-    """The one ``error:`` line of stderr (notes allowed before it)."""
-    assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
-    lines = [line for line in err.splitlines() if not line.startswith("note: ")]
-    assert len(lines) == 1 and lines[0].startswith("error: "), \
-        f"expected one 'error:' line, got {lines!r}"
-    return lines[0]
-
-
-def temporaries(directory):
-    """Temporary files left in a directory."""
-    return sorted(p.name for p in pathlib.Path(directory).iterdir() if p.name.endswith(".tmp"))
 
 
 def appeared(path):

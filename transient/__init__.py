@@ -34,7 +34,7 @@ The names below are imported from their modules on first use, so that
 before numpy, scipy and h5py load (:mod:`steady.cli.entry`).
 """
 
-import importlib
+from steady.lazy import lazy_names
 
 #: Public names and the module of each.
 _MODULE_OF = {
@@ -89,15 +89,4 @@ _MODULE_OF = {
 __all__ = sorted(_MODULE_OF)
 
 
-def __getattr__(name):
-    """A public name, imported from its module on first use (PEP 562)."""
-    if name not in _MODULE_OF:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_MODULE_OF[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    """The module's names, the lazily imported ones included."""
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(__name__, _MODULE_OF)
