@@ -42,8 +42,8 @@ from .schema import SCALE_RANGE as _SCALE_RANGE
 from .text import shorten
 from .wear import as_wear_law
 
-__all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_scale", "check_scales",
-           "input_names"]
+__all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_phase_names", "check_scale",
+           "check_scales", "default_phase_names", "input_names"]
 
 #: The range of every scale of a problem, in SI units (m, N, Pa, 1/Pa, 1): the
 #: lengths of the face and its pixel, the force, the modulus, the mean and phase
@@ -88,6 +88,40 @@ def input_names(outline, normal_force, E_star, n=None, wear=None):
                         + ", ".join(f"{k}={v!r}" for k, v in lengths.items()) + ")")
     names.update(normal_force=f"normal_force = {normal_force!r}", E_star=f"E_star = {E_star!r}",
                  n=f"n = {n!r}", wear=getattr(wear, "describe", lambda: repr(wear))())
+    return names
+
+
+def default_phase_names(n_phases):
+    """``("phase 0", "phase 1", ...)``: the names of phases a scene does not name."""
+    return tuple(f"phase {i}" for i in range(int(n_phases)))
+
+
+def check_phase_names(names, n_phases):
+    """The phase names as a tuple of str: one per phase, non-empty, distinct, one line each.
+
+    Raises
+    ------
+    ValueError
+        Another count than ``n_phases``, a name that is not a non-empty
+        string, a line break or a repeated name; the message names it.
+    """
+    if isinstance(names, str):
+        raise ValueError(f"phase names must be a sequence of strings, one per phase, got "
+                         f"{shorten(names)}")
+    names = tuple(names)
+    if len(names) != n_phases:
+        raise ValueError(f"{len(names)} phase name(s) given for {n_phases} phase(s): "
+                         f"{shorten(list(names))}")
+    seen = set()
+    for i, name in enumerate(names):
+        if not isinstance(name, str) or not name.strip():
+            raise ValueError(f"the name of phase {i} must be a non-empty string, got "
+                             f"{shorten(name)}")
+        if any(c in name for c in "\n\r\0"):
+            raise ValueError(f"the name of phase {i} must be one line, got {shorten(name)}")
+        if name in seen:
+            raise ValueError(f"phase names must be distinct: {name!r} is given twice")
+        seen.add(name)
     return names
 
 
@@ -212,6 +246,10 @@ class FacePhases:
     n_phases : int
         ``P``, the phases the map declares; every one must have a pixel on
         the face.
+    names : sequence of str, optional
+        A name for each phase (``[phases] names``), used in summaries,
+        figures and files; default ``("phase 0", "phase 1", ...)``.  Phases
+        are numbered from 0 everywhere.
 
     Attributes
     ----------
@@ -229,6 +267,7 @@ class FacePhases:
     grid: FaceGrid
     labels: np.ndarray
     n_phases: int
+    names: tuple | None = None
 
     def __post_init__(self):
         """Check the labels against the grid and the declared phases; store them read-only."""
@@ -249,6 +288,9 @@ class FacePhases:
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "n_phases", int(self.n_phases))
         object.__setattr__(self, "counts", counts)
+        object.__setattr__(self, "names", default_phase_names(self.n_phases)
+                           if self.names is None
+                           else check_phase_names(self.names, self.n_phases))
 
     @property
     def outline(self):
@@ -339,7 +381,8 @@ class Problem:
             the scene's keys).
         """
         grid = scene.grid(n)
-        phases = FacePhases(grid, scene.phase_labels(grid), scene.geometry.n_phases)
+        phases = FacePhases(grid, scene.phase_labels(grid), scene.geometry.n_phases,
+                            getattr(scene, "phase_names", None))
         try:
             check_scales(scene.outline, scene.normal_force, scene.E_star, n=grid.n,
                          wear=scene.wear, counts=phases.counts, names=scene.input_names())
@@ -388,6 +431,11 @@ class Problem:
     def n_phases(self):
         """Number of phases ``P``."""
         return self.phases.n_phases
+
+    @property
+    def phase_names(self):
+        """A name for each phase, phase 0 first (:attr:`FacePhases.names`)."""
+        return self.phases.names
 
     # -- derived ---------------------------------------------------------
     @functools.cached_property

@@ -53,12 +53,12 @@ from . import inclusions, micrograph  # noqa: F401 -- they register their map ki
 from .labels import validate_labels
 from .outline import FaceGrid, outline_from_table
 from .phases import PHASE_MAPS, Voronoi
-from .problem import check_scales
+from .problem import check_phase_names, check_scales
 from .schema import Context, Key, read_table
 from .text import one_line, shorten
 from .wear import wear_law_from_table
 
-__all__ = ["MAX_SCENE_BYTES", "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene",
+__all__ = ["MAX_SCENE_BYTES", "PHASE_KEYS", "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene",
            "parse_scene"]
 
 #: Largest scene file read, bytes: a scene is a few lines; large data belong in
@@ -74,6 +74,12 @@ SECTIONS = {
     "grid": (Key("n", "integer", low=2, low_open=False, required=True,
                  doc="pixels along the longer side of the face's bounding box"),),
 }
+
+#: The keys of ``[phases]`` besides the map (read by its kind).
+PHASE_KEYS = (Key("names", "strings",
+                  doc="a name for each phase, in the order of the phase indices 0, 1, ... "
+                      "(default: 'phase 0', 'phase 1', ...); used in summaries, figures and "
+                      "files"),)
 
 #: Every section a scene file has: those of :data:`SECTIONS` and the ones that name a kind.
 CORE_SECTIONS = ("punch", "load", "counterbody", "grid", "wear", "phases")
@@ -115,6 +121,9 @@ class Scene:
     ignored_sections : tuple of str
         Run-in sections (:data:`RUN_IN_SECTIONS`) present in the file but
         not named in ``extra_sections``, sorted.
+    phase_names : tuple of str or None
+        ``[phases] names``, one per phase; None when the scene names none
+        (:attr:`steady.problem.FacePhases.names` then holds the defaults).
     """
 
     outline: object
@@ -128,6 +137,7 @@ class Scene:
     extra: types.MappingProxyType = dataclasses.field(
         default_factory=lambda: types.MappingProxyType({}))
     ignored_sections: tuple = ()
+    phase_names: tuple | None = None
 
     @property
     def n_phases(self):
@@ -273,7 +283,7 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
             raise ValueError(f"[{name}] must be a table, got {shorten(doc[name])}")
     values = {name: read_table(doc[name], f"[{name}]", keys, base_dir)
               for name, keys in SECTIONS.items()}
-    read_table(doc["phases"], "[phases]", (), ignore=("map",))  # the map is read by its kind
+    phase_keys = read_table(doc["phases"], "[phases]", PHASE_KEYS, ignore=("map",))
     if "map" not in doc["phases"]:
         raise ValueError("missing key 'map' in [phases]")
     outline = outline_from_table(doc["punch"], base_dir)
@@ -287,6 +297,12 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
         raise ValueError(f"[grid] n: {err}") from None
     geometry = _geometry(doc["phases"]["map"], outline, base_dir, n)
     wear = wear_law_from_table(doc["wear"], base_dir, n_phases=geometry.n_phases)
+    names = phase_keys.get("names")
+    if names is not None:
+        try:
+            names = check_phase_names(names, geometry.n_phases)
+        except ValueError as err:
+            raise ValueError(f"[phases] names: {err}") from None
     check_scales(outline, force, E_star, n=n, wear=wear,
                  names=input_names(outline, force, E_star, n, wear))
     try:
@@ -298,7 +314,8 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
     return Scene(outline=outline, normal_force=force, E_star=E_star, n=n, wear=wear,
                  geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
-                 text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored)
+                 text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
+                 phase_names=names)
 
 
 def _toml(text):

@@ -37,7 +37,8 @@ from .text import shorten
 __all__ = ["SCALE_RANGE", "SCALE_UNITS", "Context", "Key", "Registry", "read_table"]
 
 #: Types a key may hold.
-TYPES = ("number", "integer", "string", "path", "numbers", "integers", "pairs", "pair")
+TYPES = ("number", "integer", "string", "path", "numbers", "integers", "pairs", "pair",
+         "strings")
 
 #: The range of every scale of a problem, in SI units: lengths, forces,
 #: moduli and what follows from them (:func:`steady.problem.check_scales`).
@@ -61,8 +62,8 @@ class Key:
         ``"number"`` (an int or a float, finite), ``"integer"``,
         ``"string"`` (non-empty), ``"path"`` (a non-empty string, resolved
         against the scene file's directory), ``"numbers"``,
-        ``"integers"`` (arrays of those), ``"pairs"`` (an array of
-        ``[x, y]``), ``"pair"`` (one ``[x, y]``).
+        ``"integers"``, ``"strings"`` (arrays of those), ``"pairs"`` (an
+        array of ``[x, y]``), ``"pair"`` (one ``[x, y]``).
     unit : str, optional
         Unit of the value (``"m"``, ``"N"``, ``"Pa"``, ``"1/Pa"``, ``"1"``
         for a pure number, ``"s*"`` for a distance in run-in units, ...);
@@ -124,7 +125,8 @@ class Key:
         """What the key holds, for messages and docs: ``"a number > 0 (m)"``."""
         noun = {"number": "a number", "integer": "an integer", "string": "a string",
                 "path": "a file name", "numbers": "an array of numbers",
-                "integers": "an array of integers", "pairs": "an array of [x, y] pairs",
+                "integers": "an array of integers",
+                "strings": "an array of non-empty strings", "pairs": "an array of [x, y] pairs",
                 "pair": "an [x, y] pair"}[self.type]
         bound = self.range_text()
         if bound:
@@ -147,13 +149,15 @@ class Key:
 
         Returns
         -------
-        float, int, str, pathlib.Path, tuple of float or int, or tuple of (float, float)
+        float, int, str, pathlib.Path, tuple of float, int or str, or tuple of
+        (float, float)
         """
         name = f"{where} {self.name}" if where else self.name
-        if self.type in ("numbers", "integers", "pairs"):
+        if self.type in ("numbers", "integers", "pairs", "strings"):
             if not isinstance(value, list):
                 raise ValueError(f"{name} must be {self.describe()}, got {shorten(value)}")
-            item = {"numbers": "number", "integers": "integer", "pairs": "pair"}[self.type]
+            item = {"numbers": "number", "integers": "integer", "pairs": "pair",
+                    "strings": "string"}[self.type]
             single = dataclasses.replace(self, type=item)
             try:
                 values = tuple(single._scalar(v, name, value, base_dir) for v in value)

@@ -1,6 +1,7 @@
 """Scene files: parsing, validation, extra sections, shipped scenes."""
 
 import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -8,6 +9,8 @@ from conftest import scene_text
 
 from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi
 from steady.scene import load_scene, parse_scene
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
 
@@ -238,3 +241,22 @@ def test_phase_labels_name_a_phase_without_face_pixel(tmp_path):
                                      f"n = 8"), f"{err.value}"
     ok = parse_scene(BASE, tmp_path)
     assert np.array_equal(ok.phase_labels(), ok.geometry.labels(64)), "labels of a good map"
+
+
+def test_phase_names_reach_the_problem_and_are_checked():
+    """``[phases] names`` is one name per phase, distinct; the default numbers from 0."""
+    from steady.problem import Problem
+    base = (ROOT / "studies/scenes/rods_brass_in_steel.toml")
+    scene = load_scene(base)
+    assert scene.phase_names == ("steel", "brass")
+    problem = Problem.from_scene(scene, n=48)
+    assert problem.phase_names == ("steel", "brass")
+    text = base.read_text()
+    unnamed = parse_scene(text.replace('names = ["steel", "brass"]', ""), base.parent)
+    assert Problem.from_scene(unnamed, n=48).phase_names == ("phase 0", "phase 1")
+    for bad, words in (('["steel"]', "1 phase name(s) given for 2"),
+                       ('["steel", "steel"]', "'steel' is given twice"),
+                       ('["steel", ""]', "[phases] names must be an array of non-empty strings"),
+                       ('"steel"', "[phases] names must be an array")):
+        with pytest.raises(ValueError, match=re.escape(words)):
+            parse_scene(text.replace('["steel", "brass"]', bad), base.parent)
