@@ -145,7 +145,8 @@ def draw_map(ax, field, extent, *, unit="mm", **imshow):
     Parameters
     ----------
     ax : matplotlib.axes.Axes
-    field : ndarray, shape (nx, ny)
+    field : ndarray or masked array, shape (nx, ny)
+        Masked entries and NaN are drawn in the colour map's "bad" colour.
     extent : sequence of 4 float
         ``[x0, x1, y0, y1]`` of the grid's box (:func:`grid_extent`).
     unit : str, optional
@@ -157,7 +158,7 @@ def draw_map(ax, field, extent, *, unit="mm", **imshow):
     -------
     matplotlib.image.AxesImage
     """
-    image = ax.imshow(np.asarray(field).T, origin="lower", extent=tuple(extent),
+    image = ax.imshow(np.asanyarray(field).T, origin="lower", extent=tuple(extent),
                       interpolation="nearest", **imshow)
     ax.set_xlabel(f"x ({unit})")
     ax.set_ylabel(f"y ({unit})")

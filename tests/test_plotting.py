@@ -170,9 +170,14 @@ def test_phase_names_come_from_the_scene(tmp_path, scene_file):
 
 
 def test_phases_numbered_from_zero_without_names(wide_result):
-    texts = [t.get_text() for t in plot_phases(wide_result, details=False)
-             .axes[0].get_legend().get_texts()]
+    ax = plot_phases(wide_result, details=False).axes[0]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
     assert texts == ["phase 0", "phase 1"]
+    disk = solve(problem(GEOMETRIES["voronoi"], [1e-13, 1e-12], n=24))
+    drawn = plot_phases(disk).axes[0].images[0].get_array()
+    assert (disk.labels < 0).any()
+    np.testing.assert_array_equal(np.ma.getmaskarray(drawn).T, disk.labels < 0,
+                                  err_msg="off the face masked (drawn white)")
     assert phase_names_from_scene("[phases]\nnames = ['a']\n", 2) == ("phase 0", "phase 1")
     assert phase_names_from_scene("not toml [", 1) == ("phase 0",)
 
