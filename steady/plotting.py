@@ -35,9 +35,10 @@ from .output import read_result
 from .problem import default_phase_names
 from .relief import PlaneFit
 
-__all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "draw_map", "grid_extent",
-           "new_figure", "phase_colours", "phase_names_from_scene", "plot_face", "plot_file",
-           "plot_phases", "pressure_unit", "relief", "result_figure", "save_png", "set_fonts"]
+__all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "grid_extent",
+           "map_height", "new_figure", "phase_colours", "phase_names_from_scene", "plot_face",
+           "plot_file", "plot_phases", "pressure_unit", "relief", "result_figure", "save_png",
+           "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
@@ -166,6 +167,30 @@ def draw_map(ax, field, extent, *, unit="mm", **imshow):
     return image
 
 
+def colour_bar(image, label):
+    """A colour bar beside a map: on the right, or below a map more than 1.5 times wider than tall.
+
+    Parameters
+    ----------
+    image : matplotlib.image.AxesImage
+        From :func:`draw_map`.
+    label : str
+
+    Returns
+    -------
+    matplotlib.colorbar.Colorbar
+        Its axes' fonts set (:func:`set_fonts`).
+    """
+    x0, x1, y0, y1 = image.get_extent()
+    wide = abs(x1 - x0) > 1.5 * abs(y1 - y0)
+    fig = image.axes.get_figure(root=True)
+    bar = fig.colorbar(image, ax=image.axes, location="bottom" if wide else "right",
+                       shrink=0.9, aspect=30)
+    bar.set_label(label)
+    set_fonts(bar.ax)
+    return bar
+
+
 def relief(face, face_mask, pixel_size, *, remove="plane"):
     """The face's height about its least-squares plane or its mean over the face.
 
@@ -270,10 +295,25 @@ def _phase_names(res, scene_text, names):
     return phase_names_from_scene(scene_text, res.n_phases)
 
 
-def _map_size(shape, width):
-    """Height in inches of a panel ``width`` inches wide that draws a grid of ``shape``."""
+def map_height(shape, width):
+    """Height in inches of a map panel ``width`` inches wide for a grid of ``shape``.
+
+    Room for the map at its aspect (within 0.9 to 7 inches), its axis
+    labels and title, and a colour bar below a wide map (:func:`colour_bar`).
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(nx, ny)`` of the grid.
+    width : float, inches
+
+    Returns
+    -------
+    float, inches
+    """
     nx, ny = shape
-    return float(np.clip(0.75 * width * ny / nx, 1.6, 7.0)) + 0.9
+    below = 0.8 if nx > 1.5 * ny else 0.0
+    return float(np.clip(0.75 * width * ny / nx, 0.9, 7.0)) + 0.8 + below
 
 
 def plot_phases(source, *, ax=None, names=None, details=True):
@@ -299,7 +339,7 @@ def plot_phases(source, *, ax=None, names=None, details=True):
     """
     res, scene_text = _steady(source)
     names = _phase_names(res, scene_text, names)
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, _map_size(res.shape, COLUMN_WIDTH) + 0.6))
+    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH) + 0.6))
     colours = phase_colours(res.n_phases)
     cmap = ListedColormap(colours).with_extremes(bad="white")
     norm = BoundaryNorm(np.arange(res.n_phases + 1) - 0.5, res.n_phases)
@@ -346,16 +386,15 @@ def plot_face(source, *, ax=None, remove="plane", units="um", cmap="viridis"):
     res, _ = _steady(source)
     if units not in ("um", "normalised"):
         raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, _map_size(res.shape, COLUMN_WIDTH)))
+    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH)))
     height = relief(res.face, res.labels >= 0, res.pixel_size, remove=remove)
     if units == "um":
         field, unit = height * 1e6, "µm"
     else:
         field, unit = height / (res.reference_slope * res.scale), r"$\nabla f^0_\infty L$"
     image = draw_map(ax, field, grid_extent(res.shape, res.pixel_size), cmap=cmap)
-    bar = fig.colorbar(image, ax=ax, shrink=0.9, aspect=30)
-    bar.set_label(f"height {_RELIEF[remove]} ({unit})")
-    set_fonts(ax, bar.ax)
+    colour_bar(image, f"height {_RELIEF[remove]} ({unit})")
+    set_fonts(ax)
     return fig
 
 
@@ -396,7 +435,7 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
     """
     res, scene_text = _steady(stored)
     if axes is None:
-        fig = new_figure(PAGE_WIDTH, _map_size(res.shape, 0.5 * PAGE_WIDTH) + 0.9)
+        fig = new_figure(PAGE_WIDTH, map_height(res.shape, 0.5 * PAGE_WIDTH) + 0.9)
         axes = fig.subplots(1, 2)
     else:
         fig = axes[0].get_figure(root=True)

@@ -32,7 +32,9 @@ from steady.plotting import (
     COLUMN_WIDTH,
     FONT_SIZES,
     PAGE_WIDTH,
+    colour_bar,
     draw_map,
+    map_height,
     new_figure,
     pressure_unit,
     relief,
@@ -416,12 +418,6 @@ def extent(shape, outline):
     return [-0.5 * nx * h_mm, 0.5 * nx * h_mm, -0.5 * ny * h_mm, 0.5 * ny * h_mm], "mm"
 
 
-def _map_height(shape, width):
-    """Height in inches of a map panel ``width`` inches wide for a grid of ``shape``."""
-    nx, ny = shape
-    return float(np.clip(0.75 * width * ny / nx, 1.4, 6.0)) + 0.7
-
-
 def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cmap="viridis"):
     """The worn face as relief about its plane (or mean), the final one or a snapshot.
 
@@ -452,7 +448,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
     if units not in ("um", "normalised"):
         raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
     result, attrs, _, _ = _run(source)
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, _map_height(result.shape, COLUMN_WIDTH)))
+    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
     outline = _outline(result, attrs)
     ext, unit = extent(result.shape, outline)
     h = 2.0 * outline.scale / max(result.shape) if outline is not None else 1.0
@@ -469,9 +465,8 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
                     else (height / result.depth_scale, "f*"))
     image = draw_map(ax, field, ext, unit=unit, cmap=cmap)
     about = "the best-fit plane" if remove == "plane" else "the mean"
-    bar = fig.colorbar(image, ax=ax, shrink=0.9, aspect=30)
-    bar.set_label(f"height about {about} ({scale})")
-    set_fonts(ax, bar.ax)
+    colour_bar(image, f"height about {about} ({scale})")
+    set_fonts(ax)
     return fig
 
 
@@ -497,7 +492,7 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
     if units not in ("Pa", "normalised"):
         raise ValueError(f"units must be 'Pa' or 'normalised', got {units!r}")
     result, attrs, _, _ = _run(source)
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, _map_height(result.shape, COLUMN_WIDTH)))
+    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
     ext, unit = extent(result.shape, _outline(result, attrs))
     pressure = np.where(result.face_mask, result.pressure, np.nan)
     if units == "Pa":
@@ -505,9 +500,8 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
     else:
         factor, label = result.pixel_mean_pressure, "mean pressure"
     image = draw_map(ax, pressure / factor, ext, unit=unit, cmap=cmap)
-    bar = fig.colorbar(image, ax=ax, shrink=0.9, aspect=30)
-    bar.set_label(f"pressure ({label})")
-    set_fonts(ax, bar.ax)
+    colour_bar(image, f"pressure ({label})")
+    set_fonts(ax)
     return fig
 
 
@@ -545,9 +539,9 @@ def run_figure(result, attrs=None, comparison=None, *, units="m", normalised=Tru
     if isinstance(result, (str, os.PathLike)):
         result, attrs, comparison, _ = _run(result)
     attrs, comparison = dict(attrs or {}), dict(comparison or {})
-    map_height = _map_height(result.shape, 0.5 * PAGE_WIDTH)
-    fig = new_figure(PAGE_WIDTH, 2.6 + 2.3 + map_height + 0.5)
-    grid = fig.add_gridspec(3, 2, height_ratios=(2.6, 2.3, map_height))
+    maps = map_height(result.shape, 0.5 * PAGE_WIDTH)
+    fig = new_figure(PAGE_WIDTH, 2.6 + 2.3 + maps + 0.5)
+    grid = fig.add_gridspec(3, 2, height_ratios=(2.6, 2.3, maps))
     ax_slope = fig.add_subplot(grid[0, :])
     ax_height = fig.add_subplot(grid[1, 0])
     ax_conv = fig.add_subplot(grid[1, 1], sharex=ax_height)
