@@ -118,6 +118,21 @@ def test_a_face_wider_in_x_is_drawn_wider_than_tall(wide_result):
         assert width == pytest.approx(2 * height, rel=0.02), f"{width} x {height} pixels"
 
 
+@pytest.mark.parametrize(("outline", "below"), [(WIDE, True), (Circle(4e-3), False),
+                                                (Rectangle(6e-3, 4e-3), False)])
+def test_colour_bar_below_a_wide_map_else_beside(outline, below):
+    res = solve(problem(GEOMETRIES["voronoi"], [1e-13, 1e-12], n=24, outline=outline))
+    fig = plot_face(res)
+    fig.canvas.draw()
+    face, bar = (ax.get_window_extent() for ax in fig.axes)
+    if below:
+        assert bar.y1 < face.y0 and bar.width > 5 * bar.height, (face, bar)
+    else:
+        assert bar.x0 > face.x1 and bar.height > 5 * bar.width, (face, bar)
+    assert (fig.axes[1].get_xlabel() if below else fig.axes[1].get_ylabel()) == \
+        "height about the best-fit plane (µm)"
+
+
 # -- units and labels -----------------------------------------------------------------------
 
 def test_face_is_drawn_as_relief_in_micrometres(wide_result):
@@ -129,9 +144,10 @@ def test_face_is_drawn_as_relief_in_micrometres(wide_result):
     np.testing.assert_allclose(drawn[mask], expected[mask], rtol=1e-12,
                                err_msg="relief in µm")
     assert abs(np.mean(drawn[mask])) < 1e-9 * np.ptp(drawn[mask]), "zero mean on the face"
-    assert bar.get_ylabel() == "height about the best-fit plane (µm)"
+    # Below the map, twice as wide as tall.
+    assert bar.get_xlabel() == "height about the best-fit plane (µm)"
     mean = plot_face(wide_result, remove="mean").axes[1]
-    assert mean.get_ylabel() == "height about the mean (µm)"
+    assert mean.get_xlabel() == "height about the mean (µm)"
 
 
 def test_face_in_normalised_units(wide_result):
@@ -141,7 +157,7 @@ def test_face_in_normalised_units(wide_result):
     unit = wide_result.reference_slope * wide_result.scale
     expected = relief(wide_result.face, mask, wide_result.pixel_size) / unit
     np.testing.assert_allclose(drawn[mask], expected[mask], rtol=1e-12)
-    assert r"$\nabla f^0_\infty L$" in fig.axes[1].get_ylabel()
+    assert r"$\nabla f^0_\infty L$" in fig.axes[1].get_xlabel()
     with pytest.raises(ValueError, match="units must be 'um' or 'normalised', got 'mm'"):
         plot_face(wide_result, units="mm")
 

@@ -160,7 +160,7 @@ def test_face_is_relief_with_zero_mean(result):
     np.testing.assert_allclose(drawn[mask], expected[mask], rtol=1e-12)
     assert abs(drawn[mask].mean()) < 1e-9 * np.ptp(drawn[mask]), "zero mean on the face"
     assert np.all(np.isnan(drawn[~mask]))
-    assert fig.axes[1].get_ylabel() == "height about the best-fit plane (µm)"
+    assert fig.axes[1].get_xlabel() == "height about the best-fit plane (µm)", "bar below"
     snapshot = _drawn(plot_face(result, snapshot=0, remove="mean", units="normalised").axes[0])
     assert abs(np.nanmean(snapshot)) < 1e-9 * np.nanmax(np.abs(snapshot))
     with pytest.raises(ValueError, match="snapshot 5 out of range: the run has 1"):
@@ -172,7 +172,7 @@ def test_pressure_in_kilopascals(result):
     drawn = _drawn(fig.axes[0])
     mask = result.face_mask
     np.testing.assert_allclose(drawn[mask], result.pressure[mask] / 1e3, rtol=1e-15)
-    assert fig.axes[1].get_ylabel() == "pressure (kPa)"
+    assert fig.axes[1].get_xlabel() == "pressure (kPa)", "colour bar below the wide map"
     normalised = _drawn(plot_pressure(result, units="normalised").axes[0])
     assert np.mean(normalised[mask]) == pytest.approx(1.0, rel=1e-9), "mean pressure 1"
 
