@@ -315,7 +315,7 @@ def _draw_convergence(ax, result, units):
 
 def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",), ax=None,
                  secondary=True, legend=True):
-    """The rms slope (and other measures) against the sliding distance.
+    r"""The rms slope (and other measures) against the sliding distance.
 
     Parameters
     ----------
@@ -347,6 +347,20 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
     ------
     ValueError
         Unknown ``units`` or quantity, or not as many axes as quantities.
+
+    Examples
+    --------
+    >>> from steady import Circle, FacePhases, Problem, Voronoi
+    >>> from transient import initial_face
+    >>> from transient.problem import WearProblem
+    >>> from transient.runin import RunOptions, run_in
+    >>> grid = Circle(4e-3).grid(24)
+    >>> phases = FacePhases(grid, Voronoi(16, (0.5, 0.5), seed=2024).labels(grid), 2)
+    >>> problem = WearProblem(Problem(phases, [1e-13, 1e-12], 10.0, 1.3e6))
+    >>> result = run_in(problem, initial_face.flat(problem.grid), RunOptions(tol=1e-2))
+    >>> fig = plot_history(result, units="m")
+    >>> print(fig.axes[0].get_xlabel(), "|", fig.axes[0].child_axes[0].get_xlabel())
+    sliding distance (m) | sliding distance / s*  (s* = 3.08$\times 10^{4}$ m)
     """
     _check_units(units)
     quantities = (quantities,) if isinstance(quantities, str) else tuple(quantities)
