@@ -15,6 +15,7 @@ from transient.comparison import compare_with_steady
 from transient.output import read_run, write_run
 from transient.plotting import (
     add_distance_axis,
+    distance_scale,
     format_metres,
     plot_face,
     plot_history,
@@ -57,7 +58,7 @@ def result(run_file):
 def _steps(result):
     """Distances of the steps after s = 0, m, and their mask (a final jump to 1e8 s* left out)."""
     d = np.asarray(result.history["distance"])
-    pos = (d > 0) & (d < 1e6 * result.run_in_distance)
+    pos = (d > 0) & (d < 1e6 * distance_scale(result))
     return d, pos
 
 
@@ -98,7 +99,7 @@ def test_history_against_distance_in_metres(run_file, result):
     assert ax.get_ylabel() == r"rms slope / $\nabla f^0_\infty$"
     assert ax.get_xticklabels()[0].get_text() == "0", "s = 0 at the left edge"
     top = ax.child_axes[0]
-    s_star = result.run_in_distance
+    s_star = distance_scale(result)
     assert format_metres(s_star) in top.get_xlabel(), "s* printed on the figure"
     fig.canvas.draw()
     assert top.get_xlim() == pytest.approx(np.array(ax.get_xlim()) / s_star, rel=1e-12)
@@ -113,7 +114,7 @@ def test_history_in_s_star_and_absolute_slope(result):
     fig = plot_history(result, units="s*", normalised=False)
     ax = fig.axes[0]
     d, pos = _steps(result)
-    np.testing.assert_allclose(ax.lines[0].get_xdata(), d[pos] / result.run_in_distance,
+    np.testing.assert_allclose(ax.lines[0].get_xdata(), d[pos] / distance_scale(result),
                                rtol=1e-15)
     np.testing.assert_array_equal(ax.lines[0].get_ydata(), result.history["rms_slope"][pos])
     assert ax.get_ylabel() == "rms slope"
@@ -139,15 +140,29 @@ def test_history_panels_and_given_axes(result):
         plot_history(result, units="mm")
 
 
-def test_run_in_distance_is_marked_when_recorded(result):
-    assert run_in_distance_of(result, {}) is None
-    assert run_in_distance_of(result, {"runin_distance": np.nan}) is None
-    attrs = {"runin_distance": 1234.5}
-    assert run_in_distance_of(result, attrs) == 1234.5
-    ax = run_figure(result, attrs).axes[0]
+def test_run_in_distance_is_marked_from_the_file_table(result):
+    """The run file's ``run_in_distance`` table: the 1 % row, if the run reached it."""
+    table = {"within": np.array([0.01, 0.001]), "reached": np.array([1.0, 0.0]),
+             "distance": np.array([1234.5, np.nan])}
+    assert run_in_distance_of(result, table=table) == 1234.5
+    assert run_in_distance_of(result, 0.001, table=table) is None, "not reached"
+    assert run_in_distance_of(result, 0.1, table=table) is None, "no such row"
+    ax = run_figure(result, run_in=table).axes[0]
     marks = [line for line in ax.lines if line.get_label().startswith("run-in distance")]
     assert len(marks) == 1 and list(marks[0].get_xdata()) == [1234.5, 1234.5]
-    assert marks[0].get_label() == "run-in distance 1.23e+03 m"
+    assert marks[0].get_label() == "run-in distance (1 %) 1230 m"
+    in_s_star = run_figure(result, run_in=table, units="s*").axes[0]
+    mark = [line for line in in_s_star.lines if line.get_label().startswith("run-in")][0]
+    assert mark.get_xdata()[0] == pytest.approx(1234.5 / distance_scale(result), rel=1e-15)
+
+
+def test_run_in_distance_without_a_table_comes_from_the_result(result):
+    method = getattr(result, "run_in_distance", None)
+    if not callable(method):
+        assert run_in_distance_of(result) is None, "nothing recorded: no mark"
+        return
+    found = method(0.01)
+    assert run_in_distance_of(result) == (found.distance_m if found.reached else None)
 
 
 # -- the face and its pressure ------------------------------------------------------------

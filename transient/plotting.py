@@ -21,6 +21,7 @@ too (``studies/runin_history.py``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 
@@ -44,14 +45,13 @@ from steady.plotting import (
 
 from .output import read_run
 
-__all__ = ["RUN_IN_DISTANCE_NAMES", "add_distance_axis", "draw_rms_slope_history", "extent",
-           "format_metres", "plot_face", "plot_history", "plot_pressure", "plot_run", "run_figure",
-           "run_in_distance_of"]
+__all__ = ["RUN_IN_WITHIN", "add_distance_axis", "distance_scale", "draw_rms_slope_history",
+           "extent", "format_metres", "plot_face", "plot_history", "plot_pressure", "plot_run",
+           "run_figure", "run_in_distance_of"]
 
-#: Where a run file or result may hold the run-in distance (m, the distance
-#: after which the rms slope stays within 1 % of its final value): result
-#: attributes, then root attributes of the file, first found is used.
-RUN_IN_DISTANCE_NAMES = ("runin_distance", "run_in_length")
+#: The tolerance of the run-in distance marked on the history: the distance
+#: after which the run stays within 1 % of the steady state.
+RUN_IN_WITHIN = 0.01
 
 _QUANTITIES = ("rms_slope", "rms_height", "convergence")
 # Histories whose last step jumped to "infinity" when the steady state was
@@ -82,7 +82,7 @@ def _distance_ticks(left, right):
     return [t for t in ticks if 10 * left < t <= right * (1 + 1e-12)]
 
 
-def draw_rms_slope_history(ax, history, run_in_distance, reference_slope, *, steady=None,
+def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, steady=None,
                            color="C0", label="continuum estimate",
                            plain_label="plain pixel value", units="s*"):
     """The rms slope against the sliding distance, with its error band.
@@ -99,7 +99,7 @@ def draw_rms_slope_history(ax, history, run_in_distance, reference_slope, *, ste
         ``distance`` (m), ``rms_slope`` and, when present,
         ``rms_slope_error``, ``rms_slope_spatial_error``, ``rms_slope_plain``
         (:data:`transient.runin.HISTORY_UNITS`).
-    run_in_distance : float, m
+    distance_scale : float, m
         ``s*``, the distance scale of the run.
     reference_slope : float
         The unit of the slope axis: ``grad_f0`` for the normalised rms
@@ -122,8 +122,8 @@ def draw_rms_slope_history(ax, history, run_in_distance, reference_slope, *, ste
         The position of the ``s = 0`` point on the axis, in ``units``.
     """
     _check_units(units)
-    scale = 1.0 if units == "s*" else float(run_in_distance)
-    s = np.asarray(history["distance"], dtype=float) / run_in_distance
+    scale = 1.0 if units == "s*" else float(distance_scale)
+    s = np.asarray(history["distance"], dtype=float) / distance_scale
     y = np.asarray(history["rms_slope"], dtype=float) / reference_slope
     err = _error_band(history, reference_slope)
     pos = s > 0
@@ -169,9 +169,11 @@ def format_metres(value):
 
     Examples
     --------
-    >>> print(format_metres(46153.8), "|", format_metres(0.25))
-    4.62$\times 10^{4}$ m | 0.25 m
+    >>> print(format_metres(46153.8), "|", format_metres(1234.5), "|", format_metres(0.25))
+    4.62$\times 10^{4}$ m | 1230 m | 0.25 m
     """
+    if 100 <= abs(value) < 1e4:  # three significant figures without an exponent
+        return f"{float(f'{value:.3g}'):.0f} m"
     if value == 0 or 1e-3 <= abs(value) < 1e4:
         return f"{value:.3g} m"
     exponent = math.floor(math.log10(abs(value)))
@@ -181,14 +183,14 @@ def format_metres(value):
     return f"{mantissa:.3g}$\\times 10^{{{exponent}}}$ m"
 
 
-def add_distance_axis(ax, run_in_distance, units="m"):
+def add_distance_axis(ax, distance_scale, units="m"):
     """A secondary distance axis on top: ``s*`` over an axis in metres, or the reverse.
 
     Parameters
     ----------
     ax : matplotlib.axes.Axes
         Axes whose x axis is the sliding distance in ``units``.
-    run_in_distance : float, m
+    distance_scale : float, m
         ``s*``; its value is printed in the secondary axis' label.
     units : {"m", "s*"}, optional
         The unit of ``ax``'s x axis (default ``"m"``).
@@ -199,7 +201,7 @@ def add_distance_axis(ax, run_in_distance, units="m"):
         The secondary axis (``ax.secondary_xaxis``).
     """
     _check_units(units)
-    s_star = float(run_in_distance)
+    s_star = float(distance_scale)
     if units == "m":
         functions = (lambda s: s / s_star, lambda u: u * s_star)
         label = f"sliding distance / s*  (s* = {format_metres(s_star)})"
@@ -212,22 +214,51 @@ def add_distance_axis(ax, run_in_distance, units="m"):
     return top
 
 
-def _comparison(run_path):
-    """Attributes of the run file's ``comparison`` group, or an empty dict."""
+@dataclasses.dataclass(frozen=True)
+class _Run:
+    """A run's result with what its file adds (each empty when absent).
+
+    The root attributes, the ``comparison`` group's attributes and the
+    ``run_in_distance`` group's datasets.
+    """
+
+    result: object
+    attrs: dict
+    comparison: dict
+    run_in: dict
+
+    @property
+    def distance_scale(self):
+        """``s*``, m."""
+        return distance_scale(self.result)
+
+
+def _groups(run_path):
+    """The run file's ``comparison`` attributes and ``run_in_distance`` datasets, or empty."""
     with h5py.File(run_path, "r") as f:
-        return dict(f["comparison"].attrs) if "comparison" in f else {}
+        comparison = dict(f["comparison"].attrs) if "comparison" in f else {}
+        group = f.get("run_in_distance")
+        run_in = ({name: ds[()] for name, ds in group.items() if isinstance(ds, h5py.Dataset)}
+                  if isinstance(group, h5py.Group) else {})
+    return comparison, run_in
 
 
 def _run(source):
-    """``(RunResult, attrs, comparison, arrays)`` of a run file or a RunResult."""
-    if isinstance(source, _Stored):
-        return source.parts
+    """The :class:`_Run` of a run file or a RunResult."""
+    if isinstance(source, _Run):
+        return source
     if isinstance(source, (str, os.PathLike)):
-        result, attrs, arrays = read_run(source)
-        return result, attrs, _comparison(source), arrays
-    if hasattr(source, "history") and hasattr(source, "run_in_distance"):
-        return source, {}, {}, {}
+        result, attrs, _ = read_run(source)
+        return _Run(result, dict(attrs), *_groups(source))
+    if hasattr(source, "history") and hasattr(source, "depth_scale"):
+        return _Run(source, {}, {}, {})
     raise ValueError(f"expected a run file or a RunResult, got {type(source).__name__}")
+
+
+def distance_scale(result):
+    """``s* = L / (k_min E*)`` of a run, m (``distance_scale``, formerly ``run_in_distance``)."""
+    scale = getattr(result, "distance_scale", None)
+    return float(result.run_in_distance if scale is None else scale)
 
 
 def _steady_slope(attrs, comparison):
@@ -240,21 +271,45 @@ def _steady_slope(attrs, comparison):
     return None
 
 
-def run_in_distance_of(result, attrs):
-    """The run-in distance (m) the result or its file records, or None.
+def run_in_distance_of(source, within=RUN_IN_WITHIN, *, table=None):
+    """The run-in distance within ``within`` of the steady state, m, or None.
 
-    Looks up :data:`RUN_IN_DISTANCE_NAMES` among the result's attributes,
-    then the file's root attributes; a value that is not a positive finite
-    number counts as absent.
+    From the run file's group ``run_in_distance`` (datasets ``within``,
+    ``reached``, ``distance``), else from the result's
+    ``run_in_distance(within)`` method where it has one; None when neither
+    gives a distance the run reached.
+
+    Parameters
+    ----------
+    source : str, path-like or RunResult
+    within : float, optional
+        Relative tolerance (default :data:`RUN_IN_WITHIN`, 1 %).
+    table : mapping of str to ndarray, optional
+        The group's datasets, in place of the file's.
+
+    Returns
+    -------
+    float or None, m
     """
-    for name in RUN_IN_DISTANCE_NAMES:
-        for value in (getattr(result, name, None), attrs.get(name)):
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                continue
-            if math.isfinite(value) and value > 0:
-                return value
+    run = _run(source)
+    table = run.run_in if table is None else table
+    if {"within", "distance"} <= table.keys():
+        tolerances = np.atleast_1d(np.asarray(table["within"], dtype=float))
+        distances = np.atleast_1d(np.asarray(table["distance"], dtype=float))
+        reached = np.atleast_1d(np.asarray(table.get("reached", np.ones_like(distances)),
+                                           dtype=float))
+        match = np.flatnonzero(np.isclose(tolerances, within, rtol=1e-9, atol=0.0))
+        if match.size and reached[match[0]] > 0 and np.isfinite(distances[match[0]]):
+            return float(distances[match[0]])
+        return None
+    method = getattr(run.result, "run_in_distance", None)
+    if callable(method):
+        try:
+            found = method(within)
+        except ValueError:
+            return None
+        if found.reached and math.isfinite(found.distance_m):
+            return float(found.distance_m)
     return None
 
 
@@ -265,28 +320,30 @@ def _figure_of(ax, size):
     return fig, fig.add_subplot()
 
 
-def _distance(result, h, units):
+def _distance(run, units):
     """Positive distances before any final jump, in ``units``, and their mask."""
-    s = np.asarray(h["distance"], dtype=float) / result.run_in_distance
+    s = np.asarray(run.result.history["distance"], dtype=float) / run.distance_scale
     pos = (s > 0) & (s < _JUMP)
-    return s * (1.0 if units == "s*" else result.run_in_distance), pos
+    return s * (1.0 if units == "s*" else run.distance_scale), pos
 
 
-def _draw_slope(ax, result, attrs, comparison, units, normalised):
+def _draw_slope(ax, run, units, normalised):
+    result = run.result
     g0 = result.reference_slope if normalised else 1.0
-    draw_rms_slope_history(ax, result.history, result.run_in_distance, g0,
-                           steady=_steady_slope(attrs, comparison), units=units)
+    draw_rms_slope_history(ax, result.history, run.distance_scale, g0,
+                           steady=_steady_slope(run.attrs, run.comparison), units=units)
     ax.set_ylabel(r"rms slope / $\nabla f^0_\infty$" if normalised else "rms slope")
-    mark = run_in_distance_of(result, attrs)
+    mark = run_in_distance_of(run)
     if mark is not None:
-        x = mark / result.run_in_distance if units == "s*" else mark
+        x = mark / run.distance_scale if units == "s*" else mark
         ax.axvline(x, color="0.3", ls=":", lw=1.0,
-                   label=f"run-in distance {format_metres(mark)}")
+                   label=f"run-in distance ({100 * RUN_IN_WITHIN:g} %) {format_metres(mark)}")
 
 
-def _draw_height(ax, result, comparison, units, normalised):
+def _draw_height(ax, run, units, normalised):
+    result, comparison = run.result, run.comparison
     h = result.history
-    x, pos = _distance(result, h, units)
+    x, pos = _distance(run, units)
     scale = result.outline.scale if result.outline is not None else math.nan
     if normalised:
         y, unit = np.asarray(h["normalised_rms_height"]), r" / $(\nabla f^0_\infty L)$"
@@ -302,9 +359,9 @@ def _draw_height(ax, result, comparison, units, normalised):
     ax.set_xlabel("sliding distance (m)" if units == "m" else "sliding distance / s*")
 
 
-def _draw_convergence(ax, result, units):
-    h = result.history
-    x, pos = _distance(result, h, units)
+def _draw_convergence(ax, run, units):
+    h = run.result.history
+    x, pos = _distance(run, units)
     ax.loglog(x[pos], np.maximum(h["spread"][pos], 1e-17), ".-", ms=2,
               label="wear-rate spread")
     ax.loglog(x[pos], np.maximum(h["shape_rate"][pos], 1e-17), ".-", ms=2,
@@ -368,7 +425,7 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
     if unknown or not quantities:
         raise ValueError(f"unknown quantity {unknown[0] if unknown else quantities!r}: "
                          f"expected some of {', '.join(_QUANTITIES)}")
-    result, attrs, comparison, _ = _run(source)
+    run = _run(source)
     if ax is None:
         fig = new_figure(COLUMN_WIDTH, 0.4 + 2.6 * len(quantities))
         axes = list(np.atleast_1d(fig.subplots(len(quantities), 1, sharex=True)))
@@ -379,11 +436,11 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
         fig = axes[0].get_figure(root=True)
     for a, quantity in zip(axes, quantities, strict=True):
         if quantity == "rms_slope":
-            _draw_slope(a, result, attrs, comparison, units, normalised)
+            _draw_slope(a, run, units, normalised)
         elif quantity == "rms_height":
-            _draw_height(a, result, comparison, units, normalised)
+            _draw_height(a, run, units, normalised)
         else:
-            _draw_convergence(a, result, units)
+            _draw_convergence(a, run, units)
         if legend:
             a.legend(loc="best", fontsize=FONT_SIZES["legend"])
         set_fonts(a)
@@ -391,7 +448,7 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
         for a in axes[:-1]:
             a.set_xlabel("")
     if secondary:
-        add_distance_axis(axes[0], result.run_in_distance, units)
+        add_distance_axis(axes[0], run.distance_scale, units)
     return fig
 
 
@@ -461,9 +518,10 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
     """
     if units not in ("um", "normalised"):
         raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
-    result, attrs, _, _ = _run(source)
+    run = _run(source)
+    result = run.result
     fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
-    outline = _outline(result, attrs)
+    outline = _outline(result, run.attrs)
     ext, unit = extent(result.shape, outline)
     h = 2.0 * outline.scale / max(result.shape) if outline is not None else 1.0
     if snapshot is None:
@@ -505,9 +563,10 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
     """
     if units not in ("Pa", "normalised"):
         raise ValueError(f"units must be 'Pa' or 'normalised', got {units!r}")
-    result, attrs, _, _ = _run(source)
+    run = _run(source)
+    result = run.result
     fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
-    ext, unit = extent(result.shape, _outline(result, attrs))
+    ext, unit = extent(result.shape, _outline(result, run.attrs))
     pressure = np.where(result.face_mask, result.pressure, np.nan)
     if units == "Pa":
         factor, label = pressure_unit(pressure)
@@ -519,21 +578,26 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
     return fig
 
 
-def run_figure(result, attrs=None, comparison=None, *, units="m", normalised=True):
+def run_figure(result, attrs=None, comparison=None, run_in=None, *, units="m",
+               normalised=True):
     """Summary figure of a run: histories above, final face and pressure below.
 
     Parameters
     ----------
     result : transient.runin.RunResult or str or path-like
-        A result, or a run file (then ``attrs`` and ``comparison`` are
-        read from it).
+        A result, or a run file (then ``attrs``, ``comparison`` and
+        ``run_in`` are read from it).
     attrs : mapping, optional
         Root attributes of the run file (``steady_rms_slope``; ``radius``
-        when the result carries no outline; the run-in distance).
+        when the result carries no outline).
     comparison : mapping, optional
         The run file's ``comparison`` attributes
         (:class:`transient.comparison.SteadyComparison`): the steady face's
         rms slope and rms height with their error bars.
+    run_in : mapping, optional
+        The run file's ``run_in_distance`` datasets (``within``,
+        ``reached``, ``distance``): the run-in distance marked on the
+        history (:func:`run_in_distance_of`).
     units : {"m", "s*"}, optional
         Distance axes in metres (default, ``s*`` on a secondary axis) or
         in ``s*``.
@@ -551,8 +615,10 @@ def run_figure(result, attrs=None, comparison=None, *, units="m", normalised=Tru
         is unknown), x horizontal and y up.
     """
     if isinstance(result, (str, os.PathLike)):
-        result, attrs, comparison, _ = _run(result)
-    attrs, comparison = dict(attrs or {}), dict(comparison or {})
+        source = _run(result)
+    else:
+        source = _Run(result, dict(attrs or {}), dict(comparison or {}), dict(run_in or {}))
+    result, attrs = source.result, source.attrs
     maps = map_height(result.shape, 0.5 * PAGE_WIDTH)
     fig = new_figure(PAGE_WIDTH, 2.6 + 2.3 + maps + 0.5)
     grid = fig.add_gridspec(3, 2, height_ratios=(2.6, 2.3, maps))
@@ -561,7 +627,6 @@ def run_figure(result, attrs=None, comparison=None, *, units="m", normalised=Tru
     ax_conv = fig.add_subplot(grid[1, 1], sharex=ax_height)
     ax_face = fig.add_subplot(grid[2, 0])
     ax_pressure = fig.add_subplot(grid[2, 1], sharex=ax_face, sharey=ax_face)
-    source = _Stored(result, attrs, comparison)
     plot_history(source, units=units, normalised=normalised, ax=ax_slope)
     has_height = "rms_height" in result.history and "normalised_rms_height" in result.history
     if has_height:
@@ -584,13 +649,6 @@ def run_figure(result, attrs=None, comparison=None, *, units="m", normalised=Tru
         ax.set_title(title)
     set_fonts(ax_slope, ax_height, ax_conv, ax_face, ax_pressure)
     return fig
-
-
-class _Stored:
-    """A run's result with its file's attributes, as :func:`_run` returns them."""
-
-    def __init__(self, result, attrs, comparison):
-        self.parts = (result, attrs, comparison, {})
 
 
 def plot_run(run_path, png_path, *, force=True, dpi=200, units="m"):
