@@ -1,4 +1,4 @@
-"""Figures of a steady result: the phase map and the limiting face as relief (paper Fig. 3).
+"""Figure of a steady result: phase map beside the limiting worn face (paper Figure 3).
 
 Each ``plot_*`` function takes a result file (written by
 :func:`steady.output.write_result`), a :class:`steady.output.StoredResult`
