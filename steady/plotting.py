@@ -329,8 +329,8 @@ def plot_phases(source, *, ax=None, names=None, details=True):
         One name per phase, phase 0 first (default: the result's or the
         stored scene's ``[phases] names``, else ``"phase 0"``, ...).
     details : bool, optional
-        Add each phase's wear coefficient and area fraction to its legend
-        entry (default True).
+        Add each phase's wear coefficient, area fraction and steady
+        pressure (eq. 7) to its legend entry (default True).
 
     Returns
     -------
@@ -347,9 +347,10 @@ def plot_phases(source, *, ax=None, names=None, details=True):
              cmap=cmap, norm=norm)
     labels = list(names)
     if details:
-        labels = [f"{name}: k = {k:.3g} 1/Pa, {100 * rho:.1f} %"
-                  for name, k, rho in zip(names, res.wear_coefficients, res.fill_factors,
-                                          strict=True)]
+        factor, unit = pressure_unit(res.phase_pressures)
+        labels = [f"{name}: k = {k:.3g} 1/Pa, {100 * rho:.1f} %, p = {p / factor:.3g} {unit}"
+                  for name, k, rho, p in zip(names, res.wear_coefficients, res.fill_factors,
+                                             res.phase_pressures, strict=True)]
     handles = [Patch(facecolor=c, edgecolor="0.4", lw=0.5, label=label)
                for c, label in zip(colours, labels, strict=True)]
     # Below the axes, clear of the x tick labels and label whatever the axes' height.

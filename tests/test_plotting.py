@@ -179,6 +179,9 @@ def test_phase_names_come_from_the_scene(tmp_path, scene_file):
     texts = [t.get_text() for t in plot_phases(out).axes[0].get_legend().get_texts()]
     assert [t.split(":")[0] for t in texts] == ["epoxy", "bronze"], texts
     assert "k = 1e-09 1/Pa" in texts[0], texts[0]
+    stored = read_result(out).result
+    for text, p in zip(texts, stored.phase_pressures, strict=True):
+        assert text.endswith(f"p = {p / 1e3:.3g} kPa"), (text, p)
     plain = plot_phases(read_result(out), details=False, names=["a", "b"])
     assert [t.get_text() for t in plain.axes[0].get_legend().get_texts()] == ["a", "b"]
     with pytest.raises(ValueError, match="names has 1 entries, expected one per phase"):
