@@ -221,3 +221,23 @@ def test_plot_file_writes_the_figure(tmp_path, wide_result):
     with pytest.raises(ValueError, match=r"exists \(pass force=True to overwrite\)"):
         plot_file(out, png)
     assert plot_file(out, png, force=True) == png
+
+
+def test_fit_figure_draws_relief_not_the_dome(tmp_path, scene_file):
+    """Measured and fitted faces about the fitted face's plane: zero mean, not the dome's height."""
+    from steady import MeasuredFace, fit_scene
+    from steady.fit_files import fit_figure, read_fit, write_fit
+
+    scene = load_scene(scene_file("steady"))
+    face = solve_scene(scene, slope_error=False).face
+    measured = MeasuredFace(face, scene.grid(scene.n).h)
+    stored = read_fit(write_fit(tmp_path / "fit.h5", fit_scene(scene, measured), scene))
+    fig = fit_figure(stored)
+    drawn = [np.ma.filled(ax.images[0].get_array(), np.nan).T for ax in fig.axes[:2]]
+    for field in drawn:
+        values = field[np.isfinite(field)]
+        assert abs(values.mean()) < 1e-9 * np.ptp(values), "zero mean over the face"
+    np.testing.assert_allclose(drawn[0], drawn[1], atol=1e-6 * np.nanmax(np.abs(drawn[1])),
+                               err_msg="an exact face is fitted exactly")
+    bars = [ax.get_ylabel() for ax in fig.axes[3:]]
+    assert bars == ["height about plane (µm)", "residual (µm)"], bars
