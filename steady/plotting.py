@@ -35,10 +35,10 @@ from .output import read_result
 from .problem import default_phase_names
 from .relief import PlaneFit
 
-__all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "grid_extent",
-           "map_height", "new_figure", "phase_colours", "phase_names_from_scene", "plot_face",
-           "plot_file", "plot_phases", "pressure_unit", "relief", "result_figure", "save_png",
-           "set_fonts"]
+__all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
+           "grid_extent", "map_height", "new_figure", "phase_colours", "phase_names_from_scene",
+           "plot_face", "plot_file", "plot_phases", "pressure_unit", "relief", "result_figure",
+           "save_png", "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,8 +64,20 @@ def new_figure(width, height):
     return fig
 
 
-def _figure_of(ax, size):
-    """``(figure, axes)``: those of ``ax``, or a new figure of ``size`` inches with one axes."""
+def figure_and_axes(ax, size):
+    """``(figure, axes)``: those of ``ax``, or a new figure of ``size`` inches with one axes.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes or None
+        The caller's axes.
+    size : (float, float), inches
+        Width and height of the new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure, matplotlib.axes.Axes
+    """
     if ax is not None:
         return ax.get_figure(root=True), ax
     fig = new_figure(*size)
@@ -339,7 +351,7 @@ def plot_phases(source, *, ax=None, names=None, details=True):
     """
     res, scene_text = _steady(source)
     names = _phase_names(res, scene_text, names)
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH) + 0.6))
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH) + 0.6))
     colours = phase_colours(res.n_phases)
     cmap = ListedColormap(colours).with_extremes(bad="white")
     norm = BoundaryNorm(np.arange(res.n_phases + 1) - 0.5, res.n_phases)
@@ -387,7 +399,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", cmap="viridis"):
     res, _ = _steady(source)
     if units not in ("um", "normalised"):
         raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH)))
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH)))
     height = relief(res.face, res.labels >= 0, res.pixel_size, remove=remove)
     if units == "um":
         field, unit = height * 1e6, "µm"

@@ -35,6 +35,7 @@ from steady.plotting import (
     PAGE_WIDTH,
     colour_bar,
     draw_map,
+    figure_and_axes,
     map_height,
     new_figure,
     pressure_unit,
@@ -313,13 +314,6 @@ def run_in_distance_of(source, within=RUN_IN_WITHIN, *, table=None):
     return None
 
 
-def _figure_of(ax, size):
-    if ax is not None:
-        return ax.get_figure(root=True), ax
-    fig = new_figure(*size)
-    return fig, fig.add_subplot()
-
-
 def _distance(run, units):
     """Positive distances before any final jump, in ``units``, and their mask."""
     s = np.asarray(run.result.history["distance"], dtype=float) / run.distance_scale
@@ -520,7 +514,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
         raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
     run = _run(source)
     result = run.result
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
     outline = _outline(result, run.attrs)
     ext, unit = extent(result.shape, outline)
     h = 2.0 * outline.scale / max(result.shape) if outline is not None else 1.0
@@ -565,7 +559,7 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
         raise ValueError(f"units must be 'Pa' or 'normalised', got {units!r}")
     run = _run(source)
     result = run.result
-    fig, ax = _figure_of(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
     ext, unit = extent(result.shape, _outline(result, run.attrs))
     pressure = np.where(result.face_mask, result.pressure, np.nan)
     if units == "Pa":
