@@ -306,8 +306,9 @@ def test_scene_builds_a_micrograph_map(skimage, grains_png, caplog):
 @pytest.mark.parametrize("keys, fragment", [
     ('path = "grains.png"', "missing key 'n_phases'"),
     ('path = "grains.png", n_phases = 2, sigma = 1.0',
-     "unknown key 'sigma' in [phases] map (kind 'micrograph') (allowed: cover, kind, "
-     "min_speck, n_phases, offset, path, pixel_size, smoothing)"),
+     "unknown key 'sigma' in [phases] map (kind 'micrograph') (allowed: cover, crop, "
+     "fill_holes, fill_phases, kind, min_speck, n_phases, offset, path, pixel_size, smoothing, "
+     "thresholds)"),
     ('path = "grains.png", n_phases = 1', "[phases] map n_phases must be an integer >= 2, got 1"),
     ('path = "grains.png", n_phases = 2.0', "[phases] map n_phases must be an integer >= 2, "
                                              "got 2.0"),
