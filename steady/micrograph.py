@@ -1022,9 +1022,9 @@ def segmentation_figure(geometry, *, ax=None, names=None):
         fig.suptitle(_figure_title(geometry))
     elif isinstance(ax, Axes):
         image_ax, hist_ax = ax, None
-    elif (isinstance(ax, (tuple, list)) and len(ax) == 2
-          and all(isinstance(a, Axes) for a in ax)):
-        image_ax, hist_ax = ax
+    elif (isinstance(ax, (tuple, list, np.ndarray)) and np.size(ax) == 2
+          and all(isinstance(a, Axes) for a in np.ravel(ax))):
+        image_ax, hist_ax = np.ravel(ax)
     else:
         raise ValueError(f"ax must be a matplotlib Axes or a pair of them, got {shorten(ax)}")
     _draw_image(image_ax, geometry, names)

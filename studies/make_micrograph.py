@@ -100,9 +100,13 @@ PARTICLES = {"rows": 300, "cols": 400, "bar_rows": 40, "n_particles": 140,
              "rim_width": 2.0, "drift": 0.02, "blur": 0.8, "noise": 0.04, "seed": 4127}
 
 
-def _ellipse(rows, cols, centre, axes, angle):
-    """Pixels whose centre lies inside an ellipse (semi-axes ``axes``, pixels, turned ``angle``)."""
-    r, c = np.mgrid[0:rows, 0:cols] + 0.5
+def _ellipse(window, centre, axes, angle):
+    """Pixels of ``window`` (row and column slices) whose centre lies inside an ellipse.
+
+    The ellipse has semi-axes ``axes`` (pixels) along directions turned by
+    ``angle`` from the rows, and its centre at ``centre`` (row, column).
+    """
+    r, c = np.mgrid[window] + 0.5
     dr, dc = r - centre[0], c - centre[1]
     u = dc * np.cos(angle) + dr * np.sin(angle)
     v = -dc * np.sin(angle) + dr * np.cos(angle)
@@ -169,13 +173,17 @@ def make_particles(rows, cols, bar_rows, n_particles, radii, gap, matrix, core, 
     rng = np.random.default_rng(seed)
     truth = np.zeros((rows, cols), dtype=bool)
     taken = np.zeros((rows, cols), dtype=bool)
+    reach = int(np.ceil(radii[1])) + gap + 1
     for _ in range(n_particles):
         axes = rng.uniform(*radii, size=2)
         centre = rng.uniform((0.0, 0.0), (rows, cols))
-        shape = _ellipse(rows, cols, centre, axes, rng.uniform(0.0, np.pi))
-        if not (shape & taken).any():
-            truth |= shape
-            taken |= ndimage.binary_dilation(shape, iterations=gap)
+        angle = rng.uniform(0.0, np.pi)
+        window = tuple(slice(max(int(x) - reach, 0), min(int(x) + reach + 1, size))
+                       for x, size in zip(centre, (rows, cols), strict=True))
+        shape = _ellipse(window, centre, axes, angle)
+        if not (shape & taken[window]).any():
+            truth[window] |= shape
+            taken[window] |= ndimage.binary_dilation(shape, iterations=gap)
     depth = ndimage.distance_transform_edt(truth) - 0.5
     inside = core + (rim - core) * np.exp(-depth / rim_width)
     ramp = drift * (np.arange(cols) / max(cols - 1, 1) - 0.5)
