@@ -863,8 +863,10 @@ _OVERLAY_COLOURS = ("#e6194b", "#4363d8", "#3cb44b", "#f58231", "#911eb4", "#42d
 _PHASE0_COLOUR = "#808080"
 _OVERLAY_ALPHA = 0.4
 
-#: Largest side, pixels, of the view of a tiled micrograph over the face.
+#: Largest side, pixels, of the view of a tiled micrograph over the face; a
+#: cropped image with a longer side is drawn one pixel in every few.
 _TILE_VIEW = 1200
+_IMAGE_VIEW = 2048
 
 
 def _phase_colour(phase):
@@ -875,7 +877,8 @@ def _phase_colour(phase):
 def _view(geometry):
     """Grey levels, labels and their extent (mm, face coordinates) as the figure shows them.
 
-    A crop shows the whole (cropped) image; a tiling shows the periodic
+    A crop shows the whole (cropped) image, one pixel in every
+    ``ceil(side / _IMAGE_VIEW)`` each way; a tiling shows the periodic
     image over the face's bounding box, sampled at most :data:`_TILE_VIEW`
     pixels a side.
     """
@@ -885,7 +888,8 @@ def _view(geometry):
     if geometry.cover == "crop":
         extent = np.array([-0.5 * width - x0, 0.5 * width - x0,
                            -0.5 * height - y0, 0.5 * height - y0])
-        return seg.image, seg.labels, extent * 1e3
+        every = -(-max(seg.shape) // _IMAGE_VIEW)
+        return seg.image[::every, ::every], seg.labels[::every, ::every], extent * 1e3
     half_x, half_y = geometry.outline.half_extent
     step = max(geometry.pixel_size, 2.0 * max(half_x, half_y) / _TILE_VIEW)
     x = np.arange(-half_x + 0.5 * step, half_x, step)
@@ -898,8 +902,11 @@ def _view(geometry):
     return seg.image[index], seg.labels[index], extent * 1e3
 
 
-def _draw_image(ax, geometry, names):
-    """The image in grey, the phases over it, the face's outline; a legend of both."""
+def _draw_image(ax, geometry, names, legend):
+    """The image in grey, the phases over it, the face's outline; their legend handles.
+
+    With ``legend`` the legend goes below the axes; otherwise the caller places it.
+    """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -907,9 +914,10 @@ def _draw_image(ax, geometry, names):
     grey, labels, extent = _view(geometry)
     ax.imshow(grey, cmap="gray", extent=extent, interpolation="nearest",
               vmin=float(seg.image.min()), vmax=float(seg.image.max()))
-    overlay = np.zeros(labels.shape + (4,))
+    overlay = np.zeros(labels.shape + (4,), dtype=np.uint8)
     for phase in range(1, seg.n_phases):
-        overlay[labels == phase] = (*_rgb(_phase_colour(phase)), _OVERLAY_ALPHA)
+        rgba = (*_rgb(_phase_colour(phase)), _OVERLAY_ALPHA)
+        overlay[labels == phase] = np.rint(255 * np.asarray(rgba))
     ax.imshow(overlay, extent=extent, interpolation="nearest")
     half_x, half_y = geometry.outline.half_extent
     x = np.linspace(-1.05 * half_x, 1.05 * half_x, 601)
@@ -921,14 +929,16 @@ def _draw_image(ax, geometry, names):
                      label=f"{names[p]}: {100 * seg.fill_factors[p]:.1f} % of the image")
                for p in range(seg.n_phases)]
     handles.append(Line2D([], [], color="#ffd700", linewidth=1.5, label="face"))
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1),
-              ncols=min(len(handles), 3), fontsize="small", frameon=False)
+    if legend:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12),
+                  ncols=min(len(handles), 3), fontsize="small", frameon=False)
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_aspect("equal")
     thresholds = ", ".join(f"{t:.4g}" for t in seg.thresholds)
     ax.set_title(f"{seg.n_phases} phases, threshold{'s' if len(seg.thresholds) > 1 else ''} "
                  f"{thresholds} ({seg.method})")
+    return handles
 
 
 def _rgb(colour):
@@ -1016,7 +1026,7 @@ def segmentation_figure(geometry, *, ax=None, names=None):
     elif isinstance(names, str) or len(names) != seg.n_phases:
         raise ValueError(f"names must name the {seg.n_phases} phases, got {shorten(names)}")
     if ax is None:
-        fig = Figure(figsize=(11.0, 5.4), layout="constrained")
+        fig = Figure(figsize=(11.0, 5.2), layout="constrained")
         FigureCanvasAgg(fig)
         image_ax, hist_ax = fig.subplots(1, 2, width_ratios=(3, 2))
         fig.suptitle(_figure_title(geometry))
@@ -1027,7 +1037,10 @@ def segmentation_figure(geometry, *, ax=None, names=None):
         image_ax, hist_ax = np.ravel(ax)
     else:
         raise ValueError(f"ax must be a matplotlib Axes or a pair of them, got {shorten(ax)}")
-    _draw_image(image_ax, geometry, names)
+    handles = _draw_image(image_ax, geometry, names, legend=ax is not None)
+    if ax is None:  # the figure's own: a legend the layout makes room for
+        fig.legend(handles=handles, loc="outside lower left", ncols=min(len(handles), 4),
+                   fontsize="small", frameon=False)
     if hist_ax is not None:
         _draw_histogram(hist_ax, geometry)
     return image_ax.figure
@@ -1044,5 +1057,5 @@ def _figure_title(geometry):
         words.append(f"{seg.holes} holes filled")
     if seg.specks:
         words.append(f"{seg.specks} specks relabelled")
-    words.append(f"pixel {geometry.pixel_size * 1e6:.4g} µm, {geometry.cover}")
+    words.append(f"pixel {geometry.pixel_size * 1e6:.4g} µm, cover {geometry.cover}")
     return ", ".join(words)

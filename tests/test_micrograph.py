@@ -721,7 +721,7 @@ def test_segmentation_figure_draws_image_phases_face_and_histogram(skimage, part
     face = image_ax.collections[0].get_paths()[0].vertices
     assert np.allclose(np.hypot(*face.T), 3.0, atol=0.02), "the face's outline, radius 3 mm"
     assert image_ax.get_title() == "2 phases, threshold 0.62 (manual)", image_ax.get_title()
-    legend = [t.get_text() for t in image_ax.get_legend().get_texts()]
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert legend[0].startswith("ferrite: 85.") and legend[2] == "face", legend
     lines = [line for line in hist_ax.get_lines() if line.get_linestyle() == "--"]
     assert [line.get_xdata()[0] for line in lines] == [0.62], "the threshold marked"
@@ -806,3 +806,15 @@ def test_command_line_refuses_segmentation_of_another_map(tmp_path, capsys):
     assert status == 2 and "--segmentation needs a phase map of kind \"micrograph\", the " \
         "scene's is 'homogeneous'" in err, f"exit {status}: {err!r}"
     assert not (tmp_path / "seg.png").exists(), "nothing written"
+
+
+def test_script_writes_the_particle_image(make_micrograph, tmp_path, capsys):
+    assert make_micrograph.main(["--particles", "-o", str(tmp_path / "p.png")]) == 0, "exit"
+    grey, truth = make_micrograph.make_particles(**make_micrograph.PARTICLES)
+    written = np.asarray(Image.open(tmp_path / "p.png"))
+    assert np.array_equal(written, np.rint(grey * 255).astype(np.uint8)), "the image written"
+    bar = written[make_micrograph.PARTICLES["rows"] - make_micrograph.PARTICLES["bar_rows"]:]
+    assert np.isin(bar, (0, 255)).all(), "the data bar is black and white"
+    fill = truth[:260].mean()
+    assert f"{1 - fill:.4f}, {fill:.4f} (above the 40-row data bar)" in capsys.readouterr().out, \
+        "true fill factors printed"
