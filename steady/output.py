@@ -47,8 +47,11 @@ Steady result files (layout ``runin.steady``, version 2)::
         source            the image file
         n_phases, smoothing (pixels), min_speck (pixels), specks, speck_pixels
         thresholds        grey levels between the phases (PNG: fraction of full scale)
+        threshold_method  "otsu" or "manual" (given in the scene)
+        crop              [[row0, row1], [col0, col1]] of the image kept (pixels)
+        fill_phases, holes, hole_pixels  phases whose holes were filled, and how many
         image_fill_factors  fraction of the image's pixels per phase
-        image_shape       (rows, cols)
+        image_shape       (rows, cols) of the (cropped) image
         pixel_size m, cover "crop" or "tile", offset (x, y) m
 
 An attribute cannot carry attributes, so the unit of attribute ``x`` is the
@@ -642,6 +645,12 @@ def _write_micrograph(group, geometry):
         "min_speck": seg.min_speck,
         "specks": seg.specks,
         "speck_pixels": seg.speck_pixels,
+        "threshold_method": seg.method,
+        "crop": np.asarray(seg.crop or ((0, seg.shape[0]), (0, seg.shape[1]))),
+        "crop_units": "pixels",
+        "fill_phases": np.asarray(seg.fill_phases, dtype=np.int64),
+        "holes": seg.holes,
+        "hole_pixels": seg.hole_pixels,
         "image_shape": np.asarray(seg.shape),
         "pixel_size": geometry.pixel_size,
         "pixel_size_units": "m",
