@@ -1,7 +1,7 @@
 """The face mask of a road-aggregate chip: an irregular, star-shaped outline.
 
-Makes ``studies/scenes/aggregate_chip_mask.npy``, the outline of the shipped
-scene ``studies/scenes/aggregate_chip.toml`` (``[punch] shape = "mask"``): a
+Makes ``steady/examples/aggregate_chip_mask.npy``, the outline of the shipped
+scene ``steady/examples/aggregate_chip.toml`` (``[punch] shape = "mask"``): a
 12 x 9 mm box of 0.125 mm pixels (96 x 72, x along axis 0) holding the
 polished face of a crushed stone, the region inside the closed curve
 ``r(theta) = R (1 + sum_k a_k cos(k theta + phi_k))`` about the box centre
@@ -23,7 +23,8 @@ import sys
 
 import numpy as np
 
-OUTPUT = pathlib.Path(__file__).resolve().parent / "scenes" / "aggregate_chip_mask.npy"
+OUTPUT = pathlib.Path(__file__).resolve().parents[1] / "steady" / "examples" / (
+    "aggregate_chip_mask.npy")
 
 #: Box (pixels along x and y), pixel size (mm), mean radius (mm), stretch along
 #: x, harmonics, amplitude of the second harmonic, seed.

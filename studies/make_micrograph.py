@@ -1,7 +1,7 @@
 """A synthetic two-phase micrograph: blurred, noisy grains of known phases.
 
-Makes ``studies/scenes/micrograph_example.png``, the image of the shipped
-scene ``studies/scenes/micrograph_steady.toml``: Voronoi grains (nearest of
+Makes ``steady/examples/micrograph_example.png``, the image of the shipped
+scene ``steady/examples/micrograph_steady.toml``: Voronoi grains (nearest of
 random seeds), 30 % of them of a bright phase in a darker matrix, seen
 through an optical blur (Gaussian, 1.5 pixels) with Gaussian noise of 5 %
 of full scale, stored as 8-bit grey levels.  It stands in for an etched
@@ -25,7 +25,8 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage, spatial
 
-OUTPUT = pathlib.Path(__file__).resolve().parent / "scenes" / "micrograph_example.png"
+OUTPUT = pathlib.Path(__file__).resolve().parents[1] / "steady" / "examples" / (
+    "micrograph_example.png")
 
 #: Image size in pixels, grains, share of bright grains, grey levels of the
 #: two phases (fraction of full scale), blur and noise (pixels, full scale).
