@@ -15,7 +15,7 @@ Run::
     python studies/fig3_biphasic.py --quick    # about 1 s
     python studies/fig3_biphasic.py --plot-only
 
-Writes ``out/fig3_biphasic.h5`` and ``docs/figures/fig3_biphasic.png``.
+Writes ``OUT/fig3_biphasic.h5`` and ``OUT/fig3_biphasic.png``.
 """
 
 import sys

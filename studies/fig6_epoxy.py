@@ -14,7 +14,7 @@ Run::
     python studies/fig6_epoxy.py --quick    # about 1 s
     python studies/fig6_epoxy.py --plot-only
 
-Writes ``out/fig6_epoxy.h5`` and ``docs/figures/fig6_epoxy.png``.
+Writes ``OUT/fig6_epoxy.h5`` and ``OUT/fig6_epoxy.png``.
 """
 
 import sys

@@ -17,7 +17,7 @@ Run::
     python studies/fig78_rods.py --quick    # about 1 s
     python studies/fig78_rods.py --plot-only
 
-Writes ``out/fig78_rods.h5`` and ``docs/figures/fig78_rods.png``.
+Writes ``OUT/fig78_rods.h5`` and ``OUT/fig78_rods.png``.
 """
 
 import sys

@@ -18,7 +18,7 @@ Run::
     python studies/fit_rods.py --quick    # about 5 s
     python studies/fit_rods.py --plot-only
 
-Writes ``out/fit_rods.h5`` and ``docs/figures/fit_rods.png``.
+Writes ``OUT/fit_rods.h5`` and ``OUT/fit_rods.png``.
 """
 
 import sys

@@ -20,7 +20,7 @@ Run::
     python studies/rods_both_ways.py --quick    # about 2 s
     python studies/rods_both_ways.py --plot-only
 
-Writes ``out/rods_both_ways.h5`` and ``docs/figures/rods_both_ways.png``.
+Writes ``OUT/rods_both_ways.h5`` and ``OUT/rods_both_ways.png``.
 """
 
 import dataclasses

@@ -26,8 +26,8 @@ How to run
     python studies/runin_convergence.py --quick     # n = 40, 64, 80: half a minute
     python studies/runin_convergence.py --plot-only
 
-Writes ``out/runin_convergence.h5`` (the sweep in ``out/runin_convergence_sweep.h5``,
-resumable) and ``docs/figures/runin_convergence.png``; prints the table.
+Writes ``OUT/runin_convergence.h5`` (the sweep in ``OUT/runin_convergence_sweep.h5``,
+resumable) and ``OUT/runin_convergence.png``; prints the table.
 """
 
 import functools

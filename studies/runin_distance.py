@@ -27,7 +27,7 @@ Run::
     python studies/runin_distance.py --quick    # a few seconds
     python studies/runin_distance.py --plot-only
 
-Writes ``out/runin_distance.h5`` and ``docs/figures/runin_distance.png``.
+Writes ``OUT/runin_distance.h5`` and ``OUT/runin_distance.png``.
 """
 
 import sys

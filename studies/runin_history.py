@@ -22,8 +22,8 @@ Run::
     python studies/runin_history.py --quick    # a few seconds
     python studies/runin_history.py --plot-only
 
-Writes ``out/runin_history.h5`` (and the sweep file ``out/runin_sweep_n<n>.h5``)
-and ``docs/figures/runin_history.png``.
+Writes ``OUT/runin_history.h5`` (and the sweep file ``OUT/runin_sweep_n<n>.h5``)
+and ``OUT/runin_history.png``.
 """
 
 import functools
