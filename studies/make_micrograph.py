@@ -11,8 +11,8 @@ the segmentation of :mod:`steady.micrograph` can be checked against it
 
 Run::
 
-    python studies/make_micrograph.py                  # under a second
-    python studies/make_micrograph.py -o grains.png    # elsewhere
+    python studies/make_micrograph.py          # about 2 s: OUT/micrograph_example.png
+    python studies/make_micrograph.py -o steady/examples/micrograph_example.png  # the shipped one
 
 The image is a pure function of the parameters below (the seed included).
 """
@@ -22,11 +22,13 @@ import pathlib
 import sys
 
 import numpy as np
+import study_io
 from PIL import Image
 from scipy import ndimage, spatial
 
-OUTPUT = pathlib.Path(__file__).resolve().parents[1] / "steady" / "examples" / (
-    "micrograph_example.png")
+#: The file as shipped with the package (``-o`` writes it there).
+SHIPPED = (pathlib.Path(__file__).resolve().parents[1] / "steady" / "examples"
+           / "micrograph_example.png")
 
 #: Image size in pixels, grains, share of bright grains, grey levels of the
 #: two phases (fraction of full scale), blur and noise (pixels, full scale).
@@ -93,13 +95,17 @@ def write_png(path, grey):
 def main(argv=None):
     """Make the image; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("-o", "--output", type=pathlib.Path, default=OUTPUT,
-                        help=f"PNG to write (default {OUTPUT})")
+    parser.add_argument("-o", "--output", type=pathlib.Path, default=None,
+                        help=f"PNG to write (default: OUT/{SHIPPED.name}; the shipped one: "
+                             f"{SHIPPED})")
+    study_io.add_output_arguments(parser, docs_figures=False)
     args = parser.parse_args(argv)
+    output = args.output or args.out / SHIPPED.name
+    output.parent.mkdir(parents=True, exist_ok=True)
     grey, truth = make_grains(**PARAMS)
-    write_png(args.output, grey)
+    write_png(output, grey)
     fill = np.bincount(truth.ravel(), minlength=2) / truth.size
-    print(f"{args.output}: {PARAMS['cols']} x {PARAMS['rows']} pixels, true fill factors "
+    print(f"{output}: {PARAMS['cols']} x {PARAMS['rows']} pixels, true fill factors "
           f"{fill[0]:.4f}, {fill[1]:.4f}")
     return 0
 

@@ -188,7 +188,7 @@ def save_figure(fig, path, *, dpi=90):
     return path
 
 
-def add_output_arguments(parser):
+def add_output_arguments(parser, *, docs_figures=True):
     """Add the output options every study shares: ``--out OUT`` and ``--docs-figures``.
 
     Parameters
@@ -196,12 +196,17 @@ def add_output_arguments(parser):
     parser : argparse.ArgumentParser
         A study's parser; gains ``out`` (a :class:`pathlib.Path`) and
         ``docs_figures`` (bool).
+    docs_figures : bool, optional
+        Whether the script draws a committed figure (default True); the
+        scripts that make the example scenes' map files take ``--out`` alone.
     """
     parser.add_argument("--out", type=pathlib.Path, default=DEFAULT_OUT, metavar="OUT",
-                        help=f"directory of the outputs (default: ./{DEFAULT_OUT}; quick runs "
-                             f"in OUT/quick)")
-    parser.add_argument("--docs-figures", action="store_true",
-                        help=f"redraw the committed figure in {DOCS_FIGURES} (full runs only)")
+                        help=f"directory of the outputs (default: ./{DEFAULT_OUT}"
+                             + ("; quick runs in OUT/quick)" if docs_figures else ")"))
+    if docs_figures:
+        parser.add_argument("--docs-figures", action="store_true",
+                            help=f"redraw the committed figure in {DOCS_FIGURES} (full runs "
+                                 f"only)")
 
 
 def output_paths(args, name, *, default_output=None, committed_output=None):

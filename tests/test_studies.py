@@ -358,3 +358,19 @@ def test_sweep_files_go_to_the_output_directory(studies):
         pathlib.Path("d/voronoi_sweep_quick_n64.h5"), "quick sweep beside the output"
     assert voronoi_study.sweep_path({"n": 512, "sweep": "s.h5"}, "d/fig4.h5") == \
         pathlib.Path("s.h5"), "a given sweep file"
+
+
+def test_map_file_makers_write_the_shipped_files_into_the_output_directory(tmp_path,
+                                                                           monkeypatch):
+    """The scripts that make the examples' map files: the same bytes, under ./runin-studies-out."""
+    sys.path.insert(0, str(STUDIES))
+    try:
+        makers = [importlib.import_module(name) for name in ("make_face_mask", "make_micrograph")]
+    finally:
+        sys.path.remove(str(STUDIES))
+    monkeypatch.chdir(tmp_path)
+    for module in makers:
+        assert module.main([]) == 0, f"{module.__name__} failed"
+        made = tmp_path / "runin-studies-out" / module.SHIPPED.name
+        assert made.read_bytes() == module.SHIPPED.read_bytes(), \
+            f"{module.__name__}: {made.name} differs from the shipped file"
