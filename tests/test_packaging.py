@@ -96,6 +96,14 @@ def test_unknown_example_is_refused_with_the_names(tmp_path, capsys):
     assert not any(tmp_path.iterdir()), "something was written"
 
 
+def test_output_without_a_name_is_refused(tmp_path, capsys):
+    assert runin_examples(["-o", str(tmp_path)]) == 2, "-o without a name accepted"
+    err = capsys.readouterr().err
+    assert err.startswith("error: -o and --force copy an example: name one") and \
+        err.count("\n") == 1, err
+    assert not any(tmp_path.iterdir()), "something was written"
+
+
 def test_copy_into_a_file_is_refused(tmp_path):
     (tmp_path / "f").write_text("x")
     with pytest.raises(ValueError, match="is not a directory"):

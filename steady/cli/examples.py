@@ -44,7 +44,7 @@ def main(argv=None):
                     "and the map files it names) into a directory.",
         epilog=EXIT_STATUS_EPILOG)
     parser.add_argument("name", nargs="?", help="example to copy (without: list them)")
-    parser.add_argument("-o", "--output", default=".", metavar="DIR",
+    parser.add_argument("-o", "--output", default=None, metavar="DIR",
                         help="directory to copy into, created if missing (default: the "
                              "current directory)")
     parser.add_argument("--force", action="store_true", help="overwrite existing files")
@@ -54,11 +54,14 @@ def main(argv=None):
 def _run(args):
     """List the examples or copy one, for parsed arguments; return the exit status."""
     if args.name is None:
+        if args.output is not None or args.force:
+            raise ValueError("-o and --force copy an example: name one (runin-examples NAME "
+                             "-o DIR); without a name runin-examples lists them")
         listed = examples.list_examples()
         width = max(map(len, listed))
         for name, description in listed.items():
             print(f"{name:<{width}}  {description}")
         return 0
-    for written in examples.copy(args.name, args.output, force=args.force):
+    for written in examples.copy(args.name, args.output or ".", force=args.force):
         print(written)
     return 0
