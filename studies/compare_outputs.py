@@ -1,7 +1,7 @@
 """The files the shipped scenes produce are the same at two revisions of the code.
 
 What it checks
-    Every scene of ``studies/scenes/`` is run through the commands of two
+    Every scene of ``steady/examples/`` is run through the commands of two
     source trees -- this one and another revision, checked out beside it
     with ``git worktree`` -- with the same Python: the steady result of
     every scene (``runin-steady``), the run file of every scene with a
@@ -78,10 +78,16 @@ def run_command(tree, command, args, log):
                               env=env, stdout=out, stderr=subprocess.STDOUT).returncode
 
 
+def scene_directory(tree):
+    """The directory of a tree's shipped scenes (``studies/scenes`` in older revisions)."""
+    shipped = tree / "steady" / "examples"
+    return shipped if shipped.is_dir() else tree / "studies" / "scenes"
+
+
 def scenes(tree):
     """The shipped scene files of a tree, and which of them carry run-in sections."""
     found = []
-    for path in sorted((tree / "studies" / "scenes").glob("*.toml")):
+    for path in sorted(scene_directory(tree).glob("*.toml")):
         text = path.read_text()
         run_in = "[transient]" in text or "[initial_face]" in text
         found.append((path.stem, path, run_in))
@@ -130,7 +136,7 @@ def run_fits(tree, out, log, faces):
     status = {}
     for name in FIT_SCENES:
         measured, h = faces[name]
-        scene = tree / "studies" / "scenes" / f"{name}.toml"
+        scene = scene_directory(tree) / f"{name}.toml"
         status[f"fit/{name}"] = run_command(
             tree, "runin-fit", [scene, measured, "-o", out / f"fit_{name}.h5", "--force",
                                 "--pixel-size", repr(h)], log)

@@ -1,7 +1,7 @@
 """A synthetic two-phase micrograph: blurred, noisy grains of known phases.
 
-Makes ``studies/scenes/micrograph_example.png``, the image of the shipped
-scene ``studies/scenes/micrograph_steady.toml``: Voronoi grains (nearest of
+Makes ``steady/examples/micrograph_example.png``, the image of the shipped
+scene ``steady/examples/micrograph_steady.toml``: Voronoi grains (nearest of
 random seeds), 30 % of them of a bright phase in a darker matrix, seen
 through an optical blur (Gaussian, 1.5 pixels) with Gaussian noise of 5 %
 of full scale, stored as 8-bit grey levels.  It stands in for an etched
@@ -19,9 +19,9 @@ crop, manual thresholds and hole filling recover them.
 
 Run::
 
-    python studies/make_micrograph.py                       # under a second
-    python studies/make_micrograph.py -o grains.png         # elsewhere
-    python studies/make_micrograph.py --particles -o se.png # the particles image
+    python studies/make_micrograph.py          # about 2 s: OUT/micrograph_example.png
+    python studies/make_micrograph.py -o steady/examples/micrograph_example.png  # the shipped one
+    python studies/make_micrograph.py --particles -o se.png  # the particles image
 
 The image is a pure function of the parameters below (the seed included).
 """
@@ -31,10 +31,13 @@ import pathlib
 import sys
 
 import numpy as np
+import study_io
 from PIL import Image
 from scipy import ndimage, spatial
 
-OUTPUT = pathlib.Path(__file__).resolve().parent / "scenes" / "micrograph_example.png"
+#: The file as shipped with the package (``-o`` writes it there).
+SHIPPED = (pathlib.Path(__file__).resolve().parents[1] / "steady" / "examples"
+           / "micrograph_example.png")
 
 #: Image size in pixels, grains, share of bright grains, grey levels of the
 #: two phases (fraction of full scale), blur and noise (pixels, full scale).
@@ -205,12 +208,16 @@ def write_png(path, grey):
 def main(argv=None):
     """Make the image; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("-o", "--output", type=pathlib.Path, default=OUTPUT,
-                        help=f"PNG to write (default {OUTPUT})")
+    parser.add_argument("-o", "--output", type=pathlib.Path, default=None,
+                        help=f"PNG to write (default: OUT/{SHIPPED.name}, or OUT/particles.png "
+                             f"with --particles; the shipped one: {SHIPPED})")
     parser.add_argument("--particles", action="store_true",
                         help="the secondary-electron image of particles with a data bar "
                              "(make_particles) instead of the grains")
+    study_io.add_output_arguments(parser, docs_figures=False)
     args = parser.parse_args(argv)
+    output = args.output or args.out / ("particles.png" if args.particles else SHIPPED.name)
+    output.parent.mkdir(parents=True, exist_ok=True)
     if args.particles:
         grey, truth = make_particles(**PARTICLES)
         truth = truth[:PARTICLES["rows"] - PARTICLES["bar_rows"]]
@@ -218,9 +225,9 @@ def main(argv=None):
     else:
         grey, truth = make_grains(**PARAMS)
         what = "whole image"
-    write_png(args.output, grey)
+    write_png(output, grey)
     fill = np.bincount(truth.ravel(), minlength=2) / truth.size
-    print(f"{args.output}: {grey.shape[1]} x {grey.shape[0]} pixels, true fill factors "
+    print(f"{output}: {grey.shape[1]} x {grey.shape[0]} pixels, true fill factors "
           f"{fill[0]:.4f}, {fill[1]:.4f} ({what})")
     return 0
 

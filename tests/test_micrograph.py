@@ -24,7 +24,7 @@ from steady.scene import load_scene
 from steady.solution import solve_scene
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-SCENES = ROOT / "studies" / "scenes"
+SCENES = ROOT / "steady" / "examples"
 RADIUS = 4e-3  # m, the gallery's punch
 
 #: Seeds of the synthetic images (twenty images per case, under a second).
@@ -395,7 +395,7 @@ def test_shipped_image_is_what_the_script_makes(make_micrograph):
     grey, _ = make_micrograph.make_grains(**make_micrograph.PARAMS)
     shipped = np.asarray(Image.open(SCENES / "micrograph_example.png"))
     assert np.array_equal(shipped, np.rint(grey * 255).astype(np.uint8)), \
-        "studies/scenes/micrograph_example.png differs from make_micrograph.py's image"
+        "steady/examples/micrograph_example.png differs from make_micrograph.py's image"
     assert (SCENES / "micrograph_example.png").stat().st_size < 300_000, "image too large"
 
 

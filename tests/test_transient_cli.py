@@ -221,7 +221,7 @@ def test_resume_of_a_finished_run_is_a_no_op(tmp_path, write_scene):
 def test_shipped_transient_scenes_parse():
     from transient.scene import load_transient_scene
 
-    scenes = sorted((ROOT / "studies" / "scenes").glob("*transient*.toml"))
+    scenes = sorted((ROOT / "steady" / "examples").glob("*transient*.toml"))
     assert scenes, "no transient scene shipped"
     for path in scenes:
         scene, settings, initial = load_transient_scene(path)

@@ -717,7 +717,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     >>> from transient import RunOptions, WearProblem, compare_with_steady, run_in
     >>> from transient.scene import load_transient_scene
     >>> scene, settings, initial = load_transient_scene(
-    ...     "studies/scenes/voronoi_transient.toml")
+    ...     "steady/examples/voronoi_transient.toml")
     >>> problem = WearProblem.from_scene(scene, n=40)
     >>> result = run_in(problem, initial.height(problem.grid),
     ...                 RunOptions(tol=1e-2))
