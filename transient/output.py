@@ -433,13 +433,7 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
         _write_history(f, result)
         _write_snapshots(f, result, scales[:2])
         if comparison is not None:
-            g = f.create_group("comparison")
-            for fld in dataclasses.fields(comparison):
-                value = getattr(comparison, fld.name)
-                if isinstance(value, np.ndarray):
-                    _put(g, fld.name, value, "Pa", dims=scales[2:])
-                else:
-                    g.attrs[fld.name] = value
+            _write_comparison(f, comparison, scales[2])
         _seal_groups(f)
     return writer.identity
 
@@ -514,6 +508,25 @@ def _write_snapshots(f, result, grid_scales):
          "NaN off the face", dims=(distance, *grid_scales), **packed)
     _put(snaps, "pressure", result.snapshot_pressure, "Pa", "contact pressure",
          dims=(distance, *grid_scales), **packed)
+
+
+# The comparison's arrays (Pa, one value per phase) and its lengths; the rest is 1 or a flag.
+_COMPARISON_NAMES = {"phase_pressures": "mean pressure on each phase, run",
+                     "steady_phase_pressures": "pressure on each phase, steady state (eq. 7)"}
+_COMPARISON_UNITS = {"rms_height": "m", "steady_rms_height": "m"}
+
+
+def _write_comparison(f, comparison, phase_scale):
+    """The group ``comparison``: :class:`transient.comparison.SteadyComparison`."""
+    g = f.create_group("comparison")
+    for fld in dataclasses.fields(comparison):
+        value = getattr(comparison, fld.name)
+        if isinstance(value, np.ndarray):
+            _put(g, fld.name, value, "Pa", _COMPARISON_NAMES.get(fld.name), dims=(phase_scale,))
+        else:
+            unit = None if isinstance(value, (bool, np.bool_)) else _COMPARISON_UNITS.get(
+                fld.name, "1")
+            _attribute(g.attrs, fld.name, value, unit)
 
 
 def _write_outline(f, result):
