@@ -12,8 +12,11 @@ import h5py
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import E_STAR, FORCE, GEOMETRIES, K1, RADIUS
+from conftest import E_STAR, FORCE, GEOMETRIES, K1, RADIUS, run_cli, scene_text
 
+import steady.cli.fit as fit_cli
+import steady.cli.solve as steady_cli
+import transient.cli.runin as transient_cli
 from steady import MeasuredFace, fit_face, solve, write_fit
 from steady.outline import Circle
 from steady.output import DIMENSION_SCALE_ATTRIBUTES, read_result, write_result
@@ -203,3 +206,32 @@ def test_run_file_checksums_still_catch_a_flipped_value(files, tmp_path):
         f["x"][...] = x
     with pytest.raises(run_output.DamagedRunFileError, match="dataset 'x' does not match"):
         read_run(path)
+
+
+def test_files_the_commands_write_open_as_labelled_arrays(tmp_path, capsys):
+    """runin-steady, runin-transient and runin-fit: the same scheme, with the scene's names."""
+    names = '[phases]\nnames = ["matrix", "hard phase"]\n'
+    scene = tmp_path / "scene.toml"
+    scene.write_text(scene_text("runin").replace("[phases]\n", names))
+    outputs = {"result": tmp_path / "result.h5", "run": tmp_path / "run.h5",
+               "fit": tmp_path / "fit.h5"}
+    status, _, err = run_cli(steady_cli, [scene, "-o", outputs["result"], "--no-slope-error"],
+                             capsys)
+    assert status == 0, err
+    status, _, err = run_cli(transient_cli, [scene, "-o", outputs["run"]], capsys)
+    assert status == 0, err
+    with h5py.File(outputs["result"], "r") as f:
+        face, h = f["face"][()], float(f.attrs["pixel_size"])
+    np.save(tmp_path / "measured.npy", face)
+    status, _, err = run_cli(fit_cli, [scene, tmp_path / "measured.npy", "--pixel-size", h,
+                                       "-o", outputs["fit"]], capsys)
+    assert status == 0, err
+    for kind, path in outputs.items():
+        units = units_of(path)
+        bad = {where: unit for where, unit in units.items()
+               if unit is None or not UDUNITS.match(str(unit))}
+        assert not bad, f"{kind} file: bad units or no long_name: {bad}"
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
+            assert ds["phase"].dims == ("x", "y"), f"{kind}: phase dims {ds['phase'].dims}"
+            assert ds["phase_name"].values.tolist() == ["matrix", "hard phase"], \
+                f"{kind}: phase names {ds['phase_name'].values}"
