@@ -235,3 +235,22 @@ def test_files_the_commands_write_open_as_labelled_arrays(tmp_path, capsys):
             assert ds["phase"].dims == ("x", "y"), f"{kind}: phase dims {ds['phase'].dims}"
             assert ds["phase_name"].values.tolist() == ["matrix", "hard phase"], \
                 f"{kind}: phase names {ds['phase_name'].values}"
+
+
+def test_two_files_written_alike_compare_identical(files, tmp_path):
+    """studies/compare_outputs.py compares dimension scales by the names they refer to."""
+    import importlib
+    import pathlib
+    import sys
+
+    studies = pathlib.Path(__file__).resolve().parent.parent / "studies"
+    sys.path.insert(0, str(studies))
+    try:
+        compare = importlib.import_module("compare_outputs")
+    finally:
+        sys.path.remove(str(studies))
+    stored = read_result(files["result"])
+    again = write_result(tmp_path / "again.h5", stored.result, phase_names=stored.phase_names)
+    assert compare.compare_files(files["result"], again, ()) == [], "a rewrite is identical"
+    other = write_result(tmp_path / "other.h5", stored.result, phase_names=("a", "b"))
+    assert compare.compare_files(files["result"], other, ()) == ["/phase_name: dataset differs"]
