@@ -25,8 +25,9 @@ for every dataset and attribute with its unit and meaning.  In short::
         rms_slope_plain, rms_slope_ref (grad_f0), rms_slope_ref_error,
         rms_slope_ref_source (text), mean_pressure (Pa), rms_height (m),
         fill_factors, phase_pressures (Pa), wear_coefficients (Pa-m),
-        exponent, normal_force (N), E_star (Pa), pixel_size (m), radius (m,
-        disks only), scale (m), n (pixels along the longer side)
+        exponent, wear_law (in words), normal_force (N), E_star (Pa),
+        pixel_size (m), radius (m, disks only), scale (m), n (pixels along
+        the longer side)
     group ``outline``: the face's outline (:func:`write_outline`)
     group ``micrograph``: a segmented micrograph's segmentation and placement
 
@@ -53,6 +54,7 @@ from .micrograph import Micrograph
 from .outline import OUTLINES, Circle, MaskOutline
 from .problem import check_phase_names, default_phase_names
 from .solution import SteadyResult
+from .wear import PowerLaw
 
 __all__ = ["DIMENSION_SCALE_ATTRIBUTES", "FORMAT", "FORMAT_VERSION", "AtomicH5", "FileIdentity",
            "OutputAppearedError", "OutputExistsError", "StoredResult", "atomic_h5",
@@ -733,6 +735,7 @@ def _write(f, result, scene, phase_names):
         f.attrs[name] = values[name]
         f.attrs[f"{name}_units"] = unit or wear_coefficient_units(result.exponent)
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
+    f.attrs["wear_law"] = PowerLaw(result.wear_coefficients, exponent=result.exponent).describe()
     if isinstance(result.outline, Circle):
         f.attrs["radius"] = result.outline.radius
         f.attrs["radius_units"] = "m"

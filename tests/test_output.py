@@ -214,3 +214,5 @@ def test_datasets_carry_cf_units_long_names_and_coordinates(tmp_path, solved):
         assert f["x"].attrs["units"] == "m" and f["y"].attrs["units"] == "m", "coordinates in m"
         assert f["outline"].attrs["area_units"] == "m2", "area in m2"
         assert f.attrs["wear_coefficients_units"] == "Pa-1", "Archard's k in Pa-1"
+        assert f.attrs["wear_law"] == "Archard's law dw/ds = k p, k = [1e-09, 3e-09] 1/Pa", \
+            f"wear law {f.attrs['wear_law']!r}"
