@@ -64,7 +64,7 @@ Fit result files (layout ``runin.fit``, version 2), written by
         phase     (nx, ny)  phase index at each pixel, -1 off the face 1
         scene     string    the scene TOML (attribute source_path)
     group ``outline``: the face's outline (:func:`steady.output.write_outline`):
-        attributes kind, area (m^2) and its lengths (m, with <name>_units);
+        attributes kind, area (m2) and its lengths (m, with <name>_units);
         for a mask the dataset ``mask`` (mx, my)
 
 The unit of attribute ``x`` is the udunits string ``x_units`` (docs/files.md).
