@@ -156,6 +156,23 @@ def _normalise(value, trees):
     return value
 
 
+def _dereferenced(f, value):
+    """An attribute with each object reference (dimension scales) replaced by the object's name."""
+    a = np.asarray(value)
+    if a.dtype.kind != "O" and not (a.dtype.fields and any(
+            a.dtype[k].kind == "O" for k in a.dtype.fields)):
+        return value
+
+    def name(v):
+        if isinstance(v, h5py.Reference):
+            return f[v].name if v else ""
+        if isinstance(v, (np.ndarray, list, tuple, np.void)):
+            return [name(u) for u in v]
+        return v
+
+    return repr(name(a.tolist() if a.dtype.fields else list(a.flat)))
+
+
 def _same(a, b):
     """Whether two stored values are identical: dtype, shape and bytes (NaN equal)."""
     a, b = np.asarray(a), np.asarray(b)
@@ -201,8 +218,8 @@ def compare_files(path_a, path_b, trees):
             for key in sorted(keys_a & keys_b):
                 if key in volatile:
                     continue
-                va = _normalise(node_a.attrs[key], trees)
-                vb = _normalise(node_b.attrs[key], trees)
+                va = _normalise(_dereferenced(fa, node_a.attrs[key]), trees)
+                vb = _normalise(_dereferenced(fb, node_b.attrs[key]), trees)
                 if not _same(va, vb):
                     differences.append(f"{where} @{key}: {_shown(va)} != {_shown(vb)}")
     return differences
