@@ -282,29 +282,36 @@ def pressure_unit(values):
 
 
 def _steady(source):
-    """``(SteadyResult, scene_text)`` of a file, a StoredResult or a SteadyResult."""
+    """``(SteadyResult, phase names)`` of a file, a StoredResult or a SteadyResult.
+
+    The names: the file's, else those of the scene stored with it, else
+    the result's own, else ``"phase 0"``, ...
+    """
     if isinstance(source, (str, os.PathLike)):
         source = read_result(source)
     if hasattr(source, "result") and hasattr(source, "scene_text"):
-        return source.result, source.scene_text
+        res = source.result
+        stored = tuple(getattr(source, "phase_names", ()) or ())
+        if len(stored) == res.n_phases and stored != default_phase_names(res.n_phases):
+            return res, tuple(str(name) for name in stored)
+        return res, phase_names_from_scene(source.scene_text, res.n_phases)
     if hasattr(source, "labels") and hasattr(source, "face"):
-        return source, ""
+        own = tuple(getattr(source, "phase_names", ()) or ())
+        return source, (own if len(own) == source.n_phases
+                        else default_phase_names(source.n_phases))
     raise ValueError(f"expected a steady result file, StoredResult or SteadyResult, got "
                      f"{type(source).__name__}")
 
 
-def _phase_names(res, scene_text, names):
-    """Names given, else the result's own, else the stored scene's, else ``"phase i"``."""
-    if names is not None:
-        names = tuple(str(name) for name in names)
-        if len(names) != res.n_phases:
-            raise ValueError(f"names has {len(names)} entries, expected one per phase "
-                             f"({res.n_phases})")
-        return names
-    own = getattr(res, "phase_names", None)
-    if own is not None and len(own) == res.n_phases:
-        return tuple(str(name) for name in own)
-    return phase_names_from_scene(scene_text, res.n_phases)
+def _phase_names(res, known, names):
+    """``names`` checked (one per phase), or the names ``known`` from the result."""
+    if names is None:
+        return known
+    names = tuple(str(name) for name in names)
+    if len(names) != res.n_phases:
+        raise ValueError(f"names has {len(names)} entries, expected one per phase "
+                         f"({res.n_phases})")
+    return names
 
 
 def map_height(shape, width):
@@ -338,8 +345,9 @@ def plot_phases(source, *, ax=None, names=None, details=True):
     ax : matplotlib.axes.Axes, optional
         Axes to draw into (default: a new figure a column wide).
     names : sequence of str, optional
-        One name per phase, phase 0 first (default: the result's or the
-        stored scene's ``[phases] names``, else ``"phase 0"``, ...).
+        One name per phase, phase 0 first (default: the names the file
+        stores, else its scene's ``[phases] names``, else the result's
+        own, else ``"phase 0"``, ...).
     details : bool, optional
         Add each phase's wear coefficient, area fraction and steady
         pressure (eq. 7) to its legend entry (default True).
@@ -349,8 +357,8 @@ def plot_phases(source, *, ax=None, names=None, details=True):
     matplotlib.figure.Figure
         The figure drawn into; axes in mm, x horizontal, y up.
     """
-    res, scene_text = _steady(source)
-    names = _phase_names(res, scene_text, names)
+    res, known = _steady(source)
+    names = _phase_names(res, known, names)
     fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH) + 0.6))
     colours = phase_colours(res.n_phases)
     cmap = ListedColormap(colours).with_extremes(bad="white")
@@ -446,14 +454,14 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
     >>> fig.axes[1].images[0].get_extent()
     [-4.0, 4.0, -2.0, 2.0]
     """
-    res, scene_text = _steady(stored)
+    res, known = _steady(stored)
     if axes is None:
         fig = new_figure(PAGE_WIDTH, map_height(res.shape, 0.5 * PAGE_WIDTH) + 0.9)
         axes = fig.subplots(1, 2)
     else:
         fig = axes[0].get_figure(root=True)
     ax_phase, ax_face = axes
-    plot_phases(res, ax=ax_phase, names=_phase_names(res, scene_text, names))
+    plot_phases(res, ax=ax_phase, names=_phase_names(res, known, names))
     plot_face(res, ax=ax_face, remove=remove)
     ax_phase.set_title("phase map")
     error = (f" ± {res.rms_slope_error / res.reference_slope:.1g}"

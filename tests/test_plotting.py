@@ -188,6 +188,13 @@ def test_phase_names_come_from_the_scene(tmp_path, scene_file):
         plot_phases(out, names=["a"])
 
 
+def test_phase_names_stored_in_the_file(tmp_path, wide_result):
+    out = tmp_path / "r.h5"
+    write_result(out, wide_result, phase_names=["rubber", "silica"])
+    ax = plot_phases(out, details=False).axes[0]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["rubber", "silica"]
+
+
 def test_phases_numbered_from_zero_without_names(wide_result):
     ax = plot_phases(wide_result, details=False).axes[0]
     texts = [t.get_text() for t in ax.get_legend().get_texts()]
