@@ -54,7 +54,6 @@ __all__ = ["RUN_IN_WITHIN", "add_distance_axis", "distance_scale", "draw_rms_slo
 #: after which the run stays within 1 % of the steady state.
 RUN_IN_WITHIN = 0.01
 
-_QUANTITIES = ("rms_slope", "rms_height", "convergence")
 # Histories whose last step jumped to "infinity" when the steady state was
 # reached: points beyond this many s* are not drawn.
 _JUMP = 1e6
@@ -353,7 +352,8 @@ def _draw_height(ax, run, units, normalised):
     ax.set_xlabel("sliding distance (m)" if units == "m" else "sliding distance / s*")
 
 
-def _draw_convergence(ax, run, units):
+def _draw_convergence(ax, run, units, normalised):
+    del normalised  # the measures are relative already
     h = run.result.history
     x, pos = _distance(run, units)
     ax.loglog(x[pos], np.maximum(h["spread"][pos], 1e-17), ".-", ms=2,
@@ -362,6 +362,11 @@ def _draw_convergence(ax, run, units):
               label="shape change (f* per s*)")
     ax.set_ylabel("convergence measure")
     ax.set_xlabel("sliding distance (m)" if units == "m" else "sliding distance / s*")
+
+
+#: The panels of :func:`plot_history` by quantity: ``draw(ax, run, units, normalised)``.
+_PANELS = {"rms_slope": _draw_slope, "rms_height": _draw_height,
+           "convergence": _draw_convergence}
 
 
 def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",), ax=None,
@@ -415,10 +420,10 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
     """
     _check_units(units)
     quantities = (quantities,) if isinstance(quantities, str) else tuple(quantities)
-    unknown = [q for q in quantities if q not in _QUANTITIES]
+    unknown = [q for q in quantities if q not in _PANELS]
     if unknown or not quantities:
         raise ValueError(f"unknown quantity {unknown[0] if unknown else quantities!r}: "
-                         f"expected some of {', '.join(_QUANTITIES)}")
+                         f"expected some of {', '.join(_PANELS)}")
     run = _run(source)
     if ax is None:
         fig = new_figure(COLUMN_WIDTH, 0.4 + 2.6 * len(quantities))
@@ -429,12 +434,7 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
             raise ValueError(f"{len(axes)} axes given for {len(quantities)} quantities")
         fig = axes[0].get_figure(root=True)
     for a, quantity in zip(axes, quantities, strict=True):
-        if quantity == "rms_slope":
-            _draw_slope(a, run, units, normalised)
-        elif quantity == "rms_height":
-            _draw_height(a, run, units, normalised)
-        else:
-            _draw_convergence(a, run, units)
+        _PANELS[quantity](a, run, units, normalised)
         if legend:
             a.legend(loc="best", fontsize=FONT_SIZES["legend"])
         set_fonts(a)
