@@ -38,7 +38,7 @@ from .relief import PlaneFit
 __all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
            "grid_extent", "map_height", "new_figure", "phase_colours", "phase_names_from_scene",
            "plot_face", "plot_file", "plot_phases", "pressure_unit", "relief", "result_figure",
-           "save_png", "set_fonts"]
+           "root_figure", "save_png", "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,6 +64,12 @@ def new_figure(width, height):
     return fig
 
 
+def root_figure(ax):
+    """The figure that holds ``ax``, through any subfigures (matplotlib 3.7 and later)."""
+    # Axes.figure is the innermost (sub)figure; a (sub)figure's own .figure is the root.
+    return ax.figure.figure
+
+
 def figure_and_axes(ax, size):
     """``(figure, axes)``: those of ``ax``, or a new figure of ``size`` inches with one axes.
 
@@ -79,7 +85,7 @@ def figure_and_axes(ax, size):
     matplotlib.figure.Figure, matplotlib.axes.Axes
     """
     if ax is not None:
-        return ax.get_figure(root=True), ax
+        return root_figure(ax), ax
     fig = new_figure(*size)
     return fig, fig.add_subplot()
 
@@ -195,8 +201,7 @@ def colour_bar(image, label):
     """
     x0, x1, y0, y1 = image.get_extent()
     wide = abs(x1 - x0) > 1.5 * abs(y1 - y0)
-    fig = image.axes.get_figure(root=True)
-    bar = fig.colorbar(image, ax=image.axes, location="bottom" if wide else "right",
+    bar = image.axes.figure.colorbar(image, ax=image.axes, location="bottom" if wide else "right",
                        shrink=0.9, aspect=30)
     bar.set_label(label)
     set_fonts(bar.ax)
@@ -459,7 +464,7 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
         fig = new_figure(PAGE_WIDTH, map_height(res.shape, 0.5 * PAGE_WIDTH) + 0.9)
         axes = fig.subplots(1, 2)
     else:
-        fig = axes[0].get_figure(root=True)
+        fig = root_figure(axes[0])
     ax_phase, ax_face = axes
     plot_phases(res, ax=ax_phase, names=_phase_names(res, known, names))
     plot_face(res, ax=ax_face, remove=remove)

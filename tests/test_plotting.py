@@ -248,3 +248,12 @@ def test_fit_figure_draws_relief_not_the_dome(tmp_path, scene_file):
                                err_msg="an exact face is fitted exactly")
     bars = [ax.get_ylabel() for ax in fig.axes[3:]]
     assert bars == ["height about plane (µm)", "residual (µm)"], bars
+
+
+def test_drawn_into_a_subfigure_returns_the_whole_figure(wide_result):
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    left, _ = fig.subfigures(1, 2)
+    assert plot_face(wide_result, ax=left.add_subplot()) is fig, "the root figure"
+    assert len(left.axes) == 2, "the map and its colour bar in the subfigure"
+    fig.canvas.draw()

@@ -40,6 +40,7 @@ from steady.plotting import (
     new_figure,
     pressure_unit,
     relief,
+    root_figure,
     save_png,
     set_fonts,
 )
@@ -432,7 +433,7 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
         axes = [ax] if hasattr(ax, "plot") else list(ax)
         if len(axes) != len(quantities):
             raise ValueError(f"{len(axes)} axes given for {len(quantities)} quantities")
-        fig = axes[0].get_figure(root=True)
+        fig = root_figure(axes[0])
     for a, quantity in zip(axes, quantities, strict=True):
         _PANELS[quantity](a, run, units, normalised)
         if legend:
