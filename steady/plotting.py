@@ -36,9 +36,9 @@ from .problem import default_phase_names
 from .relief import PlaneFit
 
 __all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
-           "grid_extent", "map_height", "new_figure", "phase_colours", "phase_names_from_scene",
-           "plot_face", "plot_file", "plot_phases", "pressure_unit", "relief", "result_figure",
-           "root_figure", "save_png", "set_fonts"]
+           "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
+           "plot_phases", "pressure_unit", "relief", "result_figure", "root_figure", "save_png",
+           "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
@@ -106,32 +106,6 @@ def set_fonts(*axes):
 def phase_colours(n_phases):
     """One colour per phase, phase 0 first (light matrix, dark inclusions)."""
     return [_PHASE_COLOURS[i % len(_PHASE_COLOURS)] for i in range(int(n_phases))]
-
-
-def phase_names_from_scene(scene_text, n_phases):
-    """The phase names of a stored scene's ``[phases] names``, else ``"phase i"``.
-
-    Parameters
-    ----------
-    scene_text : str
-        The scene's TOML ("" when none was stored).
-    n_phases : int
-
-    Returns
-    -------
-    tuple of str
-        One name per phase, phase 0 first.
-    """
-    import tomllib
-
-    try:
-        names = tomllib.loads(scene_text or "").get("phases", {}).get("names")
-    except (tomllib.TOMLDecodeError, AttributeError):
-        names = None
-    if (isinstance(names, list) and len(names) == n_phases
-            and all(isinstance(name, str) and name for name in names)):
-        return tuple(names)
-    return default_phase_names(n_phases)
 
 
 def grid_extent(shape, pixel_size):
@@ -289,23 +263,21 @@ def pressure_unit(values):
 def _steady(source):
     """``(SteadyResult, phase names)`` of a file, a StoredResult or a SteadyResult.
 
-    The names: the file's, else those of the scene stored with it, else
-    the result's own, else ``"phase 0"``, ...
+    The names: those the file stores (:attr:`steady.output.StoredResult.phase_names`),
+    else the result's own, else ``"phase 0"``, ...
     """
     if isinstance(source, (str, os.PathLike)):
         source = read_result(source)
     if hasattr(source, "result") and hasattr(source, "scene_text"):
-        res = source.result
-        stored = tuple(getattr(source, "phase_names", ()) or ())
-        if len(stored) == res.n_phases and stored != default_phase_names(res.n_phases):
-            return res, tuple(str(name) for name in stored)
-        return res, phase_names_from_scene(source.scene_text, res.n_phases)
-    if hasattr(source, "labels") and hasattr(source, "face"):
-        own = tuple(getattr(source, "phase_names", ()) or ())
-        return source, (own if len(own) == source.n_phases
-                        else default_phase_names(source.n_phases))
-    raise ValueError(f"expected a steady result file, StoredResult or SteadyResult, got "
-                     f"{type(source).__name__}")
+        source, names = source.result, tuple(getattr(source, "phase_names", ()) or ())
+    elif hasattr(source, "labels") and hasattr(source, "face"):
+        names = tuple(getattr(source, "phase_names", ()) or ())
+    else:
+        raise ValueError(f"expected a steady result file, StoredResult or SteadyResult, got "
+                         f"{type(source).__name__}")
+    if len(names) != source.n_phases:
+        names = default_phase_names(source.n_phases)
+    return source, tuple(str(name) for name in names)
 
 
 def _phase_names(res, known, names):
@@ -351,8 +323,7 @@ def plot_phases(source, *, ax=None, names=None, details=True):
         Axes to draw into (default: a new figure a column wide).
     names : sequence of str, optional
         One name per phase, phase 0 first (default: the names the file
-        stores, else its scene's ``[phases] names``, else the result's
-        own, else ``"phase 0"``, ...).
+        stores, else the result's own, else ``"phase 0"``, ...).
     details : bool, optional
         Add each phase's wear coefficient, area fraction and steady
         pressure (eq. 7) to its legend entry (default True).

@@ -16,7 +16,6 @@ from steady.output import read_result, write_result
 from steady.plotting import (
     draw_map,
     grid_extent,
-    phase_names_from_scene,
     plot_face,
     plot_file,
     plot_phases,
@@ -171,7 +170,7 @@ def test_pressure_unit(values, expected):
 
 # -- phase names, axes given ------------------------------------------------------------------
 
-def test_phase_names_come_from_the_scene(tmp_path, scene_file):
+def test_phase_names_of_the_scene_go_with_the_file(tmp_path, scene_file):
     path = scene_file("steady", extra='names = ["epoxy", "bronze"]')
     scene = load_scene(path)
     out = tmp_path / "r.h5"
@@ -204,8 +203,6 @@ def test_phases_numbered_from_zero_without_names(wide_result):
     assert (disk.labels < 0).any()
     np.testing.assert_array_equal(np.ma.getmaskarray(drawn).T, disk.labels < 0,
                                   err_msg="off the face masked (drawn white)")
-    assert phase_names_from_scene("[phases]\nnames = ['a']\n", 2) == ("phase 0", "phase 1")
-    assert phase_names_from_scene("not toml [", 1) == ("phase 0",)
 
 
 def test_functions_draw_into_given_axes(wide_result):
