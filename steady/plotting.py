@@ -414,7 +414,8 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
     matplotlib.figure.Figure
         Left: phase map with the phase names; right: the limiting face
         ``f_inf`` about its plane in micrometres, titled with its rms
-        slope.  Axes in mm, x horizontal, y up.
+        slope; a new figure is titled with the outline, load, modulus and
+        grid.  Axes in mm, x horizontal, y up.
 
     Examples
     --------
@@ -431,7 +432,8 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
     [-4.0, 4.0, -2.0, 2.0]
     """
     res, known = _steady(stored)
-    if axes is None:
+    own = axes is None
+    if own:
         fig = new_figure(PAGE_WIDTH, map_height(res.shape, 0.5 * PAGE_WIDTH) + 0.9)
         axes = fig.subplots(1, 2)
     else:
@@ -444,9 +446,10 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
              if np.isfinite(res.rms_slope_error) else "")
     ax_face.set_title(f"limiting face, rms slope {res.rms_slope:.3g}\n"
                       f"= ({res.normalised_rms_slope:.4g}{error}) " r"$\nabla f^0_\infty$")
-    fig.suptitle(f"{res.outline.describe()}, F = {res.normal_force:.3g} N, "
-                 f"E* = {res.E_star / 1e6:.3g} MPa, n = {res.n}",
-                 fontsize=FONT_SIZES["title"])
+    if own:  # a title of the inputs on a figure of ours, not on the caller's
+        fig.suptitle(f"{res.outline.describe()}, F = {res.normal_force:.3g} N, "
+                     f"E* = {res.E_star / 1e6:.3g} MPa, n = {res.n}",
+                     fontsize=FONT_SIZES["title"])
     set_fonts(ax_phase, ax_face)
     return fig
 

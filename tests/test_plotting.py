@@ -215,6 +215,7 @@ def test_functions_draw_into_given_axes(wide_result):
     a, b = Figure().subplots(1, 2)
     assert result_figure(wide_result, axes=(a, b)) is a.get_figure()
     assert a.get_title() == "phase map" and "rms slope" in b.get_title()
+    assert a.get_figure().get_suptitle() == "", "the caller's figure keeps its title"
 
 
 def test_plot_file_writes_the_figure(tmp_path, wide_result):
