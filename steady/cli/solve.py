@@ -63,8 +63,9 @@ def build_parser():
     parser.add_argument("--force", action="store_true",
                         help="overwrite existing output files")
     parser.add_argument("--no-slope-error", dest="slope_error", action="store_false",
-                        help="report the plain pixel rms slope only (skips the corrected "
-                             "estimate and its error bar, which cost a few more solves)")
+                        help="skip the corrected rms slope and its error bar, which cost a "
+                             "few more solves (rms_slope is then NaN; the plain pixel value is "
+                             "still reported as such)")
     add_memory_limit(parser)
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log progress (-v) or details (-vv) to stderr")
@@ -73,13 +74,19 @@ def build_parser():
 
 def summary_lines(result):
     """Short human-readable summary of a :class:`~steady.solution.SteadyResult`."""
-    fill = ", ".join(f"{v:.4f}" for v in result.fill_factors)
-    pressures = ", ".join(f"{v:.6g}" for v in result.phase_pressures)
-    if math.isfinite(result.rms_slope_error):
+    names = result.phase_names
+    fill = ", ".join(f"{name} {v:.4f}" for name, v in zip(names, result.fill_factors,
+                                                            strict=True))
+    pressures = ", ".join(f"{name} {v:.6g}" for name, v in zip(names, result.phase_pressures,
+                                                                strict=True))
+    plain = f"plain pixel value {result.rms_slope_plain:.6g}"
+    if math.isnan(result.rms_slope):
+        slope = f"rms slope        not estimated  ({plain})"
+    elif math.isfinite(result.rms_slope_error):
         slope = (f"rms slope        {result.rms_slope:.6g} +- {result.rms_slope_error:.2g}"
-                 f"  (plain pixel value {result.rms_slope_plain:.6g})")
+                 f"  ({plain})")
     else:
-        slope = f"rms slope        {result.rms_slope:.6g}  (plain pixel value, no error estimate)"
+        slope = f"rms slope        {result.rms_slope:.6g}  (no error bar; {plain})"
     if result.reference_slope_error > 0:
         ref = f"{result.reference_slope:.6g} +- {result.reference_slope_error:.2g}"
     else:
@@ -90,7 +97,9 @@ def summary_lines(result):
         f"({result.shape[0]} x {result.shape[1]} pixels)",
         slope,
         f"grad_f0          {ref}  ({source})",
-        f"rms / grad_f0    {result.normalised_rms_slope:.6g}",
+        f"rms / grad_f0    {result.normalised_rms_slope:.6g}"
+        + ("" if math.isfinite(result.rms_slope)
+           else f"  (plain pixel value {result.normalised_rms_slope_plain:.6g})"),
         f"fill factors     {fill}",
         f"phase pressures  {pressures} Pa",
     ]
@@ -101,7 +110,7 @@ def run(args):
     saved = None
     try:
         scene = _check(args)
-        result = solve_scene(scene, slope_error=args.slope_error)
+        result = solve_scene(scene, face_only=not args.slope_error)
         lines = summary_lines(result)
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
