@@ -193,7 +193,7 @@ def test_command_line(tmp_path, capsys):
     args = ["--table", str(path), "--pbar-over-estar", "0.08", "--wear-ratio", "1e-3"]
     assert main(args + ["--target-slope", "0.5"]) == 0, "inverse"
     out = capsys.readouterr().out
-    assert "fill factor rho_2 =" in out and "reachable" in out, out
+    assert "fill factor rho_1 =" in out and "reachable" in out, out
     assert main(args + ["--fill-factor", "0.1"]) == 0, "forward"
     out = capsys.readouterr().out
     assert "rms slope =" in out and "fine-grain closed form" in out, out
