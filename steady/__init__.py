@@ -24,6 +24,8 @@ bottom floor up:
 - :mod:`steady.rms_slope` -- the energy-corrected rms slope and its error
   bar; :mod:`steady.normalisation` -- the reference slope of each outline;
   :mod:`steady.relief` -- rms heights;
+- :mod:`steady.validity` -- where the model holds (small slopes) and the
+  warning beyond;
 - :mod:`steady.scene` -- TOML scene files;
 - :mod:`steady.solution` -- the steady solve; :mod:`steady.basis` --
   per-phase fields for sweeps over wear coefficients;
@@ -74,6 +76,7 @@ _MODULE_OF = {
     "SteadyResult": "solution",
     "StoredResult": "output",
     "SweepSlopes": "basis",
+    "ValidityWarning": "validity",
     "Voronoi": "phases",
     "as_outline": "outline",
     "atomic_h5": "output",

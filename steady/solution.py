@@ -36,6 +36,7 @@ from .normalisation import reference_slope
 from .problem import Problem, default_phase_names
 from .relief import rms_height
 from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
+from .validity import check_rms_slope
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
 
@@ -341,4 +342,8 @@ def solve_scene(scene, *, n=None, face_only=False):
     0.997 +- 0.012 grad_f0, plain 0.965
     """
     # The problem's map is the geometry's at n by construction: no need to check it.
-    return _solve(Problem.from_scene(scene, n=n), scene.geometry, face_only)
+    result = _solve(Problem.from_scene(scene, n=n), scene.geometry, face_only)
+    where = "the scene" if scene.source_path is None else str(scene.source_path)
+    check_rms_slope(result.rms_slope if math.isfinite(result.rms_slope)
+                    else result.rms_slope_plain, f"the steady face of {where}")
+    return result
