@@ -1,4 +1,4 @@
-"""Wear ratios from a measured worn face: the inverse problem of eq. 7 and 9.
+"""Wear ratios from a measured worn face: the inverse problem of equations 7 and 9.
 
 The steady face is linear in the phase pressures,
 ``f_inf = sum_i p_i K chi_i`` (eq. 9), and in the steady state

@@ -1,4 +1,4 @@
-"""Figure of a steady result: phase map beside the limiting worn face (paper Fig. 3).
+"""Figure of a steady result: phase map beside the limiting worn face (paper Figure 3).
 
 Reads the HDF5 file written by :func:`steady.output.write_result`, so a
 figure can be redrawn without solving again.  Uses matplotlib's Agg canvas

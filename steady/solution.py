@@ -1,4 +1,4 @@
-"""Closed-form limiting worn face of a multi-phase punch (paper eq. 7, 9, 15).
+"""Closed-form limiting worn face of a multi-phase punch (paper equations 7, 9, 15).
 
 In the steady state every point of the face wears at the same rate.  With a
 local wear law ``dw/ds = k_i p^m`` on phase ``i`` that means
