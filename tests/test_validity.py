@@ -98,3 +98,16 @@ def test_solve_scene_warns_once_per_scene(tmp_path):
     assert len(caught) == 1, [str(w.message) for w in caught]
     assert str(caught[0].message).startswith("the steady face of the scene has an rms slope"), \
         str(caught[0].message)
+
+
+def test_runin_command_warns_after_the_run(tmp_path, capsys):
+    """The run-in's scene is checked on its steady face, at the end of the run."""
+    import transient.cli.runin as runin_cli
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(scene_text("runin", normal_force=25.0))      # 2.5 x 0.254 rad
+    status, out, err = run_cli(runin_cli, [scene, "-o", tmp_path / "r.h5"], capsys)
+    assert status == 0 and (tmp_path / "r.h5").exists(), f"exit {status}: {err}"
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(
+        f"warning: the steady face of {scene} has an rms slope of 0.63"), err
