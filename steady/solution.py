@@ -214,9 +214,9 @@ def solve(problem, *, geometry=None, face_only=False):
     -----
     One forward transform of the pressure feeds the three products (face
     and two slope components), so the face costs one forward and three
-    inverse transforms; the corrected rms slope and its error bar cost
-    about three times that again (the slope energy on ``n``, ``n/2`` and
-    ``n/4``).
+    inverse transforms; the corrected rms slope and its error bar add the
+    slope energy (:class:`steady.rms_slope.SlopeEnergy`) on ``n``, ``n/2``
+    and ``n/4``, several times that.
 
     Examples
     --------
@@ -326,6 +326,13 @@ def solve_scene(scene, *, n=None, face_only=False):
     Returns
     -------
     SteadyResult
+
+    Warns
+    -----
+    steady.validity.ValidityWarning
+        The face's rms slope (the plain pixel value with ``face_only``)
+        beyond :data:`steady.validity.SLOPE_LIMIT`: the scene lies outside
+        the range of the linear half-space.
 
     Examples
     --------
