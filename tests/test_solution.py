@@ -302,7 +302,7 @@ def test_homogeneous_rms_height_converges_to_eq10():
 
 
 # -- the rms slope of a solve: one meaning -----------------------------------------------------
-SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
+SCENES = pathlib.Path(__file__).resolve().parent.parent / "steady" / "examples"
 
 
 def test_solve_and_solve_scene_give_the_same_corrected_rms_slope():

@@ -24,7 +24,7 @@ from steady.validity import (
     max_pbar_over_estar,
 )
 
-SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
+SCENES = pathlib.Path(__file__).resolve().parent.parent / "steady" / "examples"
 
 
 def test_the_limit_is_where_the_dropped_terms_reach_five_per_cent():

@@ -229,6 +229,10 @@ class RunResult:
         Uncertainty of ``reference_slope`` (0: a closed form).
     reference_slope_source : str
         Where ``reference_slope`` comes from, in words ("" when unknown).
+    problem : steady.problem.Problem or None
+        The problem the run solved (load, modulus, wear law, phase map and
+        names), which :func:`transient.output.write_run` stores; None for a
+        run read from a file.
     """
 
     status: str
@@ -254,6 +258,7 @@ class RunResult:
     outline: object = None
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
+    problem: object = None
 
     @property
     def height(self):
@@ -541,7 +546,7 @@ class _Run:
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
             reference_slope=self.grad_f0, state=self.current_state(),
             outline=self.problem.outline, reference_slope_error=self.reference.error,
-            reference_slope_source=self.reference.source)
+            reference_slope_source=self.reference.source, problem=self.problem.problem)
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
@@ -717,7 +722,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     >>> from transient import RunOptions, WearProblem, compare_with_steady, run_in
     >>> from transient.scene import load_transient_scene
     >>> scene, settings, initial = load_transient_scene(
-    ...     "studies/scenes/voronoi_transient.toml")
+    ...     "steady/examples/voronoi_transient.toml")
     >>> problem = WearProblem.from_scene(scene, n=40)
     >>> result = run_in(problem, initial.height(problem.grid),
     ...                 RunOptions(tol=1e-2))

@@ -2,30 +2,26 @@
 Steady face of a punch cut from a micrograph
 ============================================
 
-A two-phase micrograph (``studies/scenes/micrograph_example.png``, a
-synthetic image of bright grains in a darker matrix) is segmented into two
-phases and cropped to a disk of radius 4 mm; the bright grains wear ten
-times less than the matrix.  In the steady state every point wears at the
-same rate, so the pressure is constant on each phase (eq. 7) and the worn
-face is the half-space's displacement under that pressure (eq. 9).
+A two-phase micrograph (``micrograph_example.png``, a synthetic image of
+bright grains in a darker matrix) is segmented into two phases and cropped
+to a disk of radius 4 mm; the bright grains wear ten times less than the
+matrix.  In the steady state every point wears at the same rate, so the
+pressure is constant on each phase (eq. 7) and the worn face is the
+half-space's displacement under that pressure (eq. 9).
 
-The scene file ``studies/scenes/micrograph_steady.toml`` holds all of it;
-:func:`steady.solve_scene` solves it.  Needs ``runin[micrograph]``
-(scikit-image).
+The example scene ``micrograph_steady`` (:mod:`steady.examples`;
+``runin-examples`` copies it) holds all of it; :func:`steady.solve_scene`
+solves it.  Needs ``runin[micrograph]`` (scikit-image).
 """
 
-import pathlib
 import warnings
 
 import matplotlib.pyplot as plt
 import numpy as np
 
-import steady
-from steady import ValidityWarning, load_scene, solve_scene
+from steady import ValidityWarning, examples, load_scene, solve_scene
 
-# The scenes of the repository, beside the package.
-SCENES = pathlib.Path(steady.__file__).resolve().parents[1] / "studies" / "scenes"
-scene = load_scene(SCENES / "micrograph_steady.toml")
+scene = load_scene(examples.path("micrograph_steady"))
 
 # %%
 # Solve.  The rms slope of the face -- the friction proxy -- comes with its

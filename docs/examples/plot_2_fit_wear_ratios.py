@@ -12,17 +12,13 @@ a brass cylinder of the paper's Fig. 7 (``k_steel / k_brass = 1.7``), plus
 noise of 5 % of its spread.  :func:`steady.fit_scene` fits it back.
 """
 
-import pathlib
 
 import matplotlib.pyplot as plt
 import numpy as np
 
-import steady
-from steady import MeasuredFace, fit_scene, load_scene, solve_scene
+from steady import MeasuredFace, examples, fit_scene, load_scene, solve_scene
 
-# The scenes of the repository, beside the package.
-SCENES = pathlib.Path(steady.__file__).resolve().parents[1] / "studies" / "scenes"
-scene = load_scene(SCENES / "rods_steel_in_brass.toml")   # phase 0 brass, phase 1 steel
+scene = load_scene(examples.path("rods_steel_in_brass"))   # phase 0 brass, phase 1 steel
 n = 64
 
 # %%
