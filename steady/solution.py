@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from .normalisation import reference_slope
-from .problem import Problem, default_phase_names
+from .problem import Problem
 from .relief import rms_height
 from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
 from .validity import check_rms_slope
@@ -94,9 +94,6 @@ class SteadyResult:
         Uncertainty of ``reference_slope`` (0 for a closed form).
     reference_slope_source : str
         Where ``reference_slope`` comes from, in words.
-    phase_names : tuple of str
-        A name for each phase, phase 0 first (:attr:`steady.problem.Problem.phase_names`);
-        default ``("phase 0", "phase 1", ...)``.
     """
 
     labels: np.ndarray
@@ -117,12 +114,6 @@ class SteadyResult:
     rms_height: float = math.nan
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
-    phase_names: tuple = ()
-
-    def __post_init__(self):
-        """Default phase names, ``("phase 0", "phase 1", ...)``."""
-        if not self.phase_names:
-            object.__setattr__(self, "phase_names", default_phase_names(self.n_phases))
 
     @property
     def n(self):
@@ -305,7 +296,6 @@ def _limiting_face(problem):
         rms_height=height,
         reference_slope_error=ref.error,
         reference_slope_source=ref.source,
-        phase_names=problem.phase_names,
     )
 
 

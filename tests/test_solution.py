@@ -355,10 +355,15 @@ def test_a_geometry_that_is_not_the_map_is_refused():
         solve(other, geometry=geometry)
 
 
-def test_phase_names_reach_the_result():
-    grid48 = grid(48)
-    labels = Voronoi(100, (0.5, 0.5), 6131).labels(grid48)
-    named = solve(Problem(FacePhases(grid48, labels, 2, ("matrix", "fibre")), [1e-13, 1e-12],
-                          FORCE, E_STAR), face_only=True)
-    assert named.phase_names == ("matrix", "fibre"), named.phase_names
-    assert steady(labels, [1e-13, 1e-12], face_only=True).phase_names == ("phase 0", "phase 1")
+def test_steady_summary_lists_the_phases_by_name():
+    from steady.cli.solve import summary_lines
+
+    labels = Voronoi(100, (0.5, 0.5), 6131).labels(48)
+    res = steady(labels, [1e-13, 1e-12])
+    lines = {line[:17]: line[17:] for line in summary_lines(res, ("matrix", "fibre"))}
+    p0, p1 = res.phase_pressures
+    assert lines["phase pressures  "] == f"matrix {p0:.6g}, fibre {p1:.6g} Pa", lines
+    assert lines["fill factors     "].startswith("matrix 0.") and ", fibre 0." in \
+        lines["fill factors     "], lines
+    unnamed = {line[:17]: line[17:] for line in summary_lines(res)}
+    assert unnamed["phase pressures  "].startswith("phase 0 "), unnamed

@@ -34,7 +34,8 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 
 The command ``runin-transient`` (``python -m transient``,
 :mod:`transient.__main__`) runs the run-in of a scene file.
-``transient.__version__`` is the installed version (:mod:`steady.version`).
+``transient.__version__`` is the installed version (:mod:`transient.version`, which
+reads :mod:`steady.version`).
 
 The names below are imported from their modules on first use, so that
 ``import transient`` is quick: the command installs its Ctrl-C handling

@@ -31,6 +31,7 @@ import pathlib
 from ..memory import check_memory, steady_memory
 from ..micrograph import Micrograph
 from ..output import write_result
+from ..problem import default_phase_names
 from ..scene import load_scene
 from ..solution import solve_scene
 from .common import (
@@ -80,9 +81,18 @@ def build_parser():
     return parser
 
 
-def summary_lines(result):
-    """Short human-readable summary of a :class:`~steady.solution.SteadyResult`."""
-    names = result.phase_names
+def summary_lines(result, names=None):
+    """Short human-readable summary of a :class:`~steady.solution.SteadyResult`.
+
+    Parameters
+    ----------
+    result : steady.solution.SteadyResult or steady.output.StoredResult
+    names : sequence of str, optional
+        A name for each phase (a scene's ``[phases] names``); default the
+        result's own (a stored result's), else ``("phase 0", "phase 1", ...)``.
+    """
+    names = tuple(names or getattr(result, "phase_names", None)
+                  or default_phase_names(result.n_phases))
     fill = ", ".join(f"{name} {v:.4f}" for name, v in zip(names, result.fill_factors,
                                                             strict=True))
     pressures = ", ".join(f"{name} {v:.6g}" for name, v in zip(names, result.phase_pressures,
@@ -125,7 +135,7 @@ def run(args):
                       f"segmentation PNG {args.segmentation}")
                 return EXIT_OK
         result = solve_scene(scene, face_only=not args.slope_error)
-        lines = summary_lines(result)
+        lines = summary_lines(result, scene.phase_names)
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
         if args.segmentation is not None:
