@@ -32,15 +32,15 @@ scene = load_scene(examples.path("micrograph_steady"))
 with warnings.catch_warnings(record=True) as caught:
     warnings.simplefilter("always", ValidityWarning)
     result = solve_scene(scene)
-for warning in caught:
-    print(f"warning: {warning.message}")
+for warning in caught:  # the scene's file shown by its name, wherever it is installed
+    print(f"warning: {warning.message}".replace(str(scene.source_path), scene.source_path.name))
 
 print(f"rms slope       {result.rms_slope:.4f} +- {result.rms_slope_error:.4f} rad")
 print(f"plain pixels    {result.rms_slope_plain:.4f} rad")
 print(f"rms / grad_f0   {result.normalised_rms_slope:.3f} (load-independent, eq. 15)")
-for name, fill, pressure in zip(result.phase_names, result.fill_factors,
-                                result.phase_pressures, strict=True):
-    print(f"{name}: fill factor {fill:.3f}, pressure {pressure / 1e3:.1f} kPa")
+for i, (fill, pressure) in enumerate(zip(result.fill_factors, result.phase_pressures,
+                                         strict=True)):
+    print(f"phase {i}: fill factor {fill:.3f}, pressure {pressure / 1e3:.1f} kPa")
 
 # %%
 # Draw the phase map beside the worn face (the face is defined up to a
