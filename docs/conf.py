@@ -4,9 +4,13 @@ Build (warnings are errors)::
 
     python -m sphinx -W --keep-going -b html docs /tmp/docs_html
 
-Needs ``sphinx``, ``numpydoc`` and ``myst-parser``; the packages ``steady``
-and ``transient`` are imported from the repository root, so no install is
-needed.
+Needs the ``docs`` extra (``sphinx``, ``numpydoc``, ``myst-parser``,
+``sphinx-mathjax-offline``, ``sphinx-gallery``); the packages ``steady`` and
+``transient`` are imported from the repository root, so no install is
+needed.  The build needs no network: MathJax is copied into the site
+(``sphinx-mathjax-offline``), and the examples of ``docs/examples`` run
+during the build (sphinx-gallery), their pages written to
+``docs/auto_examples``.
 """
 
 import os
@@ -32,15 +36,19 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    # MathJax from the package, copied into _static/mathjax: equations without a CDN.
+    "sphinx-mathjax-offline",
     "numpydoc",
     "myst_parser",
+    "sphinx_gallery.gen_gallery",
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 
 # figures/ holds images only; pages show them, but nothing there is a source page.
-exclude_patterns = ["_build", "figures", "Thumbs.db", ".DS_Store"]
+# examples/ holds the gallery's scripts; their pages are generated into auto_examples/.
+exclude_patterns = ["_build", "figures", "examples", "Thumbs.db", ".DS_Store"]
 
 # -- MyST ----------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "amsmath"]
@@ -61,3 +69,20 @@ numpydoc_xref_param_type = False
 html_theme = "alabaster"
 html_title = "runin"
 html_static_path = []
+
+# -- Examples (sphinx-gallery) ---------------------------------------------
+# Every script of docs/examples runs during the build, in file-name order, so
+# that the examples a user copies are the ones that ran; an error fails it.
+sphinx_gallery_conf = {
+    "examples_dirs": "examples",
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r"/plot_",
+    "within_subsection_order": "FileNameSortKey",
+    "abort_on_example_error": True,
+    "download_all_examples": False,
+    "show_signature": False,
+    "image_scrapers": ("matplotlib",),
+    "reference_url": {},
+    # The timing page would load a table script from a CDN: not written.
+    "write_computation_times": False,
+}

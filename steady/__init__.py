@@ -24,6 +24,8 @@ bottom floor up:
 - :mod:`steady.rms_slope` -- the energy-corrected rms slope and its error
   bar; :mod:`steady.normalisation` -- the reference slope of each outline;
   :mod:`steady.relief` -- rms heights;
+- :mod:`steady.validity` -- where the model holds (small slopes) and the
+  warning beyond;
 - :mod:`steady.scene` -- TOML scene files; :mod:`steady.examples` -- the
   example scenes shipped with the package;
 - :mod:`steady.solution` -- the steady solve; :mod:`steady.basis` --
@@ -78,6 +80,7 @@ _MODULE_OF = {
     "SteadyResult": "solution",
     "StoredResult": "output",
     "SweepSlopes": "basis",
+    "ValidityWarning": "validity",
     "Voronoi": "phases",
     "as_outline": "outline",
     "atomic_h5": "output",

@@ -1,19 +1,23 @@
 """Design rule: the fill factor that gives a target rms slope, and back.
 
 The steady rms slope of a biphasic punch is ``grad_f0`` times a normalised
-value that depends only on the fill factor ``rho_2`` and the wear ratio
-``k_2 / k_1`` (eq. 15; ``grad_f0 = 4 pbar / (pi E*)``, eq. 12).  This module
+value that depends only on the fill factor ``rho_1`` and the wear ratio
+``k_1 / k_0`` (eq. 15; ``grad_f0 = 4 pbar / (pi E*)``, eq. 12).  This module
 
 - tabulates its realisation mean and scatter over random Voronoi maps
   (:class:`DesignTable`, an HDF5 file built from the sweep of
   :mod:`steady.voronoi_sweep`) and interpolates it monotonically (PCHIP in
   the fill factor and in ``log10`` of the wear ratio);
 - inverts it: given ``pbar / E*``, the wear ratio and a target rms slope,
-  the fill factor ``rho_2`` with its realisation scatter
+  the fill factor ``rho_1`` with its realisation scatter
   (:meth:`DesignTable.fill_factor_for`), and the reverse
   (:meth:`DesignTable.rms_slope`);
 - answers both from the command line with the table shipped in the package
   (:data:`DEFAULT_TABLE`).
+
+Phases are numbered from 0, as everywhere in runin: ``rho_1`` is the fill
+factor of phase 1 and ``k_1 / k_0`` its wear coefficient over phase 0's (the
+paper, which numbers from 1, writes ``rho_2`` and ``k_2 / k_1``).
 
 The fine-grain limit in closed form,
 :func:`steady.reference.fine_grain_rms_slope`, is the check of the table.
@@ -38,6 +42,7 @@ from scipy import interpolate, optimize
 
 from .output import atomic_h5
 from .text import one_line, shorten
+from .validity import check_rms_slope
 
 __all__ = [
     "DEFAULT_TABLE",
@@ -62,13 +67,13 @@ class DesignResult:
     Attributes
     ----------
     fill_factor : float
-        ``rho_2`` at which the realisation-mean rms slope equals the target
-        (the largest such ``rho_2`` if there are several).
+        ``rho_1`` at which the realisation-mean rms slope equals the target
+        (the largest such ``rho_1`` if there are several).
     fill_factor_range : (float, float)
         The fill factors around it within which the target lies inside
         the realisation scatter (mean +- one standard deviation).
     solutions : tuple of float
-        Every ``rho_2`` in the table's range that reaches the target.
+        Every ``rho_1`` in the table's range that reaches the target.
     normalised_target : float
         ``target / grad_f0``.
     reachable : (float, float)
@@ -84,14 +89,14 @@ class DesignResult:
 
 
 class DesignTable:
-    """Tabulated normalised rms slope ``S(rho_2, k_2/k_1)`` with its scatter.
+    """Tabulated normalised rms slope ``S(rho_1, k_1/k_0)`` with its scatter.
 
     Parameters
     ----------
     fill_factors : array_like, shape (R,)
-        Increasing ``rho_2`` nodes.
+        Increasing ``rho_1`` nodes.
     ratios : array_like, shape (K,)
-        Increasing wear ratios ``k_2 / k_1``.
+        Increasing wear ratios ``k_1 / k_0``.
     mean, scatter, error : array_like, shape (R, K), grad_f0
         Realisation mean, realisation standard deviation and
         discretisation error of the normalised rms slope.
@@ -102,15 +107,17 @@ class DesignTable:
     --------
     With the table shipped in the package (:data:`DEFAULT_TABLE`): the fill
     factor of a hard phase wearing a thousand times slower that gives an rms
-    slope of 1 at ``pbar / E* = 0.08``, and the rms slope of a 10 % fill factor.
+    slope of 0.3 at ``pbar / E* = 0.08``, and the rms slope of a 30 % fill
+    factor.  (The paper's tyre rule, an rms slope of 1, lies beyond the small
+    slopes of the model, :mod:`steady.validity`: that query warns.)
 
     >>> table = DesignTable.read()
-    >>> design = table.fill_factor_for(0.08, 1e-3, 1.0)
-    >>> print(f"rho_2 = {design.fill_factor:.4f}")
-    rho_2 = 0.0235
-    >>> value, scatter = table.rms_slope(0.08, 1e-3, 0.1)
+    >>> design = table.fill_factor_for(0.08, 1e-3, 0.3)
+    >>> print(f"rho_1 = {design.fill_factor:.4f}")
+    rho_1 = 0.2405
+    >>> value, scatter = table.rms_slope(0.08, 1e-3, 0.3)
     >>> print(f"rms slope {value:.3f} +- {scatter:.3f}")
-    rms slope 0.482 +- 0.006
+    rms slope 0.263 +- 0.002
     """
 
     def __init__(self, fill_factors, ratios, mean, scatter, error, attrs=None):
@@ -233,14 +240,14 @@ class DesignTable:
                              f"{lo:.3g}..{hi:.3g}")
 
     def _column(self, ratio):
-        """PCHIP interpolants in ``rho_2`` of mean, scatter and error at one ratio."""
+        """PCHIP interpolants in ``rho_1`` of mean, scatter and error at one ratio."""
         self._check_ratio(ratio)
         x = math.log10(ratio)
         return {name: interpolate.PchipInterpolator(self.fill_factors, f(x))
                 for name, f in self._along_ratio.items()}
 
     def normalised(self, fill_factor, ratio):
-        """Normalised rms slope at ``(rho_2, k_2/k_1)``.
+        """Normalised rms slope at ``(rho_1, k_1/k_0)``.
 
         Returns
         -------
@@ -254,14 +261,14 @@ class DesignTable:
         return tuple(float(col[name](fill_factor)) for name in ("mean", "scatter", "error"))
 
     def curve(self, ratio, fill_factors=None):
-        """Normalised rms slope along ``rho_2`` at one wear ratio.
+        """Normalised rms slope along ``rho_1`` at one wear ratio.
 
         Parameters
         ----------
         ratio : float
-            ``k_2 / k_1``.
+            ``k_1 / k_0``.
         fill_factors : array_like, optional
-            ``rho_2`` values inside the table's range (default: its nodes).
+            ``rho_1`` values inside the table's range (default: its nodes).
 
         Returns
         -------
@@ -282,28 +289,37 @@ class DesignTable:
         pbar_over_estar : float
             ``pbar / E*``, positive.
         ratio : float
-            Wear ratio ``k_2 / k_1``.
+            Wear ratio ``k_1 / k_0``.
         fill_factor : float
-            ``rho_2``.
+            ``rho_1``.
 
         Returns
         -------
         value, scatter : float, dimensionless
             ``grad_f0`` times the table's mean and realisation scatter.
+
+        Warns
+        -----
+        steady.validity.ValidityWarning
+            An rms slope beyond :data:`steady.validity.SLOPE_LIMIT`: a
+            design outside the range of the linear half-space.
         """
         g0 = _reference(pbar_over_estar)
         mean, scatter, _ = self.normalised(fill_factor, ratio)
+        check_rms_slope(float(np.max(g0 * mean)),
+                        f"the design pbar/E* = {pbar_over_estar:.4g}, k_1/k_0 = {ratio:.4g}, "
+                        f"rho_1 = {shorten(fill_factor)}")
         return g0 * mean, g0 * scatter
 
     def fill_factor_for(self, pbar_over_estar, ratio, target_slope):
-        """Fill factor ``rho_2`` that gives a target steady rms slope.
+        """Fill factor ``rho_1`` that gives a target steady rms slope.
 
         Parameters
         ----------
         pbar_over_estar : float
             ``pbar / E*``, positive.
         ratio : float
-            Wear ratio ``k_2 / k_1``.  Below 1, phase 2 is the hard
+            Wear ratio ``k_1 / k_0``.  Below 1, phase 1 is the hard
             (low-wear) phase.
         target_slope : float
             Target rms slope (dimensionless), positive.
@@ -317,6 +333,12 @@ class DesignTable:
         ValueError
             Target outside the reachable range (named in the message), or
             inputs outside the table.
+
+        Warns
+        -----
+        steady.validity.ValidityWarning
+            A target beyond :data:`steady.validity.SLOPE_LIMIT`: a design
+            outside the range of the linear half-space.
         """
         g0 = _reference(pbar_over_estar)
         if not (np.isfinite(target_slope) and target_slope > 0):
@@ -352,6 +374,8 @@ class DesignTable:
             lo_j -= 1
         while hi_j < rho.size - 1 and inside[hi_j + 1]:
             hi_j += 1
+        check_rms_slope(target_slope, f"the design target at pbar/E* = {pbar_over_estar:.4g}, "
+                                      f"k_1/k_0 = {ratio:.4g}")
         return DesignResult(fill_factor=best,
                             fill_factor_range=(float(min(rho[lo_j], best)),
                                                float(max(rho[hi_j], best))),

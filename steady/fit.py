@@ -1,4 +1,4 @@
-"""Wear ratios from a measured worn face: the inverse problem of eq. 7 and 9.
+"""Wear ratios from a measured worn face: the inverse problem of equations 7 and 9.
 
 The steady face is linear in the phase pressures,
 ``f_inf = sum_i p_i K chi_i`` (eq. 9), and in the steady state
@@ -65,7 +65,7 @@ from .fit_files import MeasuredFace
 from .halfspace import HalfSpace
 from .labels import extend_off_face
 from .outline import Annulus, Circle, Rectangle
-from .problem import Problem
+from .problem import Problem, default_phase_names
 from .wear import PowerLaw
 
 __all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceModel", "FitResult", "fit_face", "fit_scene"]
@@ -227,11 +227,20 @@ class FitResult:
         """Number of phases ``P``."""
         return self.phase_pressures.shape[0]
 
-    def summary_lines(self):
-        """Short human-readable summary, a list of lines."""
+    def summary_lines(self, names=None):
+        """Short human-readable summary, a list of lines.
+
+        Parameters
+        ----------
+        names : sequence of str, optional
+            A name for each phase (a scene's ``[phases] names``); default
+            ``("phase 0", "phase 1", ...)``.
+        """
+        names = default_phase_names(self.n_phases) if names is None else tuple(names)
         ref = self.reference_phase
         level = f"{100 * self.confidence:g} %"
-        lines = [f"wear ratios k_i/k_{ref} ({level} intervals)"]
+        lines = [f"wear ratios k_i/k_{ref} ({level} intervals; k_{ref} of {names[ref]})"]
+        width = max(15, *(len(name) + 1 for name in names))
         for i in range(self.n_phases):
             if i == ref:
                 continue
@@ -239,9 +248,10 @@ class FitResult:
             upper = "inf" if not math.isfinite(hi) else f"{hi:.4g}"
             scene = ("" if self.scene_ratios is None
                      else f"   (scene: {self.scene_ratios[i]:.4g})")
-            lines.append(f"  phase {i}        {self.ratios[i]:.4g}  [{lo:.4g}, {upper}]{scene}")
-        pressures = ", ".join(f"{p:.4g} +- {e:.2g}" for p, e in
-                              zip(self.phase_pressures, self.phase_pressure_errors, strict=True))
+            lines.append(f"  {names[i]:<{width}}{self.ratios[i]:.4g}  [{lo:.4g}, {upper}]{scene}")
+        pressures = ", ".join(f"{name} {p:.4g} +- {e:.2g}" for name, p, e in
+                              zip(names, self.phase_pressures, self.phase_pressure_errors,
+                                  strict=True))
         lo, hi = self.load_scale_interval
         lines += [
             f"phase pressures  {pressures} Pa",

@@ -1,4 +1,4 @@
-"""Elastic half-space operator on a rectangular grid of square pixels (paper eq. 8).
+"""Elastic half-space operator on a rectangular grid of square pixels (paper equation 8).
 
 The surface displacement of an elastic half-space under a pressure that is
 constant on each square pixel of side ``h`` is an aperiodic convolution of the

@@ -1,4 +1,4 @@
-"""The reference slope of a face outline: the normalisation of rms slopes (eq. 12, 15).
+"""The reference slope of a face outline: the normalisation of rms slopes (equations 12, 15).
 
 The paper normalises the rms slope of a worn face by that of the
 homogeneous face of the same outline under the same mean pressure: for a

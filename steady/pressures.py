@@ -1,4 +1,4 @@
-"""Steady pressure on each phase under the power law (paper eq. 7).
+"""Steady pressure on each phase under the power law (paper equation 7).
 
 In the steady state every point wears at the same rate, ``k_i p_i^m = C``,
 and the phases together carry the normal force.  :func:`phase_pressures`

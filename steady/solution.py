@@ -1,4 +1,4 @@
-"""Closed-form limiting worn face of a multi-phase punch (paper eq. 7, 9, 15).
+"""Closed-form limiting worn face of a multi-phase punch (paper equations 7, 9, 15).
 
 In the steady state every point of the face wears at the same rate.  With a
 local wear law ``dw/ds = k_i p^m`` on phase ``i`` that means
@@ -35,7 +35,8 @@ import numpy as np
 from .normalisation import reference_slope
 from .problem import Problem
 from .relief import rms_height
-from .rms_slope import estimate_rms_slope
+from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
+from .validity import check_rms_slope
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
 
@@ -60,9 +61,10 @@ class SteadyResult:
     slope : ndarray, shape (nx, ny), dimensionless
         Magnitude of the gradient of ``f_inf``; NaN off the face.
     rms_slope : float, dimensionless
-        Best estimate of the rms slope over the face: the energy-corrected
-        value of :mod:`steady.rms_slope` where ``rms_slope_error`` is set,
-        else ``rms_slope_plain``.
+        The rms slope over the face: the energy-corrected estimate of
+        :mod:`steady.rms_slope`, whose error bar is ``rms_slope_error``;
+        NaN when not estimated (``face_only``).  Never the plain pixel
+        value, which is ``rms_slope_plain``.
     reference_slope : float, dimensionless
         ``grad_f0``, the rms slope of the homogeneous face of the same
         outline under the same load: ``4 pbar / (pi E*)`` for a disk (eq.
@@ -80,10 +82,10 @@ class SteadyResult:
     rms_slope_plain : float, dimensionless
         Root mean square of ``slope`` over the face pixels (plain pixel
         quadrature: first order, low by up to tens of per cent on fine
-        grains).
+        grains); always set.
     rms_slope_error : float, dimensionless
-        Estimated discretisation error of ``rms_slope``; NaN when not
-        estimated (:func:`solve` alone does not).
+        Estimated discretisation error of ``rms_slope``; infinite where no
+        bound could be estimated, NaN when ``rms_slope`` is not estimated.
     rms_height : float, m
         Rms of ``face`` over the face pixels about its least-squares plane
         (:func:`steady.relief.rms_height`; the asymptote of the run-in's
@@ -149,6 +151,11 @@ class SteadyResult:
         return self.rms_slope / self.reference_slope
 
     @property
+    def normalised_rms_slope_plain(self):
+        """``rms_slope_plain / grad_f0``, dimensionless: the plain pixel value, normalised."""
+        return self.rms_slope_plain / self.reference_slope
+
+    @property
     def normalised_rms_height(self):
         """``rms_height / (grad_f0 L)``, dimensionless (0.15499 for eq. 10)."""
         return self.rms_height / (self.reference_slope * self.scale)
@@ -163,31 +170,44 @@ class SteadyResult:
         return self.face / (self.reference_slope * self.scale)
 
 
-def solve(problem):
-    """Limiting worn face of a multi-phase punch (eq. 7, 9).
+def solve(problem, *, geometry=None, face_only=False):
+    """Limiting worn face of a multi-phase punch (eq. 7, 9) and its rms slope with an error bar.
 
     Parameters
     ----------
     problem : steady.problem.Problem
         The phase map on the face's grid, the wear law, the load and ``E*``.
+    geometry : phase geometry, optional
+        The continuous geometry (:mod:`steady.phases`; a scene's
+        ``scene.geometry``) whose rasterisation at ``problem.n`` is the
+        problem's phase map.  The error bar then compares the geometry
+        rasterised at ``n/2`` and ``n/4``
+        (:func:`steady.rms_slope.estimate_rms_slope`); without it, the map
+        itself resampled (:func:`steady.rms_slope.estimate_map_rms_slope`).
+    face_only : bool, optional
+        Skip the rms slope estimate, for callers that want the face alone:
+        ``rms_slope`` and ``rms_slope_error`` are then NaN (default False).
 
     Returns
     -------
     SteadyResult
-        With the plain pixel rms slope (``rms_slope_error`` NaN): the
-        corrected rms slope and its error bar need the phase geometry at
-        several grids, :func:`solve_scene`.
+        ``rms_slope`` is the energy-corrected estimate
+        (:mod:`steady.rms_slope`) with its error bar ``rms_slope_error``;
+        the plain pixel value is ``rms_slope_plain``.
 
     Raises
     ------
     ValueError
-        A non-finite result.
+        A ``geometry`` that does not rasterise to the problem's map, or a
+        non-finite result.
 
     Notes
     -----
     One forward transform of the pressure feeds the three products (face
-    and two slope components), so a solve costs one forward and three
-    inverse transforms.
+    and two slope components), so the face costs one forward and three
+    inverse transforms; the corrected rms slope and its error bar add the
+    slope energy (:class:`steady.rms_slope.SlopeEnergy`) on ``n``, ``n/2``
+    and ``n/4``, several times that.
 
     Examples
     --------
@@ -202,14 +222,42 @@ def solve(problem):
     10.000000
     >>> result.face.shape, result.n_phases
     ((64, 64), 2)
-    >>> print(f"plain pixel rms slope {result.rms_slope_plain / result.reference_slope:.4f} "
-    ...       f"grad_f0")
-    plain pixel rms slope 1.3259 grad_f0
+    >>> print(f"{result.normalised_rms_slope:.3f} "
+    ...       f"+- {result.rms_slope_error / result.reference_slope:.3f} grad_f0, "
+    ...       f"plain pixel value {result.normalised_rms_slope_plain:.3f}")
+    1.489 +- 0.004 grad_f0, plain pixel value 1.326
     """
     if not isinstance(problem, Problem):
         raise ValueError(f"solve takes a steady.problem.Problem, got {type(problem).__name__}")
+    if geometry is not None and not face_only:
+        labels = geometry.labels(problem.grid)
+        if not np.array_equal(labels, problem.labels):
+            raise ValueError(f"the geometry {type(geometry).__name__} rasterised at n = "
+                             f"{problem.n} is not the problem's phase map "
+                             f"({int(np.sum(labels != problem.labels))} pixels differ)")
+    return _solve(problem, geometry, face_only)
+
+
+def _solve(problem, geometry, face_only):
+    """:func:`solve` of a problem whose map is ``geometry``'s at ``problem.n`` (or None)."""
+    result = _limiting_face(problem)
+    if face_only:
+        return dataclasses.replace(result, rms_slope=math.nan)
+    if geometry is None:
+        estimate = estimate_map_rms_slope(problem.labels, problem.wear, problem.normal_force,
+                                          problem.outline, problem.E_star)
+    else:
+        estimate = estimate_rms_slope(geometry, problem.wear, problem.normal_force,
+                                      problem.outline, problem.E_star, problem.n)
+    logger.debug("steady %s rms slope %.6g +- %.2g (grids %s), plain %.6g", problem.shape,
+                 estimate.rms_slope, estimate.error, estimate.grids, result.rms_slope_plain)
+    return dataclasses.replace(result, rms_slope=estimate.rms_slope,
+                               rms_slope_error=estimate.error)
+
+
+def _limiting_face(problem):
+    """The fields of the steady state (eq. 7, 9) and the plain pixel rms slope."""
     halfspace = problem.halfspace
-    labels = problem.labels
     on_face = problem.face_mask
     counts = problem.phases.counts
     p_phase = problem.phase_pressures()
@@ -220,57 +268,61 @@ def solve(problem):
     gx, gy = halfspace.gradient(pressure, pressure_q=pressure_q)
     slope2 = gx * gx
     slope2 += gy * gy
-    rms = math.sqrt(np.sum(slope2, where=on_face) / counts.sum())
+    plain = math.sqrt(np.sum(slope2, where=on_face) / counts.sum())
     height = rms_height(face, on_face, halfspace.h)
     off = ~on_face
     face[off] = np.nan
     slope = np.sqrt(slope2, out=slope2)
     slope[off] = np.nan
-    if not math.isfinite(rms):
-        raise ValueError(f"steady solve produced a non-finite rms slope ({rms}); "
+    if not math.isfinite(plain):
+        raise ValueError(f"steady solve produced a non-finite rms slope ({plain}); "
                          f"phase pressures {p_phase.tolist()} Pa")
     ref = reference_slope(problem.outline, problem.normal_force, problem.E_star)
-    grad_f0 = ref.value
-    logger.debug("steady %s P=%d rms slope %.6g (%.6g grad_f0)", problem.shape,
-                 problem.n_phases, rms, rms / grad_f0)
     return SteadyResult(
-        labels=np.array(labels),
+        labels=np.array(problem.labels),
         pressure=pressure,
         phase_pressures=p_phase,
         face=face,
         slope=slope,
-        rms_slope=rms,
-        reference_slope=grad_f0,
+        rms_slope=math.nan,
+        reference_slope=ref.value,
         fill_factors=counts / counts.sum(),
         wear_coefficients=np.asarray(problem.wear.coefficients, dtype=float),
         exponent=problem.wear.exponent,
         normal_force=problem.normal_force,
         E_star=problem.E_star,
         outline=problem.outline,
-        rms_slope_plain=rms,
+        rms_slope_plain=plain,
         rms_height=height,
         reference_slope_error=ref.error,
         reference_slope_source=ref.source,
     )
 
 
-def solve_scene(scene, *, n=None, slope_error=True):
-    """Solve the steady state of a :class:`steady.scene.Scene`.
+def solve_scene(scene, *, n=None, face_only=False):
+    """Solve the steady state of a :class:`steady.scene.Scene`: :func:`solve` of its problem.
 
     Parameters
     ----------
     scene : Scene
     n : int, optional
         Grid size, pixels along the longer side; default ``scene.n``.  The
-        geometry is rasterised at this size.
-    slope_error : bool, optional
-        Replace the plain pixel rms slope by the energy-corrected one with
-        its error estimate (:func:`steady.rms_slope.estimate_rms_slope`,
-        default True).  Costs a few solves of the same grid.
+        geometry is rasterised at this size, and at ``n/2`` and ``n/4`` for
+        the error bar of the rms slope.
+    face_only : bool, optional
+        Skip the rms slope estimate (``rms_slope`` and its error NaN),
+        default False.
 
     Returns
     -------
     SteadyResult
+
+    Warns
+    -----
+    steady.validity.ValidityWarning
+        The face's rms slope (the plain pixel value with ``face_only``)
+        beyond :data:`steady.validity.SLOPE_LIMIT`: the scene lies outside
+        the range of the linear half-space.
 
     Examples
     --------
@@ -283,14 +335,12 @@ def solve_scene(scene, *, n=None, slope_error=True):
     >>> result = solve_scene(scene, n=64)
     >>> print(f"{result.normalised_rms_slope:.3f} "
     ...       f"+- {result.rms_slope_error / result.reference_slope:.3f} grad_f0, "
-    ...       f"plain {result.rms_slope_plain / result.reference_slope:.3f}")
+    ...       f"plain {result.normalised_rms_slope_plain:.3f}")
     0.997 +- 0.012 grad_f0, plain 0.965
     """
-    problem = Problem.from_scene(scene, n=n)
-    result = solve(problem)
-    if not slope_error:
-        return result
-    estimate = estimate_rms_slope(scene.geometry, problem.wear, scene.normal_force,
-                                  scene.outline, scene.E_star, problem.n)
-    return dataclasses.replace(result, rms_slope=estimate.rms_slope,
-                               rms_slope_error=estimate.error)
+    # The problem's map is the geometry's at n by construction: no need to check it.
+    result = _solve(Problem.from_scene(scene, n=n), scene.geometry, face_only)
+    where = "the scene" if scene.source_path is None else str(scene.source_path)
+    check_rms_slope(result.rms_slope if math.isfinite(result.rms_slope)
+                    else result.rms_slope_plain, f"the steady face of {where}")
+    return result

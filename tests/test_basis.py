@@ -34,11 +34,13 @@ def test_basis_matches_direct_solves(n):
         on = labels >= 0
         err = np.max(np.abs(face[on] - direct.face[on])) / np.max(np.abs(direct.face[on]))
         assert err < 1e-13, f"row {row}: face differs by {err:.1e}"
-        assert sweep.rms_slope_plain[row] == pytest.approx(direct.rms_slope, rel=1e-12), \
+        assert sweep.rms_slope_plain[row] == pytest.approx(direct.rms_slope_plain, rel=1e-12), \
             f"row {row}: plain rms slope"
         corrected = energy(direct.pressure, on).rms_slope
         assert sweep.rms_slope[row] == pytest.approx(corrected, rel=1e-12), \
             f"row {row}: corrected rms slope"
+        assert direct.rms_slope == pytest.approx(corrected, rel=1e-12), \
+            f"row {row}: the solve's corrected rms slope"
         assert np.allclose(sweep.phase_pressures[row], direct.phase_pressures, rtol=1e-14), \
             f"row {row}: phase pressures"
 

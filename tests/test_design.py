@@ -102,19 +102,19 @@ def test_inversion_round_trip(tmp_path):
     path = table.write(tmp_path / "table.h5")
     table = DesignTable.read(path)
     q, r = 0.08, 1e-3
-    res = table.fill_factor_for(q, r, 0.5)
+    res = table.fill_factor_for(q, r, 0.25)
     value, scatter = table.rms_slope(q, r, res.fill_factor)
-    assert value == pytest.approx(0.5, rel=1e-9), f"forward of the inverse: {value}"
+    assert value == pytest.approx(0.25, rel=1e-9), f"forward of the inverse: {value}"
     lo, hi = res.fill_factor_range
     assert lo < res.fill_factor < hi, f"scatter range {res.fill_factor_range}"
     v_lo, _ = table.rms_slope(q, r, lo)
     v_hi, _ = table.rms_slope(q, r, hi)
-    assert abs(v_lo - 0.5) == pytest.approx(table.rms_slope(q, r, lo)[1], rel=0.05), \
+    assert abs(v_lo - 0.25) == pytest.approx(table.rms_slope(q, r, lo)[1], rel=0.05), \
         "range end where the target sits one standard deviation away"
-    assert v_lo > 0.5 > v_hi, "rms slope falls with the hard-phase fill factor"
+    assert v_lo > 0.25 > v_hi, "rms slope falls with the hard-phase fill factor"
     # Against the closed form itself (PCHIP interpolation of a smooth curve).
     exact = 4 * q / np.pi * two_phase(res.fill_factor, r)
-    assert exact == pytest.approx(0.5, rel=2e-3), f"closed form at the answer: {exact}"
+    assert exact == pytest.approx(0.25, rel=2e-3), f"closed form at the answer: {exact}"
 
 
 def test_unreachable_target_names_the_range():
@@ -193,7 +193,7 @@ def test_command_line(tmp_path, capsys):
     args = ["--table", str(path), "--pbar-over-estar", "0.08", "--wear-ratio", "1e-3"]
     assert main(args + ["--target-slope", "0.5"]) == 0, "inverse"
     out = capsys.readouterr().out
-    assert "fill factor rho_2 =" in out and "reachable" in out, out
+    assert "fill factor rho_1 =" in out and "reachable" in out, out
     assert main(args + ["--fill-factor", "0.1"]) == 0, "forward"
     out = capsys.readouterr().out
     assert "rms slope =" in out and "fine-grain closed form" in out, out

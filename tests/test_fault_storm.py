@@ -128,7 +128,7 @@ def _fit(tmp_path, rng):
 
     scene = tmp_path / "s.toml"
     scene.write_text(scene_text("steady"))
-    face = solve_scene(load_scene(scene), slope_error=False).face
+    face = solve_scene(load_scene(scene), face_only=True).face
     maps = []
     for i, scale in enumerate((1.0, 1.5)):
         maps.append(tmp_path / f"m{i}.npy")

@@ -120,6 +120,17 @@ def test_exact_face_is_recovered(case, n):
     assert fit.samples == Circle(RADIUS).grid(n).mask.sum(), "every face pixel is fitted"
 
 
+def test_summary_lists_the_phases_by_name():
+    geometry, ratios = THREE
+    face, labels, _ = steady_face(geometry, ratios, 48)
+    fit = fit_face(MeasuredFace(face, pixel_size(48)), fit_problem(labels))
+    named = fit.summary_lines(("matrix", "grains", "fibres"))
+    assert named[0] == "wear ratios k_i/k_0 (95 % intervals; k_0 of matrix)", named[0]
+    assert named[1].startswith("  grains         ") and named[2].startswith("  fibres  "), named
+    assert named[3].startswith("phase pressures  matrix ") and ", fibres " in named[3], named[3]
+    assert fit.summary_lines()[1].startswith("  phase 1        "), "the default names"
+
+
 @pytest.mark.parametrize("exponent", [0.5, 2.0])
 def test_power_law_ratios(exponent):
     """k_i p_i^m = C: the ratios are (p_0 / p_i)^m, whatever m."""

@@ -88,7 +88,7 @@ def work(tmp_path_factory):
     (where / "steady.toml").write_text(scene_text("steady", n=384))
     (where / "runin.toml").write_text(scene_text("runin", n=160))
     (where / "fit.toml").write_text(scene_text("steady", n=96))
-    fitted = solve_scene(load_scene(where / "fit.toml"), slope_error=False)
+    fitted = solve_scene(load_scene(where / "fit.toml"), face_only=True)
     np.save(where / "face.npy", fitted.face)
     args = {
         "runin-steady": ["steady.toml", "-o", "out/steady.h5"],

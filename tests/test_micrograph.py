@@ -384,7 +384,7 @@ def test_results_of_other_maps_have_no_micrograph_group(tmp_path):
     (tmp_path / "s.toml").write_text(scene_text("steady", n=16, map="homogeneous",
                                                 coefficients=(1e-9,)))
     scene = load_scene(tmp_path / "s.toml")
-    write_result(tmp_path / "r.h5", solve_scene(scene, slope_error=False), scene)
+    write_result(tmp_path / "r.h5", solve_scene(scene, face_only=True), scene)
     with h5py.File(tmp_path / "r.h5") as f:
         assert "micrograph" not in f, "a micrograph group without a micrograph"
 

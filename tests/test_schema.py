@@ -140,7 +140,7 @@ def test_a_phase_map_kind_is_one_registration(tmp_path):
         path = tmp_path / "s.toml"
         path.write_text(scene_text("steady").replace(
             scene_text("steady").split("map = ", 1)[1].split("\n", 1)[0], '{ kind = "halves" }'))
-        result = solve_scene(load_scene(path), slope_error=False)
+        result = solve_scene(load_scene(path), face_only=True)
     finally:
         PHASE_MAPS.unregister("halves")
     # Eq. 7: equal areas, k_1 = 10 k_0 -> p_0 = 10 p_1; the map is mirror-symmetric in x.
@@ -174,7 +174,7 @@ def test_a_wear_law_is_one_registration(tmp_path):
     plain = parse_scene(scene_text("steady"), tmp_path)
     assert isinstance(scaled.wear, _ScaledArchard), f"law {scaled.wear}"
     # The steady face depends on the ratios only; the run-in distance s* = a / (k E*).
-    a, b = solve_scene(scaled, slope_error=False), solve_scene(plain, slope_error=False)
+    a, b = solve_scene(scaled, face_only=True), solve_scene(plain, face_only=True)
     assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "steady face"
     ratio = (WearProblem.from_scene(plain).run_in_distance
              / WearProblem.from_scene(scaled).run_in_distance)
@@ -186,7 +186,7 @@ def test_archard_is_the_power_law_of_exponent_one(tmp_path):
     archard = parse_scene(scene_text("steady").replace("[wear]\n", '[wear]\nlaw = "archard"\n'),
                           tmp_path)
     assert isinstance(archard.wear, ArchardLaw) and archard.wear.exponent == 1.0, archard.wear
-    a, b = solve_scene(archard, slope_error=False), solve_scene(plain, slope_error=False)
+    a, b = solve_scene(archard, face_only=True), solve_scene(plain, face_only=True)
     assert np.array_equal(a.face, b.face, equal_nan=True), "bit for bit the power law's face"
     with pytest.raises(ValueError, match=r"unknown key 'exponent' in \[wear\] \(law 'archard'\)"):
         parse_scene(scene_text("parser").replace("[wear]\n", '[wear]\nlaw = "archard"\n'),

@@ -160,7 +160,7 @@ def test_fit_written_meanwhile_is_kept(tmp_path, scene_file, capsys, monkeypatch
     from steady.solution import solve_scene
 
     scene = scene_file("steady")
-    np.save(tmp_path / "face.npy", solve_scene(load_scene(scene), slope_error=False).face)
+    np.save(tmp_path / "face.npy", solve_scene(load_scene(scene), face_only=True).face)
     out = tmp_path / "fit.h5"
     args = [scene, tmp_path / "face.npy", "--pixel-size", "2e-4", "-o", out]
     module, name = FIT_MOMENTS[moment]

@@ -14,6 +14,12 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 - :mod:`transient.stepping` -- the registered time integrators;
 - :mod:`transient.control` -- step control and stop tests;
 - :mod:`transient.diagnostics` -- what the history records of the face;
+- :mod:`transient.history` -- the friction proxy along the run: the rms
+  slope with its error bar, the rms height;
+- :mod:`transient.spatial_error` -- the history's spatial error bar from
+  the same run on a coarser grid;
+- :mod:`transient.axisymmetric` -- the axisymmetric run-in of the
+  homogeneous cylinder, the reference of the history;
 - :mod:`transient.runin` -- the run loop, its result and the state a
   resumed run needs, history and checkpoints;
 - :mod:`transient.comparison` -- agreement with the steady face;
@@ -28,7 +34,8 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 
 The command ``runin-transient`` (``python -m transient``,
 :mod:`transient.__main__`) runs the run-in of a scene file.
-``transient.__version__`` is the installed version (:mod:`steady.version`).
+``transient.__version__`` is the installed version (:mod:`transient.version`, which
+reads :mod:`steady.version`).
 
 The names below are imported from their modules on first use, so that
 ``import transient`` is quick: the command installs its Ctrl-C handling

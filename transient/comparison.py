@@ -1,4 +1,4 @@
-"""Agreement of a run's final face with the closed-form steady face (eq. 9).
+"""Agreement of a run's final face with the closed-form steady face (equation 9).
 
 The transient and the steady module reach the same limiting face by two
 independent routes (time integration of the contact problem against the

@@ -321,7 +321,8 @@ class WearProblem:
         Returns
         -------
         steady.solution.SteadyResult
-            Plain pixel rms slope, no error estimate.
+            With the corrected rms slope and the error bar of this map
+            resampled (:func:`steady.rms_slope.estimate_map_rms_slope`).
         """
         return solve(self.problem)
 

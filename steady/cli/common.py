@@ -42,14 +42,17 @@ from __future__ import annotations
 
 import _thread
 import argparse
+import functools
 import logging
 import os
 import pathlib
 import stat
 import sys
 import tempfile
+import warnings
 
 from ..text import one_line, shorten
+from ..validity import ValidityWarning
 
 __all__ = [
     "EXIT_BAD_INPUT",
@@ -219,6 +222,14 @@ def _log_unraisable(unraisable):
                  type(unraisable.exc_value).__name__, unraisable.exc_value)
 
 
+def _show_warning(default, message, category, *args, **kwargs):
+    """Print a :class:`ValidityWarning` as one line ``warning: ...``; others as Python does."""
+    if issubclass(category, ValidityWarning):
+        print(f"warning: {one_line(str(message))}", file=sys.stderr)
+    else:
+        default(message, category, *args, **kwargs)
+
+
 def run_command(work, args, *, verbose=0):
     """Run a command's work and turn every failure into one line and an exit status.
 
@@ -242,7 +253,11 @@ def run_command(work, args, *, verbose=0):
         anything else 1, with the exception's type named.
     """
     try:
-        return work(args)
+        with warnings.catch_warnings():
+            # A problem outside the model's range is answered, with one line.
+            warnings.simplefilter("always", ValidityWarning)
+            warnings.showwarning = functools.partial(_show_warning, warnings.showwarning)
+            return work(args)
     except CommandError as err:
         message, status = str(err), err.status
     except ValueError as err:

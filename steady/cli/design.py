@@ -46,16 +46,16 @@ def main(argv=None):
     parser = ArgumentParser(
         prog=program_name("python -m steady.cli.design"),
         description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
-                    "rho_2 of phase 2 that gives a target rms slope, or the rms slope of a "
-                    "fill factor.  Phase 2 is the hard phase when the wear ratio is below 1.",
+                    "rho_1 of phase 1 that gives a target rms slope, or the rms slope of a "
+                    "fill factor.  Phase 1 is the hard phase when the wear ratio is below 1.",
         epilog=EXIT_STATUS_EPILOG)
     parser.add_argument("--pbar-over-estar", type=float, required=True,
                         help="mean pressure over the effective modulus, pbar/E*")
     parser.add_argument("--wear-ratio", type=float, required=True,
-                        help="k_2/k_1 (below 1: phase 2 wears less)")
+                        help="k_1/k_0 (below 1: phase 1 wears less than phase 0)")
     what = parser.add_mutually_exclusive_group(required=True)
     what.add_argument("--target-slope", type=float, help="target steady rms slope")
-    what.add_argument("--fill-factor", type=float, help="fill factor rho_2 of phase 2")
+    what.add_argument("--fill-factor", type=float, help="fill factor rho_1 of phase 1")
     parser.add_argument("--table", default=None,
                         help=f"design table (default {DEFAULT_TABLE})")
     return run_command(_answer, parser.parse_args(argv))
@@ -71,7 +71,7 @@ def _answer(args):
         res = table.fill_factor_for(args.pbar_over_estar, args.wear_ratio, args.target_slope)
         g0 = disk_reference_slope(args.pbar_over_estar, 1.0)  # grad_f0 of eq. 12
         lo, hi = res.fill_factor_range
-        print(f"fill factor rho_2 = {res.fill_factor:.4g} "
+        print(f"fill factor rho_1 = {res.fill_factor:.4g} "
               f"(realisation scatter: {lo:.4g}..{hi:.4g})")
         if len(res.solutions) > 1:
             print("other fill factors reaching the target: "

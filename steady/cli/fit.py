@@ -125,7 +125,8 @@ def run(args):
                            reference_phase=args.reference_phase, confidence=args.confidence)
         write_fit(args.output, result, scene, force=args.force, checked=True)
         saved = args.output
-        lines = result.summary_lines() + [f"result           {args.output}"]
+        lines = (result.summary_lines(scene.phase_names)
+                 + [f"result           {args.output}"])
         if args.plot:
             try:
                 plot_fit(args.output, args.plot, force=args.force)

@@ -31,6 +31,7 @@ import pathlib
 from ..memory import check_memory, steady_memory
 from ..micrograph import Micrograph
 from ..output import write_result
+from ..problem import default_phase_names
 from ..scene import load_scene
 from ..solution import solve_scene
 from .common import (
@@ -71,23 +72,39 @@ def build_parser():
     parser.add_argument("--force", action="store_true",
                         help="overwrite existing output files")
     parser.add_argument("--no-slope-error", dest="slope_error", action="store_false",
-                        help="report the plain pixel rms slope only (skips the corrected "
-                             "estimate and its error bar, which cost a few more solves)")
+                        help="skip the corrected rms slope and its error bar, which cost a "
+                             "few more solves (rms_slope is then NaN; the plain pixel value is "
+                             "still reported as such)")
     add_memory_limit(parser)
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log progress (-v) or details (-vv) to stderr")
     return parser
 
 
-def summary_lines(result):
-    """Short human-readable summary of a :class:`~steady.solution.SteadyResult`."""
-    fill = ", ".join(f"{v:.4f}" for v in result.fill_factors)
-    pressures = ", ".join(f"{v:.6g}" for v in result.phase_pressures)
-    if math.isfinite(result.rms_slope_error):
+def summary_lines(result, names=None):
+    """Short human-readable summary of a :class:`~steady.solution.SteadyResult`.
+
+    Parameters
+    ----------
+    result : steady.solution.SteadyResult or steady.output.StoredResult
+    names : sequence of str, optional
+        A name for each phase (a scene's ``[phases] names``); default the
+        result's own (a stored result's), else ``("phase 0", "phase 1", ...)``.
+    """
+    names = tuple(names or getattr(result, "phase_names", None)
+                  or default_phase_names(result.n_phases))
+    fill = ", ".join(f"{name} {v:.4f}" for name, v in zip(names, result.fill_factors,
+                                                            strict=True))
+    pressures = ", ".join(f"{name} {v:.6g}" for name, v in zip(names, result.phase_pressures,
+                                                                strict=True))
+    plain = f"plain pixel value {result.rms_slope_plain:.6g}"
+    if math.isnan(result.rms_slope):
+        slope = f"rms slope        not estimated  ({plain})"
+    elif math.isfinite(result.rms_slope_error):
         slope = (f"rms slope        {result.rms_slope:.6g} +- {result.rms_slope_error:.2g}"
-                 f"  (plain pixel value {result.rms_slope_plain:.6g})")
+                 f"  ({plain})")
     else:
-        slope = f"rms slope        {result.rms_slope:.6g}  (plain pixel value, no error estimate)"
+        slope = f"rms slope        {result.rms_slope:.6g}  (no error bar; {plain})"
     if result.reference_slope_error > 0:
         ref = f"{result.reference_slope:.6g} +- {result.reference_slope_error:.2g}"
     else:
@@ -98,7 +115,9 @@ def summary_lines(result):
         f"({result.shape[0]} x {result.shape[1]} pixels)",
         slope,
         f"grad_f0          {ref}  ({source})",
-        f"rms / grad_f0    {result.normalised_rms_slope:.6g}",
+        f"rms / grad_f0    {result.normalised_rms_slope:.6g}"
+        + ("" if math.isfinite(result.rms_slope)
+           else f"  (plain pixel value {result.normalised_rms_slope_plain:.6g})"),
         f"fill factors     {fill}",
         f"phase pressures  {pressures} Pa",
     ]
@@ -115,8 +134,8 @@ def run(args):
                 print(f"segmentation     {scene.geometry.segmentation.summary()}\n"
                       f"segmentation PNG {args.segmentation}")
                 return EXIT_OK
-        result = solve_scene(scene, slope_error=args.slope_error)
-        lines = summary_lines(result)
+        result = solve_scene(scene, face_only=not args.slope_error)
+        lines = summary_lines(result, scene.phase_names)
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
         if args.segmentation is not None:

@@ -88,6 +88,7 @@ from steady.cli.common import (
 )
 from steady.memory import check_memory, keep_freed_memory
 from steady.output import OutputAppearedError
+from steady.validity import check_rms_slope
 
 from ..memory import run_in_memory
 from ..options import add_option_flags, options_from_flags
@@ -371,6 +372,8 @@ def _run(job):
     comparison = None
     if result.success:
         comparison = compare_with_steady(result, problem.solve_steady(), problem)
+        where = job.scene.source_path or "the scene"
+        check_rms_slope(comparison.steady_rms_slope, f"the steady face of {where}")
         if job.companion_grid is not None and not finished:
             result = _companion(job, result)
     if not finished:
