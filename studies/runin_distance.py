@@ -104,7 +104,7 @@ def _run(case, n, scheme, tol, band):
     if not result.success:
         raise ValueError(f"run-in of {case} ended {result.status}: {result.message}")
     h = result.history
-    s = h["distance"] / result.run_in_distance
+    s = h["distance"] / result.distance_scale
     value = h["normalised_rms_slope"]
     error = h["rms_slope_error"] / result.reference_slope
     steady = value[-1]

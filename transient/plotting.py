@@ -31,7 +31,7 @@ def _error_band(history, reference):
     return error / reference
 
 
-def draw_rms_slope_history(ax, history, run_in_distance, reference_slope, *, steady=None,
+def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, steady=None,
                            color="C0", label="continuum estimate",
                            plain_label="plain pixel value"):
     """The rms slope against the sliding distance, with its error band.
@@ -48,7 +48,7 @@ def draw_rms_slope_history(ax, history, run_in_distance, reference_slope, *, ste
         ``distance`` (m), ``rms_slope`` and, when present,
         ``rms_slope_error``, ``rms_slope_spatial_error``, ``rms_slope_plain``
         (:data:`transient.runin.HISTORY_UNITS`).
-    run_in_distance : float, m
+    distance_scale : float, m
         ``s*``, the unit of the distance axis.
     reference_slope : float
         ``grad_f0``, the unit of the slope axis.
@@ -67,7 +67,7 @@ def draw_rms_slope_history(ax, history, run_in_distance, reference_slope, *, ste
     float
         The position of the ``s = 0`` point on the axis, in ``s*``.
     """
-    s = np.asarray(history["distance"], dtype=float) / run_in_distance
+    s = np.asarray(history["distance"], dtype=float) / distance_scale
     y = np.asarray(history["rms_slope"], dtype=float) / reference_slope
     err = _error_band(history, reference_slope)
     pos = s > 0
@@ -150,11 +150,11 @@ def run_figure(result, attrs, comparison=None):
                   comparison.get("steady_rms_slope_uncertainty", np.nan))
     elif "steady_rms_slope" in attrs:
         steady = (attrs["steady_rms_slope"], np.nan)
-    draw_rms_slope_history(ax_slope, h, result.run_in_distance, g0, steady=steady)
+    draw_rms_slope_history(ax_slope, h, result.distance_scale, g0, steady=steady)
     ax_slope.legend(fontsize=8, loc="best")
     ax_slope.set_title(f"{result.scheme}: {result.steps} steps, {result.solves} contact solves",
                        fontsize=10)
-    s = h["distance"] / result.run_in_distance
+    s = h["distance"] / result.distance_scale
     pos = (s > 0) & (s < 1e6)
     outline = _outline(result, attrs)
     scale = np.nan if outline is None else outline.scale

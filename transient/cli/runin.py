@@ -14,7 +14,8 @@ by the flags), compares the final face with the closed-form steady face
 face may have any outline of the scene's ``[punch]`` (:mod:`steady.outline`);
 the summary names it and the reference slope ``grad_f0`` the rms slopes are
 normalised by (the homogeneous face's: eq. 12 for a disk), with its source.  A
-progress bar is drawn when stderr is a terminal.
+progress bar is drawn when stderr is a terminal; elsewhere ``-v`` logs one line per step
+(at a bounded rate, :mod:`transient.cli.progress`).
 
 Before the run starts everything that can be checked is: the scene, the
 output paths (missing directories are created; a directory, a device, an
@@ -188,10 +189,31 @@ def _report(result, comparison):
         ref = f"{result.reference_slope:.6g}"
     source = result.reference_slope_source or "unknown"
     lines += [f"grad_f0 = {ref} ({source}): the unit of the normalised rms slopes",
-              f"scales: f* = {result.depth_scale:.4g} m, s* = {result.run_in_distance:.4g} m, "
-              f"fastest relaxation h/(k_max E*) = {result.fast_distance:.4g} m"]
+              f"scales: f* = {result.depth_scale:.4g} m, distance scale s* = "
+              f"{result.distance_scale:.4g} m, fastest relaxation h/(k_max E*) = "
+              f"{result.fast_distance:.4g} m"]
+    lines += _distance_lines(result)
     if comparison is not None:
         lines += ["agreement with the steady face (eq. 9):", comparison.summary()]
+    return lines
+
+
+def _distance_lines(result):
+    """The run-in distances within 1 % and 0.1 % and the real end of the run."""
+    from ..run_in_distance import TOLERANCES
+
+    s_end = float(result.history["distance"][-1])
+    end = f"{s_end:.4g} m = {s_end / result.distance_scale:.4g} s*"
+    if result.sliding_speed is not None:
+        end += f" = {s_end / result.sliding_speed:.4g} s at {result.sliding_speed:g} m/s"
+    jumps = result.steps - (len(result.history["distance"]) - 1)
+    then = ", then the jump to the steady state" if jumps > 0 else ""
+    lines = [f"end of the dynamics: s = {end} ({len(result.history['distance']) - 1} steps"
+             f"{then})"]
+    try:
+        lines += [result.run_in_distance(x).summary() for x in TOLERANCES]
+    except ValueError as err:
+        lines.append(f"run-in distance: {err}")
     return lines
 
 
@@ -211,6 +233,7 @@ class _Job:
     finished: bool = False
     # Why --spatial-error's companion run failed (the run is written without its error).
     companion_failure: str | None = None
+    verbose: int = 0  # -v: progress lines outside a terminal
 
 
 def _prepare(args, lock, scene, initial, options):
@@ -265,7 +288,7 @@ def _prepare(args, lock, scene, initial, options):
     grid = (_companion_grid(args.scene, scene, initial, problem.n)
             if args.spatial_error and not finished else None)
     return _Job(scene, initial, problem, h0, options, resume, run_file,
-                companion_grid=grid, finished=finished)
+                companion_grid=grid, finished=finished, verbose=args.verbose)
 
 
 def _lacks_spatial_error(args, stored):
@@ -334,7 +357,7 @@ def run(args):
                                EXIT_FAILED if saved else EXIT_BAD_INPUT) from None
         print("\n".join(_report(result, comparison)))
         status = EXIT_OK if result.success else EXIT_FAILED
-        at = at_text(result.steps, result.distance / result.run_in_distance)
+        at = at_text(result.steps, result.distance / result.distance_scale)
         stop = f"run {result.status} at {at}: {result.message}; continue with --resume"
         if job.companion_failure is not None:
             status = EXIT_FAILED
@@ -360,7 +383,7 @@ def _run(job):
 
     problem, resume = job.problem, job.resume
     finished = job.finished  # a finished run lacking its spatial error is not: it gets it
-    bar = Progress(0 if resume is None else resume.steps)
+    bar = Progress(0 if resume is None else resume.steps, log=job.verbose)
     try:
         result = run_in(problem, job.initial_height, job.options, resume=resume, on_step=bar,
                         on_checkpoint=None if finished else job.run_file.write)
@@ -370,7 +393,10 @@ def _run(job):
         bar.close()
     comparison = None
     if result.success:
-        comparison = compare_with_steady(result, problem.solve_steady(), problem)
+        # The steady result of runin-steady (solve_scene), its error bar included.
+        from steady.solution import solve_scene
+
+        comparison = compare_with_steady(result, solve_scene(job.scene), problem)
         if job.companion_grid is not None and not finished:
             result = _companion(job, result)
     if not finished:
@@ -388,7 +414,7 @@ def _companion(job, result):
     from ..problem import StepFailure
     from ..spatial_error import spatial_error
 
-    bar = Progress(0)
+    bar = Progress(0, log=job.verbose)
     try:
         companion = spatial_error(job.scene, job.initial, job.options, result,
                                   grid=job.companion_grid, on_step=bar)
