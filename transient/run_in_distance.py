@@ -24,8 +24,11 @@ the step's local error (``rms_slope_step_error``,
 estimator's error bar that the steady value does not share (the rim layer;
 the map's share is common to both and cancels in ``d_S``) and, when the
 companion run of :mod:`transient.spatial_error` filled them, the spatial
-errors ``rms_slope_spatial_error`` and ``face_deviation_spatial_error``
-(the same run on a coarser grid).  Without the companion the grid's error
+errors of the two deviations, ``rms_slope_deviation_spatial_error`` and
+``face_deviation_spatial_error`` (the same run on a coarser grid, each
+deviation from its own grid's steady state: ``rms_slope_spatial_error``
+holds the difference of the steady values too, which the distance does
+not see).  Without the companion the grid's error
 of the face is not in the uncertainty (:attr:`RunInDistance.spatial` is
 False): on the homogeneous disk it is the larger part (docs/model.md).  The band is widened and
 narrowed by them: the first crossing of the narrowed band and the last of
@@ -155,8 +158,9 @@ def deviations(result):
     bar = np.asarray(h["rms_slope_error"], dtype=float)
     map_share = (steady_error / steady) * slope if math.isfinite(steady_error) else 0.0
     rim = np.sqrt(np.maximum(bar ** 2 - map_share ** 2, 0.0))
-    parts = [rim, _dataset(h, "rms_slope_step_error"), _dataset(h, "rms_slope_spatial_error")]
-    e_slope = np.sqrt(sum(np.nan_to_num(p, nan=0.0) ** 2 for p in parts)) / steady
+    parts = [rim / steady, _dataset(h, "rms_slope_step_error") / steady,
+             _dataset(h, "rms_slope_deviation_spatial_error")]
+    e_slope = np.sqrt(sum(np.nan_to_num(p, nan=0.0) ** 2 for p in parts))
     e_face = np.hypot(np.nan_to_num(_dataset(h, "face_deviation_step_error"), nan=0.0),
                       np.nan_to_num(_dataset(h, "face_deviation_spatial_error"), nan=0.0))
     # At s = 0 the slope is the initial face's own, exact, value.
@@ -238,17 +242,21 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
     s_star = result.distance_scale
     nan = math.nan
     spatial = _dataset(h, "face_deviation_spatial_error").any() or \
-        _dataset(h, "rms_slope_spatial_error").any()
+        _dataset(h, "rms_slope_deviation_spatial_error").any()
     common = dict(within=within, end_m=float(s[-1]), distance_scale=float(s_star),
                   spatial=bool(spatial))
     found = entry(s, deviation, within)
     if found is None:
-        status = "" if result.status == "steady" else f", run {result.status}"
+        if result.status == "steady":
+            status = ("; the jump to the steady state skipped the rest: lower jump_spread to "
+                      "follow it")
+        else:
+            status = f"; the run {result.status}"
         return RunInDistance(
             reached=False, distance_m=nan, distance_s_star=nan, uncertainty_m=nan, low_m=nan,
             high_m=nan, mean_worn_depth_m=nan, rim_worn_depth_m=nan, time_s=None,
             time_uncertainty_s=None,
-            message=(f"the run ends at s = {s[-1]:.4g} m = {s[-1] / s_star:.4g} s* "
+            message=(f"the dynamics end at s = {s[-1]:.4g} m = {s[-1] / s_star:.4g} s*, "
                      f"{100 * deviation[-1]:.3g} % from the steady state{status}"), **common)
     lo = entry(s, low, within)
     hi = entry(s, high, within)

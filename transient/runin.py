@@ -127,6 +127,9 @@ HISTORY_UNITS = {
     "face_deviation_spatial_error": "1 (|D_n - D_m| of face_deviation from the same run on a "
                                     "coarser grid m; empty unless transient.spatial_error "
                                     "filled it)",
+    "rms_slope_deviation_spatial_error": "1 (the same of rms_slope / steady_rms_slope - 1, each "
+                                         "run's own steady value; empty unless "
+                                         "transient.spatial_error filled it)",
 }
 
 # History datasets that files written before them lack (read as NaN when resumed).
