@@ -213,3 +213,75 @@ def test_summary_line():
     assert found.summary() == (
         "run-in distance within 0.1 %: s = 1234.5 +- 12 m = 2.5 +- 0.024 s*; worn depth there "
         "0.0001 m (mean), 0.0002 m (rim); time 2469 +- 24 s"), found.summary()
+
+
+# -- the commands ---------------------------------------------------------
+def test_command_prints_the_run_in_distances_and_the_end(tmp_path, scene_file):
+    from test_transient_cli import cli
+
+    scene = scene_file("runin", n=32, coefficients=(1.0e-13, 1.0e-12),
+                       transient={"tol": 1e-3})
+    scene.write_text(scene.read_text().replace("normal_force = 10.0\n",
+                                               "normal_force = 10.0\nsliding_speed = 0.5\n"))
+    out = tmp_path / "run.h5"
+    proc = cli(scene, "-o", out, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == "", f"stderr not quiet off a terminal: {proc.stderr!r}"
+    lines = proc.stdout.splitlines()
+    result, _, _ = read_run(out)
+    end = result.history["distance"][-1]
+    ends = [line for line in lines if line.startswith("end of the dynamics: ")]
+    assert ends == [f"end of the dynamics: s = {end:.4g} m = {end / result.distance_scale:.4g} "
+                    f"s* = {end / 0.5:.4g} s at 0.5 m/s ({len(result.history['distance']) - 1} "
+                    f"steps, then the jump to the steady state)"], lines
+    with h5py.File(out, "r") as f:
+        g = f["run_in_distance"]
+        stored = {name: g[name][()] for name in g}
+    for i, within in enumerate(TOLERANCES):
+        head = f"run-in distance within {100 * within:g} %: "
+        found = [line for line in lines if line.startswith(head)]
+        assert len(found) == 1, f"no line {head!r} in {lines}"
+        d = stored["distance"][i]
+        assert found[0].startswith(
+            f"{head}s = {d:.5g} +- {stored['uncertainty'][i]:.2g} m = "
+            f"{stored['distance_s_star'][i]:.4g} +- "), found[0]
+        assert f"; time {stored['time'][i]:.5g} +- " in found[0], found[0]
+        assert stored["time"][i] == pytest.approx(d / 0.5, rel=1e-15), "time = distance / speed"
+        assert found[0].endswith("(+- without the grid's error: no companion run)"), found[0]
+    assert "steady state at s = " in lines[0] and f"({end / result.distance_scale:.6g} s*)" in \
+        lines[0], f"the steady line names another distance than the end: {lines[0]!r}"
+
+
+def test_verbose_run_logs_progress_lines_off_a_terminal(tmp_path, scene_file):
+    import re
+
+    from test_transient_cli import cli
+
+    scene = scene_file("runin", n=32, coefficients=(1.0e-13, 1.0e-12), transient={"tol": 1e-3})
+    proc = cli(scene, "-o", tmp_path / "run.h5", "-v", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    progress = [line for line in proc.stderr.splitlines() if "transient.cli.progress" in line]
+    pattern = (r"INFO transient\.cli\.progress: step (\d+): s = \S+ m = \S+ s\*, wear-rate "
+               r"spread \S+, (rms slope \S+ \(at s = \S+ s\*\)|rms slope not yet computed)$")
+    assert progress and all(re.match(pattern, line) for line in progress), progress
+    steps = [int(re.match(pattern, line).group(1)) for line in progress]
+    result, _, _ = read_run(tmp_path / "run.h5")
+    # The first step, then at most one a second, and the jump that ends the run.
+    assert steps[0] == 1 and steps[-1] == result.steps, steps
+    assert steps == sorted(set(steps)), f"progress lines out of order: {steps}"
+
+
+def test_verbose_steady_command_logs_its_stages(tmp_path, scene_file):
+    import subprocess
+    import sys
+
+    scene = scene_file("runin", n=32, coefficients=(1.0e-13, 1.0e-12), transient=None)
+    quiet = subprocess.run([sys.executable, "-m", "steady", str(scene), "-o", "a.h5"],
+                           cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
+    loud = subprocess.run([sys.executable, "-m", "steady", str(scene), "-o", "b.h5", "-v"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert loud.returncode == 0, loud.stderr
+    stages = [line.split(": ", 1)[1].split(" ")[0] for line in loud.stderr.splitlines()
+              if line.startswith("INFO steady.cli.solve: ")]
+    assert stages == ["scene", "solving", "solved", "wrote"], loud.stderr

@@ -21,8 +21,10 @@ checked before the solve too (:func:`steady.cli.common.check_png_path`).
 
 from __future__ import annotations
 
+import logging
 import math
 import pathlib
+import time
 
 from ..memory import check_memory, steady_memory
 from ..micrograph import Micrograph
@@ -48,6 +50,8 @@ from .common import (
 )
 
 __all__ = ["build_parser", "main", "summary_lines"]
+
+logger = logging.getLogger(__name__)
 
 def build_parser():
     """The argument parser of ``runin-steady`` (``python -m steady``)."""
@@ -101,14 +105,23 @@ def run(args):
     saved = None
     try:
         scene = _check(args)
+        logger.info("scene %s checked: %s, n = %d, %d phases", args.scene,
+                    scene.outline.describe(), scene.n, scene.n_phases)
+        started = time.monotonic()
+        logger.info("solving the steady state%s", " and the rms slope's error ladder"
+                    if args.slope_error else "")
         result = solve_scene(scene, slope_error=args.slope_error)
+        logger.info("solved in %.3g s: rms slope %.6g", time.monotonic() - started,
+                    result.rms_slope)
         lines = summary_lines(result)
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
         write_result(args.output, result, scene, force=args.force, checked=True)
         saved = args.output
+        logger.info("wrote %s", args.output)
         lines.append(f"result           {args.output}")
         if args.plot:
+            logger.info("drawing %s", args.plot)
             _plot(args)
             lines.append(f"figure           {args.plot}")
     except KeyboardInterrupt:
