@@ -41,7 +41,9 @@ pending, the run takes implicit Euler steps of ``jump_step`` s* (default
 The face after an implicit stage is rebuilt from its pressure,
 ``w = d - K p`` on the contact (with the solver's own ``K p``), so
 that the solver's residual, which scales with the shifted operator, does
-not enter the face.
+not enter the face.  A jump's state is the steady face at no particular
+distance: it stays out of the history, the distance and the rigid wear, so
+that the history ends where the dynamics end.
 
 Contact tolerance
 -----------------
@@ -418,7 +420,10 @@ class _Run:
       ``rejected``, ``failures``, ``wall_time`` (s, spent before this call),
       ``t0`` (monotonic clock at the start of this call), ``history``
       (lists), the snapshots ``snap_d``, ``snap_h``, ``snap_p`` and
-      ``snap_index`` (the next requested one);
+      ``snap_index`` (the next requested one), ``latest`` (the current
+      point's spread and shape change, which the stop tests judge);
+    - the steady state the history measures against: ``steady_face``,
+      ``steady_relief``, ``steady_slope`` (:meth:`_steady_reference`);
     - the history's worker thread: ``_worker``, ``_estimator_workers``,
       ``_pending``.
 

@@ -10,7 +10,10 @@ Usage (``runin-transient`` once installed, or ``python -m transient``)::
 Starts from the scene's initial face (``[initial_face]``, flat by default),
 wears it until the wear rates equalise (``[transient]`` options, overridden
 by the flags), compares the final face with the closed-form steady face
-(eq. 9), prints the agreement and stores everything in ``RUN.h5``.  The
+(eq. 9, with ``runin-steady``'s error bar: :func:`steady.solution.solve_scene`),
+prints the agreement, the end of the dynamics and the run-in distances
+within 1 % and 0.1 % (:mod:`transient.run_in_distance`; as times too with
+``[load] sliding_speed``) and stores everything in ``RUN.h5``.  The
 face may have any outline of the scene's ``[punch]`` (:mod:`steady.outline`);
 the summary names it and the reference slope ``grad_f0`` the rms slopes are
 normalised by (the homogeneous face's: eq. 12 for a disk), with its source.  A
