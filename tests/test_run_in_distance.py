@@ -285,3 +285,16 @@ def test_verbose_steady_command_logs_its_stages(tmp_path, scene_file):
     stages = [line.split(": ", 1)[1].split(" ")[0] for line in loud.stderr.splitlines()
               if line.startswith("INFO steady.cli.solve: ")]
     assert stages == ["scene", "solving", "solved", "wrote"], loud.stderr
+
+
+def test_an_infinite_error_bar_bounds_nothing(disk64):
+    import dataclasses
+    import types
+
+    history = dict(disk64.history)
+    history["rms_slope_error"] = np.full(len(history["distance"]), np.inf)
+    blind = dataclasses.replace(disk64, history=types.MappingProxyType(history),
+                                steady_rms_slope_error=math.inf)
+    found = blind.run_in_distance(0.01)
+    assert found.reached and found.uncertainty_m == math.inf and found.high_m == math.inf, found
+    assert found.distance_m == disk64.run_in_distance(0.01).distance_m, "the value moved"

@@ -160,9 +160,10 @@ def deviations(result):
     rim = np.sqrt(np.maximum(bar ** 2 - map_share ** 2, 0.0))
     parts = [rim / steady, _dataset(h, "rms_slope_step_error") / steady,
              _dataset(h, "rms_slope_deviation_spatial_error")]
-    e_slope = np.sqrt(sum(np.nan_to_num(p, nan=0.0) ** 2 for p in parts))
-    e_face = np.hypot(np.nan_to_num(_dataset(h, "face_deviation_step_error"), nan=0.0),
-                      np.nan_to_num(_dataset(h, "face_deviation_spatial_error"), nan=0.0))
+    # An infinite error bar (no estimate possible) stays infinite: no bound.
+    e_slope = np.sqrt(sum(np.nan_to_num(p, nan=0.0, posinf=np.inf) ** 2 for p in parts))
+    e_face = np.hypot(*(np.nan_to_num(_dataset(h, name), nan=0.0, posinf=np.inf) for name in (
+        "face_deviation_step_error", "face_deviation_spatial_error")))
     # At s = 0 the slope is the initial face's own, exact, value.
     e_slope[0], e_face[0] = 0.0, 0.0
     deviation = np.maximum(d_slope, face)
