@@ -91,7 +91,7 @@ class Progress:
         self.bar = tqdm(desc="run-in", total=_TOTAL, unit="", file=sys.stderr,
                         disable=not self.terminal, ncols=cols if cols > 0 else 100,
                         nrows=rows if rows > 0 else 40,
-                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed} {postfix}")
+                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}{postfix}")
 
     def __call__(self, run):
         """Show the run's progress after an accepted step (a jump too)."""
