@@ -24,7 +24,8 @@ bottom floor up:
 - :mod:`steady.rms_slope` -- the energy-corrected rms slope and its error
   bar; :mod:`steady.normalisation` -- the reference slope of each outline;
   :mod:`steady.relief` -- rms heights;
-- :mod:`steady.scene` -- TOML scene files;
+- :mod:`steady.scene` -- TOML scene files; :mod:`steady.examples` -- the
+  example scenes shipped with the package;
 - :mod:`steady.solution` -- the steady solve; :mod:`steady.basis` --
   per-phase fields for sweeps over wear coefficients;
   :mod:`steady.profiles` -- cross sections and differential profiles;
@@ -35,8 +36,10 @@ bottom floor up:
   a target rms slope; :mod:`steady.fit`, :mod:`steady.fit_files` -- wear
   ratios from a measured worn face;
 - :mod:`steady.cli` -- the commands ``runin-steady`` (``python -m
-  steady``), ``runin-fit`` and ``runin-design``, and what every command
-  shares.
+  steady``), ``runin-fit``, ``runin-design`` and ``runin-examples``, and
+  what every command shares.
+
+``steady.__version__`` is the installed version (:mod:`steady.version`).
 
 The names below are imported from their modules on first use, so that
 ``import steady`` is quick and needs neither h5py nor matplotlib until a
@@ -47,6 +50,7 @@ from .lazy import lazy_names
 
 #: Public names and the module of each.
 _MODULE_OF = {
+    "__version__": "version",
     "Annulus": "outline",
     "ArrayMap": "phases",
     "Circle": "outline",
@@ -103,7 +107,7 @@ _MODULE_OF = {
     "write_result": "output",
 }
 
-__all__ = sorted(_MODULE_OF)
+__all__ = sorted(name for name in _MODULE_OF if not name.startswith("_"))
 
 
 __getattr__, __dir__ = lazy_names(__name__, _MODULE_OF)

@@ -30,7 +30,7 @@ Fit result files (layout ``runin.fit``, version 2), written by
         reference_phase        index of the phase the ratios refer to
         phase_pressures        fitted steady pressure of each phase, Pa
         phase_pressure_errors  their standard errors, Pa
-        pressure_covariance    (P, P) covariance of the phase pressures, Pa^2
+        pressure_covariance    (P, P) covariance of the phase pressures, Pa2
         offset                 fitted height at the face's centre, m
         tilt                   fitted slopes dz/dx, dz/dy of the plane, 1
         shift                  position of the face's centre in the map (from the map's
@@ -54,7 +54,9 @@ Fit result files (layout ``runin.fit``, version 2), written by
         radius                 m, the disk's radius (circular faces only)
         pixel_size             (dx, dy) of the measured map, m
         measured_source        the measured file
-    root datasets, each with a units attribute
+    root datasets, each with the CF attributes units (udunits) and long_name
+        x (nx,), y (ny,)    pixel centres from the map's centre: dimension scales  m
+        phase_name (P,)     the phase names, phase 0 first: a dimension scale
         measured  (nx, ny)  measured heights, NaN where missing        m
         fitted    (nx, ny)  fitted face with its plane, NaN off the face m
         residual  (nx, ny)  measured - fitted on the fitted pixels, NaN  m
@@ -62,11 +64,12 @@ Fit result files (layout ``runin.fit``, version 2), written by
         phase     (nx, ny)  phase index at each pixel, -1 off the face 1
         scene     string    the scene TOML (attribute source_path)
     group ``outline``: the face's outline (:func:`steady.output.write_outline`):
-        attributes kind, area (m^2) and its lengths (m, with <name>_units);
+        attributes kind, area (m2) and its lengths (m, with <name>_units);
         for a mask the dataset ``mask`` (mx, my)
 
-Version 1 files (disks only: ``radius``, no ``outline`` or ``scale``) are
-read too.
+The unit of attribute ``x`` is the udunits string ``x_units`` (docs/files.md).
+Version 1 files (disks only: ``radius``, no ``outline`` or ``scale``) and
+version 2 files without the coordinates and phase names are read too.
 
 :func:`plot_fit` draws the measured, fitted and residual faces side by
 side from such a file (matplotlib without pyplot, imported on demand).
@@ -84,7 +87,17 @@ import numpy as np
 
 from .array_files import input_file_size, npy_header, read_npy
 from .outline import Circle
-from .output import atomic_h5, read_outline, write_outline
+from .output import (
+    atomic_h5,
+    attach_scales,
+    describe,
+    read_outline,
+    read_phase_names,
+    write_grid_coordinates,
+    write_outline,
+    write_phase_names,
+)
+from .problem import check_phase_names, default_phase_names
 
 __all__ = [
     "FIT_FORMAT",
@@ -397,7 +410,14 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
     return MeasuredFace(scaled, pixel, source=repr(str(path)))
 
 
-_DATASETS = {"measured": "m", "fitted": "m", "residual": "m", "fit_mask": "1", "phase": "1"}
+# Datasets on the measured grid: (units, long_name).
+_DATASETS = {
+    "measured": ("m", "measured face height, NaN where missing"),
+    "fitted": ("m", "fitted face with its plane, NaN off the face"),
+    "residual": ("m", "measured minus fitted height on the fitted pixels, NaN elsewhere"),
+    "fit_mask": ("1", "1 for the pixels of the fit, 0 elsewhere"),
+    "phase": ("1", "phase index, -1 off the face"),
+}
 _ATTRIBUTES = {
     "ratios": "1",
     "ratio_lower": "1",
@@ -406,7 +426,7 @@ _ATTRIBUTES = {
     "reference_phase": "1",
     "phase_pressures": "Pa",
     "phase_pressure_errors": "Pa",
-    "pressure_covariance": "Pa^2",
+    "pressure_covariance": "Pa2",
     "offset": "m",
     "tilt": "1",
     "shift": "m",
@@ -452,6 +472,9 @@ class StoredFit:
         file).
     version : int
         The file's layout version.
+    phase_names : tuple of str
+        One per phase, phase 0 first (``"phase 0", ...`` for a file
+        written without names).
     """
 
     attrs: dict
@@ -460,9 +483,10 @@ class StoredFit:
     path: pathlib.Path
     outline: object
     version: int = FIT_FORMAT_VERSION
+    phase_names: tuple = ()
 
 
-def write_fit(path, result, scene=None, *, force=False, checked=False):
+def write_fit(path, result, scene=None, *, phase_names=None, force=False, checked=False):
     """Write a fit to an HDF5 file (layout ``runin.fit``), atomically.
 
     Parameters
@@ -472,6 +496,9 @@ def write_fit(path, result, scene=None, *, force=False, checked=False):
     result : steady.fit.FitResult
     scene : Scene, optional
         Its TOML text and source path are stored.
+    phase_names : sequence of str, optional
+        One per phase; default the scene's (``[phases] names``), else
+        ``"phase 0", "phase 1", ...``.
     force : bool, optional
         Overwrite an existing file (default False).
     checked : bool, optional
@@ -490,6 +517,10 @@ def write_fit(path, result, scene=None, *, force=False, checked=False):
         it meanwhile: nothing is written), or is a directory.
     """
     path = pathlib.Path(path)
+    if phase_names is None:
+        phase_names = getattr(scene, "phase_names", None)
+    phase_names = (default_phase_names(result.n_phases) if phase_names is None
+                   else check_phase_names(phase_names, result.n_phases))
     values = {
         "ratios": result.ratios,
         "ratio_lower": result.ratio_intervals[:, 0],
@@ -540,12 +571,16 @@ def write_fit(path, result, scene=None, *, force=False, checked=False):
         f.attrs["success"] = bool(result.success)
         f.attrs["message"] = result.message
         f.attrs["measured_source"] = result.measured.source
-        for name, unit in _DATASETS.items():
+        scales = write_grid_coordinates(f, *result.measured.coordinates())
+        for name, (unit, long_name) in _DATASETS.items():
             ds = f.create_dataset(name, data=arrays[name])
-            ds.attrs["units"] = unit
+            describe(ds, unit, long_name)
+            attach_scales(ds, *scales)
+        write_phase_names(f, phase_names)
         write_outline(f.create_group("outline"), result.outline)
         ds = f.create_dataset("scene", data="" if scene is None else scene.text,
                               dtype=h5py.string_dtype())
+        describe(ds, None, "scene file (TOML), verbatim")
         ds.attrs["source_path"] = ("" if scene is None or scene.source_path is None
                                    else str(scene.source_path))
     return path
@@ -608,10 +643,14 @@ def read_fit(path):
         attrs["measured_source"] = _text(f.attrs.get("measured_source", ""))
         arrays = {name: f[name][()] for name in _DATASETS}
         scene_text = _text(f["scene"][()])
+        try:
+            names = read_phase_names(f, len(np.atleast_1d(attrs["ratios"])))
+        except ValueError as err:
+            raise ValueError(f"fit file {str(path)!r}: {err}") from None
     arrays["fit_mask"] = arrays["fit_mask"].astype(bool)
     arrays["phase"] = arrays["phase"].astype(np.int64)
     return StoredFit(attrs=attrs, arrays=arrays, scene_text=scene_text, path=path,
-                     outline=outline, version=version)
+                     outline=outline, version=version, phase_names=names)
 
 
 def _plane(stored):

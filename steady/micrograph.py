@@ -6,11 +6,14 @@ like a pixel-exact phase map (one phase per grey level, see
 steps:
 
 1. :func:`segment` splits the grey levels into a requested number of
-   phases: optional Gaussian smoothing, multi-level Otsu thresholds
+   phases: an optional crop (to leave out a data bar or a scale bar),
+   optional Gaussian smoothing, thresholds -- multi-level Otsu
    (:func:`skimage.filters.threshold_multiotsu`; Liao, Chen & Chung,
-   J. Inf. Sci. Eng. 17, 2001), and removal of specks, connected patches
-   smaller than a given number of pixels, which take the phase that
-   surrounds them.  Phase 0 is the darkest.  The thresholds and the
+   J. Inf. Sci. Eng. 17, 2001) or given grey levels --, optional hole
+   filling (a particle seen as a bright rim around a dark core becomes a
+   filled particle) and removal of specks, connected patches smaller than
+   a given number of pixels, which take the phase that surrounds them.
+   Phase 0 is the darkest.  The thresholds, the holes filled and the
    realised fill factors are reported in a :class:`Segmentation`.
 2. :class:`Micrograph` places the segmented image on the face with its
    own pixel size in metres: centred (or shifted by an offset) and either
@@ -22,9 +25,12 @@ steps:
 The image is placed as it is viewed: its columns run along ``x`` (to the
 right), its rows along ``-y`` (the top row lies at the largest ``y``), so
 the phase map drawn by :mod:`steady.plotting` looks like the micrograph.
+:func:`segmentation_figure` draws the segmentation over the image, with
+the face and the grey-level histogram, to check a phase map before
+trusting a result.
 
-Segmentation needs scikit-image, an optional extra:
-``pip install 'runin[micrograph]'``.
+Otsu thresholds need scikit-image, an optional extra:
+``pip install 'runin[micrograph]'``; given thresholds do not.
 """
 
 from __future__ import annotations
@@ -51,6 +57,7 @@ __all__ = [
     "load_micrograph",
     "read_grey",
     "segment",
+    "segmentation_figure",
 ]
 
 logger = logging.getLogger(__name__)
@@ -114,6 +121,85 @@ def _check_min_speck(min_speck):
     return int(min_speck)
 
 
+def _check_thresholds(thresholds, n_phases):
+    """Given thresholds as a tuple of floats (None: Otsu); count and order checked."""
+    if thresholds is None:
+        return None
+    shown = shorten(list(thresholds) if isinstance(thresholds, (tuple, np.ndarray))
+                    else thresholds)
+    try:
+        if isinstance(thresholds, (str, bytes)):
+            raise TypeError
+        values = tuple(thresholds)
+        if not all(_is_number(v) and math.isfinite(v) for v in values):
+            raise TypeError
+    except TypeError:
+        raise ValueError(f"thresholds = {shown} must be a list of finite grey levels") from None
+    if len(values) != n_phases - 1:
+        raise ValueError(f"thresholds = {shown} must hold n_phases - 1 = {n_phases - 1} grey "
+                         f"level{'s' if n_phases > 2 else ''}, got {len(values)}")
+    if any(b <= a for a, b in zip(values[:-1], values[1:], strict=True)):
+        raise ValueError(f"thresholds = {shown} must increase (phase 0 is the darkest)")
+    return tuple(float(v) for v in values)
+
+
+def _check_crop(crop):
+    """``crop`` as ``((row0, row1), (col0, col1))`` of ints (None: no crop); order checked."""
+    if crop is None:
+        return None
+    shown = shorten([list(pair) if isinstance(pair, tuple) else pair for pair in crop]
+                    if isinstance(crop, (tuple, list)) else crop)
+    bad = (f"crop = {shown} must be [[row0, row1], [col0, col1]], whole pixel indices with "
+           f"0 <= row0 < row1 and 0 <= col0 < col1")
+    try:
+        if isinstance(crop, (str, bytes)) or len(crop) != 2:
+            raise TypeError
+        pairs = tuple(tuple(pair) for pair in crop)
+        if any(len(pair) != 2 for pair in pairs):
+            raise TypeError
+        if not all(_is_number(v) and math.isfinite(v) and v == int(v) and v >= 0
+                   for pair in pairs for v in pair):
+            raise TypeError
+    except TypeError:
+        raise ValueError(bad) from None
+    (r0, r1), (c0, c1) = ((int(a), int(b)) for a, b in pairs)
+    if r1 - r0 < 2 or c1 - c0 < 2:
+        raise ValueError(f"{bad}, at least 2 pixels each way")
+    return (r0, r1), (c0, c1)
+
+
+def _crop_window(crop, shape):
+    """The slices of a checked ``crop`` in an image of ``shape``; ``ValueError`` if outside it."""
+    if crop is None:
+        return slice(None), slice(None)
+    (r0, r1), (c0, c1) = crop
+    rows, cols = shape
+    if r1 > rows or c1 > cols:
+        raise ValueError(f"crop = [[{r0}, {r1}], [{c0}, {c1}]] reaches beyond the image of "
+                         f"{rows} rows x {cols} columns (row1 <= {rows}, col1 <= {cols})")
+    return slice(r0, r1), slice(c0, c1)
+
+
+def _check_fill(fill_holes, fill_phases, n_phases):
+    """The phases whose holes are filled, a sorted tuple (empty: none)."""
+    if not isinstance(fill_holes, (bool, np.bool_)):
+        raise ValueError(f"fill_holes must be true or false, got {shorten(fill_holes)}")
+    if fill_phases is None:
+        return tuple(range(1, n_phases)) if fill_holes else ()
+    shown = shorten(list(fill_phases) if isinstance(fill_phases, tuple) else fill_phases)
+    if not fill_holes:
+        raise ValueError(f"fill_phases = {shown} needs fill_holes = true")
+    try:
+        phases = tuple(fill_phases)
+    except TypeError:
+        phases = (None,)
+    if (not phases or not all(_is_integer(p) and 1 <= p < n_phases for p in phases)
+            or len(set(phases)) != len(phases)):
+        raise ValueError(f"fill_phases = {shown} must list distinct phases 1 to {n_phases - 1} "
+                         f"(phase 0, the darkest, has no darker phase to enclose)")
+    return tuple(sorted(int(p) for p in phases))
+
+
 def _mm(value):
     """A length in m, written in mm."""
     return f"{value * 1e3:.6g} mm"
@@ -126,17 +212,18 @@ class Segmentation:
     Attributes
     ----------
     labels : ndarray, shape (rows, cols), int
-        Phase index of every image pixel, ``0..P-1`` by increasing grey
-        level (read-only).
+        Phase index of every pixel of the (cropped) image, ``0..P-1`` by
+        increasing grey level (read-only).
     thresholds : tuple of float, shape (P-1,)
         Increasing grey levels between the phases, in the units of the
         image (a PNG is read as a fraction of full scale, 0 black to 1
         white); a pixel at or above ``thresholds[i]`` belongs to phase
-        ``i + 1`` or above.
+        ``i + 1`` or above (before holes are filled).
     fill_factors : tuple of float, shape (P,)
-        Fraction of the image's pixels in each phase after speck removal;
-        they sum to 1.  (The fill factors on the face depend on the crop
-        and the grid: :meth:`Micrograph.face_fill_factors`.)
+        Fraction of the (cropped) image's pixels in each phase after hole
+        filling and speck removal; they sum to 1.  (The fill factors on
+        the face depend on the placement and the grid:
+        :meth:`Micrograph.face_fill_factors`.)
     smoothing : float, pixels
         Standard deviation of the Gaussian smoothing (0: none).
     min_speck : int, pixels
@@ -145,6 +232,21 @@ class Segmentation:
         Number of patches relabelled.
     speck_pixels : int
         Number of pixels relabelled.
+    method : {"otsu", "manual"}
+        Where the thresholds come from: multi-level Otsu, or given (manual).
+    fill_phases : tuple of int
+        Phases whose holes were filled (empty: none).
+    holes : int
+        Number of holes filled.
+    hole_pixels : int
+        Number of pixels that changed phase by hole filling.
+    crop : ((int, int), (int, int)) or None
+        ``((row0, row1), (col0, col1))``: the rows ``row0 <= r < row1`` (0
+        the top row) and columns ``col0 <= c < col1`` (0 the left column)
+        of the image that were kept; None: the whole image.
+    image : ndarray, shape (rows, cols), float, or None
+        The grey levels of the (cropped) image before smoothing
+        (read-only), for :func:`segmentation_figure`; None if not kept.
     """
 
     labels: np.ndarray
@@ -154,6 +256,12 @@ class Segmentation:
     min_speck: int
     specks: int
     speck_pixels: int
+    method: str = "otsu"
+    fill_phases: tuple = ()
+    holes: int = 0
+    hole_pixels: int = 0
+    crop: tuple | None = None
+    image: np.ndarray | None = None
 
     @property
     def n_phases(self):
@@ -162,15 +270,24 @@ class Segmentation:
 
     @property
     def shape(self):
-        """``(rows, cols)`` of the image."""
+        """``(rows, cols)`` of the (cropped) image."""
         return self.labels.shape
 
     def summary(self):
-        """One line: the phases, the thresholds, the fill factors and the specks."""
+        """One line: phases, thresholds, crop, holes, fill factors and specks."""
         thresholds = ", ".join(f"{t:.4g}" for t in self.thresholds)
         fill = ", ".join(f"{f:.4f}" for f in self.fill_factors)
-        return (f"{self.n_phases} phases, thresholds {thresholds}, image fill factors {fill}, "
-                f"{self.specks} specks ({self.speck_pixels} pixels) relabelled")
+        words = [f"{self.n_phases} phases, thresholds {thresholds} ({self.method})"]
+        if self.crop is not None:
+            (r0, r1), (c0, c1) = self.crop
+            words.append(f"crop rows {r0}:{r1}, columns {c0}:{c1}")
+        if self.fill_phases:
+            phases = ", ".join(str(p) for p in self.fill_phases)
+            words.append(f"{self.holes} holes ({self.hole_pixels} pixels) filled in phase"
+                         f"{'s' if len(self.fill_phases) > 1 else ''} {phases}")
+        words.append(f"image fill factors {fill}")
+        words.append(f"{self.specks} specks ({self.speck_pixels} pixels) relabelled")
+        return ", ".join(words)
 
 
 def _remove_specks(labels, n_phases, min_speck):
@@ -200,8 +317,73 @@ def _remove_specks(labels, n_phases, min_speck):
     return labels[ii, jj], specks, removed
 
 
-def segment(image, n_phases, *, smoothing=0.0, min_speck=0):
-    """Split a grey-level image into phases by multi-level Otsu thresholds.
+def _fill_holes(labels, phases):
+    """Labels with the holes of each phase in ``phases`` that hold only darker phases filled.
+
+    A hole of phase ``j`` is a patch of other pixels that phase ``j`` encloses
+    (not connected to the image's edge through pixels sharing a side:
+    :func:`scipy.ndimage.binary_fill_holes`).  It takes phase ``j`` if all
+    its pixels are of phases below ``j``; one holding a brighter phase (a
+    bright particle inside a darker matrix) is left alone.  Phases are
+    treated from the brightest down.  Returns ``(labels, holes, pixels)``.
+    """
+    labels = labels.copy()
+    holes = pixels = 0
+    for phase in sorted(phases, reverse=True):
+        inside = labels == phase
+        enclosed = ndimage.binary_fill_holes(inside) & ~inside
+        patches, count = ndimage.label(enclosed)
+        if count == 0:
+            continue
+        brightest = ndimage.maximum(labels, patches, index=np.arange(1, count + 1))
+        darker = np.concatenate([[False], np.asarray(brightest) < phase])
+        fill = darker[patches]
+        labels[fill] = phase
+        holes += int(np.count_nonzero(darker))
+        pixels += int(np.count_nonzero(fill))
+    return labels, holes, pixels
+
+
+def _check_image(image):
+    """A 2-d finite image of numbers as float64; ``ValueError`` saying what is wrong."""
+    image = np.asarray(image)
+    if image.ndim != 2:
+        raise ValueError(f"a micrograph must be a 2-d grey-level image, got shape {image.shape}")
+    if not (np.issubdtype(image.dtype, np.integer) or np.issubdtype(image.dtype, np.floating)
+            or np.issubdtype(image.dtype, np.bool_)):
+        raise ValueError(f"a micrograph must hold numbers, got dtype {image.dtype}")
+    image = image.astype(np.float64)
+    if not np.all(np.isfinite(image)):
+        raise ValueError(f"the micrograph has {np.count_nonzero(~np.isfinite(image))} "
+                         f"non-finite pixels (NaN or inf)")
+    if min(image.shape) < 2:
+        raise ValueError(f"a micrograph needs at least 2 x 2 pixels, got {image.shape}")
+    return image
+
+
+def _thresholds(grey, n_phases, given, cropped):
+    """Otsu's thresholds of ``grey``, or the ``given`` ones checked against its grey range."""
+    if given is None:
+        threshold_multiotsu = _threshold_multiotsu()
+        try:
+            return np.asarray(threshold_multiotsu(grey, classes=n_phases, nbins=_OTSU_BINS),
+                              dtype=np.float64)
+        except ValueError as err:
+            raise ValueError(f"cannot split the micrograph into {n_phases} phases: "
+                             f"{str(err)[:200]}") from None
+    low, high = float(grey.min()), float(grey.max())
+    outside = [t for t in given if not low < t <= high]
+    if outside:
+        where = "the cropped image" if cropped else "the image"
+        raise ValueError(f"thresholds = {shorten(list(given))}: {outside[0]:.6g} lies outside "
+                         f"the grey range ({low:.6g}, {high:.6g}] of {where} (the same units: "
+                         f"a PNG reads 0 black to 1 white), so a phase would be empty")
+    return np.asarray(given, dtype=np.float64)
+
+
+def segment(image, n_phases, *, smoothing=0.0, min_speck=0, thresholds=None, fill_holes=False,
+            fill_phases=None, crop=None):
+    """Split a grey-level image into phases by thresholds: Otsu's or given ones.
 
     Parameters
     ----------
@@ -215,30 +397,54 @@ def segment(image, n_phases, *, smoothing=0.0, min_speck=0):
         pixels across the thresholds; a sigma of about one pixel removes
         most of that speckle at the cost of rounding grain corners.
     min_speck : int, optional
-        After thresholding, connected patches (sharing a side) of fewer
-        than ``min_speck`` pixels take the phase of the pixels around them
+        Last, connected patches (sharing a side) of fewer than
+        ``min_speck`` pixels take the phase of the pixels around them
         (default 0: none).
+    thresholds : sequence of float, shape (P-1,), optional
+        Increasing grey levels between the phases, in the units of the
+        image, each inside its grey range ``(min, max]`` (after the crop
+        and the smoothing).  Default: multi-level Otsu thresholds.
+    fill_holes : bool, optional
+        Fill holes (default False): a patch of darker phases enclosed by
+        phase ``j``, such as the dark core of a particle seen as a bright
+        rim, takes phase ``j``.  See Notes.
+    fill_phases : sequence of int, optional
+        The phases ``j`` whose holes are filled, among ``1..P-1`` (needs
+        ``fill_holes``; default: all of them).
+    crop : ((int, int), (int, int)), optional
+        ``((row0, row1), (col0, col1))``: keep only the rows
+        ``row0 <= r < row1`` (row 0 at the top, as viewed) and the columns
+        ``col0 <= c < col1`` (column 0 at the left), e.g. to leave out a
+        data bar.  Applied first: everything else, the thresholds
+        included, sees the cropped image only.
 
     Returns
     -------
     Segmentation
-        Phase 0 is the darkest.
+        Of the cropped image; phase 0 is the darkest.
 
     Raises
     ------
     ValueError
-        scikit-image is not installed (the message names the extra), the
-        image is not a finite 2-d array, it has fewer distinct grey levels
-        than phases, a parameter is out of range, or a phase ends up with
-        no pixel (the message gives the thresholds).
+        scikit-image is not installed for Otsu thresholds (the message
+        names the extra), the image is not a finite 2-d array, it has
+        fewer distinct grey levels than phases, a parameter is out of
+        range (the message names it and its value), or a phase ends up
+        with no pixel (the message gives the thresholds).
 
     Notes
     -----
-    The thresholds maximise the between-class variance of the grey-level
-    histogram (256 bins between the smallest and the largest value, so a
-    threshold is resolved to one bin, 1/256 of the grey range).  Pixels are
-    classed by :func:`numpy.digitize`: a pixel equal to a threshold goes to
-    the brighter phase.
+    Steps: crop, smoothing, thresholds, holes, specks.  Otsu's thresholds
+    maximise the between-class variance of the grey-level histogram (256
+    bins between the smallest and the largest value, so a threshold is
+    resolved to one bin, 1/256 of the grey range).  Pixels are classed by
+    :func:`numpy.digitize`: a pixel equal to a threshold goes to the
+    brighter phase.  Holes are filled from the brightest phase down: a
+    hole of phase ``j`` (a patch not connected to the image's edge through
+    pixels sharing a side) takes phase ``j`` if it holds only phases below
+    ``j``; one holding a brighter phase stays.  With two phases, every
+    dark patch enclosed by phase 1 becomes phase 1; a particle cut by the
+    image's edge keeps its open core.
 
     Examples
     --------
@@ -249,55 +455,49 @@ def segment(image, n_phases, *, smoothing=0.0, min_speck=0):
     >>> seg = segment(image, 2, min_speck=4)
     >>> seg.fill_factors, seg.specks
     ((0.25, 0.75), 1)
+    >>> ring = np.full((20, 20), 0.5)   # a bright ring with a dark core on grey
+    >>> ring[5:15, 5:15], ring[8:12, 8:12] = 1.0, 0.0
+    >>> segment(ring, 2, thresholds=[0.75], fill_holes=True).fill_factors
+    (0.75, 0.25)
     """
-    threshold_multiotsu = _threshold_multiotsu()
     n_phases = _check_n_phases(n_phases)
     smoothing = _check_smoothing(smoothing)
     min_speck = _check_min_speck(min_speck)
-    image = np.asarray(image)
-    if image.ndim != 2:
-        raise ValueError(f"a micrograph must be a 2-d grey-level image, got shape {image.shape}")
-    if not (np.issubdtype(image.dtype, np.integer) or np.issubdtype(image.dtype, np.floating)
-            or np.issubdtype(image.dtype, np.bool_)):
-        raise ValueError(f"a micrograph must hold numbers, got dtype {image.dtype}")
-    image = image.astype(np.float64)
-    if not np.all(np.isfinite(image)):
-        raise ValueError(f"the micrograph has {np.count_nonzero(~np.isfinite(image))} "
-                         f"non-finite pixels (NaN or inf)")
-    if min(image.shape) < 2:
-        raise ValueError(f"a micrograph needs at least 2 x 2 pixels, got {image.shape}")
+    given = _check_thresholds(thresholds, n_phases)
+    fill_phases = _check_fill(fill_holes, fill_phases, n_phases)
+    crop = _check_crop(crop)
+    if given is None:
+        _threshold_multiotsu()  # name the missing extra first
+    image = _check_image(image)[_crop_window(crop, np.shape(image))]
     if smoothing >= min(image.shape):
         raise ValueError(f"smoothing = {smoothing:g} pixels is not smaller than the image "
                          f"({image.shape[0]} x {image.shape[1]} pixels)")
     if min_speck > image.size:
         raise ValueError(f"min_speck = {min_speck} pixels exceeds the image's {image.size} "
                          f"pixels")
-    if smoothing > 0:
-        image = ndimage.gaussian_filter(image, smoothing, mode="nearest")
-    levels = np.unique(image)
+    grey = ndimage.gaussian_filter(image, smoothing, mode="nearest") if smoothing else image
+    levels = np.unique(grey)
     if len(levels) < n_phases:
         raise ValueError(f"the micrograph has {len(levels)} distinct grey levels, fewer than "
                          f"the {n_phases} phases asked for")
-    try:
-        thresholds = np.asarray(threshold_multiotsu(image, classes=n_phases, nbins=_OTSU_BINS),
-                                dtype=np.float64)
-    except ValueError as err:
-        raise ValueError(f"cannot split the micrograph into {n_phases} phases: "
-                         f"{str(err)[:200]}") from None
-    labels = np.digitize(image, thresholds).astype(np.int64)
+    cuts = _thresholds(grey, n_phases, given, crop is not None)
+    labels = np.digitize(grey, cuts).astype(np.int64)
+    labels, holes, hole_pixels = _fill_holes(labels, fill_phases)
     labels, specks, speck_pixels = _remove_specks(labels, n_phases, min_speck)
     counts = np.bincount(labels.ravel(), minlength=n_phases)
     empty = np.flatnonzero(counts == 0)
     if empty.size:
         raise ValueError(f"phase {int(empty[0])} has no pixel after segmentation into "
-                         f"{n_phases} phases (thresholds {thresholds.tolist()}, pixel counts "
+                         f"{n_phases} phases (thresholds {cuts.tolist()}, pixel counts "
                          f"{counts.tolist()}); ask for fewer phases or a smaller min_speck")
-    labels = np.ascontiguousarray(labels)
-    labels.flags.writeable = False
-    return Segmentation(labels=labels, thresholds=tuple(float(t) for t in thresholds),
+    labels, image = np.ascontiguousarray(labels), np.array(image)
+    labels.flags.writeable = image.flags.writeable = False
+    return Segmentation(labels=labels, thresholds=tuple(float(t) for t in cuts),
                         fill_factors=tuple(float(c) for c in counts / labels.size),
                         smoothing=smoothing, min_speck=min_speck, specks=specks,
-                        speck_pixels=speck_pixels)
+                        speck_pixels=speck_pixels,
+                        method="otsu" if given is None else "manual", fill_phases=fill_phases,
+                        holes=holes, hole_pixels=hole_pixels, crop=crop, image=image)
 
 
 def read_grey(path):
@@ -403,8 +603,16 @@ def _placement(shape, outline, pixel_size, cover, offset, source):
     Key("path", "path", required=True, doc="grey-level image, .png or .npy"),
     Key("n_phases", "integer", low=2, low_open=False, required=True,
         doc="phases, by multi-level Otsu thresholds (phase 0 darkest)"),
+    Key("thresholds", "numbers", unit="grey level",
+        doc="n_phases - 1 increasing grey levels instead of Otsu's (PNG: 0 black to 1 white)"),
+    Key("crop", "pairs", unit="pixels", low=0.0, low_open=False,
+        doc="[[row0, row1], [col0, col1]]: the part of the image used (row 0 at the top)"),
     Key("smoothing", "number", unit="pixels", low=0.0, low_open=False,
         doc="Gaussian sigma before thresholding (default 0)"),
+    Key("fill_holes", "boolean",
+        doc="darker patches enclosed by a phase take that phase (default false)"),
+    Key("fill_phases", "integers", low=1, low_open=False,
+        doc="the phases whose holes are filled (default: all but phase 0)"),
     Key("min_speck", "integer", unit="pixels", low=0, low_open=False,
         doc="patches below this are relabelled to the surrounding phase (default 0)"),
     Key("pixel_size", "number", unit="m", low=0.0,
@@ -563,7 +771,8 @@ class Micrograph:
         return counts / counts.sum()
 
 
-def load_micrograph(path, outline, n_phases, *, smoothing=0.0, min_speck=0, pixel_size=None,
+def load_micrograph(path, outline, n_phases, *, thresholds=None, crop=None, smoothing=0.0,
+                    fill_holes=False, fill_phases=None, min_speck=0, pixel_size=None,
                     cover="crop", offset=(0.0, 0.0)):
     """Read, segment and place a micrograph: the map kind ``micrograph`` of scene files.
 
@@ -576,30 +785,41 @@ def load_micrograph(path, outline, n_phases, *, smoothing=0.0, min_speck=0, pixe
         circular face, m.
     n_phases : int
         Number of phases ``P >= 2``.
+    thresholds : sequence of float, shape (P-1,), optional
+        Increasing grey levels between the phases, in the image's units (a
+        PNG: 0 black to 1 white); default: multi-level Otsu.
+    crop : ((int, int), (int, int)), optional
+        ``((row0, row1), (col0, col1))``, the part of the image kept (row 0
+        at the top); the pixel size and the cover refer to it.
     smoothing : float, pixels, optional
         Gaussian sigma before thresholding (default 0).
+    fill_holes : bool, optional
+        Fill the holes of phases ``fill_phases`` (default False).
+    fill_phases : sequence of int, optional
+        Default: every phase but 0.  See :func:`segment`.
     min_speck : int, pixels, optional
         Patches smaller than this take the surrounding phase (default 0).
     pixel_size : float, m, optional
-        Side of one image pixel (default: a square image spanning the
-        face's square bounding box, ``2a`` for a disk).
+        Side of one image pixel (default: a square (cropped) image spanning
+        the face's square bounding box, ``2a`` for a disk).
     cover : {"crop", "tile"}, optional
         Default ``"crop"``; see :class:`Micrograph`.
     offset : (float, float), m, optional
-        Face centre relative to the image centre (default ``(0, 0)``).
+        Face centre relative to the centre of the (cropped) image (default
+        ``(0, 0)``).
 
     Returns
     -------
     Micrograph
-        Its ``segmentation`` holds the thresholds and the image's fill
-        factors, also logged (``INFO``).
+        Its ``segmentation`` holds the thresholds, the holes filled and the
+        image's fill factors, also logged (``INFO``).
 
     Raises
     ------
     ValueError
         Any error of :func:`read_grey`, :func:`segment` or
-        :class:`Micrograph`; the parameters and the cover are checked
-        before the image is segmented.
+        :class:`Micrograph`; the parameters, the crop and the cover are
+        checked before the image is segmented.
 
     Examples
     --------
@@ -616,14 +836,226 @@ def load_micrograph(path, outline, n_phases, *, smoothing=0.0, min_speck=0, pixe
     path = pathlib.Path(path)
     source = str(path)
     n_phases = _check_n_phases(n_phases)
-    smoothing = _check_smoothing(smoothing)
-    min_speck = _check_min_speck(min_speck)
-    _threshold_multiotsu()  # name the missing extra before reading anything
+    options = dict(smoothing=_check_smoothing(smoothing), min_speck=_check_min_speck(min_speck),
+                   thresholds=_check_thresholds(thresholds, n_phases), crop=_check_crop(crop),
+                   fill_holes=fill_holes, fill_phases=fill_phases)
+    _check_fill(fill_holes, fill_phases, n_phases)
+    if options["thresholds"] is None:
+        _threshold_multiotsu()  # name the missing extra before reading anything
     image = read_grey(path)
-    _placement(image.shape, outline, pixel_size, cover, offset, source)  # before the work
     try:
-        seg = segment(image, n_phases, smoothing=smoothing, min_speck=min_speck)
+        rows, cols = _crop_window(options["crop"], image.shape)
+    except ValueError as err:
+        raise ValueError(f"micrograph {source!r}: {err}") from None
+    _placement(image[rows, cols].shape, outline, pixel_size, cover, offset, source)
+    try:
+        seg = segment(image, n_phases, **options)
     except ValueError as err:
         raise ValueError(f"micrograph {source!r}: {err}") from None
     logger.info("micrograph %s: %s", path, seg.summary())
     return Micrograph(seg, outline, pixel_size, cover, offset, source)
+
+
+#: Translucent colours of phases 1, 2, ... over the image (phase 0 is left
+#: clear, so the image shows through), and of phase 0 in the histogram.
+_OVERLAY_COLOURS = ("#e6194b", "#4363d8", "#3cb44b", "#f58231", "#911eb4", "#42d4f4",
+                    "#f032e6", "#bfef45")
+_PHASE0_COLOUR = "#808080"
+_OVERLAY_ALPHA = 0.4
+
+#: Largest side, pixels, of the view of a tiled micrograph over the face; a
+#: cropped image with a longer side is drawn one pixel in every few.
+_TILE_VIEW = 1200
+_IMAGE_VIEW = 2048
+
+
+def _phase_colour(phase):
+    return _PHASE0_COLOUR if phase == 0 else _OVERLAY_COLOURS[(phase - 1)
+                                                              % len(_OVERLAY_COLOURS)]
+
+
+def _view(geometry):
+    """Grey levels, labels and their extent (mm, face coordinates) as the figure shows them.
+
+    A crop shows the whole (cropped) image, one pixel in every
+    ``ceil(side / _IMAGE_VIEW)`` each way; a tiling shows the periodic
+    image over the face's bounding box, sampled at most :data:`_TILE_VIEW`
+    pixels a side.
+    """
+    seg = geometry.segmentation
+    width, height = geometry.extent
+    x0, y0 = geometry.offset
+    if geometry.cover == "crop":
+        extent = np.array([-0.5 * width - x0, 0.5 * width - x0,
+                           -0.5 * height - y0, 0.5 * height - y0])
+        every = -(-max(seg.shape) // _IMAGE_VIEW)
+        return seg.image[::every, ::every], seg.labels[::every, ::every], extent * 1e3
+    half_x, half_y = geometry.outline.half_extent
+    step = max(geometry.pixel_size, 2.0 * max(half_x, half_y) / _TILE_VIEW)
+    x = np.arange(-half_x + 0.5 * step, half_x, step)
+    y = np.arange(half_y - 0.5 * step, -half_y, -step)
+    n_rows, n_cols = seg.shape
+    cols = np.floor((x + x0 + 0.5 * width) / geometry.pixel_size).astype(np.int64) % n_cols
+    rows = np.floor((0.5 * height - y - y0) / geometry.pixel_size).astype(np.int64) % n_rows
+    extent = np.array([x[0], x[-1], y[-1], y[0]]) + 0.5 * step * np.array([-1, 1, -1, 1])
+    index = (rows[:, None], cols[None, :])
+    return seg.image[index], seg.labels[index], extent * 1e3
+
+
+def _draw_image(ax, geometry, names, legend):
+    """The image in grey, the phases over it, the face's outline; their legend handles.
+
+    With ``legend`` the legend goes below the axes; otherwise the caller places it.
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    seg = geometry.segmentation
+    grey, labels, extent = _view(geometry)
+    ax.imshow(grey, cmap="gray", extent=extent, interpolation="nearest",
+              vmin=float(seg.image.min()), vmax=float(seg.image.max()))
+    overlay = np.zeros(labels.shape + (4,), dtype=np.uint8)
+    for phase in range(1, seg.n_phases):
+        rgba = (*_rgb(_phase_colour(phase)), _OVERLAY_ALPHA)
+        overlay[labels == phase] = np.rint(255 * np.asarray(rgba))
+    ax.imshow(overlay, extent=extent, interpolation="nearest")
+    half_x, half_y = geometry.outline.half_extent
+    x = np.linspace(-1.05 * half_x, 1.05 * half_x, 601)
+    y = np.linspace(-1.05 * half_y, 1.05 * half_y, 601)
+    inside = geometry.outline.covers(x[None, :], y[:, None]).astype(float)
+    ax.contour(x * 1e3, y * 1e3, inside, levels=[0.5], colors=["#ffd700"], linewidths=1.5)
+    handles = [Patch(facecolor="none" if p == 0 else _phase_colour(p),
+                     alpha=1.0 if p == 0 else _OVERLAY_ALPHA, edgecolor="black",
+                     label=f"{names[p]}: {100 * seg.fill_factors[p]:.1f} % of the image")
+               for p in range(seg.n_phases)]
+    handles.append(Line2D([], [], color="#ffd700", linewidth=1.5, label="face"))
+    if legend:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12),
+                  ncols=min(len(handles), 3), fontsize="small", frameon=False)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_aspect("equal")
+    thresholds = ", ".join(f"{t:.4g}" for t in seg.thresholds)
+    ax.set_title(f"{seg.n_phases} phases, threshold{'s' if len(seg.thresholds) > 1 else ''} "
+                 f"{thresholds} ({seg.method})")
+    return handles
+
+
+def _rgb(colour):
+    from matplotlib.colors import to_rgb
+
+    return to_rgb(colour)
+
+
+def _draw_histogram(ax, geometry):
+    """Histogram of the grey levels thresholded, coloured by phase, the thresholds marked."""
+    seg = geometry.segmentation
+    grey = seg.image
+    if seg.smoothing:
+        grey = ndimage.gaussian_filter(grey, seg.smoothing, mode="nearest")
+    counts, edges = np.histogram(grey, bins=_OTSU_BINS)
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    colours = [_phase_colour(p) for p in np.digitize(centres, seg.thresholds)]
+    ax.bar(centres, np.maximum(counts, 0.5), width=edges[1] - edges[0], color=colours,
+           log=True, linewidth=0)
+    for i, t in enumerate(seg.thresholds):
+        ax.axvline(t, color="black", linestyle="--", linewidth=1.0,
+                   label=f"threshold {i}: {t:.4g}")
+    ax.legend(fontsize="small", frameon=False)
+    png = geometry.source.lower().endswith(".png")
+    ax.set_xlabel("grey level" + (" (fraction of full scale)" if png else ""))
+    ax.set_ylabel("pixels")
+    ax.set_ylim(bottom=0.5)
+    smoothed = f" (smoothed, sigma {seg.smoothing:g} px)" if seg.smoothing else ""
+    ax.set_title(f"grey levels thresholded{smoothed}")
+
+
+def segmentation_figure(geometry, *, ax=None, names=None):
+    """The segmentation of a micrograph drawn over the image, and its histogram.
+
+    Parameters
+    ----------
+    geometry : Micrograph
+        A segmented micrograph placed on the face (:func:`load_micrograph`).
+    ax : matplotlib Axes or (Axes, Axes), optional
+        Where to draw: one Axes for the image alone, a pair for the image
+        and the histogram.  Default: a new figure with both panels.
+    names : sequence of str, optional
+        Names of the phases for the legend (default ``"phase 0"``, ...).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The image panel shows the (cropped) image in grey with phases 1,
+        2, ... coloured translucently over it and the face's outline (x and
+        y in mm, the face's coordinates; a tiled image is shown tiled over
+        the face's bounding box); its title gives the thresholds.  The
+        histogram panel shows the grey levels that were thresholded (after
+        the smoothing), coloured by phase, with the thresholds as dashed
+        lines.
+
+    Raises
+    ------
+    ValueError
+        ``geometry`` is not a :class:`Micrograph`, its segmentation keeps
+        no image, ``ax`` is neither an Axes nor a pair of them, or
+        ``names`` does not name every phase.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> image = np.full((60, 60), 0.5)
+    >>> image[20:40, 20:40], image[25:35, 25:35] = 1.0, 0.0     # a rim around a dark core
+    >>> seg = segment(image, 2, thresholds=[0.75], fill_holes=True)
+    >>> fig = segmentation_figure(Micrograph(seg, 1e-3))        # image spans the 2 mm face
+    >>> [a.get_title() for a in fig.axes]
+    ['2 phases, threshold 0.75 (manual)', 'grey levels thresholded']
+    """
+    from matplotlib.axes import Axes
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    if not isinstance(geometry, Micrograph):
+        raise ValueError(f"geometry must be a Micrograph, got {shorten(geometry)}")
+    seg = geometry.segmentation
+    if seg.image is None:
+        raise ValueError("the segmentation keeps no image to draw (made by segment() or "
+                         "load_micrograph(), it does)")
+    if names is None:
+        names = [f"phase {p}" for p in range(seg.n_phases)]
+    elif isinstance(names, str) or len(names) != seg.n_phases:
+        raise ValueError(f"names must name the {seg.n_phases} phases, got {shorten(names)}")
+    if ax is None:
+        fig = Figure(figsize=(11.0, 5.2), layout="constrained")
+        FigureCanvasAgg(fig)
+        image_ax, hist_ax = fig.subplots(1, 2, width_ratios=(3, 2))
+        fig.suptitle(_figure_title(geometry))
+    elif isinstance(ax, Axes):
+        image_ax, hist_ax = ax, None
+    elif (isinstance(ax, (tuple, list, np.ndarray)) and np.size(ax) == 2
+          and all(isinstance(a, Axes) for a in np.ravel(ax))):
+        image_ax, hist_ax = np.ravel(ax)
+    else:
+        raise ValueError(f"ax must be a matplotlib Axes or a pair of them, got {shorten(ax)}")
+    handles = _draw_image(image_ax, geometry, names, legend=ax is not None)
+    if ax is None:  # the figure's own: a legend the layout makes room for
+        fig.legend(handles=handles, loc="outside lower left", ncols=min(len(handles), 4),
+                   fontsize="small", frameon=False)
+    if hist_ax is not None:
+        _draw_histogram(hist_ax, geometry)
+    return image_ax.figure
+
+
+def _figure_title(geometry):
+    """The source, the crop, the smoothing, the holes and the placement in a line."""
+    seg = geometry.segmentation
+    words = [pathlib.Path(geometry.source).name]
+    if seg.crop is not None:
+        (r0, r1), (c0, c1) = seg.crop
+        words.append(f"rows {r0}:{r1}, columns {c0}:{c1}")
+    if seg.fill_phases:
+        words.append(f"{seg.holes} holes filled")
+    if seg.specks:
+        words.append(f"{seg.specks} specks relabelled")
+    words.append(f"pixel {geometry.pixel_size * 1e6:.4g} µm, cover {geometry.cover}")
+    return ", ".join(words)

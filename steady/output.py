@@ -7,54 +7,35 @@ renamed over the file it may replace), with the layout name and version in
 the root attributes ``format`` and ``format_version``.  (Sweep files, which
 grow point by point, have their own mechanism: :mod:`steady.sweep`.)
 
-Steady result files (layout ``runin.steady``, version 2)::
+Steady result files (layout ``runin.steady``, version 2): see docs/files.md
+for every dataset and attribute with its unit and meaning.  In short::
 
-    root attributes
-        format            "runin.steady"
-        format_version    2
-        rms_slope         rms of |grad f_inf| over the face, best  (units: rms_slope_units)
-                          estimate (energy-corrected where rms_slope_error is finite)
-        rms_slope_error   its estimated discretisation error, NaN if not estimated
-        rms_slope_plain   plain pixel rms of the slope dataset
-        rms_slope_ref     grad_f0, the homogeneous face's rms     (rms_slope_ref_units)
-                          slope: 4 pbar / (pi E*) for a disk (eq. 12)
-        rms_slope_ref_error   its uncertainty (0: a closed form)
-        rms_slope_ref_source  where it comes from, in words
-        mean_pressure     pbar = F_N / face area, Pa               (mean_pressure_units)
-        rms_height        rms of the face about its least-squares  (rms_height_units, m)
-                          plane; optional when read (NaN if absent)
-        fill_factors      realised area fraction of each phase     (fill_factors_units)
-        phase_pressures   steady pressure on each phase, Pa        (phase_pressures_units)
-        wear_coefficients k_i, 1/Pa                                (wear_coefficients_units)
-        exponent          m of the wear law k p^m                  (exponent_units)
-        normal_force N, E_star Pa, pixel_size m                    (<name>_units)
-        radius            m, the disk's radius (circular faces only)
-        scale             m, the outline's length scale L (the radius of a disk)
-        n                 pixels along the longer side (across the diameter of a disk)
-    root datasets, each with a ``units`` attribute
-        phase     (nx, ny) int8/int16 phase index, -1 off the face   units "1"
-        pressure  (nx, ny) float64    steady pressure                units "Pa"
-        face      (nx, ny) float64    limiting face f_inf, NaN off   units "m"
-        slope     (nx, ny) float64    |grad f_inf|, NaN off the face units "1"
-        scene     scalar string       the scene TOML (attribute ``source_path``)
-    group ``outline``: the face's outline (:mod:`steady.outline`); attributes
-        kind              "circle", "rectangle", "ellipse", "annulus" or "mask"
-        area              m^2, the exact area (area_units)
-        <its lengths>     e.g. width, length (m, with <name>_units)
-        and for a mask the dataset ``mask`` (mx, my) bool
-    group ``micrograph``, only for a segmented micrograph (map kind "micrograph",
-    :mod:`steady.micrograph`); attributes
-        source            the image file
-        n_phases, smoothing (pixels), min_speck (pixels), specks, speck_pixels
-        thresholds        grey levels between the phases (PNG: fraction of full scale)
-        image_fill_factors  fraction of the image's pixels per phase
-        image_shape       (rows, cols)
-        pixel_size m, cover "crop" or "tile", offset (x, y) m
+    root datasets (CF attributes ``units``, udunits, and ``long_name``)
+        x (nx,), y (ny,)  m      pixel centres from the outline's centre: the
+                                 dimension scales of every (nx, ny) dataset
+        phase_name (P,) string   the phase names, phase 0 first: the dimension
+                                 scale ``phase_name``
+        phase     (nx, ny) int   phase index, -1 off the face          units "1"
+        pressure  (nx, ny) float steady pressure                       units "Pa"
+        face      (nx, ny) float limiting face f_inf, NaN off the face units "m"
+        slope     (nx, ny) float |grad f_inf|, NaN off the face        units "1"
+        scene     scalar string  the scene TOML (attribute ``source_path``)
+    root attributes: a quantity ``x`` with its udunits unit in ``x_units``
+        format "runin.steady", format_version 2, rms_slope, rms_slope_error,
+        rms_slope_plain, rms_slope_ref (grad_f0), rms_slope_ref_error,
+        rms_slope_ref_source (text), mean_pressure (Pa), rms_height (m),
+        fill_factors, phase_pressures (Pa), wear_coefficients (Pa-m),
+        exponent, wear_law (in words), normal_force (N), E_star (Pa),
+        pixel_size (m), radius (m, disks only), scale (m), n (pixels along
+        the longer side)
+    group ``outline``: the face's outline (:func:`write_outline`)
+    group ``micrograph``: a segmented micrograph's segmentation and placement
 
 An attribute cannot carry attributes, so the unit of attribute ``x`` is the
-string attribute ``x_units``.  Version 1 files (disks only, without
-``outline``, ``scale``, ``mean_pressure`` and the reference's error and
-source) are read too.
+string attribute ``x_units``, a udunits string like a dataset's ``units``.
+Files written before the coordinates and phase names (version 2 without
+them, and version 1, disks only, without ``outline``, ``scale``,
+``mean_pressure`` and the reference's error and source) are read too.
 """
 
 from __future__ import annotations
@@ -71,18 +52,30 @@ import numpy as np
 
 from .micrograph import Micrograph
 from .outline import OUTLINES, Circle, MaskOutline
+from .problem import check_phase_names, default_phase_names
 from .solution import SteadyResult
+from .wear import PowerLaw
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "AtomicH5", "FileIdentity", "OutputAppearedError",
-           "OutputExistsError", "StoredResult", "atomic_h5", "file_identity", "read_outline",
-           "read_result", "write_outline", "write_result"]
+__all__ = ["DIMENSION_SCALE_ATTRIBUTES", "FORMAT", "FORMAT_VERSION", "AtomicH5", "FileIdentity",
+           "OutputAppearedError", "OutputExistsError", "StoredResult", "atomic_h5",
+           "attach_scales", "describe", "file_identity", "read_outline", "read_phase_names",
+           "read_result", "wear_coefficient_units", "write_grid_coordinates", "write_outline",
+           "write_phase_names", "write_result"]
 
 FORMAT = "runin.steady"
 FORMAT_VERSION = 2
 #: Versions :func:`read_result` reads.
 _READABLE_VERSIONS = (1, 2)
 
-_DATASETS = {"phase": "1", "pressure": "Pa", "face": "m", "slope": "1"}
+# Datasets: (units, long_name).
+_DATASETS = {
+    "phase": ("1", "phase index, -1 off the face"),
+    "pressure": ("Pa", "steady contact pressure, zero off the face"),
+    "face": ("m", "limiting worn face f_inf = K p, NaN off the face"),
+    "slope": ("1", "magnitude of the gradient of the limiting face, NaN off the face"),
+}
+# Root attributes and their units (udunits); the wear coefficients' unit
+# depends on the exponent (wear_coefficient_units).
 _ATTRIBUTES = {
     "rms_slope": "1",
     "rms_slope_error": "1",
@@ -90,7 +83,7 @@ _ATTRIBUTES = {
     "rms_slope_ref": "1",
     "fill_factors": "1",
     "phase_pressures": "Pa",
-    "wear_coefficients": "1/Pa",
+    "wear_coefficients": None,
     "exponent": "1",
     "normal_force": "N",
     "E_star": "Pa",
@@ -101,6 +94,152 @@ _ATTRIBUTES = {
 # before they existed still read, with NaN).
 _OPTIONAL_ATTRIBUTES = {"rms_height": "m", "rms_slope_ref_error": "1", "mean_pressure": "Pa",
                         "scale": "m"}
+
+#: Attributes the HDF5 dimension-scale API (and netCDF-4) keeps on datasets:
+#: the file's structure, not its values.
+DIMENSION_SCALE_ATTRIBUTES = frozenset({"CLASS", "NAME", "DIMENSION_LIST", "REFERENCE_LIST",
+                                        "_Netcdf4Dimid", "_Netcdf4Coordinates"})
+
+
+def wear_coefficient_units(exponent):
+    """The udunits unit of the coefficients ``k`` of the wear law ``dw/ds = k p^m``: ``Pa-m``.
+
+    Parameters
+    ----------
+    exponent : float
+        ``m``.
+
+    Returns
+    -------
+    str
+        ``"Pa-1"`` for Archard's law; udunits has integer powers only, so
+        a fractional exponent gives ``"Pa^-1.5"``, which it cannot parse.
+
+    Examples
+    --------
+    >>> wear_coefficient_units(1.0), wear_coefficient_units(2), wear_coefficient_units(1.5)
+    ('Pa-1', 'Pa-2', 'Pa^-1.5')
+    """
+    m = float(exponent)
+    return f"Pa-{m:.0f}" if m == round(m) else f"Pa^-{m:g}"
+
+
+def describe(obj, units, long_name):
+    """Give a dataset its CF attributes ``units`` (udunits; None: none) and ``long_name``.
+
+    Parameters
+    ----------
+    obj : h5py.Dataset
+    units : str or None
+        ``"Pa"``, ``"m"``, ``"1"`` (dimensionless), ...; None for text or
+        a code.
+    long_name : str
+        What the values are, in words.
+    """
+    if units is not None:
+        obj.attrs["units"] = units
+    obj.attrs["long_name"] = long_name
+
+
+def _create(group, name, values, units, long_name, put, **options):
+    """A dataset with its CF attributes, made by ``put`` if given."""
+    if put is not None:
+        return put(group, name, values, units, long_name, **options)
+    ds = group.create_dataset(name, data=values, **options)
+    describe(ds, units, long_name)
+    return ds
+
+
+def write_grid_coordinates(group, x, y, put=None):
+    """The datasets ``x`` and ``y`` (m) of ``group``, made dimension scales ``x`` and ``y``.
+
+    Parameters
+    ----------
+    group : h5py.Group
+    x : ndarray, shape (nx,), m
+    y : ndarray, shape (ny,), m
+        Pixel centres from the face's centre.
+    put : callable, optional
+        ``put(group, name, values, units, long_name, **options)`` creating
+        a dataset with its CF attributes (a writer that adds its own, such
+        as checksums); default :meth:`h5py.Group.create_dataset` and
+        :func:`describe`.
+
+    Returns
+    -------
+    (h5py.Dataset, h5py.Dataset)
+        The scales, for :func:`attach_scales`.
+    """
+    scales = []
+    for name, values in (("x", x), ("y", y)):
+        ds = _create(group, name, np.asarray(values, dtype=float), "m",
+                     f"{name} of the pixel centre, from the centre of the face", put)
+        ds.make_scale(name)
+        scales.append(ds)
+    return tuple(scales)
+
+
+def write_phase_names(group, names, put=None):
+    """The dataset ``phase_name`` of ``group``: the phase names, made a dimension scale.
+
+    Parameters
+    ----------
+    group : h5py.Group
+    names : sequence of str
+        One per phase, phase 0 first.
+    put : callable, optional
+        As for :func:`write_grid_coordinates`.
+
+    Returns
+    -------
+    h5py.Dataset
+    """
+    values = np.array([str(name) for name in names], dtype=object)
+    ds = _create(group, "phase_name", values, None, "name of the phase, phase 0 first", put,
+                 dtype=h5py.string_dtype())
+    ds.make_scale("phase_name")
+    return ds
+
+
+def read_phase_names(group, n_phases):
+    """The phase names :func:`write_phase_names` wrote, or the defaults if there are none.
+
+    Parameters
+    ----------
+    group : h5py.Group
+    n_phases : int
+
+    Returns
+    -------
+    tuple of str
+        ``("phase 0", "phase 1", ...)`` for a file written without names.
+
+    Raises
+    ------
+    ValueError
+        Another number of names than ``n_phases``.
+    """
+    if "phase_name" not in group:
+        return default_phase_names(n_phases)
+    names = tuple(_text(name) for name in np.atleast_1d(group["phase_name"][()]))
+    if len(names) != n_phases:
+        raise ValueError(f"{len(names)} phase names for {n_phases} phases")
+    return names
+
+
+def attach_scales(ds, *scales):
+    """Attach dimension scales to the axes of ``ds``, in order; None leaves an axis bare.
+
+    Parameters
+    ----------
+    ds : h5py.Dataset
+    *scales : h5py.Dataset or None
+        One per leading axis of ``ds``; a scale whose length is not that
+        of its axis is not attached.
+    """
+    for axis, scale in enumerate(scales):
+        if scale is not None and scale.shape[0] == ds.shape[axis]:
+            ds.dims[axis].attach_scale(scale)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,11 +252,15 @@ class StoredResult:
     scene_text : str
         The scene TOML stored with the result ("" if none was stored).
     path : pathlib.Path
+    phase_names : tuple of str
+        One per phase, phase 0 first (``"phase 0", ...`` for a file
+        written without names).
     """
 
     result: SteadyResult
     scene_text: str
     path: pathlib.Path
+    phase_names: tuple = ()
 
 
 def _umask():
@@ -508,11 +651,13 @@ def _write_atomically(receipt, path, *, format, version, force, backup, replaces
         pass
 
 
-def write_result(path, result, scene=None, *, force=False, checked=False):
+def write_result(path, result, scene=None, *, phase_names=None, force=False, checked=False):
     """Write a steady result (and its scene) to an HDF5 file, atomically.
 
     See :func:`atomic_h5`: a reader never sees half a file; missing parent
-    directories are created.
+    directories are created.  The file holds the result's inputs (load,
+    modulus, wear law, phase map, outline, phase names) whether or not a
+    scene is given.
 
     Parameters
     ----------
@@ -520,6 +665,9 @@ def write_result(path, result, scene=None, *, force=False, checked=False):
     result : SteadyResult
     scene : Scene, optional
         Its TOML text and source path are stored.
+    phase_names : sequence of str, optional
+        One per phase; default the scene's (``[phases] names``), else
+        ``"phase 0", "phase 1", ...``.
     force : bool, optional
         Overwrite an existing file (default False).
     checked : bool, optional
@@ -533,20 +681,38 @@ def write_result(path, result, scene=None, *, force=False, checked=False):
     Raises
     ------
     ValueError
-        ``path`` is a directory.
+        ``path`` is a directory, or ``phase_names`` are not one distinct
+        name per phase.
     OutputExistsError
         (a ``ValueError``) ``path`` exists and ``force`` is False; an
         :class:`OutputAppearedError` if another writer wrote it while this
         result was written (nothing is written then).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> from steady import Circle, FacePhases, Problem, Voronoi, solve
+    >>> grid = Circle(4e-3).grid(32)
+    >>> phases = FacePhases(grid, Voronoi(64, (0.7, 0.3), seed=2029).labels(grid), 2)
+    >>> result = solve(Problem(phases, [1e-13, 1e-12], 10.0, 1.3e6))
+    >>> path = write_result(pathlib.Path(tempfile.mkdtemp()) / "r.h5", result)
+    >>> with xr.open_dataset(path, engine="h5netcdf") as ds:
+    ...     print(ds["pressure"].dims, ds["x"].attrs["units"], ds["phase_name"].values.tolist())
+    ('x', 'y') m ['phase 0', 'phase 1']
     """
     path = pathlib.Path(path)
+    if phase_names is None:
+        phase_names = getattr(result, "phase_names", None) or getattr(scene, "phase_names", None)
+    phase_names = check_phase_names(phase_names, result.n_phases) if phase_names is not None \
+        else default_phase_names(result.n_phases)
     with atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=force,
                    checked=checked) as f:
-        _write(f, result, scene)
+        _write(f, result, scene, phase_names)
     return path
 
 
-def _write(f, result, scene):
+def _write(f, result, scene, phase_names):
     values = {
         "rms_slope": result.rms_slope,
         "rms_slope_error": result.rms_slope_error,
@@ -567,20 +733,26 @@ def _write(f, result, scene):
     }
     for name, unit in {**_ATTRIBUTES, **_OPTIONAL_ATTRIBUTES}.items():
         f.attrs[name] = values[name]
-        f.attrs[f"{name}_units"] = unit
+        f.attrs[f"{name}_units"] = unit or wear_coefficient_units(result.exponent)
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
+    f.attrs["wear_law"] = PowerLaw(result.wear_coefficients, exponent=result.exponent).describe()
     if isinstance(result.outline, Circle):
         f.attrs["radius"] = result.outline.radius
         f.attrs["radius_units"] = "m"
     write_outline(f.create_group("outline"), result.outline)
+    grid = result.outline.grid(result.n)
+    scales = write_grid_coordinates(f, grid.x, grid.y)
+    write_phase_names(f, phase_names)
     dtype = np.int8 if result.n_phases < 127 else np.int16
     arrays = {"phase": result.labels.astype(dtype), "pressure": result.pressure,
               "face": result.face, "slope": result.slope}
-    for name, unit in _DATASETS.items():
+    for name, (unit, long_name) in _DATASETS.items():
         ds = f.create_dataset(name, data=arrays[name])
-        ds.attrs["units"] = unit
+        describe(ds, unit, long_name)
+        attach_scales(ds, *scales)
     ds = f.create_dataset("scene", data="" if scene is None else scene.text,
                           dtype=h5py.string_dtype())
+    describe(ds, None, "scene file (TOML), verbatim")
     ds.attrs["source_path"] = "" if scene is None or scene.source_path is None else str(
         scene.source_path)
     if scene is not None and isinstance(scene.geometry, Micrograph):
@@ -590,6 +762,10 @@ def _write(f, result, scene):
 def write_outline(group, outline):
     """A face outline as the attributes (and for a mask the dataset) of ``group``.
 
+    Attribute ``x`` has its udunits unit in ``x_units``: ``area`` (``m2``)
+    and the outline's lengths (``m``).  A mask outline's ``mask`` has the
+    dimension scales ``mask_x`` and ``mask_y`` (m, its pixel centres).
+
     Parameters
     ----------
     group : h5py.Group
@@ -597,13 +773,22 @@ def write_outline(group, outline):
     """
     group.attrs["kind"] = outline.kind
     group.attrs["area"] = outline.area
-    group.attrs["area_units"] = "m^2"
+    group.attrs["area_units"] = "m2"
     for name, (value, unit) in outline.parameters().items():
         group.attrs[name] = value
         group.attrs[f"{name}_units"] = unit
     if isinstance(outline, MaskOutline):
-        ds = group.create_dataset("mask", data=outline.mask)
-        ds.attrs["units"] = "1"
+        ds = group.create_dataset("mask", data=outline.mask.astype(np.int8))
+        describe(ds, "1", "1 inside the face, 0 outside")
+        scales = []
+        for axis, name in enumerate(("mask_x", "mask_y")):
+            m = outline.mask.shape[axis]
+            scale = group.create_dataset(name, data=(np.arange(m) - 0.5 * (m - 1))
+                                         * outline.pixel_size)
+            describe(scale, "m", f"{name[-1]} of the mask's pixel centre, from its centre")
+            scale.make_scale(name)
+            scales.append(scale)
+        attach_scales(ds, *scales)
         group.attrs["source"] = outline.source
 
 
@@ -642,14 +827,21 @@ def _write_micrograph(group, geometry):
         "min_speck": seg.min_speck,
         "specks": seg.specks,
         "speck_pixels": seg.speck_pixels,
+        "threshold_method": seg.method,
+        "crop": np.asarray(seg.crop or ((0, seg.shape[0]), (0, seg.shape[1]))),
+        "crop_units": "pixels",
+        "fill_phases": np.asarray(seg.fill_phases, dtype=np.int64),
+        "holes": seg.holes,
+        "hole_pixels": seg.hole_pixels,
         "image_shape": np.asarray(seg.shape),
         "pixel_size": geometry.pixel_size,
         "pixel_size_units": "m",
         "cover": geometry.cover,
         "offset": np.asarray(geometry.offset),
         "offset_units": "m",
-        "smoothing_units": "pixels",
-        "min_speck_units": "pixels",
+        # Counts of pixels: dimensionless for udunits (docs/files.md says pixels).
+        "smoothing_units": "1",
+        "min_speck_units": "1",
     }
     for name, value in values.items():
         group.attrs[name] = value
@@ -688,7 +880,12 @@ def read_result(path):
         raise ValueError(f"result file {str(path)!r} is not an HDF5 file")
     try:
         with h5py.File(path, "r") as f:
-            return StoredResult(*_read(f, path), path=path)
+            result, scene_text = _read(f, path)
+            try:
+                names = read_phase_names(f, result.n_phases)
+            except ValueError as err:
+                raise ValueError(f"result file {str(path)!r}: {err}") from None
+            return StoredResult(result, scene_text, path=path, phase_names=names)
     except (OSError, KeyError, TypeError) as err:
         raise ValueError(f"result file {str(path)!r} is corrupt or incomplete: {err}") from None
 

@@ -38,7 +38,7 @@ __all__ = ["SCALE_RANGE", "SCALE_UNITS", "Context", "Key", "Registry", "read_tab
 
 #: Types a key may hold.
 TYPES = ("number", "integer", "string", "path", "numbers", "integers", "pairs", "pair",
-         "strings")
+         "strings", "boolean")
 
 #: The range of every scale of a problem, in SI units: lengths, forces,
 #: moduli and what follows from them (:func:`steady.problem.check_scales`).
@@ -63,7 +63,8 @@ class Key:
         ``"string"`` (non-empty), ``"path"`` (a non-empty string, resolved
         against the scene file's directory), ``"numbers"``,
         ``"integers"``, ``"strings"`` (arrays of those), ``"pairs"`` (an
-        array of ``[x, y]``), ``"pair"`` (one ``[x, y]``).
+        array of ``[x, y]``), ``"pair"`` (one ``[x, y]``), ``"boolean"``
+        (``true`` or ``false``).
     unit : str, optional
         Unit of the value (``"m"``, ``"N"``, ``"Pa"``, ``"1/Pa"``, ``"1"``
         for a pure number, ``"s*"`` for a distance in run-in units, ...);
@@ -127,7 +128,7 @@ class Key:
                 "path": "a file name", "numbers": "an array of numbers",
                 "integers": "an array of integers",
                 "strings": "an array of non-empty strings", "pairs": "an array of [x, y] pairs",
-                "pair": "an [x, y] pair"}[self.type]
+                "pair": "an [x, y] pair", "boolean": "true or false"}[self.type]
         bound = self.range_text()
         if bound:
             noun += f" {'each ' if self.type in ('numbers', 'integers', 'pairs') else ''}{bound}"
@@ -187,6 +188,10 @@ class Key:
     def _scalar(self, value, name, shown, base_dir):
         """One value; messages show ``shown`` (the whole list for a list's item)."""
         bad = f"{name} must be {self.describe()}, got {shorten(shown)}"
+        if self.type == "boolean":
+            if not isinstance(value, bool):
+                raise ValueError(bad)
+            return value
         if self.type in ("string", "path"):
             if not isinstance(value, str) or not value:
                 raise ValueError(bad)

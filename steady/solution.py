@@ -279,7 +279,7 @@ def solve_scene(scene, *, n=None, slope_error=True):
     bar, the plain pixel value 3.5 % low.
 
     >>> from steady import load_scene, solve_scene
-    >>> scene = load_scene("studies/scenes/epoxy_cylinder.toml")
+    >>> scene = load_scene("steady/examples/epoxy_cylinder.toml")
     >>> result = solve_scene(scene, n=64)
     >>> print(f"{result.normalised_rms_slope:.3f} "
     ...       f"+- {result.rms_slope_error / result.reference_slope:.3f} grad_f0, "

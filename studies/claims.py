@@ -20,12 +20,12 @@ Tests, on the Voronoi sweep (energy-corrected rms slope, grid ``n = 512``,
 
 Run::
 
-    python studies/claims.py            # 35 s once the sweep is in out/voronoi_sweep_n512.h5;
+    python studies/claims.py            # 35 s once the sweep is in OUT/voronoi_sweep_n512.h5;
                                         # from scratch 840 maps, ~30 min on 2 cores
     python studies/claims.py --quick    # a few seconds
     python studies/claims.py --plot-only
 
-Writes ``out/claims.h5`` and ``docs/figures/claims.png``.
+Writes ``OUT/claims.h5`` and ``OUT/claims.png``.
 """
 
 import sys
@@ -212,7 +212,8 @@ def plot(path, png):
 
 def main(argv=None):
     """Run the study from the command line (``--help`` lists the options); exit status."""
-    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True)
+    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True,
+                              default_sweep=voronoi_study.SWEEP)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """The files the shipped scenes produce are the same at two revisions of the code.
 
 What it checks
-    Every scene of ``studies/scenes/`` is run through the commands of two
+    Every scene of ``steady/examples/`` is run through the commands of two
     source trees -- this one and another revision, checked out beside it
     with ``git worktree`` -- with the same Python: the steady result of
     every scene (``runin-steady``), the run file of every scene with a
@@ -78,10 +78,16 @@ def run_command(tree, command, args, log):
                               env=env, stdout=out, stderr=subprocess.STDOUT).returncode
 
 
+def scene_directory(tree):
+    """The directory of a tree's shipped scenes (``studies/scenes`` in older revisions)."""
+    shipped = tree / "steady" / "examples"
+    return shipped if shipped.is_dir() else tree / "studies" / "scenes"
+
+
 def scenes(tree):
     """The shipped scene files of a tree, and which of them carry run-in sections."""
     found = []
-    for path in sorted((tree / "studies" / "scenes").glob("*.toml")):
+    for path in sorted(scene_directory(tree).glob("*.toml")):
         text = path.read_text()
         run_in = "[transient]" in text or "[initial_face]" in text
         found.append((path.stem, path, run_in))
@@ -130,7 +136,7 @@ def run_fits(tree, out, log, faces):
     status = {}
     for name in FIT_SCENES:
         measured, h = faces[name]
-        scene = tree / "studies" / "scenes" / f"{name}.toml"
+        scene = scene_directory(tree) / f"{name}.toml"
         status[f"fit/{name}"] = run_command(
             tree, "runin-fit", [scene, measured, "-o", out / f"fit_{name}.h5", "--force",
                                 "--pixel-size", repr(h)], log)
@@ -148,6 +154,23 @@ def _normalise(value, trees):
         for tree in trees:
             value = value.replace(str(tree), "<tree>")
     return value
+
+
+def _dereferenced(f, value):
+    """An attribute with each object reference (dimension scales) replaced by the object's name."""
+    a = np.asarray(value)
+    if a.dtype.kind != "O" and not (a.dtype.fields and any(
+            a.dtype[k].kind == "O" for k in a.dtype.fields)):
+        return value
+
+    def name(v):
+        if isinstance(v, h5py.Reference):
+            return f[v].name if v else ""
+        if isinstance(v, (np.ndarray, list, tuple, np.void)):
+            return [name(u) for u in v]
+        return v
+
+    return repr(name(a.tolist() if a.dtype.fields else list(a.flat)))
 
 
 def _same(a, b):
@@ -195,8 +218,8 @@ def compare_files(path_a, path_b, trees):
             for key in sorted(keys_a & keys_b):
                 if key in volatile:
                     continue
-                va = _normalise(node_a.attrs[key], trees)
-                vb = _normalise(node_b.attrs[key], trees)
+                va = _normalise(_dereferenced(fa, node_a.attrs[key]), trees)
+                vb = _normalise(_dereferenced(fb, node_b.attrs[key]), trees)
                 if not _same(va, vb):
                     differences.append(f"{where} @{key}: {_shown(va)} != {_shown(vb)}")
     return differences

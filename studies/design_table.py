@@ -12,13 +12,15 @@ fine-grain closed form.
 Run::
 
     python studies/design_table.py            # 20 s once the sweep is in
-                                              # out/voronoi_sweep_n512.h5; from scratch
+                                              # OUT/voronoi_sweep_n512.h5; from scratch
                                               # 270 maps, ~10 min on 2 cores
     python studies/design_table.py --quick    # a few seconds
     python studies/design_table.py --plot-only
+    python studies/design_table.py --docs-figures   # rebuild the shipped table
 
-Writes ``steady/data/design_table.h5`` (the table shipped as package data of
-``steady``) and ``docs/figures/design_table.png``.
+Writes ``OUT/design_table.h5`` and ``OUT/design_table.png``; with
+``--docs-figures``, the table shipped as package data of ``steady``,
+``steady/data/design_table.h5``, and ``docs/figures/design_table.png``.
 """
 
 import sys
@@ -81,7 +83,7 @@ def plot(path, png):
 def main(argv=None):
     """Run the study from the command line (``--help`` lists the options); exit status."""
     return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True,
-                              default_output=TABLE)
+                              committed_output=TABLE, default_sweep=voronoi_study.SWEEP)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ Run::
     python studies/face_outlines.py --quick    # a few s
     python studies/face_outlines.py --plot-only
 
-Writes ``out/face_outlines.h5`` and ``docs/figures/face_outlines.png``.
+Writes ``OUT/face_outlines.h5`` and ``OUT/face_outlines.png``.
 """
 
 import sys

@@ -14,7 +14,7 @@ Run::
     python studies/fig2_homogeneous.py --quick    # about 1 s
     python studies/fig2_homogeneous.py --plot-only
 
-Writes ``out/fig2_homogeneous.h5`` and ``docs/figures/fig2_homogeneous.png``.
+Writes ``OUT/fig2_homogeneous.h5`` and ``OUT/fig2_homogeneous.png``.
 """
 
 import sys

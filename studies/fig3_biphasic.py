@@ -6,7 +6,7 @@ random seeds, each labelled phase 1 or phase 2 with fill factor ``rho_2``),
 of eq. 15 divided by ``a`` (``f / (grad_f0 a)``), with the energy-corrected rms
 slope and its discretisation error (grids ``n, n/2, n/4``).
 
-The map is the one of ``studies/scenes/voronoi_biphasic.toml`` (40^2 seeds,
+The map is the one of ``steady/examples/voronoi_biphasic.toml`` (40^2 seeds,
 ``rho_2 = 0.5``, seed 2718).
 
 Run::
@@ -15,7 +15,7 @@ Run::
     python studies/fig3_biphasic.py --quick    # about 1 s
     python studies/fig3_biphasic.py --plot-only
 
-Writes ``out/fig3_biphasic.h5`` and ``docs/figures/fig3_biphasic.png``.
+Writes ``OUT/fig3_biphasic.h5`` and ``OUT/fig3_biphasic.png``.
 """
 
 import sys

@@ -17,9 +17,9 @@ Run::
     python studies/fig4_coarseness.py --plot-only
     python studies/fig4_coarseness.py --scheduler tcp://host:8786   # on a Dask cluster
 
-The sweep points go to (or are reused from) ``out/voronoi_sweep_n<n>.h5``
-(:mod:`voronoi_study`).  Writes ``out/fig4_coarseness.h5`` and
-``docs/figures/fig4_coarseness.png``.
+The sweep points go to (or are reused from) ``OUT/voronoi_sweep_n<n>.h5``
+(:mod:`voronoi_study`).  Writes ``OUT/fig4_coarseness.h5`` and
+``OUT/fig4_coarseness.png``.
 """
 
 import sys
@@ -122,7 +122,8 @@ def plot(path, png):
 
 def main(argv=None):
     """Run the study from the command line (``--help`` lists the options); exit status."""
-    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True)
+    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True,
+                              default_sweep=voronoi_study.SWEEP)
 
 
 if __name__ == "__main__":

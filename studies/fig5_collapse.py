@@ -17,9 +17,9 @@ Run::
     python studies/fig5_collapse.py --quick    # a few seconds
     python studies/fig5_collapse.py --plot-only
 
-The sweep points go to (or are reused from) ``out/voronoi_sweep_n<n>.h5``
-(:mod:`voronoi_study`; Fig. 4 shares them).  Writes ``out/fig5_collapse.h5``
-and ``docs/figures/fig5_collapse.png``.
+The sweep points go to (or are reused from) ``OUT/voronoi_sweep_n<n>.h5``
+(:mod:`voronoi_study`; Fig. 4 shares them).  Writes ``OUT/fig5_collapse.h5``
+and ``OUT/fig5_collapse.png``.
 """
 
 import sys
@@ -141,7 +141,8 @@ def plot(path, png):
 
 def main(argv=None):
     """Run the study from the command line (``--help`` lists the options); exit status."""
-    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True)
+    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True,
+                              default_sweep=voronoi_study.SWEEP)
 
 
 if __name__ == "__main__":

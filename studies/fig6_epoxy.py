@@ -1,7 +1,7 @@
 """Fig. 6b: cross sections of the worn epoxy cylinder, theory in physical units.
 
 Reproduces the theoretical curve of the paper's Fig. 6b: the homogeneous epoxy
-cylinder of ``studies/scenes/epoxy_cylinder.toml`` (``a = 4 mm``,
+cylinder of ``steady/examples/epoxy_cylinder.toml`` (``a = 4 mm``,
 ``F_N = 10 N``, ``E* = 1.3 MPa``), its limiting face from the steady solver
 sampled along four diameters (0, 45, 90 and 135 degrees), against eq. 10.
 Heights are given relative to the rim (``f_inf(r) - f_inf(a)``), in
@@ -14,7 +14,7 @@ Run::
     python studies/fig6_epoxy.py --quick    # about 1 s
     python studies/fig6_epoxy.py --plot-only
 
-Writes ``out/fig6_epoxy.h5`` and ``docs/figures/fig6_epoxy.png``.
+Writes ``OUT/fig6_epoxy.h5`` and ``OUT/fig6_epoxy.png``.
 """
 
 import sys
@@ -28,7 +28,7 @@ from steady.scene import load_scene
 from steady.solution import solve_scene
 
 NAME = "fig6_epoxy"
-SCENE = study_io.ROOT / "studies" / "scenes" / "epoxy_cylinder.toml"
+SCENE = study_io.ROOT / "steady" / "examples" / "epoxy_cylinder.toml"
 PARAMS = {"n": 512, "angles_deg": [0.0, 45.0, 90.0, 135.0], "points": 401}
 QUICK = {"n": 64, "angles_deg": [0.0, 90.0], "points": 41}
 

@@ -3,7 +3,7 @@
 Reproduces the theoretical parts of the paper's Fig. 7 and 8: five rods of
 radius 2.5 mm in a cylinder of radius 10 mm, ``F_N = 35 N``, ``E* = 1.3 MPa``,
 ``k_steel / k_brass = 1.7`` as printed in the paper, steel rods in brass and
-brass rods in steel (``studies/scenes/rods_steel_in_brass.toml`` and
+brass rods in steel (``steady/examples/rods_steel_in_brass.toml`` and
 ``rods_brass_in_steel.toml``: one rod on the axis, four with centres 6 mm
 from it at 0, 90, 180 and 270 degrees).  For each: the limiting face and the
 differential profiles (cross section minus the ring average at the same
@@ -17,7 +17,7 @@ Run::
     python studies/fig78_rods.py --quick    # about 1 s
     python studies/fig78_rods.py --plot-only
 
-Writes ``out/fig78_rods.h5`` and ``docs/figures/fig78_rods.png``.
+Writes ``OUT/fig78_rods.h5`` and ``OUT/fig78_rods.png``.
 """
 
 import sys
@@ -43,7 +43,7 @@ def compute(path, params):
     """Solve both scenes and sample their differential profiles; write HDF5."""
     datasets, attrs = {}, {}
     for key, file in SCENES.items():
-        scene = load_scene(study_io.ROOT / "studies" / "scenes" / file)
+        scene = load_scene(study_io.ROOT / "steady" / "examples" / file)
         if not isinstance(scene.geometry, Rods):
             raise ValueError(f"scene {file} is not a rods scene")
         res = solve_scene(scene, n=params["n"])

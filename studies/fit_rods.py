@@ -1,7 +1,7 @@
 """Wear ratios from a worn face: the rods of Fig. 7-8 tell k_steel/k_brass = 1.7 from 1/1.7.
 
 A synthetic measured face is made with the project's own forward model
-(eq. 7, 9) for each rods scene (``studies/scenes/rods_steel_in_brass.toml``
+(eq. 7, 9) for each rods scene (``steady/examples/rods_steel_in_brass.toml``
 and ``rods_brass_in_steel.toml``) and each of the two wear ratios
 ``k_steel / k_brass = 1.7`` (as printed in the paper) and ``1/1.7``, plus a
 tilt, an offset and noise correlated over 2 pixels (0.2 mm), at levels from
@@ -18,7 +18,7 @@ Run::
     python studies/fit_rods.py --quick    # about 5 s
     python studies/fit_rods.py --plot-only
 
-Writes ``out/fit_rods.h5`` and ``docs/figures/fit_rods.png``.
+Writes ``OUT/fit_rods.h5`` and ``OUT/fit_rods.png``.
 """
 
 import sys
@@ -81,7 +81,7 @@ def compute(path, params):
     coverage_hits, coverage_total = 0, 0
     separated = {}
     for key, file in SCENES.items():
-        scene = load_scene(study_io.ROOT / "studies" / "scenes" / file)
+        scene = load_scene(study_io.ROOT / "steady" / "examples" / file)
         k = scene.wear.coefficients
         ratio_printed = max(k) / min(k)
         if abs(k[STEEL[key]] / k[1 - STEEL[key]] - 1.7) > 1e-12 or abs(ratio_printed - 1.7) > 1e-12:
@@ -147,7 +147,7 @@ def compute(path, params):
     # Discretisation bias: the "measured" face is the steel-in-brass face at
     # k_steel/k_brass = 1.7 on a grid `fine` times finer, averaged over the
     # measured pixels (no noise), fitted with models of several grids.
-    scene = load_scene(study_io.ROOT / "studies" / "scenes" / SCENES["steel_in_brass"])
+    scene = load_scene(study_io.ROOT / "steady" / "examples" / SCENES["steel_in_brass"])
     fine = params["fine"] * n
     face, _ = _truth(scene, "steel_in_brass", 1.7, fine)
     b = params["fine"]

@@ -1,7 +1,7 @@
 """The face mask of a road-aggregate chip: an irregular, star-shaped outline.
 
-Makes ``studies/scenes/aggregate_chip_mask.npy``, the outline of the shipped
-scene ``studies/scenes/aggregate_chip.toml`` (``[punch] shape = "mask"``): a
+Makes ``steady/examples/aggregate_chip_mask.npy``, the outline of the shipped
+scene ``steady/examples/aggregate_chip.toml`` (``[punch] shape = "mask"``): a
 12 x 9 mm box of 0.125 mm pixels (96 x 72, x along axis 0) holding the
 polished face of a crushed stone, the region inside the closed curve
 ``r(theta) = R (1 + sum_k a_k cos(k theta + phi_k))`` about the box centre
@@ -11,8 +11,8 @@ seed).  ``True`` marks the face.
 
 Run::
 
-    python studies/make_face_mask.py                    # under a second
-    python studies/make_face_mask.py -o chip.npy        # elsewhere
+    python studies/make_face_mask.py          # about a second: OUT/aggregate_chip_mask.npy
+    python studies/make_face_mask.py -o steady/examples/aggregate_chip_mask.npy  # the shipped one
 
 The mask is a pure function of the parameters below (the seed included).
 """
@@ -22,8 +22,11 @@ import pathlib
 import sys
 
 import numpy as np
+import study_io
 
-OUTPUT = pathlib.Path(__file__).resolve().parent / "scenes" / "aggregate_chip_mask.npy"
+#: The file as shipped with the package (``-o`` writes it there).
+SHIPPED = (pathlib.Path(__file__).resolve().parents[1] / "steady" / "examples"
+           / "aggregate_chip_mask.npy")
 
 #: Box (pixels along x and y), pixel size (mm), mean radius (mm), stretch along
 #: x, harmonics, amplitude of the second harmonic, seed.
@@ -46,13 +49,18 @@ def make_mask(nx, ny, pixel, radius, stretch, harmonics, amplitude, seed):
 
 
 def main(argv=None):
-    """Write the mask (``-o`` for another place)."""
+    """Write the mask (``--out`` or ``-o`` for another place)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("-o", "--output", type=pathlib.Path, default=OUTPUT)
+    parser.add_argument("-o", "--output", type=pathlib.Path, default=None,
+                        help=f"file to write (default: OUT/{SHIPPED.name}; the shipped one: "
+                             f"{SHIPPED})")
+    study_io.add_output_arguments(parser, docs_figures=False)
     args = parser.parse_args(argv)
+    output = args.output or args.out / SHIPPED.name
+    output.parent.mkdir(parents=True, exist_ok=True)
     mask = make_mask(**PARAMS)
-    np.save(args.output, mask)
-    print(f"{args.output}: {mask.shape[0]} x {mask.shape[1]} pixels, "
+    np.save(output, mask)
+    print(f"{output}: {mask.shape[0]} x {mask.shape[1]} pixels, "
           f"{int(mask.sum())} on the face ({mask.mean():.1%})")
     return 0
 

@@ -26,7 +26,7 @@ Run::
     python studies/random_inclusions.py --quick    # about 2 s
     python studies/random_inclusions.py --plot-only
 
-Writes ``out/random_inclusions.h5`` and ``docs/figures/random_inclusions.png``.
+Writes ``OUT/random_inclusions.h5`` and ``OUT/random_inclusions.png``.
 """
 
 import functools

@@ -4,7 +4,7 @@ The paper prints ``k_steel / k_brass = 1.7`` for its rods (Fig. 7-8) but
 describes steel rods that "are less worn and produce visible protrusions"
 and brass rods that wear into dimples, which needs ``k_steel < k_brass``.
 This study draws both: the two rods scenes
-(``studies/scenes/rods_steel_in_brass.toml`` and ``rods_brass_in_steel.toml``,
+(``steady/examples/rods_steel_in_brass.toml`` and ``rods_brass_in_steel.toml``,
 the arrangement of :mod:`fig78_rods`) with the printed ratio and with the
 steel and brass coefficients swapped (``k_steel / k_brass = 1/1.7``), side by
 side with their differential profiles (cross section minus the ring average,
@@ -20,7 +20,7 @@ Run::
     python studies/rods_both_ways.py --quick    # about 2 s
     python studies/rods_both_ways.py --plot-only
 
-Writes ``out/rods_both_ways.h5`` and ``docs/figures/rods_both_ways.png``.
+Writes ``OUT/rods_both_ways.h5`` and ``OUT/rods_both_ways.png``.
 """
 
 import dataclasses
@@ -74,7 +74,7 @@ def compute(path, params):
     """Solve both scenes at both ratios; sample their differential profiles; write HDF5."""
     datasets, attrs = {}, {}
     for key, file in fig78_rods.SCENES.items():
-        base = load_scene(study_io.ROOT / "studies" / "scenes" / file)
+        base = load_scene(study_io.ROOT / "steady" / "examples" / file)
         k = base.wear.coefficients
         if abs(k[STEEL[key]] / k[1 - STEEL[key]] - 1.7) > 1e-12:
             raise ValueError(f"scene {file}: expected k_steel / k_brass = 1.7")

@@ -5,12 +5,12 @@ What it reproduces
     (:mod:`transient.history`) at ``s = 0.001, 0.01, 0.1, 1 s*`` (and the
     distances in between) on n = 64, 128, 256, 512, for
 
-    - the homogeneous epoxy cylinder (``studies/scenes/epoxy_cylinder.toml``)
+    - the homogeneous epoxy cylinder (``steady/examples/epoxy_cylinder.toml``)
       against the axisymmetric reference (:mod:`transient.axisymmetric`,
       1200 graded rings, extrapolated);
-    - the shipped Voronoi run-in scene (``studies/scenes/voronoi_transient.toml``:
+    - the shipped Voronoi run-in scene (``steady/examples/voronoi_transient.toml``:
       400 seeds, ``rho_2 = 0.3``, ``k_2/k_1 = 10``);
-    - five steel rods in brass (``studies/scenes/rods_steel_in_brass.toml``);
+    - five steel rods in brass (``steady/examples/rods_steel_in_brass.toml``);
 
     all from the flat face, SDIRK2 at ``tol = 1e-5`` (steps land on the
     distances), run on to the steady state.  Per case and distance: the
@@ -26,8 +26,8 @@ How to run
     python studies/runin_convergence.py --quick     # n = 40, 64, 80: half a minute
     python studies/runin_convergence.py --plot-only
 
-Writes ``out/runin_convergence.h5`` (the sweep in ``out/runin_convergence_sweep.h5``,
-resumable) and ``docs/figures/runin_convergence.png``; prints the table.
+Writes ``OUT/runin_convergence.h5`` (the sweep in ``OUT/runin_convergence_sweep.h5``,
+resumable) and ``OUT/runin_convergence.png``; prints the table.
 """
 
 import functools
@@ -62,7 +62,7 @@ _UNITS = {"distance": "s*", "rms_slope": "grad_f0", "rms_slope_error": "grad_f0"
 
 
 def _scene(case):
-    return load_scene(study_io.ROOT / "studies" / "scenes" / CASES[case])
+    return load_scene(study_io.ROOT / "steady" / "examples" / CASES[case])
 
 
 def run_case(point, *, tol, distances):

@@ -9,7 +9,7 @@ steady value (the run's last value, the steady face of eq. 9): the last
 crossing of the 1 % band, interpolated in ``log s``.  Its bounds use the
 history's error bar: the band widened and narrowed by the error at each
 step.  Distances are in ``s* = a / (k_min E*)`` (``k_min`` the smaller wear
-coefficient) and, for the epoxy scene (``studies/scenes/epoxy_cylinder.toml``:
+coefficient) and, for the epoxy scene (``steady/examples/epoxy_cylinder.toml``:
 ``a = 4 mm``, ``E* = 1.3 MPa``, its ``k = 1e-13 1/Pa`` for the matrix), in
 metres.  Also the mean depth worn off by ``s_1%`` at the steady wear rate
 ``k_eff pbar`` (``k_eff = 1 / sum_i rho_i / k_i``, eq. 6), in units of
@@ -27,7 +27,7 @@ Run::
     python studies/runin_distance.py --quick    # a few seconds
     python studies/runin_distance.py --plot-only
 
-Writes ``out/runin_distance.h5`` and ``docs/figures/runin_distance.png``.
+Writes ``OUT/runin_distance.h5`` and ``OUT/runin_distance.png``.
 """
 
 import sys
@@ -159,7 +159,7 @@ def compute(path, params):
             unit = {"steady": "grad_f0", "steps": "1", "wall_time": "s",
                     "depth_factor": "f* per s*"}.get(field, "s*")
             attrs[f"{name.replace('/', '_')}_{field}"] = (v[field], unit)
-    scene = load_scene(study_io.ROOT / "studies" / "scenes" / params["scene"])
+    scene = load_scene(study_io.ROOT / "steady" / "examples" / params["scene"])
     radius = scene.outline.radius
     attrs["epoxy_radius"] = (radius, "m")
     attrs["epoxy_E_star"] = (scene.E_star, "Pa")

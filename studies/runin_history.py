@@ -5,7 +5,7 @@ control, from a flat initial face, until the wear rates equalise) of
 
 - the two insert cases of the paper's Fig. 5b: 40^2 Voronoi seeds,
   ``rho_2 = 0.3``, ``k_2 / k_1 = 0.1`` and ``10`` (seed 1000);
-- the two rods scenes of Fig. 7-8 (``studies/scenes/rods_*.toml``),
+- the two rods scenes of Fig. 7-8 (``steady/examples/rods_*.toml``),
 
 and plots the history's rms slope (the continuum estimate of
 :mod:`transient.history`, normalised by ``grad_f0``) against the sliding
@@ -22,8 +22,8 @@ Run::
     python studies/runin_history.py --quick    # a few seconds
     python studies/runin_history.py --plot-only
 
-Writes ``out/runin_history.h5`` (and the sweep file ``out/runin_sweep_n<n>.h5``)
-and ``docs/figures/runin_history.png``.
+Writes ``OUT/runin_history.h5`` (and the sweep file ``OUT/runin_sweep_n<n>.h5``)
+and ``OUT/runin_history.png``.
 """
 
 import functools
@@ -67,7 +67,7 @@ def _scene(case, n, n_seeds, fill, seed):
         return Scene(outline=Circle(1.0), normal_force=np.pi, E_star=1.0, n=n,
                      wear=PowerLaw((1.0, spec["ratio"])),
                      geometry=Voronoi(n_seeds, (1 - fill, fill), seed))
-    return load_scene(study_io.ROOT / "studies" / "scenes" / spec["scene"])
+    return load_scene(study_io.ROOT / "steady" / "examples" / spec["scene"])
 
 
 def run_case(point, *, n, n_seeds, fill, seed, tol):

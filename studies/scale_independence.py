@@ -20,9 +20,9 @@ Run::
     python studies/scale_independence.py --quick    # a few seconds
     python studies/scale_independence.py --plot-only
 
-The sweep points go to (or are reused from) ``out/voronoi_sweep_n<n>.h5``
-(:mod:`voronoi_study`).  Writes ``out/scale_independence.h5`` and
-``docs/figures/scale_independence.png``.
+The sweep points go to (or are reused from) ``OUT/voronoi_sweep_n<n>.h5``
+(:mod:`voronoi_study`).  Writes ``OUT/scale_independence.h5`` and
+``OUT/scale_independence.png``.
 """
 
 import sys
@@ -182,7 +182,8 @@ def plot(path, png):
 
 def main(argv=None):
     """Run the study from the command line (``--help`` lists the options); exit status."""
-    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True)
+    return study_io.run_study(NAME, __doc__, compute, plot, PARAMS, QUICK, argv, parallel=True,
+                              default_sweep=voronoi_study.SWEEP)
 
 
 if __name__ == "__main__":

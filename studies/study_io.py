@@ -7,11 +7,20 @@ alone, so that a figure can be redrawn without recomputing (``--plot-only``).
 
 Command line of every study::
 
-    python studies/<study>.py [--quick] [-o OUT.h5] [--png OUT.png] [--plot-only]
-                              [--force] [--workers N] [--scheduler ADDRESS] [-v]
+    python studies/<study>.py [--quick] [--out OUT] [--docs-figures] [-o FILE.h5]
+                              [--png FILE.png] [--plot-only] [--force]
+                              [--workers N] [--scheduler ADDRESS] [-v]
 
-Defaults: ``out/<study>.h5`` and ``docs/figures/<study>.png`` for the full
-run; ``out/quick/<study>.h5`` and ``out/quick/<study>.png`` with ``--quick``.
+Outputs go to ``OUT`` (``--out``, default ``./runin-studies-out``, which
+git ignores), never into the source tree unless asked: ``OUT/<study>.h5``
+and ``OUT/<study>.png`` for the full run, ``OUT/quick/<study>.h5`` and
+``OUT/quick/<study>.png`` with ``--quick``; ``-o`` and ``--png`` name other
+files.  ``--docs-figures`` (full runs only) redraws the committed figure
+``docs/figures/<study>.png`` of the source tree instead, and for the design
+table also rewrites the table shipped with the package.  Sweep files go to
+``OUT`` too, and are reused from there.  Every study script takes these
+options from :func:`add_output_arguments`.
+
 A run replaces the HDF5 file an earlier run left, but not one that another
 process wrote while this one computed (two runs of a study on one output
 at once): that is refused, exit status 2, unless ``--force`` is given.
@@ -33,8 +42,9 @@ from matplotlib.figure import Figure
 
 from steady.output import atomic_h5, file_identity
 
-__all__ = ["FORMAT_VERSION", "ROOT", "figure", "plain_log_ticks", "read_study", "run_study",
-           "save_figure", "write_study"]
+__all__ = ["DEFAULT_OUT", "DOCS_FIGURES", "FORMAT_VERSION", "ROOT", "add_output_arguments",
+           "figure", "output_paths", "plain_log_ticks", "read_study", "run_study", "save_figure",
+           "write_study"]
 
 logger = logging.getLogger(__name__)
 
@@ -43,6 +53,13 @@ FORMAT_VERSION = 1
 
 #: The repository root (studies/ is one level below it).
 ROOT = pathlib.Path(__file__).resolve().parent.parent
+
+#: Where the studies write unless told otherwise (``--out``), relative to the
+#: current directory.
+DEFAULT_OUT = pathlib.Path("runin-studies-out")
+
+#: The committed figures, redrawn only with ``--docs-figures``.
+DOCS_FIGURES = ROOT / "docs" / "figures"
 
 # The outputs :func:`run_study` checked before computing, by resolved path:
 # the identity of the file found then (None: none), or _ANY with --force.
@@ -171,8 +188,99 @@ def save_figure(fig, path, *, dpi=90):
     return path
 
 
+def add_output_arguments(parser, *, docs_figures=True):
+    """Add the output options every study shares: ``--out OUT`` and ``--docs-figures``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        A study's parser; gains ``out`` (a :class:`pathlib.Path`) and
+        ``docs_figures`` (bool).
+    docs_figures : bool, optional
+        Whether the script draws a committed figure (default True); the
+        scripts that make the example scenes' map files take ``--out`` alone.
+    """
+    parser.add_argument("--out", type=pathlib.Path, default=DEFAULT_OUT, metavar="OUT",
+                        help=f"directory of the outputs (default: ./{DEFAULT_OUT}"
+                             + ("; quick runs in OUT/quick)" if docs_figures else ")"))
+    if docs_figures:
+        parser.add_argument("--docs-figures", action="store_true",
+                            help=f"redraw the committed figure in {DOCS_FIGURES} (full runs "
+                                 f"only)")
+
+
+def output_paths(args, name, *, default_output=None, committed_output=None):
+    """The HDF5 file and the figure of a study run, from its parsed arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With ``out``, ``docs_figures`` and ``quick`` (:func:`add_output_arguments`),
+        ``output`` and ``png`` (None: the defaults).
+    name : str
+        Study name, the stem of its files.
+    default_output : path-like, optional
+        HDF5 file of a full run instead of ``OUT/<name>.h5``.
+    committed_output : path-like, optional
+        The HDF5 file committed in the source tree that ``--docs-figures``
+        rewrites (the design table); by default ``--docs-figures`` leaves
+        the HDF5 file in ``OUT``.
+
+    Returns
+    -------
+    h5, png : pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        ``--docs-figures`` with ``--quick`` (a smoke test must not replace a
+        committed figure).
+    """
+    out = pathlib.Path(args.out)
+    if args.quick:
+        if args.docs_figures:
+            raise ValueError("--docs-figures redraws the committed figures from full runs; "
+                             "not with --quick")
+        h5 = pathlib.Path(args.output or out / "quick" / f"{name}.h5")
+        return h5, pathlib.Path(args.png or h5.with_suffix(".png"))
+    if args.docs_figures and committed_output is not None:
+        default_output = committed_output
+    h5 = pathlib.Path(args.output or default_output or out / f"{name}.h5")
+    figures = DOCS_FIGURES if args.docs_figures else out
+    return h5, pathlib.Path(args.png or figures / f"{name}.png")
+
+
+def _parser(name, doc, parallel):
+    """The argument parser of a study (see the module notes)."""
+    parser = argparse.ArgumentParser(prog=f"python studies/{name}.py", description=doc,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true",
+                        help="small smoke-test run (seconds)")
+    add_output_arguments(parser)
+    parser.add_argument("-o", "--output", help="HDF5 file to write (or read with --plot-only)")
+    parser.add_argument("--png", help="figure to draw")
+    parser.add_argument("--plot-only", action="store_true",
+                        help="redraw the figure from an existing HDF5 file")
+    parser.add_argument("--force", action="store_true",
+                        help="replace the HDF5 file even if another process wrote it while "
+                             "this run computed (an earlier run's file is always replaced)")
+    if parallel:
+        parser.add_argument("--workers", type=int, default=None,
+                            help="local worker processes (default: 2)")
+        parser.add_argument("--scheduler", default=None,
+                            help="Dask scheduler address, e.g. tcp://host:8786 "
+                                 "(needs the extra 'dask')")
+        parser.add_argument("--sweep", default=None,
+                            help="sweep file to resume or reuse (default: in OUT, named by "
+                                 "the study, or beside the output with --quick)")
+        parser.add_argument("--n", type=int, default=None,
+                            help="grid of the sweep (default: the study's)")
+    parser.add_argument("-v", "--verbose", action="count", default=0)
+    return parser
+
+
 def run_study(name, doc, compute, plot, params, quick_params, argv=None, *, parallel=False,
-              default_output=None):
+              default_output=None, committed_output=None, default_sweep=None):
     """Command line of a study (see the module notes).
 
     Parameters
@@ -192,49 +300,36 @@ def run_study(name, doc, compute, plot, params, quick_params, argv=None, *, para
     parallel : bool, optional
         The study runs sweeps (adds ``--workers``, ``--scheduler``, ``--sweep``
         and ``--n``).
-    default_output : path-like, optional
-        HDF5 file of the full run, instead of ``out/<name>.h5``.
+    default_output, committed_output : path-like, optional
+        See :func:`output_paths`.
+    default_sweep : str, optional
+        Name of the sweep file of a full run in ``OUT``, formatted with the
+        run's parameters (``"voronoi_sweep_n{n}.h5"``), given to ``compute``
+        as ``params["sweep"]``; without it a study places its own sweep.
 
     Returns
     -------
     int
         Exit status.
     """
-    parser = argparse.ArgumentParser(prog=f"python studies/{name}.py", description=doc,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--quick", action="store_true",
-                        help="small smoke-test run (seconds)")
-    parser.add_argument("-o", "--output", help="HDF5 file to write (or read with --plot-only)")
-    parser.add_argument("--png", help="figure to draw")
-    parser.add_argument("--plot-only", action="store_true",
-                        help="redraw the figure from an existing HDF5 file")
-    parser.add_argument("--force", action="store_true",
-                        help="replace the HDF5 file even if another process wrote it while "
-                             "this run computed (an earlier run's file is always replaced)")
-    if parallel:
-        parser.add_argument("--workers", type=int, default=None,
-                            help="local worker processes (default: 2)")
-        parser.add_argument("--scheduler", default=None,
-                            help="Dask scheduler address, e.g. tcp://host:8786 "
-                                 "(needs the extra 'dask')")
-        parser.add_argument("--sweep", default=None,
-                            help="sweep file to resume or reuse (default: "
-                                 "out/voronoi_sweep_n<n>.h5, or beside the output with --quick)")
-        parser.add_argument("--n", type=int, default=None,
-                            help="grid of the sweep (default: the study's)")
-    parser.add_argument("-v", "--verbose", action="count", default=0)
-    args = parser.parse_args(argv)
+    args = _parser(name, doc, parallel).parse_args(argv)
     logging.basicConfig(level=(logging.WARNING, logging.INFO, logging.DEBUG)[min(args.verbose,
                                                                                 2)],
                         format="%(levelname)s %(name)s: %(message)s")
-    if args.quick:
-        out = pathlib.Path(args.output or ROOT / "out" / "quick" / f"{name}.h5")
-        png = pathlib.Path(args.png or out.with_suffix(".png"))
-        run_params = dict(quick_params, quick=True)
-    else:
-        out = pathlib.Path(args.output or default_output or ROOT / "out" / f"{name}.h5")
-        png = pathlib.Path(args.png or ROOT / "docs" / "figures" / f"{name}.png")
-        run_params = dict(params)
+    try:
+        out, png = output_paths(args, name, default_output=default_output,
+                                committed_output=committed_output)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    run_params = dict(quick_params, quick=True) if args.quick else dict(params)
+    if parallel:
+        if args.n is not None:
+            run_params["n"] = args.n
+        if args.sweep is not None:
+            run_params["sweep"] = args.sweep
+        elif default_sweep is not None and not args.quick:
+            run_params["sweep"] = str(pathlib.Path(args.out) / default_sweep.format(**run_params))
     checked = out.resolve()
     # What the study may replace: the file there now (see write_study).
     _checked[checked] = _ANY if args.force else file_identity(out)
@@ -242,10 +337,6 @@ def run_study(name, doc, compute, plot, params, quick_params, argv=None, *, para
         if not args.plot_only:
             t0 = time.perf_counter()
             if parallel:
-                if args.sweep is not None:
-                    run_params["sweep"] = args.sweep
-                if args.n is not None:
-                    run_params["n"] = args.n
                 compute(out, run_params, workers=args.workers, scheduler=args.scheduler,
                         progress=True)
             else:

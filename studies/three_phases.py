@@ -26,7 +26,7 @@ Run::
     python studies/three_phases.py --quick    # about 2 s
     python studies/three_phases.py --plot-only
 
-Writes ``out/three_phases.h5`` and ``docs/figures/three_phases.png``.
+Writes ``OUT/three_phases.h5`` and ``OUT/three_phases.png``.
 """
 
 import sys

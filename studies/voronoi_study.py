@@ -21,11 +21,13 @@ from __future__ import annotations
 import pathlib
 
 import numpy as np
-import study_io
 
 from steady.voronoi_sweep import collect_voronoi, voronoi_sweep
 
-__all__ = ["FULL", "QUICK", "index_of", "sweep_data", "sweep_path"]
+__all__ = ["FULL", "QUICK", "SWEEP", "index_of", "sweep_data", "sweep_path"]
+
+#: The sweep file of a full run, in the studies' output directory (``--out``).
+SWEEP = "voronoi_sweep_n{n}.h5"
 
 FULL = {
     "n": 512,
@@ -47,14 +49,13 @@ QUICK = {
 def sweep_path(params, output):
     """Path of the sweep file of a study run.
 
-    ``params['sweep']`` if given, else ``out/voronoi_sweep_n<n>.h5`` (full
-    runs) or beside ``output`` (quick runs).
+    ``params['sweep']`` if given (:func:`study_io.run_study` gives
+    ``OUT/voronoi_sweep_n<n>.h5`` to full runs), else beside ``output``.
     """
     if params.get("sweep"):
         return pathlib.Path(params["sweep"])
-    if params.get("quick"):
-        return pathlib.Path(output).with_name(f"voronoi_sweep_quick_n{params['n']}.h5")
-    return study_io.ROOT / "out" / f"voronoi_sweep_n{params['n']}.h5"
+    quick = "quick_" if params.get("quick") else ""
+    return pathlib.Path(output).with_name(f"voronoi_sweep_{quick}n{params['n']}.h5")
 
 
 def sweep_data(params, output, *, levels, fill_factors, seeds, workers=None, scheduler=None,

@@ -25,7 +25,7 @@ Run::
     python studies/wear_exponent.py --quick    # about 2 s
     python studies/wear_exponent.py --plot-only
 
-Writes ``out/wear_exponent.h5`` and ``docs/figures/wear_exponent.png``.
+Writes ``OUT/wear_exponent.h5`` and ``OUT/wear_exponent.png``.
 """
 
 import sys

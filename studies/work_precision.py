@@ -40,13 +40,14 @@ How to run
     python studies/work_precision.py                    # n = 256, ~10 min on 2 cores
     python studies/work_precision.py --n 64 --full-baseline   # ~11 min (10 the baseline)
     python studies/work_precision.py --spatial          # ~40 min (n = 512 reference)
-    python studies/work_precision.py --quick --out DIR  # smoke test, n = 40, ~20 s
-    python studies/work_precision.py --plot-only [--n N | --spatial] [--out DIR]
+    python studies/work_precision.py --quick --out OUT  # smoke test, n = 40, ~20 s
+    python studies/work_precision.py --plot-only [--n N | --spatial] [--out OUT]
 
-Writes ``DIR/work_precision_n{n}.h5`` (``DIR/work_precision_spatial.h5``) and
-then draws ``DIR/work_precision_n{n}.png`` (``..._spatial.png``) from that
-file.  Default DIR: ``out/`` at the repository root (the figures in
-docs/figures are copies).  This script keeps its own command line rather than
+Writes ``OUT/work_precision_n{n}.h5`` (``OUT/work_precision_spatial.h5``) and
+then draws ``OUT/work_precision_n{n}.png`` (``..._spatial.png``) from that
+file.  Default OUT: ``./runin-studies-out``; ``--docs-figures`` draws the
+figure into docs/figures instead (its committed copy), as every study does
+(:func:`study_io.add_output_arguments`).  This script keeps its own command line rather than
 ``study_io.run_study`` because it takes ``--n``, ``--full-baseline`` and
 ``--spatial``.
 """
@@ -58,12 +59,12 @@ import datetime
 import logging
 import math
 import os
-import pathlib
 import platform
 import sys
 import time
 
 import numpy as np
+import study_io
 
 from steady.outline import Circle
 from steady.output import atomic_h5
@@ -582,12 +583,14 @@ def main(argv=None):
     parser.add_argument("--spatial", action="store_true",
                         help="the spatial axis: (n, tol) against a grid-converged reference")
     parser.add_argument("--plot-only", action="store_true")
-    parser.add_argument("--out", type=pathlib.Path,
-                        default=pathlib.Path(__file__).resolve().parent.parent / "out",
-                        help="directory of the HDF5 file and the figure (default: out/)")
+    study_io.add_output_arguments(parser)
     args = parser.parse_args(argv)
+    if args.quick and args.docs_figures:
+        parser.error("--docs-figures redraws the committed figures from full runs; "
+                     "not with --quick")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     args.out.mkdir(parents=True, exist_ok=True)
+    figures = study_io.DOCS_FIGURES if args.docs_figures else args.out
     implicit = sorted(RUNS)
     if args.spatial:
         path = args.out / "work_precision_spatial.h5"
@@ -600,7 +603,7 @@ def main(argv=None):
                 compute_spatial(args.out, grids=SPATIAL_GRIDS, tolerances=SPATIAL_TOLERANCES,
                                 schemes=implicit, reference=SPATIAL_REFERENCE,
                                 distances=DISTANCES)
-        png = path.with_suffix(".png")
+        png = figures / f"{path.stem}.png"
         plot_spatial(path, png)
         print(f"wrote {path} and {png}")
         return
@@ -613,7 +616,7 @@ def main(argv=None):
         else:
             compute(n, args.out, full_baseline=args.full_baseline, runs=RUNS,
                     distances=DISTANCES, reference=REFERENCE, window=BASELINE_WINDOW)
-    png = path.with_suffix(".png")
+    png = figures / f"{path.stem}.png"
     plot(path, png)
     print(f"wrote {path} and {png}")
 

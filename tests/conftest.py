@@ -37,7 +37,7 @@ K1 = 1e-13         # 1/Pa, wear coefficient of the matrix (phase 0)
 CRITICAL_TILT = FORCE / (4 * RADIUS ** 2 * E_STAR)
 
 #: Five rods of radius 0.25 a: one on the axis, four at 0.6 a on the axes
-#: (the arrangement of studies/scenes/rods_*.toml).
+#: (the arrangement of steady/examples/rods_*.toml).
 RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
 
 GEOMETRIES = {

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from conftest import scene_text
 
-SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
+SCENES = pathlib.Path(__file__).resolve().parent.parent / "steady" / "examples"
 
 #: The gallery's steady scene: two phases, 100 Voronoi seeds, n = 40.
 SCENE = scene_text("steady")

@@ -461,7 +461,7 @@ def test_readme_example(tmp_path, monkeypatch):
 # along y), annulus (radii 2 and 4 mm) and ellipse, and the shipped aggregate chip's mask.
 
 #: The shipped aggregate chip: a mask face of 96 x 72 pixels of 0.125 mm (12 x 9 mm box).
-CHIP = ROOT / "studies" / "scenes" / "aggregate_chip.toml"
+CHIP = ROOT / "steady" / "examples" / "aggregate_chip.toml"
 
 
 def chip_outline():
@@ -754,7 +754,7 @@ def test_errors_on_outlines():
                                      ("elliptic_pad.toml", 64), ("aggregate_chip.toml", 192)])
 def test_shipped_scenes(path, n):
     """Each shipped outline's scene fits its own steady face: the scene's ratios to round-off."""
-    scene = load_scene(ROOT / "studies" / "scenes" / path)
+    scene = load_scene(ROOT / "steady" / "examples" / path)
     ratios = np.array(scene.wear.coefficients) / K1
     face, _, _, grid = outline_face(scene.outline, scene.geometry, ratios, n,
                                     E_star=scene.E_star)
@@ -830,7 +830,7 @@ def test_fit_file_records_the_outline(tmp_path, name):
     assert stored.outline.parameters() == outline.parameters(), "lengths"
     with h5py.File(tmp_path / "fit.h5") as f:
         group = f["outline"]
-        assert group.attrs["kind"] == outline.kind and group.attrs["area_units"] == "m^2"
+        assert group.attrs["kind"] == outline.kind and group.attrs["area_units"] == "m2"
         if name == "mask":
             assert np.array_equal(group["mask"][()], outline.mask), "the mask itself"
             assert np.array_equal(stored.outline.mask, outline.mask), "read back"

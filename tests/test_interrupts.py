@@ -34,6 +34,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 MODULES = {"runin-steady": "steady", "runin-transient": "transient",
            "runin-fit": "steady.cli.fit", "runin-design": "steady.cli.design"}
 
+#: Commands that load no heavy module at all (nothing to interrupt in the imports).
+LIGHT_COMMANDS = {"runin-examples": "steady.cli.examples"}
+
 #: Seconds after the heavy imports start: in them (up to ~0.8 s), then in the work.
 MOMENTS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.8, 1.2)
 
@@ -183,7 +186,8 @@ def test_entry_points_import_nothing_heavy():
 
 def test_console_scripts_name_light_entry_points():
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert sorted(scripts) == sorted(MODULES), f"commands {sorted(scripts)}"
+    assert sorted(scripts) == sorted({**MODULES, **LIGHT_COMMANDS}), \
+        f"commands {sorted(scripts)}"
     for name, target in scripts.items():
         assert target.split(":")[0] in ("steady.cli.entry", "transient.__main__"), \
             f"{name} enters through {target}, which imports the command's heavy modules"

@@ -177,3 +177,42 @@ def test_rms_height_round_trips_and_is_optional_on_read(tmp_path, solved):
         assert f.attrs["rms_height_units"] == "m", "unit of the rms height"
         del f.attrs["rms_height"]
     assert np.isnan(read_result(path).result.rms_height), "a file without it reads NaN"
+
+
+def test_phase_names_come_from_the_scene_and_are_checked(tmp_path, solved):
+    """``[phases] names`` reach the file's ``phase_name``; a file without it reads the defaults."""
+    scene, res = solved
+    named = parse_scene(SCENE.replace("[phases]\n", '[phases]\nnames = ["resin", "filler"]\n'),
+                        tmp_path)
+    path = write_result(tmp_path / "named.h5", res, named)
+    assert read_result(path).phase_names == ("resin", "filler"), "names of the scene"
+    with h5py.File(path, "r") as f:
+        assert f["phase_name"].attrs["long_name"] == "name of the phase, phase 0 first"
+        assert "units" not in f["phase_name"].attrs, "text has no unit"
+    assert read_result(write_result(tmp_path / "plain.h5", res, scene)).phase_names == \
+        ("phase 0", "phase 1"), "the default names"
+    with pytest.raises(ValueError, match="1 phase name"):
+        write_result(tmp_path / "bad.h5", res, scene, phase_names=["resin"])
+    assert not (tmp_path / "bad.h5").exists(), "nothing written for bad names"
+    with h5py.File(path, "r+") as f:
+        del f["phase_name"]  # a file written before the names (its scales dangle: unread)
+    assert read_result(path).phase_names == ("phase 0", "phase 1"), "older file: defaults"
+
+
+def test_datasets_carry_cf_units_long_names_and_coordinates(tmp_path, solved):
+    scene, res = solved
+    path = write_result(tmp_path / "r.h5", res, scene)
+    grid = res.outline.grid(res.n)
+    with h5py.File(path, "r") as f:
+        for name in ("phase", "pressure", "face", "slope"):
+            ds = f[name]
+            assert ds.attrs["long_name"], f"{name} has no long_name"
+            assert [d.label or d[0].name for d in ds.dims] == ["/x", "/y"], \
+                f"{name}: dimension scales {[d.keys() for d in ds.dims]}"
+        assert np.array_equal(f["x"][()], grid.x) and np.array_equal(f["y"][()], grid.y), \
+            "x, y: the pixel centres (m)"
+        assert f["x"].attrs["units"] == "m" and f["y"].attrs["units"] == "m", "coordinates in m"
+        assert f["outline"].attrs["area_units"] == "m2", "area in m2"
+        assert f.attrs["wear_coefficients_units"] == "Pa-1", "Archard's k in Pa-1"
+        assert f.attrs["wear_law"] == "Archard's law dw/ds = k p, k = [1e-09, 3e-09] 1/Pa", \
+            f"wear law {f.attrs['wear_law']!r}"

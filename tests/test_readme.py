@@ -1,7 +1,17 @@
-"""The README's Python examples run as written, from a directory that holds ``studies/``."""
+"""The README's quick start and Python examples run as written, in an empty directory."""
 
+import importlib
 import pathlib
 import re
+import shlex
+
+import h5py
+import pytest
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -16,8 +26,7 @@ def example(heading):
 
 
 def run(code, where, monkeypatch):
-    """Run an example in ``where`` (beside a link to studies/); return its namespace."""
-    (where / "studies").symlink_to(ROOT / "studies")
+    """Run an example in ``where`` (an empty directory); return its namespace."""
     monkeypatch.chdir(where)
     namespace = {}
     exec(compile(code, "README.md", "exec"), namespace)
@@ -34,6 +43,36 @@ def test_run_in_library_example(tmp_path, monkeypatch):
     result, stored = ns["result"], ns["stored"]
     assert result.success, f"run ended {result.status}: {result.message}"
     assert ns["comparison"].face_error < 1e-6, f"face error {ns['comparison'].face_error}"
-    assert stored.steps == result.steps and ns["attrs"]["format_version"] == 2, \
+    assert stored.steps == result.steps and ns["attrs"]["format_version"] == 3, \
         f"run file: {stored.steps} steps, attributes {ns['attrs']}"
     assert (tmp_path / "out" / "run.png").stat().st_size > 10_000, "figure not drawn"
+
+
+def quick_start():
+    """The commands of the quick start's first line, after ``pip install .``."""
+    block = re.search(r"## Quick start\n\n```bash\n(.*?)```", README, re.S)
+    assert block is not None, "no bash block in the quick start"
+    first = block.group(1).splitlines()[0]
+    install, *commands = [shlex.split(c) for c in first.split(" && ")]
+    assert install == ["pip", "install", "."], f"the quick start installs with {install}"
+    return commands
+
+
+@pytest.mark.slow
+def test_quick_start_runs_twice_in_an_empty_directory(tmp_path, monkeypatch, capsys):
+    """The installed commands of the quick start, run as written, and again over their files."""
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    commands = quick_start()
+    assert [c[0] for c in commands] == ["runin-examples", "runin-transient"], commands
+    monkeypatch.chdir(tmp_path)
+    for attempt in ("first", "second"):
+        for name, *argv in commands:
+            module, function = scripts[name].split(":")
+            status = getattr(importlib.import_module(module), function)(argv)
+            assert status == 0, f"{attempt} run of {name}: exit {status}, " \
+                                f"{capsys.readouterr().err}"
+    with h5py.File(tmp_path / "run.h5", "r") as f:
+        assert f.attrs["format"] == "runin.transient", f"run file {dict(f.attrs)}"
+    assert (tmp_path / "run.png").stat().st_size > 10_000, "figure not drawn"
+    assert sorted(p.name for p in (tmp_path / "example").iterdir()) == \
+        ["voronoi_transient.toml"], "the example copy"

@@ -258,9 +258,9 @@ def test_run_file_round_trip(tmp_path):
     write_run(path, result, arrays={"phase": RODS.labels(32)}, comparison=cmp)
     back, attrs, arrays = read_run(path)
     _same_result(result, back)
-    assert attrs["format"] == "runin.transient" and attrs["format_version"] == 2, \
+    assert attrs["format"] == "runin.transient" and attrs["format_version"] == 3, \
         f"layout {attrs['format']!r} version {attrs['format_version']!r}, expected " \
-        "'runin.transient' version 2"
+        "'runin.transient' version 3"
     assert back.snapshot_distance.tolist() == pytest.approx(
         [0.0, 0.1 * result.distance_scale, result.distance_scale], rel=1e-12), \
         "snapshots not at the requested distances"

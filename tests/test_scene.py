@@ -12,7 +12,7 @@ from steady.scene import load_scene, parse_scene
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
-SCENES = pathlib.Path(__file__).resolve().parent.parent / "studies" / "scenes"
+SCENES = pathlib.Path(__file__).resolve().parent.parent / "steady" / "examples"
 
 #: The gallery's parser scene: every core key present, 100 Voronoi seeds, n = 64.
 BASE = scene_text("parser")
@@ -246,7 +246,7 @@ def test_phase_labels_name_a_phase_without_face_pixel(tmp_path):
 def test_phase_names_reach_the_problem_and_are_checked():
     """``[phases] names`` is one name per phase, distinct; the default numbers from 0."""
     from steady.problem import Problem
-    base = (ROOT / "studies/scenes/rods_brass_in_steel.toml")
+    base = (ROOT / "steady/examples/rods_brass_in_steel.toml")
     scene = load_scene(base)
     assert scene.phase_names == ("steel", "brass")
     problem = Problem.from_scene(scene, n=48)

@@ -301,3 +301,76 @@ def test_fit_rods_tells_the_ratio_from_its_inverse(tmp_path):
                     f"{key}, true {label}: interval [{g['lower'][first]}, {g['upper'][first]}]"
     again = tmp_path / "again.png"
     assert module.main(["--plot-only", "-o", str(h5), "--png", str(again)]) == 0, "--plot-only"
+
+
+def test_a_quick_run_writes_into_its_output_directory_only(studies, tmp_path, monkeypatch):
+    """Without -o and --png a study writes under ./runin-studies-out/quick; docs/ untouched."""
+    docs = STUDIES.parent / "docs"
+    before = {p: p.stat().st_mtime_ns for p in docs.rglob("*")}
+    monkeypatch.chdir(tmp_path)
+    assert studies["fig6_epoxy"].main(["--quick"]) == 0, "quick run failed"
+    written = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
+    assert written == ["runin-studies-out/quick/fig6_epoxy.h5",
+                       "runin-studies-out/quick/fig6_epoxy.png"], f"written {written}"
+    after = {p: p.stat().st_mtime_ns for p in docs.rglob("*")}
+    assert after == before, "a quick run changed files under docs/"
+
+
+def test_docs_figures_is_refused_with_quick(studies, tmp_path, capsys):
+    status = studies["fig2_homogeneous"].main(["--quick", "--docs-figures", "--out",
+                                              str(tmp_path)])
+    assert status == 2, "--docs-figures with --quick must exit with status 2"
+    assert capsys.readouterr().err == ("error: --docs-figures redraws the committed figures "
+                                       "from full runs; not with --quick\n"), "message"
+    assert not any(tmp_path.iterdir()), "something was written"
+
+
+def test_full_runs_write_the_committed_files_only_when_asked(studies):
+    """Where a full run writes, from the shared arguments (no run)."""
+    import argparse
+
+    study_io = sys.modules["study_io"]
+    parser = argparse.ArgumentParser()
+    study_io.add_output_arguments(parser)
+
+    def paths(*argv, **kwargs):
+        args = parser.parse_args(list(argv))
+        args.quick, args.output, args.png = False, None, None
+        return study_io.output_paths(args, "fig2_homogeneous", **kwargs)
+
+    out = study_io.DEFAULT_OUT
+    assert paths() == (out / "fig2_homogeneous.h5", out / "fig2_homogeneous.png"), paths()
+    assert paths("--out", "elsewhere") == (pathlib.Path("elsewhere/fig2_homogeneous.h5"),
+                                           pathlib.Path("elsewhere/fig2_homogeneous.png"))
+    docs = STUDIES.parent / "docs" / "figures" / "fig2_homogeneous.png"
+    assert paths("--docs-figures") == (out / "fig2_homogeneous.h5", docs), "--docs-figures"
+    table = studies["design_table"].TABLE
+    assert paths(committed_output=table) == (out / "fig2_homogeneous.h5",
+                                             out / "fig2_homogeneous.png"), "the table kept"
+    assert paths("--docs-figures", committed_output=table) == (table, docs), "the table"
+
+
+def test_sweep_files_go_to_the_output_directory(studies):
+    voronoi_study = sys.modules["voronoi_study"]
+    name = voronoi_study.SWEEP.format(n=512)
+    assert name == "voronoi_sweep_n512.h5", name
+    assert voronoi_study.sweep_path({"n": 64, "quick": True}, "d/fig4.h5") == \
+        pathlib.Path("d/voronoi_sweep_quick_n64.h5"), "quick sweep beside the output"
+    assert voronoi_study.sweep_path({"n": 512, "sweep": "s.h5"}, "d/fig4.h5") == \
+        pathlib.Path("s.h5"), "a given sweep file"
+
+
+def test_map_file_makers_write_the_shipped_files_into_the_output_directory(tmp_path,
+                                                                           monkeypatch):
+    """The scripts that make the examples' map files: the same bytes, under ./runin-studies-out."""
+    sys.path.insert(0, str(STUDIES))
+    try:
+        makers = [importlib.import_module(name) for name in ("make_face_mask", "make_micrograph")]
+    finally:
+        sys.path.remove(str(STUDIES))
+    monkeypatch.chdir(tmp_path)
+    for module in makers:
+        assert module.main([]) == 0, f"{module.__name__} failed"
+        made = tmp_path / "runin-studies-out" / module.SHIPPED.name
+        assert made.read_bytes() == module.SHIPPED.read_bytes(), \
+            f"{module.__name__}: {made.name} differs from the shipped file"

@@ -11,7 +11,7 @@ import h5py
 import numpy as np
 import pytest
 
-from transient.output import read_run
+from transient.output import history_cf, read_run
 from transient.runin import HISTORY_UNITS
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -45,7 +45,7 @@ def test_run_writes_result_and_agreement(tmp_path, write_scene):
         "expected 'face shape error' in proc.stdout and 'rms slope' in proc.stdout"
     assert png.stat().st_size > 10000, "no figure"
     with h5py.File(out) as f:
-        assert f.attrs["format"] == "runin.transient" and f.attrs["format_version"] == 2, \
+        assert f.attrs["format"] == "runin.transient" and f.attrs["format_version"] == 3, \
             f"layout {f.attrs['format']!r} version {f.attrs['format_version']!r}"
         assert f.attrs["status"] == "steady", "expected f.attrs['status'] == 'steady'"
         assert f["worn_depth"].attrs["units"] == "m", \
@@ -53,9 +53,11 @@ def test_run_writes_result_and_agreement(tmp_path, write_scene):
         assert f["pressure"].attrs["units"] == "Pa", \
             "expected f['pressure'].attrs['units'] == 'Pa'"
         assert f["phase"].shape == (32, 32), "expected f['phase'].shape == (32, 32)"
-        for name, unit in HISTORY_UNITS.items():
-            assert f[f"history/{name}"].attrs["units"] == unit, \
-                "expected f[f'history/{name}'].attrs['units'] == unit"
+        for name in HISTORY_UNITS:
+            unit, long_name = history_cf(name)
+            attrs = f[f"history/{name}"].attrs
+            assert attrs.get("units") == unit and attrs["long_name"] == long_name, \
+                f"history/{name}: units {attrs.get('units')!r}, expected {unit!r}"
         assert f["snapshots/height"].shape == (2, 32, 32), \
             "expected f['snapshots/height'].shape == (2, 32, 32)"
         cmp = f["comparison"].attrs
@@ -221,7 +223,7 @@ def test_resume_of_a_finished_run_is_a_no_op(tmp_path, write_scene):
 def test_shipped_transient_scenes_parse():
     from transient.scene import load_transient_scene
 
-    scenes = sorted((ROOT / "studies" / "scenes").glob("*transient*.toml"))
+    scenes = sorted((ROOT / "steady" / "examples").glob("*transient*.toml"))
     assert scenes, "no transient scene shipped"
     for path in scenes:
         scene, settings, initial = load_transient_scene(path)

@@ -283,7 +283,7 @@ def test_shipped_outline_scenes_run_in_to_the_steady_scene(name):
     from steady.solution import solve_scene
     from transient.scene import load_transient_scene
 
-    scene, _, initial = load_transient_scene(ROOT / "studies" / "scenes" / f"{name}.toml")
+    scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" / f"{name}.toml")
     problem = WearProblem.from_scene(scene)
     result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-4))
     assert result.status == "steady", result.message
@@ -587,7 +587,7 @@ def test_command_line_refuses_a_grid_too_coarse_for_the_outline(tmp_path, scene_
 
 
 def test_shipped_tread_block_run_in_scene():
-    scene = load_scene(ROOT / "studies" / "scenes" / "tread_block_transient.toml",
+    scene = load_scene(ROOT / "steady" / "examples" / "tread_block_transient.toml",
                        extra_sections=("transient", "initial_face"))
     assert scene.outline == Rectangle(4e-3, 12e-3) and scene.grid().shape == (64, 192)
     assert scene.geometry.min_grid(scene.outline) <= scene.n

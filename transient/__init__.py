@@ -28,6 +28,7 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 
 The command ``runin-transient`` (``python -m transient``,
 :mod:`transient.__main__`) runs the run-in of a scene file.
+``transient.__version__`` is the installed version (:mod:`steady.version`).
 
 The names below are imported from their modules on first use, so that
 ``import transient`` is quick: the command installs its Ctrl-C handling
@@ -38,6 +39,7 @@ from steady.lazy import lazy_names
 
 #: Public names and the module of each.
 _MODULE_OF = {
+    "__version__": "version",
     "AMGPreconditioner": "preconditioners",
     "BDF2": "stepping",
     "ContactResult": "contact",
@@ -87,7 +89,7 @@ _MODULE_OF = {
     "write_run": "output",
 }
 
-__all__ = sorted(_MODULE_OF)
+__all__ = sorted(name for name in _MODULE_OF if not name.startswith("_"))
 
 
 __getattr__, __dir__ = lazy_names(__name__, _MODULE_OF)

@@ -250,7 +250,7 @@ class FaceEstimator:
     >>> import numpy as np
     >>> from transient.problem import WearProblem
     >>> from transient.scene import load_transient_scene
-    >>> scene, _, _ = load_transient_scene("studies/scenes/voronoi_transient.toml")
+    >>> scene, _, _ = load_transient_scene("steady/examples/voronoi_transient.toml")
     >>> problem = WearProblem.from_scene(scene, n=40)
     >>> estimator = FaceEstimator(problem, np.zeros((40, 40)))
     >>> res = problem.contact(np.zeros((40, 40)))

@@ -1,4 +1,4 @@
-"""HDF5 run files (layout ``runin.transient``, version 2), their checksums and their lock.
+"""HDF5 run files (layout ``runin.transient``, version 3), their checksums and their lock.
 
 A run file holds a run-in, finished or in progress (a checkpoint): the
 state a resumed run needs (:class:`transient.runin.RunState`), the
@@ -6,11 +6,13 @@ history, the snapshots, the inputs that identify the run and, once the run
 is steady, its agreement with the steady face.  It is written whole and
 atomically by the project's one HDF5 writer (:func:`steady.output.atomic_h5`),
 so a reader never sees half a file and a killed run leaves its last
-checkpoint intact.
+checkpoint intact.  It opens in xarray (``xarray.open_dataset(path,
+engine="h5netcdf")``, ``group="history"`` or ``"snapshots"``) as labelled
+arrays; docs/files.md lists every dataset and attribute.
 
 Layout (root group)::
 
-    attributes    format "runin.transient", format_version 2
+    attributes    format "runin.transient", format_version 3
                   status, message, scheme, distance (m), steps, rejected,
                   failures, solves, iterations, wall_time (s), offset (m),
                   approach (m), depth_scale (m), distance_scale (m),
@@ -19,20 +21,30 @@ Layout (root group)::
                   sliding_speed (m/s, NaN if none), previous_step (m, NaN if none),
                   next_step (m, NaN if none), jumps (jumps to the steady
                   state so far; files written before it was stored lack
-                  it and are read as 0); the unit of attribute ``x``
-                  in ``x_units``; the caller's input attributes (scene...;
-                  an attribute given as None is left out)
-                  with the face's outline known (every run of this version):
+                  it and are read as 0);
+                  the problem's inputs (:func:`problem_inputs`, when the
+                  result knows its problem): n, normal_force (N), E_star
+                  (Pa), exponent, wear_coefficients (Pa-m), wear_law;
+                  the caller's input attributes (scene...; an attribute
+                  given as None is left out);
+                  with the face's outline known (every run since version 2):
                   reference_slope_error, reference_slope_source (where
                   grad_f0 comes from, in words), scale (m, the outline's
                   L), pixel_size (m) and, for a disk only, radius (m)
+    x, y          (nx,), (ny,) m: pixel centres, the dimension scales of
+                  every (nx, ny) axis pair
+    phase_name    (P,) the phase names: the dimension scale ``phase_name``
     worn_depth    (nx, ny) m, NaN off the face
     pressure      (nx, ny) Pa
-    <arrays>      the caller's input datasets (e.g. ``phase``)
-    state/        height, initial_height, previous_height, previous_rate
-    history/      one dataset per :data:`transient.runin.HISTORY_UNITS` name
-    snapshots/    distance (k,) m, height (k, nx, ny) m, pressure (k, nx, ny) Pa
-                  (byte shuffle and deflate, except in a checkpoint)
+    phase         (nx, ny) the phase map, and the caller's input datasets
+    state/        height, initial_height, previous_height, previous_rate,
+                  pressure_history, pressure_history_displacement
+    history/      one dataset per :data:`transient.runin.HISTORY_UNITS` name,
+                  along the dimension scale ``distance`` (m); attribute
+                  distance_scale (s*, m)
+    snapshots/    distance (k,) m (a dimension scale), height (k, nx, ny) m,
+                  pressure (k, nx, ny) Pa (byte shuffle and deflate, except
+                  in a checkpoint)
     comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
     run_in_distance/  the run-in distances within 1 % and 0.1 % (dimension ``within``):
                   distance, distance_s_star, uncertainty, low, high, mean_worn_depth,
@@ -42,17 +54,21 @@ Layout (root group)::
     outline/      the face's outline, as :func:`steady.output.write_outline`
                   writes it (kind, area, its lengths; a mask's ``mask``)
 
-Every dataset carries a ``units`` attribute.  Arrays are ``(nx, ny)``, the
-grid of the outline (:class:`steady.outline.FaceGrid`; ``n x n`` for a disk).
-Files written before the face outlines (disks only) lack the group
-``outline`` and the reference slope's error and source: :func:`read_run`
-reads their outline as the disk of their ``radius`` attribute (None without
-it) and the source as eq. 12's.
+Every dataset carries the CF attributes ``units`` (udunits: ``"m"``,
+``"Pa"``, ``"1"``; none for text and codes) and ``long_name``; the unit of
+a root attribute ``x`` is the udunits string ``x_units``.  Arrays are
+``(nx, ny)``, the grid of the outline (:class:`steady.outline.FaceGrid`;
+``n x n`` for a disk).  Version 2 files (without coordinates, phase names
+and the problem's own inputs) are read too.  Files written before the face
+outlines (disks only) lack the group ``outline`` and the reference slope's
+error and source: :func:`read_run` reads their outline as the disk of their
+``radius`` attribute (None without it) and the source as eq. 12's.
 
 Checksums
 ---------
 Every dataset carries the attribute ``sha256``: the SHA-256 of its dtype,
-shape and bytes and of its other attributes; every group, the root
+shape and bytes and of its other attributes (except the dimension scales'
+references, :data:`steady.output.DIMENSION_SCALE_ATTRIBUTES`); every group, the root
 included, carries in ``sha256`` the SHA-256 of its attributes.
 :func:`read_run` verifies all of them, so that a flipped bit anywhere in
 what a resumed run depends on (the state, the pressure, the counters, the
@@ -90,7 +106,17 @@ import h5py
 import numpy as np
 
 from steady.outline import Circle
-from steady.output import atomic_h5, read_outline, write_outline
+from steady.output import (
+    DIMENSION_SCALE_ATTRIBUTES,
+    atomic_h5,
+    attach_scales,
+    describe,
+    read_outline,
+    wear_coefficient_units,
+    write_grid_coordinates,
+    write_outline,
+    write_phase_names,
+)
 
 from .run_in_distance import distance_table
 from .runin import HISTORY_UNITS, RunResult, RunState
@@ -107,7 +133,9 @@ __all__ = [
     "RunLock",
     "RunLockedError",
     "backup_path",
+    "history_cf",
     "lock_path",
+    "problem_inputs",
     "read_run",
     "remove_temporaries",
     "verify_run",
@@ -117,7 +145,10 @@ __all__ = [
 #: ``format`` attribute of a run file.
 FORMAT = "runin.transient"
 #: Layout version of a run file (``format_version`` attribute).
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
+#: Versions :func:`read_run` reads (2: without coordinates, phase names and
+#: the problem's inputs).
+_READABLE_VERSIONS = (2, 3)
 
 # Root scalar attributes and their units.
 _SCALARS = {
@@ -144,6 +175,12 @@ _STRINGS = ("status", "message", "scheme")
 _STATE_UNITS = {"height": "m", "initial_height": "m", "previous_height": "m",
                 "previous_rate": "1", "pressure_history": "Pa",
                 "pressure_history_displacement": "m"}
+_STATE_NAMES = {"height": "face height (worn depth plus initial face) minus offset",
+                "initial_height": "the face the run started from, NaN off the face",
+                "previous_height": "face height at the previous step",
+                "previous_rate": "wear rate at the previous step (m of wear per m of sliding)",
+                "pressure_history": "recent contact pressures (warm start of the contact solve)",
+                "pressure_history_displacement": "their surface displacements K p"}
 # State datasets every checkpoint has; the others are None before the first step.
 _REQUIRED_STATE = ("height", "initial_height")
 
@@ -213,7 +250,9 @@ def _attrs_digest(attrs):
     """SHA-256 (hex) of a mapping of attributes, its own ``sha256`` left out."""
     h = hashlib.sha256()
     for name in sorted(attrs):
-        if name != _CHECKSUM:
+        # The dimension scales' bookkeeping holds references (object
+        # addresses in the file), not values: structure, left out.
+        if name != _CHECKSUM and name not in DIMENSION_SCALE_ATTRIBUTES:
             h.update(name.encode("utf-8", "surrogatepass") + b"\0")
             _update(h, attrs[name])
     return h.hexdigest()
@@ -233,12 +272,20 @@ def _dataset_digest(data, attrs):
 _SNAPSHOT_FILTERS = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 
 
-def _put(group, name, value, unit, **options):
-    """Create a dataset with its ``units`` and ``sha256`` attributes."""
+def _put(group, name, value, unit, long_name=None, *, dims=(), **options):
+    """Create a dataset with its CF ``units`` and ``long_name`` and its ``sha256``.
+
+    ``unit`` None writes no ``units`` (text, codes); ``dims`` are the
+    dimension scales of its leading axes (:func:`steady.output.attach_scales`).
+    """
     ds = group.create_dataset(name, data=value, **options)
-    ds.attrs["units"] = unit
-    data = np.asarray(value).astype(ds.dtype, copy=False).reshape(ds.shape)
+    describe(ds, unit, long_name or name.replace("_", " "))
+    if ds.dtype.kind == "O":  # strings: digest them as a reader gets them (bytes)
+        data = ds[()]
+    else:
+        data = np.asarray(value).astype(ds.dtype, copy=False).reshape(ds.shape)
     ds.attrs[_CHECKSUM] = _dataset_digest(data, dict(ds.attrs))
+    attach_scales(ds, *dims)
     return ds
 
 
@@ -250,10 +297,89 @@ def _seal_groups(f):
         g.attrs[_CHECKSUM] = _attrs_digest(dict(g.attrs))
 
 
+def history_cf(name):
+    """CF attributes of a history dataset: ``(units, long_name)`` from :data:`HISTORY_UNITS`.
+
+    ``HISTORY_UNITS`` gives a unit and, in parentheses, what the values are;
+    a ``code`` has no unit (its meaning, the codes included, goes to the
+    long name); a power is written without a caret (``"m3"``).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`transient.runin.HISTORY_UNITS`.
+
+    Returns
+    -------
+    units : str or None
+    long_name : str
+
+    Examples
+    --------
+    >>> history_cf("normalised_rms_slope")
+    ('1', 'rms_slope / grad_f0')
+    >>> history_cf("distance")
+    ('m', 'sliding distance')
+    """
+    text = HISTORY_UNITS[name]
+    unit, _, meaning = text.partition(" (")
+    meaning = meaning[:-1] if meaning.endswith(")") else meaning
+    if not meaning:
+        meaning = _HISTORY_NAMES.get(name, name.replace("_", " "))
+    if unit == "code":
+        return None, f"{name.replace('_', ' ')} code ({meaning})"
+    return unit.replace("^", ""), meaning  # one spelling of powers: "m3", as "Pa-1"
+
+
+# Long names of history datasets whose HISTORY_UNITS entry is a bare unit.
+_HISTORY_NAMES = {"distance": "sliding distance", "step": "length of the step to this distance",
+                  "peak_pressure": "largest contact pressure",
+                  "contact_fraction": "fraction of the face's pixels in contact",
+                  "approach": "rigid approach", "worn_volume": "volume worn off since the start",
+                  "solves": "contact solves so far"}
+
+
+def _attribute(attrs, name, value, unit):
+    """Root attribute ``name`` and, for a quantity, its udunits unit in ``name_units``."""
+    attrs[name] = value
+    if unit is not None:
+        attrs[f"{name}_units"] = unit
+
+
+def problem_inputs(problem):
+    """What a run file stores of the problem a run solved: root attributes and datasets.
+
+    Parameters
+    ----------
+    problem : steady.problem.Problem
+
+    Returns
+    -------
+    attrs : dict of str to (value, units)
+        ``n``, ``normal_force`` (N), ``E_star`` (Pa), ``exponent``,
+        ``wear_coefficients`` (Pa-m), ``wear_law`` (in words).
+    arrays : dict of str to ndarray
+        ``phase``, the phase map (-1 off the face).
+    names : tuple of str
+        The phase names, phase 0 first.
+    """
+    wear = problem.wear
+    attrs = {"n": (problem.n, "1"), "normal_force": (problem.normal_force, "N"),
+             "E_star": (problem.E_star, "Pa"), "exponent": (wear.exponent, "1"),
+             "wear_coefficients": (np.asarray(wear.coefficients, dtype=float),
+                                   wear_coefficient_units(wear.exponent)),
+             "wear_law": (wear.describe(), None)}
+    return attrs, {"phase": np.asarray(problem.labels)}, tuple(problem.phase_names)
+
+
 # -- writing ----------------------------------------------------------------
 def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=False,
               force=True, replaces=None, checked=False):
     """Write a run (or a checkpoint) to HDF5, atomically, replacing ``path``.
+
+    The file holds the run's inputs when the result knows its problem (a
+    result of :func:`transient.runin.run_in`): load, modulus, wear law,
+    phase map, phase names and outline, whoever calls this function.
 
     Parameters
     ----------
@@ -261,9 +387,10 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     result : transient.runin.RunResult
     attrs : mapping, optional
         Extra root attributes (scene text, parameters); those whose value is
-        None are left out.
+        None are left out.  They replace the problem's of the same name.
     arrays : mapping of str to ndarray, optional
-        Extra root datasets (e.g. ``phase``).
+        Extra root datasets (e.g. ``phase``), replacing the problem's of
+        the same name.
     comparison : transient.comparison.SteadyComparison, optional
         Stored in the group ``comparison``.
     backup : bool, optional
@@ -296,58 +423,125 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     writer = atomic_h5(path, format=FORMAT, version=FORMAT_VERSION, force=force,
                        replaces=replaces, checked=checked,
                        backup=backup_path(path) if backup else None)
+    problem = getattr(result, "problem", None)
+    inputs, input_arrays, names = ({}, {}, None) if problem is None else problem_inputs(problem)
     with writer as f:
-        for name, unit in _SCALARS.items():
-            f.attrs[name] = getattr(result, name)
-            if unit:
-                f.attrs[f"{name}_units"] = unit
-        for name, unit in _OPTIONAL_SCALARS.items():
-            value = getattr(result.state, name)
-            f.attrs[name] = np.nan if value is None else value
-            f.attrs[f"{name}_units"] = unit
-        for name, (unit, _) in _LATER_STATE_SCALARS.items():
-            f.attrs[name] = getattr(result.state, name)
-            f.attrs[f"{name}_units"] = unit
-        for name, unit in _LATER_SCALARS.items():
-            value = getattr(result, name)
-            f.attrs[name] = np.nan if value is None else value
-            f.attrs[f"{name}_units"] = unit
+        _write_scalars(f, result)
+        for name, (value, unit) in inputs.items():
+            _attribute(f.attrs, name, value, unit)
         if result.outline is not None:
             _write_outline(f, result)
         for name, value in (attrs or {}).items():
             if value is not None:
                 f.attrs[name] = value
-        _put(f, "worn_depth", result.worn_depth, "m")
-        _put(f, "pressure", result.pressure, "Pa")
-        for name, value in (arrays or {}).items():
-            _put(f, name, value, "1")
-        st = f.create_group("state")
-        st.attrs["description"] = "everything a resumed run needs (face up to offset)"
-        for name, unit in _STATE_UNITS.items():
-            value = getattr(result.state, name)
-            if value is not None:
-                _put(st, name, value, unit)
-        hist = f.create_group("history")
-        for name, value in result.history.items():
-            _put(hist, name, value, HISTORY_UNITS[name])
-        snaps = f.create_group("snapshots")
-        _put(snaps, "distance", result.snapshot_distance, "m")
-        # A checkpoint is rewritten whole every few seconds: compressing its
-        # snapshots each time would cost more than the rest of the file.
-        packed = {} if result.status == "running" else _SNAPSHOT_FILTERS
-        _put(snaps, "height", result.snapshot_height, "m", **packed)
-        _put(snaps, "pressure", result.snapshot_pressure, "Pa", **packed)
+        scales = _write_coordinates(f, result, names)
+        _put(f, "worn_depth", result.worn_depth, "m", "depth worn off since the start, NaN "
+             "off the face", dims=scales[:2])
+        _put(f, "pressure", result.pressure, "Pa", "contact pressure", dims=scales[:2])
+        for name, value in {**input_arrays, **(arrays or {})}.items():
+            _put(f, name, value, "1", _ARRAY_NAMES.get(name), dims=scales[:2])
+        _write_state(f, result, scales[:2])
+        _write_history(f, result)
+        _write_snapshots(f, result, scales[:2])
         _write_run_in_distances(f, result)
         if comparison is not None:
-            g = f.create_group("comparison")
-            for fld in dataclasses.fields(comparison):
-                value = getattr(comparison, fld.name)
-                if isinstance(value, np.ndarray):
-                    _put(g, fld.name, value, "Pa")
-                else:
-                    g.attrs[fld.name] = value
+            _write_comparison(f, comparison, scales[2])
         _seal_groups(f)
     return writer.identity
+
+
+# Long names of the input datasets the command and the problem store.
+_ARRAY_NAMES = {"phase": "phase index, -1 off the face"}
+
+
+def _write_scalars(f, result):
+    """The result's and the state's root attributes, each with its unit."""
+    for name, unit in _SCALARS.items():
+        _attribute(f.attrs, name, getattr(result, name), unit or None)
+    for name, unit in _OPTIONAL_SCALARS.items():
+        value = getattr(result.state, name)
+        _attribute(f.attrs, name, np.nan if value is None else value, unit)
+    for name, (unit, _) in _LATER_STATE_SCALARS.items():
+        _attribute(f.attrs, name, getattr(result.state, name), unit)
+    for name, unit in _LATER_SCALARS.items():
+        value = getattr(result, name)
+        _attribute(f.attrs, name, np.nan if value is None else value, unit)
+
+
+def _write_coordinates(f, result, names):
+    """Root datasets ``x``, ``y`` (m; None, None without an outline) and ``phase_name``.
+
+    Returns the scales ``(x, y, phase_name)``, None for those not written.
+    """
+    x = y = phase = None
+    if result.outline is not None:
+        grid = result.outline.grid(max(result.shape))
+        if grid.shape == result.shape:
+            x, y = write_grid_coordinates(f, grid.x, grid.y, put=_put)
+    if names is not None:
+        phase = write_phase_names(f, names, put=_put)
+    return x, y, phase
+
+
+def _write_state(f, result, grid_scales):
+    """The group ``state``: the arrays a resumed run needs."""
+    st = f.create_group("state")
+    st.attrs["description"] = "everything a resumed run needs (face up to offset)"
+    for name, unit in _STATE_UNITS.items():
+        value = getattr(result.state, name)
+        if value is not None:
+            dims = grid_scales if np.ndim(value) == 2 else (None, *grid_scales)
+            _put(st, name, value, unit, _STATE_NAMES[name], dims=dims)
+
+
+def _write_history(f, result):
+    """The group ``history``: one dataset per recorded quantity along ``distance``."""
+    hist = f.create_group("history")
+    _attribute(hist.attrs, "distance_scale", result.distance_scale, "m")
+    distance = None
+    if "distance" in result.history:
+        distance = _put(hist, "distance", result.history["distance"], *history_cf("distance"))
+        distance.make_scale("distance")
+    for name, value in result.history.items():
+        if name == "distance":
+            continue
+        ds = _put(hist, name, value, *history_cf(name), dims=(distance,))
+        if np.ndim(value) == 1 and (distance is None or len(value) != len(distance)):
+            ds.make_scale(name)  # e.g. an empty spatial error: a dimension of its own
+
+
+def _write_snapshots(f, result, grid_scales):
+    """The group ``snapshots``: faces and pressures at chosen distances."""
+    snaps = f.create_group("snapshots")
+    distance = _put(snaps, "distance", result.snapshot_distance, "m",
+                    "sliding distance of the snapshot")
+    distance.make_scale("distance")
+    # A checkpoint is rewritten whole every few seconds: compressing its
+    # snapshots each time would cost more than the rest of the file.
+    packed = {} if result.status == "running" else _SNAPSHOT_FILTERS
+    _put(snaps, "height", result.snapshot_height, "m", "worn depth plus the initial face, "
+         "NaN off the face", dims=(distance, *grid_scales), **packed)
+    _put(snaps, "pressure", result.snapshot_pressure, "Pa", "contact pressure",
+         dims=(distance, *grid_scales), **packed)
+
+
+# The comparison's arrays (Pa, one value per phase) and its lengths; the rest is 1 or a flag.
+_COMPARISON_NAMES = {"phase_pressures": "mean pressure on each phase, run",
+                     "steady_phase_pressures": "pressure on each phase, steady state (eq. 7)"}
+_COMPARISON_UNITS = {"rms_height": "m", "steady_rms_height": "m"}
+
+
+def _write_comparison(f, comparison, phase_scale):
+    """The group ``comparison``: :class:`transient.comparison.SteadyComparison`."""
+    g = f.create_group("comparison")
+    for fld in dataclasses.fields(comparison):
+        value = getattr(comparison, fld.name)
+        if isinstance(value, np.ndarray):
+            _put(g, fld.name, value, "Pa", _COMPARISON_NAMES.get(fld.name), dims=(phase_scale,))
+        else:
+            unit = None if isinstance(value, (bool, np.bool_)) else _COMPARISON_UNITS.get(
+                fld.name, "1")
+            _attribute(g.attrs, fld.name, value, unit)
 
 
 def _write_run_in_distances(f, result):
@@ -357,10 +551,10 @@ def _write_run_in_distances(f, result):
         g = f.create_group("run_in_distance")
         g.attrs["long_name"] = ("run-in distances: where the rms slope and the face stay within "
                                 "each tolerance of the steady state (docs/model.md)")
+        within = _put(g, "within", *table.pop("within"))
+        within.make_scale("within")
         for name, (value, unit, long_name) in table.items():
-            ds = _put(g, name, value, unit)
-            ds.attrs["long_name"] = long_name
-            ds.attrs[_CHECKSUM] = _dataset_digest(value, dict(ds.attrs))
+            _put(g, name, value, unit, long_name, dims=(within,))
 
 
 def _write_outline(f, result):
@@ -369,12 +563,10 @@ def _write_outline(f, result):
     values = {"reference_slope_error": result.reference_slope_error,
               "scale": outline.scale, "pixel_size": result.pixel_size}
     for name, unit in _REFERENCE_UNITS.items():
-        f.attrs[name] = values[name]
-        f.attrs[f"{name}_units"] = unit
+        _attribute(f.attrs, name, values[name], unit)
     f.attrs["reference_slope_source"] = result.reference_slope_source
     if isinstance(outline, Circle):
-        f.attrs["radius"] = outline.radius
-        f.attrs["radius_units"] = "m"
+        _attribute(f.attrs, "radius", outline.radius, "m")
     group = f.create_group("outline")
     write_outline(group, outline)
     for ds in group.values():  # a mask's pixels: checksummed like every dataset
@@ -544,9 +736,9 @@ def read_run(path):
         if fmt != FORMAT:
             raise ValueError(f"{str(path)!r} is not a run file (format {fmt!r}, expected "
                              f"{FORMAT!r})")
-        if not isinstance(version, (int, np.integer)) or int(version) != FORMAT_VERSION:
+        if not isinstance(version, (int, np.integer)) or int(version) not in _READABLE_VERSIONS:
             raise ValueError(f"{str(path)!r} has layout version {version!r}, expected "
-                             f"{FORMAT_VERSION}")
+                             f"{' or '.join(map(str, _READABLE_VERSIONS))}")
         try:
             datasets, groups = _load(f)
         except damage as err:
@@ -622,7 +814,7 @@ def _result(path, datasets, groups):
         outline=outline, reference_slope_error=ref_error,
         reference_slope_source=str(source))
     arrays = {name: value for name, (value, _) in datasets.items()
-              if "/" not in name and name not in ("worn_depth", "pressure")}
+              if "/" not in name and name not in ("worn_depth", "pressure", "x", "y")}
     return result, attrs, arrays
 
 

@@ -228,7 +228,7 @@ class WearProblem:
         --------
         >>> from transient.scene import load_transient_scene
         >>> scene, options, initial = load_transient_scene(
-        ...     "studies/scenes/voronoi_transient.toml")
+        ...     "steady/examples/voronoi_transient.toml")
         >>> problem = WearProblem.from_scene(scene, n=40)
         >>> problem.n, problem.n_phases
         (40, 2)

@@ -255,6 +255,10 @@ class RunResult:
         Uncertainty of ``reference_slope`` (0: a closed form).
     reference_slope_source : str
         Where ``reference_slope`` comes from, in words ("" when unknown).
+    problem : steady.problem.Problem or None
+        The problem the run solved (load, modulus, wear law, phase map and
+        names), which :func:`transient.output.write_run` stores; None for a
+        run read from a file.
     steady_rms_slope, steady_rms_slope_error : float
         The rms slope of the closed-form steady face ``f_inf`` (eq. 9) by the
         history's estimator (:class:`transient.history.FaceEstimator`, the
@@ -289,6 +293,7 @@ class RunResult:
     outline: object = None
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
+    problem: object = None
     steady_rms_slope: float = math.nan
     steady_rms_slope_error: float = math.nan
     sliding_speed: float | None = None
@@ -318,7 +323,7 @@ class RunResult:
         --------
         >>> from transient import RunOptions, WearProblem, run_in
         >>> from transient.scene import load_transient_scene
-        >>> scene, _, initial = load_transient_scene("studies/scenes/voronoi_transient.toml")
+        >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
         >>> problem = WearProblem.from_scene(scene, n=40)
         >>> result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-3))
         >>> one, tenth = result.run_in_distance(0.01), result.run_in_distance(0.001)
@@ -684,7 +689,7 @@ class _Run:
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
             reference_slope=self.grad_f0, state=self.current_state(),
             outline=self.problem.outline, reference_slope_error=self.reference.error,
-            reference_slope_source=self.reference.source,
+            reference_slope_source=self.reference.source, problem=self.problem.problem,
             steady_rms_slope=self.steady_slope[0], steady_rms_slope_error=self.steady_slope[1],
             sliding_speed=self.problem.sliding_speed)
 
@@ -872,7 +877,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     >>> from transient import RunOptions, WearProblem, compare_with_steady, run_in
     >>> from transient.scene import load_transient_scene
     >>> scene, settings, initial = load_transient_scene(
-    ...     "studies/scenes/voronoi_transient.toml")
+    ...     "steady/examples/voronoi_transient.toml")
     >>> problem = WearProblem.from_scene(scene, n=40)
     >>> result = run_in(problem, initial.height(problem.grid),
     ...                 RunOptions(tol=1e-2))

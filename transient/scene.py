@@ -158,7 +158,7 @@ def load_transient_scene(path):
 
     Examples
     --------
-    >>> scene, options, initial = load_transient_scene("studies/scenes/tilted_transient.toml")
+    >>> scene, options, initial = load_transient_scene("steady/examples/tilted_transient.toml")
     >>> initial.kind, initial.height(scene.grid()).shape
     ('tilted', (64, 64))
     """

@@ -180,7 +180,7 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
     --------
     >>> from transient import RunOptions, WearProblem, run_in
     >>> from transient.scene import load_transient_scene
-    >>> scene, _, initial = load_transient_scene("studies/scenes/voronoi_transient.toml")
+    >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
     >>> options = RunOptions(tol=1e-2)
     >>> problem = WearProblem.from_scene(scene, n=64)
     >>> result = run_in(problem, initial.height(problem.grid), options)

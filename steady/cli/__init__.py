@@ -6,6 +6,8 @@
   wear ratios from a measured face;
 - :mod:`steady.cli.design` -- ``runin-design`` (``python -m
   steady.cli.design``): the design rule;
+- :mod:`steady.cli.examples` -- ``runin-examples`` (``python -m
+  steady.cli.examples``): the shipped example scenes, listed and copied;
 - :mod:`steady.cli.common` -- what every command shares (exit statuses,
   one-line errors, output checks, ``--memory-limit``), also for
   ``runin-transient``;

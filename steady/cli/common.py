@@ -1,7 +1,7 @@
 """What the command lines of both packages share.
 
 Each command (``runin-steady``, ``runin-transient``, ``runin-fit``,
-``runin-design``) runs either as an installed console script or as a module
+``runin-design``, ``runin-examples``) runs either as an installed console script or as a module
 (``python -m steady`` ...); its usage line names it the way it was run
 (:func:`program_name`).
 
@@ -157,8 +157,17 @@ class ArgumentParser(argparse.ArgumentParser):
     ``error: <what is wrong> (see '<prog> --help')`` on stderr.  An argument
     with a null byte (which no path may hold; only a caller of ``main(argv)``
     can pass one) is such an error, naming the argument, before the
-    operating system sees it.
+    operating system sees it.  Every command built on it has ``--version``:
+    ``<prog> (runin <version>)``, the installed distribution's version
+    (:mod:`steady.version`).
     """
+
+    def __init__(self, *args, **kwargs):
+        from ..version import DISTRIBUTION, __version__
+
+        super().__init__(*args, **kwargs)
+        self.add_argument("--version", action="version",
+                          version=f"%(prog)s ({DISTRIBUTION} {__version__})")
 
     def error(self, message):
         """Print one ``error:`` line and exit with :data:`EXIT_BAD_INPUT`."""

@@ -1,10 +1,11 @@
-"""Entry points of the four commands: Ctrl-C is one line and status 130 from the start.
+"""Entry points of the five commands: Ctrl-C is one line and status 130 from the start.
 
 A command's module imports numpy, scipy, h5py and the library, which takes
 up to a second; Ctrl-C during that import used to end in a
 ``KeyboardInterrupt`` traceback.  The console scripts (``[project.scripts]``
 of ``pyproject.toml``) and ``python -m steady``, ``python -m transient``,
-``python -m steady.cli.fit``, ``python -m steady.cli.design`` therefore
+``python -m steady.cli.fit``, ``python -m steady.cli.design``,
+``python -m steady.cli.examples`` therefore
 enter through :func:`launch`, in this module, which imports nothing heavy:
 it catches the interrupt around the import of the command and around the
 command itself, whose own handling (:func:`steady.cli.common.run_command`)
@@ -24,7 +25,7 @@ scipy, h5py or the library's modules.
 import signal
 import sys
 
-__all__ = ["launch", "runin_design", "runin_fit", "runin_steady"]
+__all__ = ["launch", "runin_design", "runin_examples", "runin_fit", "runin_steady"]
 
 #: :data:`steady.cli.common.EXIT_INTERRUPTED`, not imported from there: that would load
 #: argparse, logging and tempfile before the handling is in place.
@@ -140,3 +141,8 @@ def runin_fit(argv=None):
 def runin_design(argv=None):
     """``runin-design`` (:mod:`steady.cli.design`)."""
     return launch("steady.cli.design", argv)
+
+
+def runin_examples(argv=None):
+    """``runin-examples`` (:mod:`steady.cli.examples`)."""
+    return launch("steady.cli.examples", argv)

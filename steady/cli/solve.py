@@ -4,6 +4,7 @@ Usage (``runin-steady`` once installed, or ``python -m steady``)::
 
     runin-steady SCENE.toml -o OUT.h5 [--plot OUT.png] [--force] [--no-slope-error]
                  [--memory-limit GIB] [-v]
+    runin-steady SCENE.toml --segmentation SEG.png    # a micrograph's segmentation only
 
 Solves the steady state (eq. 7, 9), writes the HDF5 result
 (:mod:`steady.output`), optionally draws the figure from that file, and
@@ -17,6 +18,9 @@ operating-system error or a figure that could not be drawn (the message
 says the result is saved), 2 for bad input (nothing written), 130 when
 interrupted (:mod:`steady.cli.common`).  The suffix of ``--plot`` is
 checked before the solve too (:func:`steady.cli.common.check_png_path`).
+``--segmentation`` draws the segmentation of a ``micrograph`` phase map
+over its image (:func:`steady.micrograph.segmentation_figure`) before the
+solve; without ``-o`` it is all the command writes.
 """
 
 from __future__ import annotations
@@ -60,10 +64,14 @@ def build_parser():
         description="Limiting worn face of a multi-phase punch on an elastic half-space.",
         epilog=EXIT_STATUS_EPILOG)
     parser.add_argument("scene", type=pathlib.Path, help="scene file (.toml)")
-    parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
-                        help="HDF5 result file to write (missing directories are created)")
+    parser.add_argument("-o", "--output", type=pathlib.Path,
+                        help="HDF5 result file to write (missing directories are created); "
+                             "required unless --segmentation is given")
     parser.add_argument("--plot", type=pathlib.Path, metavar="PNG",
                         help="also draw the phase map and the face into this PNG file")
+    parser.add_argument("--segmentation", type=pathlib.Path, metavar="PNG",
+                        help="draw the segmentation of the micrograph phase map over its image "
+                             "into this PNG file, before the solve (without -o: only this)")
     parser.add_argument("--force", action="store_true",
                         help="overwrite existing output files")
     parser.add_argument("--no-slope-error", dest="slope_error", action="store_false",
@@ -107,6 +115,12 @@ def run(args):
         scene = _check(args)
         logger.info("scene %s checked: %s, n = %d, %d phases", args.scene,
                     scene.outline.describe(), scene.n, scene.n_phases)
+        if args.segmentation is not None:
+            _draw_segmentation(args, scene)
+            if args.output is None:
+                print(f"segmentation     {scene.geometry.segmentation.summary()}\n"
+                      f"segmentation PNG {args.segmentation}")
+                return EXIT_OK
         started = time.monotonic()
         logger.info("solving the steady state%s", " and the rms slope's error ladder"
                     if args.slope_error else "")
@@ -116,6 +130,8 @@ def run(args):
         lines = summary_lines(result)
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
+        if args.segmentation is not None:
+            lines.append(f"segmentation PNG {args.segmentation}")
         write_result(args.output, result, scene, force=args.force, checked=True)
         saved = args.output
         logger.info("wrote %s", args.output)
@@ -133,13 +149,19 @@ def run(args):
 
 def _check(args):
     """Everything that can fail, checked before the solve, not after it; the scene."""
-    check_distinct([("the scene", args.scene), ("-o", args.output), ("--plot", args.plot)])
-    if args.plot is not None:
-        check_png_path(args.plot)
+    check_distinct([("the scene", args.scene), ("-o", args.output), ("--plot", args.plot),
+                    ("--segmentation", args.segmentation)])
+    for path, what in ((args.plot, "--plot"), (args.segmentation, "--segmentation")):
+        if path is not None:
+            check_png_path(path, what)
     scene = load_scene(args.scene)
-    prepare_output(args.output, force=args.force)
-    if args.plot is not None:
-        prepare_output(args.plot, force=args.force, what="--plot")
+    if args.segmentation is not None and not isinstance(scene.geometry, Micrograph):
+        raise ValueError(f"--segmentation needs a phase map of kind \"micrograph\", the "
+                         f"scene's is {getattr(scene.geometry, 'kind', '?')!r}")
+    for path, what in ((args.output, "output"), (args.plot, "--plot"),
+                       (args.segmentation, "--segmentation")):
+        if path is not None:
+            prepare_output(path, force=args.force, what=what)
     if scene.ignored_sections:
         note("ignoring run-in sections "
              + ", ".join(f"[{name}]" for name in scene.ignored_sections))
@@ -147,6 +169,15 @@ def _check(args):
                  f"a steady solve at n = {scene.n}", args.memory_limit)
     scene.phase_labels()  # names a phase without a face pixel before the solve
     return scene
+
+
+def _draw_segmentation(args, scene):
+    """Draw the micrograph's segmentation over its image (before the solve, or alone)."""
+    from ..micrograph import segmentation_figure  # deferred: matplotlib is slow to import
+    from ..plotting import save_png
+
+    figure = segmentation_figure(scene.geometry, names=scene.phase_names)
+    save_png(figure, args.segmentation, force=True)  # the path was checked before
 
 
 def _plot(args):
@@ -181,6 +212,9 @@ def main(argv=None):
         could not be drawn (the result is saved), 2 for bad input, 130 when
         interrupted.
     """
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.output is None and (args.segmentation is None or args.plot is not None):
+        parser.error("the following arguments are required: -o/--output")
     configure_logging(args.verbose)
     return run_command(run, args, verbose=args.verbose)

@@ -70,7 +70,7 @@ TAMAAS_TOL = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
 # Shifted scenes: label -> (shift on phase 1 in units of K00, phase map, shift
 # ratio of phase 0 to phase 1).  "pixels": 40 % of the pixels drawn at random
 # (seed 3571) are phase 1; "voronoi": the run-in scene's map (400 seeds, 30 %
-# phase 1, seed 2029), as in an implicit stage of studies/scenes/voronoi_transient.toml.
+# phase 1, seed 2029), as in an implicit stage of steady/examples/voronoi_transient.toml.
 SHIFTS = {"shift 1 K00": (1.0, None, 1.0),
           "shift 100 K00, two phases 1:0.01": (100.0, "pixels", 1e-2),
           "shift 10 K00, Voronoi 1:0.1": (10.0, "voronoi", 1e-1)}

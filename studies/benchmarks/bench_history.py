@@ -1,6 +1,6 @@
 """Cost of the run-in history's estimator against the contact solves of a step.
 
-For the shipped Voronoi run-in scene (``studies/scenes/voronoi_transient.toml``)
+For the shipped Voronoi run-in scene (``steady/examples/voronoi_transient.toml``)
 on n = 128, 256, 512: the time of one call of
 :meth:`transient.history.FaceEstimator.figures` (what the history records
 at every accepted step: the corrected rms slope with its error bar, the
@@ -47,7 +47,7 @@ def measure(n, distance):
     from transient.runin import run_in
     from transient.scene import load_transient_scene
 
-    scene, _, initial = load_transient_scene(ROOT / "studies" / "scenes" /
+    scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" /
                                              "voronoi_transient.toml")
     problem = WearProblem.from_scene(scene, n=n)
     h0 = initial.height(problem.grid)

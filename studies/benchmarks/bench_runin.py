@@ -3,7 +3,7 @@
 What it reproduces
     docs/benchmarks.md, "Run-in speed":
 
-    ``--table``: the shipped scene ``studies/scenes/voronoi_transient.toml``
+    ``--table``: the shipped scene ``steady/examples/voronoi_transient.toml``
     with only ``[grid] n`` changed (its ``[transient]`` settings, ``tol``
     overridable, flat start to the steady state, no checkpoints): accepted
     steps, contact solves, solver iterations, iterations per solve, padded
@@ -59,7 +59,8 @@ from transient.scene import load_transient_scene
 from transient.stepping import SCHEMES
 
 # -- parameters -------------------------------------------------------------------
-SCENE = pathlib.Path(__file__).resolve().parents[1] / "scenes" / "voronoi_transient.toml"
+SCENE = (pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
+         / "voronoi_transient.toml")
 SIZES = (64, 128, 256, 512, 1024)
 TABLE_TOL = 1e-4
 SCHEME_N = 256

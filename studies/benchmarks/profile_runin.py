@@ -3,7 +3,7 @@
 What it reproduces
     docs/benchmarks.md, "Where the time goes": the command line
     (``python -m transient``) on the shipped scene
-    ``studies/scenes/voronoi_transient.toml`` with only ``[grid] n`` changed,
+    ``steady/examples/voronoi_transient.toml`` with only ``[grid] n`` changed,
     run in this process with explicit timers around the parts of a run:
 
     - contact solves (:meth:`transient.problem.WearProblem.contact`: the
@@ -53,7 +53,8 @@ import numpy as np
 
 from steady.output import atomic_h5
 
-SCENE = pathlib.Path(__file__).resolve().parents[1] / "scenes" / "voronoi_transient.toml"
+SCENE = (pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
+         / "voronoi_transient.toml")
 N = 512
 
 #: The timed parts: label and the functions (module, dotted attribute) behind it.

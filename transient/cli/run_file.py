@@ -221,9 +221,8 @@ class RunFile:
         attrs = dict(self.attrs, **(extra_attrs or {}))
         attrs.update({
             "options": repr(self.requested),
+            # JSON (docs/files.md): from_distance, to_distance in m, settings in s*.
             "settings_history": json.dumps(self.history),
-            "settings_history_units": "from_distance, to_distance: m; settings: distances "
-                                      "in s*, as in [transient]",
             "snapshots_missing": np.asarray(self.missing, dtype=float),
             "snapshots_missing_units": "m"})
         with interrupt_held():  # what saved_text() says must be what is on disk

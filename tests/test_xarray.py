@@ -1,0 +1,256 @@
+"""The files in other tools: each kind opens in xarray (h5netcdf) as labelled arrays in SI units.
+
+Result files (``runin-steady``), run files (``runin-transient``) and fit files (``runin-fit``):
+CF ``units`` that udunits parses and a ``long_name`` on every dataset, coordinates ``x`` and
+``y`` in m as dimension scales, the run history along its distance, the phase names as the
+coordinate ``phase_name``, and the problem's inputs in a run file written from Python.
+"""
+
+import re
+
+import h5py
+import numpy as np
+import pytest
+import xarray as xr
+from conftest import E_STAR, FORCE, GEOMETRIES, K1, RADIUS, run_cli, scene_text
+
+import steady.cli.fit as fit_cli
+import steady.cli.solve as steady_cli
+import transient.cli.runin as transient_cli
+from steady import MeasuredFace, fit_face, solve, write_fit
+from steady.outline import Circle
+from steady.output import DIMENSION_SCALE_ATTRIBUTES, read_result, write_result
+from steady.problem import FacePhases, Problem
+from steady.wear import PowerLaw
+from transient import output as run_output
+from transient.output import read_run, write_run
+from transient.problem import WearProblem
+from transient.runin import HISTORY_UNITS, RunOptions, run_in
+
+NAMES = ("epoxy", "bronze filler")
+N = 24
+
+#: A udunits unit as this project writes it: "1", or SI symbols with integer powers
+#: ("Pa-1", "m2"), separated by spaces.
+UDUNITS = re.compile(r"^(1|(m|Pa|N|s)(-?[0-9]+)?( (m|Pa|N|s)(-?[0-9]+)?)*)$")
+
+
+def named_problem(n=N, exponent=1.0):
+    """Two named phases (the gallery's Voronoi map) on the disk of :data:`RADIUS`."""
+    grid = Circle(RADIUS).grid(n)
+    labels = GEOMETRIES["voronoi"].labels(grid)
+    return Problem(FacePhases(grid, labels, 2, NAMES),
+                   PowerLaw([K1, 10 * K1], exponent=exponent), FORCE, E_STAR)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A result file, a run file and a fit file of :func:`named_problem`, written from Python."""
+    where = tmp_path_factory.mktemp("files")
+    problem = named_problem()
+    steady = solve(problem)
+    result_path = write_result(where / "result.h5", steady, phase_names=NAMES)
+    run = run_in(WearProblem(problem), np.zeros(problem.shape), RunOptions(snapshots=(0.5,)))
+    run_path = where / "run.h5"
+    write_run(run_path, run)
+    fit = fit_face(MeasuredFace(steady.face, problem.grid.h), problem)
+    fit_path = write_fit(where / "fit.h5", fit, phase_names=NAMES)
+    return {"result": result_path, "run": run_path, "fit": fit_path, "problem": problem,
+            "run_result": run}
+
+
+def units_of(path):
+    """Every ``units`` of a dataset and every ``*_units`` attribute in a file: ``{where: unit}``."""
+    found = {}
+
+    def visit(name, obj):
+        for key, value in obj.attrs.items():
+            if key == "units" or key.endswith("_units"):
+                found[f"/{name} @{key}"] = value.decode() if isinstance(value, bytes) else value
+        if isinstance(obj, h5py.Dataset) and "long_name" not in obj.attrs:
+            found[f"/{name} @long_name"] = None
+
+    with h5py.File(path, "r") as f:
+        visit("", f)
+        f.visititems(visit)
+    return found
+
+
+@pytest.mark.parametrize("kind", ["result", "run", "fit"])
+def test_every_unit_is_a_udunits_string_and_every_dataset_has_a_long_name(files, kind):
+    units = units_of(files[kind])
+    missing = [where for where, unit in units.items() if unit is None]
+    assert not missing, f"{kind} file: datasets without long_name: {missing}"
+    bad = {where: unit for where, unit in units.items() if not UDUNITS.match(str(unit))}
+    assert not bad, f"{kind} file: units that udunits does not parse: {bad}"
+    assert len(units) > 20, f"{kind} file: only {len(units)} units found"
+
+
+def test_result_file_opens_as_labelled_arrays(files):
+    problem = files["problem"]
+    with xr.open_dataset(files["result"], engine="h5netcdf") as ds:
+        for name in ("phase", "pressure", "face", "slope"):
+            assert ds[name].dims == ("x", "y"), f"{name} dims {ds[name].dims}"
+        assert ds["x"].attrs["units"] == "m" and ds["y"].attrs["units"] == "m", "coords in m"
+        assert np.array_equal(ds["x"].values, problem.grid.x), "x: the grid's pixel centres"
+        assert np.array_equal(ds["y"].values, problem.grid.y), "y: the grid's pixel centres"
+        assert tuple(ds["phase_name"].values.tolist()) == NAMES, f"{ds['phase_name'].values}"
+        assert ds["pressure"].attrs["units"] == "Pa", "pressure in Pa"
+        # Labelled selection: the pixel at the face's centre is on the face.
+        centre = ds["pressure"].sel(x=0.0, y=0.0, method="nearest")
+        assert float(centre) > 0, f"pressure at the centre {float(centre)}"
+        assert ds.attrs["wear_coefficients_units"] == "Pa-1", "Archard's k in Pa-1"
+    assert read_result(files["result"]).phase_names == NAMES, "names read back"
+
+
+def test_run_file_opens_as_labelled_arrays(files):
+    run = files["run_result"]
+    with xr.open_dataset(files["run"], engine="h5netcdf") as ds:
+        assert ds["worn_depth"].dims == ("x", "y") and ds["pressure"].dims == ("x", "y"), \
+            f"dims {ds['worn_depth'].dims}, {ds['pressure'].dims}"
+        assert ds["x"].attrs["units"] == "m", "x in m"
+        assert tuple(ds["phase_name"].values.tolist()) == NAMES, "phase names as a coordinate"
+        assert ds.attrs["run_in_distance_units"] == "m", "s* in m"
+    with xr.open_dataset(files["run"], engine="h5netcdf", group="history") as hist:
+        assert hist["distance"].attrs["units"] == "m", "distance in m"
+        assert np.array_equal(hist["distance"].values, run.history["distance"]), "distance"
+        for name in HISTORY_UNITS:
+            if name != "distance" and len(run.history[name]) == len(run.history["distance"]):
+                assert hist[name].dims == ("distance",), f"history/{name} dims {hist[name].dims}"
+        assert hist.attrs["run_in_distance"] == run.run_in_distance, "s* beside the history"
+    with xr.open_dataset(files["run"], engine="h5netcdf", group="snapshots") as snaps:
+        assert snaps["height"].dims == ("distance", "x", "y"), f"{snaps['height'].dims}"
+        assert np.array_equal(snaps["distance"].values, run.snapshot_distance), "snapshots"
+
+
+def test_fit_file_opens_as_labelled_arrays(files):
+    with xr.open_dataset(files["fit"], engine="h5netcdf") as ds:
+        for name in ("measured", "fitted", "residual", "fit_mask", "phase"):
+            assert ds[name].dims == ("x", "y"), f"{name} dims {ds[name].dims}"
+        assert ds["x"].attrs["units"] == "m", "x in m"
+        assert ds.attrs["pressure_covariance_units"] == "Pa2", "covariance in Pa2"
+        assert tuple(ds["phase_name"].values.tolist()) == NAMES, "phase names"
+
+
+def test_run_file_written_from_python_carries_the_inputs(files):
+    """No attrs, no arrays: the load, modulus, wear law, phase map and names are stored."""
+    problem = files["problem"]
+    back, attrs, arrays = read_run(files["run"])
+    assert attrs["normal_force"] == FORCE and attrs["normal_force_units"] == "N", "load"
+    assert attrs["E_star"] == E_STAR and attrs["E_star_units"] == "Pa", "modulus"
+    assert np.array_equal(attrs["wear_coefficients"], [K1, 10 * K1]), "wear coefficients"
+    assert attrs["wear_coefficients_units"] == "Pa-1" and attrs["exponent"] == 1.0, "wear law"
+    assert "Archard" in attrs["wear_law"], f"wear law {attrs['wear_law']!r}"
+    assert np.array_equal(arrays["phase"], problem.labels), "phase map"
+    assert [v.decode() for v in arrays["phase_name"]] == list(NAMES), "phase names"
+    assert back.outline == problem.outline, "outline"
+
+
+def test_power_law_coefficients_carry_their_unit():
+    """``dw/ds = k p^m``: k in Pa-m; udunits has no fractional powers."""
+    assert run_output.problem_inputs(named_problem(exponent=2.0))[0]["wear_coefficients"][1] \
+        == "Pa-2", "k of m = 2 in Pa-2"
+    assert run_output.problem_inputs(named_problem(exponent=1.5))[0]["wear_coefficients"][1] \
+        == "Pa^-1.5", "k of m = 1.5"
+
+
+def _as_version_2(source, target):
+    """The run file ``source`` rewritten in the layout of version 2, with its checksums.
+
+    No coordinates, phase names or dimension scales; every other dataset and
+    attribute as written (so the digests are this module's, over the same values).
+    """
+    digest, attrs_digest = run_output._dataset_digest, run_output._attrs_digest
+    with h5py.File(source, "r") as src, h5py.File(target, "w") as dst:
+        def copy(name, obj):
+            if isinstance(obj, h5py.Group):
+                dst.require_group(name)
+                return
+            if name in ("x", "y", "phase_name") or name.startswith("outline/mask_"):
+                return
+            data = obj[()]
+            ds = dst.create_dataset(name, data=data)
+            keep = {k: v for k, v in obj.attrs.items()
+                    if k not in DIMENSION_SCALE_ATTRIBUTES and k != "sha256"}
+            ds.attrs.update(keep)
+            ds.attrs["sha256"] = digest(data, keep)
+
+        src.visititems(copy)
+        for name in ["", *[n for n in dst if isinstance(dst[n], h5py.Group)]]:
+            group, origin = (dst, src) if not name else (dst[name], src[name])
+            keep = {k: v for k, v in origin.attrs.items() if k != "sha256"}
+            if not name:
+                keep["format_version"] = 2
+            group.attrs.update(keep)
+            group.attrs["sha256"] = attrs_digest(keep)
+
+
+def test_version_2_run_files_are_read(files, tmp_path):
+    old = tmp_path / "old.h5"
+    _as_version_2(files["run"], old)
+    back, attrs, arrays = read_run(old)
+    run = files["run_result"]
+    assert attrs["format_version"] == 2, "the file is of version 2"
+    assert back.steps == run.steps and np.array_equal(back.pressure, run.pressure), \
+        "a version 2 file reads as written"
+    assert "x" not in arrays and "phase_name" not in arrays, f"arrays {sorted(arrays)}"
+
+
+def test_run_file_checksums_still_catch_a_flipped_value(files, tmp_path):
+    """The dimension scales are left out of the digests, their values are not."""
+    path = tmp_path / "run.h5"
+    path.write_bytes(files["run"].read_bytes())
+    with h5py.File(path, "r+") as f:
+        x = f["x"][()]
+        x[0] = -x[0] * 2
+        f["x"][...] = x
+    with pytest.raises(run_output.DamagedRunFileError, match="dataset 'x' does not match"):
+        read_run(path)
+
+
+def test_files_the_commands_write_open_as_labelled_arrays(tmp_path, capsys):
+    """runin-steady, runin-transient and runin-fit: the same scheme, with the scene's names."""
+    names = '[phases]\nnames = ["matrix", "hard phase"]\n'
+    scene = tmp_path / "scene.toml"
+    scene.write_text(scene_text("runin").replace("[phases]\n", names))
+    outputs = {"result": tmp_path / "result.h5", "run": tmp_path / "run.h5",
+               "fit": tmp_path / "fit.h5"}
+    status, _, err = run_cli(steady_cli, [scene, "-o", outputs["result"], "--no-slope-error"],
+                             capsys)
+    assert status == 0, err
+    status, _, err = run_cli(transient_cli, [scene, "-o", outputs["run"]], capsys)
+    assert status == 0, err
+    with h5py.File(outputs["result"], "r") as f:
+        face, h = f["face"][()], float(f.attrs["pixel_size"])
+    np.save(tmp_path / "measured.npy", face)
+    status, _, err = run_cli(fit_cli, [scene, tmp_path / "measured.npy", "--pixel-size", h,
+                                       "-o", outputs["fit"]], capsys)
+    assert status == 0, err
+    for kind, path in outputs.items():
+        units = units_of(path)
+        bad = {where: unit for where, unit in units.items()
+               if unit is None or not UDUNITS.match(str(unit))}
+        assert not bad, f"{kind} file: bad units or no long_name: {bad}"
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
+            assert ds["phase"].dims == ("x", "y"), f"{kind}: phase dims {ds['phase'].dims}"
+            assert ds["phase_name"].values.tolist() == ["matrix", "hard phase"], \
+                f"{kind}: phase names {ds['phase_name'].values}"
+
+
+def test_two_files_written_alike_compare_identical(files, tmp_path):
+    """studies/compare_outputs.py compares dimension scales by the names they refer to."""
+    import importlib
+    import pathlib
+    import sys
+
+    studies = pathlib.Path(__file__).resolve().parent.parent / "studies"
+    sys.path.insert(0, str(studies))
+    try:
+        compare = importlib.import_module("compare_outputs")
+    finally:
+        sys.path.remove(str(studies))
+    stored = read_result(files["result"])
+    again = write_result(tmp_path / "again.h5", stored.result, phase_names=stored.phase_names)
+    assert compare.compare_files(files["result"], again, ()) == [], "a rewrite is identical"
+    other = write_result(tmp_path / "other.h5", stored.result, phase_names=("a", "b"))
+    assert compare.compare_files(files["result"], other, ()) == ["/phase_name: dataset differs"]
