@@ -298,3 +298,21 @@ def test_an_infinite_error_bar_bounds_nothing(disk64):
     found = blind.run_in_distance(0.01)
     assert found.reached and found.uncertainty_m == math.inf and found.high_m == math.inf, found
     assert found.distance_m == disk64.run_in_distance(0.01).distance_m, "the value moved"
+
+
+def test_scene_sliding_speed_is_read_and_checked(tmp_path):
+    from conftest import scene_text
+
+    from steady.scene import parse_scene
+
+    text = scene_text("runin", n=32, coefficients=(1.0e-13, 1.0e-12), transient=None)
+    assert parse_scene(text, tmp_path).sliding_speed is None, "a sliding speed from nowhere"
+    with_speed = text.replace("normal_force = 10.0\n", "normal_force = 10.0\nsliding_speed = 0.5\n")
+    scene = parse_scene(with_speed, tmp_path)
+    assert scene.sliding_speed == 0.5
+    assert WearProblem.from_scene(scene).sliding_speed == 0.5, "not carried to the problem"
+    for bad in ("-1.0", "0", '"fast"'):
+        with pytest.raises(ValueError, match=r"\[load\] sliding_speed must be a number > 0 "
+                                             r"\(m/s\), got "):
+            parse_scene(with_speed.replace("sliding_speed = 0.5", f"sliding_speed = {bad}"),
+                        tmp_path)

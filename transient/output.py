@@ -18,7 +18,7 @@ Layout (root group)::
                   approach (m), depth_scale (m), distance_scale (m),
                   fast_distance (m), pixel_mean_pressure (Pa),
                   reference_slope, steady_rms_slope, steady_rms_slope_error,
-                  sliding_speed (m/s, NaN if none), previous_step (m, NaN if none),
+                  sliding_speed (m s-1, NaN if none), previous_step (m, NaN if none),
                   next_step (m, NaN if none), jumps (jumps to the steady
                   state so far; files written before it was stored lack
                   it and are read as 0);
@@ -159,7 +159,7 @@ _SCALARS = {
 }
 # Root attributes of the result that files written before them lack: read as NaN (a sliding
 # speed of NaN is none: None).  Files that name the distance scale run_in_distance are read too.
-_LATER_SCALARS = {"steady_rms_slope": "1", "steady_rms_slope_error": "1", "sliding_speed": "m/s"}
+_LATER_SCALARS = {"steady_rms_slope": "1", "steady_rms_slope_error": "1", "sliding_speed": "m s-1"}
 _FORMER_NAMES = {"run_in_distance": "distance_scale"}
 # Root attributes of the state (RunState); a step absent is stored as NaN.
 _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
