@@ -673,15 +673,15 @@ def _layout(half_extent):
     Returns ``(rows, columns, figsize)``; each panel's box keeps the
     face's aspect (``set_aspect("equal")``) at a legible size.
     """
+    from .plotting import PAGE_WIDTH
+
     lx, ly = half_extent
     aspect = ly / lx
-    if aspect >= 0.5:
-        width = 3.4
-        height = min(max(width * aspect, 2.6), 8.0)
-        return 1, 3, (3 * (width + 1.0), height + 1.6)
-    width = 8.0
-    height = min(max(width * aspect, 1.6), 4.0)
-    return 3, 1, (width + 1.8, 3 * (height + 0.8) + 1.0)
+    if aspect >= 0.5:  # a page wide, each map 1.5 in wide beside its colour bar
+        height = min(max(1.5 * aspect, 1.5), 5.0)
+        return 1, 3, (PAGE_WIDTH, height + 1.4)
+    height = min(max(4.8 * aspect, 1.0), 3.0)  # maps about 4.8 in wide, stacked
+    return 3, 1, (0.85 * PAGE_WIDTH, 3 * (height + 0.55) + 0.9)
 
 
 def fit_figure(stored):
@@ -697,14 +697,17 @@ def fit_figure(stored):
     matplotlib.figure.Figure
         First: the measured face less the fitted plane (offset and tilt);
         second: the fitted face ``sum_i p_i K chi_i`` on the same colour
-        scale; third: the residual with the phase boundaries.  Each panel
-        shows the outline's bounding box about the fitted centre with equal
-        aspect (side by side, or stacked for a face more than twice as wide
-        as tall), the face's rim in grey.  Heights in micrometres, axes in
-        mm from the map's centre.
+        scale, both as relief about the fitted face's least-squares plane
+        (:func:`steady.plotting.relief`); third: the residual with the
+        phase boundaries.  Each panel shows the outline's bounding box
+        about the fitted centre with equal aspect (side by side, or stacked
+        for a face more than twice as wide as tall), the face's rim in
+        grey.  Heights in micrometres, axes in mm from the map's centre.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+
+    from .plotting import FONT_SIZES, relief, set_fonts
 
     a, arr, outline = stored.attrs, stored.arrays, stored.outline
     plane = _plane(stored)
@@ -713,6 +716,11 @@ def fit_figure(stored):
     residual = arr["residual"] * 1e6
     on_face = arr["phase"] >= 0
     measured = np.where(on_face, measured, np.nan)
+    # Relief, not the dome f = K p: both about the fitted face's plane (pixel units suffice).
+    known = on_face & np.isfinite(fitted)
+    if known.any():
+        level = fitted - relief(fitted, known, 1.0)
+        measured, fitted = measured - level, fitted - level
     nx, ny = measured.shape
     dx, dy = a["pixel_size"]
     extent = (-0.5e3 * nx * dx, 0.5e3 * nx * dx, -0.5e3 * ny * dy, 0.5e3 * ny * dy)
@@ -728,28 +736,34 @@ def fit_figure(stored):
     fig = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(rows, columns, sharex=True, sharey=True).ravel()
-    panels = [(measured, "measured face, plane removed", "viridis", (vmin, vmax)),
+    panels = [(measured, "measured", "viridis", (vmin, vmax)),
               (fitted, r"fitted $\sum_i p_i K\chi_i$", "viridis", (vmin, vmax)),
               (residual, f"residual, rms {a['residual_rms'] * 1e6:.3g} µm", "RdBu_r",
                (-rmax, rmax))]
     x = np.linspace(extent[0], extent[1], nx, endpoint=False) + 0.5e3 * dx
     y = np.linspace(extent[2], extent[3], ny, endpoint=False) + 0.5e3 * dy
     rim = on_face.T.astype(float)
+    images = []
     for ax, (field, title, cmap, (lo, hi)) in zip(axes, panels, strict=True):
         # Arrays are indexed [x, y]; imshow wants [row = y, column = x].
-        im = ax.imshow(field.T, origin="lower", extent=extent, cmap=cmap, vmin=lo, vmax=hi,
-                       interpolation="nearest")
-        fig.colorbar(im, ax=ax, shrink=0.85).set_label("height (µm)")
+        images.append(ax.imshow(field.T, origin="lower", extent=extent, cmap=cmap, vmin=lo,
+                                vmax=hi, interpolation="nearest"))
         if 0 < rim.sum() < rim.size:
             ax.contour(x, y, rim, levels=[0.5], colors="0.5", linewidths=0.6)
-        ax.set_title(title, fontsize=10)
+        ax.set_title(title)
         ax.set_aspect("equal")
         ax.set_xlim(view[0], view[1])
         ax.set_ylim(view[2], view[3])
+    # Measured and fitted share one colour scale and one bar.
+    bars = [fig.colorbar(images[0], ax=list(axes[:2]), shrink=0.85, aspect=30),
+            fig.colorbar(images[2], ax=axes[2], shrink=0.85, aspect=30)]
+    bars[0].set_label("height about plane (µm)")
+    bars[1].set_label("residual (µm)")
     for ax in axes[-columns:]:
         ax.set_xlabel("x (mm)")
     for ax in axes[::columns]:
         ax.set_ylabel("y (mm)")
+    set_fonts(*axes, *(bar.ax for bar in bars))
     n_phases = len(a["ratios"])
     if n_phases > 1:
         axes[2].contour(x, y, arr["phase"].T.astype(float), levels=np.arange(n_phases) + 0.5,
@@ -766,11 +780,11 @@ def fit_figure(stored):
              f"{outline.describe()}, centre at ({shift[0]:.3g}, {shift[1]:.3g}) mm")
     if not a["success"]:
         title += f"\nfit failed: {a['message']}"
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(title, fontsize=FONT_SIZES["title"])
     return fig
 
 
-def plot_fit(fit_path, png_path, *, force=False, dpi=100):
+def plot_fit(fit_path, png_path, *, force=False, dpi=200):
     """Draw the figure of an HDF5 fit file into a PNG file.
 
     Parameters

@@ -1,90 +1,461 @@
-"""Figure of a steady result: phase map beside the limiting worn face (paper Fig. 3).
+"""Figure of a steady result: phase map beside the limiting worn face (paper Figure 3).
 
-Reads the HDF5 file written by :func:`steady.output.write_result`, so a
-figure can be redrawn without solving again.  Uses matplotlib's Agg canvas
-directly (no pyplot, no global backend state).
+Each ``plot_*`` function takes a result file (written by
+:func:`steady.output.write_result`), a :class:`steady.output.StoredResult`
+or a :class:`steady.solution.SteadyResult`, draws into the axes given as
+``ax=`` (or a new figure) and returns the :class:`~matplotlib.figure.Figure`;
+:func:`plot_file` writes the two-panel figure of a file into a PNG (the
+``--plot`` of ``runin-steady``).  Uses matplotlib's Agg canvas directly (no
+pyplot, no global backend state).
+
+One convention for every map here and in :mod:`transient.plotting`: arrays
+are indexed ``[x, y]``, x runs along the horizontal axis and y up
+(:func:`draw_map`), lengths in mm from the centre of the grid's box.  The
+face is drawn as relief: its height about its least-squares plane (or its
+mean) over the face, in micrometres; pressures in Pa, kPa, MPa or GPa,
+whichever suits their size.  Figures are sized for print (a column is
+:data:`COLUMN_WIDTH` inches wide, a page :data:`PAGE_WIDTH`) with fonts of
+:data:`FONT_SIZES` points.
 """
 
 from __future__ import annotations
 
 import logging
+import os
 import pathlib
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+from matplotlib.transforms import offset_copy
 
 from .output import read_result
+from .problem import default_phase_names
+from .relief import PlaneFit
 
-__all__ = ["plot_file", "result_figure"]
+__all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
+           "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
+           "plot_phases", "pressure_unit", "relief", "result_figure", "root_figure", "save_png",
+           "set_fonts"]
 
 logger = logging.getLogger(__name__)
+
+#: Width of a journal column and of a page, inches.
+COLUMN_WIDTH = 3.5
+PAGE_WIDTH = 7.2
+
+#: Font sizes in points, at the figure's printed size.
+FONT_SIZES = {"label": 10, "tick": 9, "legend": 8.5, "title": 10}
 
 # Light matrix, dark inclusions, as in the paper's Fig. 3a; more phases get
 # further distinct colours.
 _PHASE_COLOURS = ["#bdbdbd", "#252525", "#d95f02", "#1b9e77", "#7570b3", "#e7298a",
                   "#66a61e", "#e6ab02"]
 
+_RELIEF = {"plane": "about the best-fit plane", "mean": "about the mean"}
 
-def result_figure(stored):
-    """Two-panel figure of a stored steady result.
+
+def new_figure(width, height):
+    """A figure of ``width`` x ``height`` inches on an Agg canvas, constrained layout."""
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def root_figure(ax):
+    """The figure that holds ``ax``, through any subfigures (matplotlib 3.7 and later)."""
+    # Axes.figure is the innermost (sub)figure; a (sub)figure's own .figure is the root.
+    return ax.figure.figure
+
+
+def figure_and_axes(ax, size):
+    """``(figure, axes)``: those of ``ax``, or a new figure of ``size`` inches with one axes.
 
     Parameters
     ----------
-    stored : StoredResult
-        From :func:`steady.output.read_result`.
+    ax : matplotlib.axes.Axes or None
+        The caller's axes.
+    size : (float, float), inches
+        Width and height of the new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure, matplotlib.axes.Axes
+    """
+    if ax is not None:
+        return root_figure(ax), ax
+    fig = new_figure(*size)
+    return fig, fig.add_subplot()
+
+
+def set_fonts(*axes):
+    """Set the label, tick and title sizes of :data:`FONT_SIZES` on each axes (colour bars too)."""
+    for ax in axes:
+        ax.tick_params(which="both", labelsize=FONT_SIZES["tick"])
+        ax.xaxis.label.set_size(FONT_SIZES["label"])
+        ax.yaxis.label.set_size(FONT_SIZES["label"])
+        ax.title.set_size(FONT_SIZES["title"])
+        legend = ax.get_legend()
+        if legend is not None:
+            for text in legend.get_texts():
+                text.set_fontsize(FONT_SIZES["legend"])
+
+
+def phase_colours(n_phases):
+    """One colour per phase, phase 0 first (light matrix, dark inclusions)."""
+    return [_PHASE_COLOURS[i % len(_PHASE_COLOURS)] for i in range(int(n_phases))]
+
+
+def grid_extent(shape, pixel_size):
+    """``imshow`` extent of a grid in mm: its box ``[x0, x1, y0, y1]`` centred on the origin.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(nx, ny)``.
+    pixel_size : float, m
+
+    Returns
+    -------
+    list of float, mm
+    """
+    nx, ny = shape
+    h_mm = 1e3 * float(pixel_size)
+    return [-0.5 * nx * h_mm, 0.5 * nx * h_mm, -0.5 * ny * h_mm, 0.5 * ny * h_mm]
+
+
+def draw_map(ax, field, extent, *, unit="mm", **imshow):
+    """Draw a field indexed ``[x, y]`` with x along the horizontal axis and y up.
+
+    The one convention of every map of :mod:`steady.plotting` and
+    :mod:`transient.plotting`: ``imshow`` shows ``field.T`` (rows are y)
+    with ``origin="lower"``, so that ``field[i, j]`` is drawn at
+    ``(x_i, y_j)``, and a face wider along x than along y is drawn wider
+    than tall.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    field : ndarray or masked array, shape (nx, ny)
+        Masked entries and NaN are drawn in the colour map's "bad" colour.
+    extent : sequence of 4 float
+        ``[x0, x1, y0, y1]`` of the grid's box (:func:`grid_extent`).
+    unit : str, optional
+        Unit of the extent, for the axis labels (default ``"mm"``).
+    **imshow
+        Passed to ``imshow`` (``cmap``, ``norm``, ``vmin``, ...).
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+    """
+    image = ax.imshow(np.asanyarray(field).T, origin="lower", extent=tuple(extent),
+                      interpolation="nearest", **imshow)
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
+    ax.set_aspect("equal")
+    return image
+
+
+def colour_bar(image, label):
+    """A colour bar beside a map: on the right, or below a map more than 1.5 times wider than tall.
+
+    Parameters
+    ----------
+    image : matplotlib.image.AxesImage
+        From :func:`draw_map`.
+    label : str
+
+    Returns
+    -------
+    matplotlib.colorbar.Colorbar
+        Its axes' fonts set (:func:`set_fonts`).
+    """
+    x0, x1, y0, y1 = image.get_extent()
+    wide = abs(x1 - x0) > 1.5 * abs(y1 - y0)
+    bar = image.axes.figure.colorbar(image, ax=image.axes, location="bottom" if wide else "right",
+                       shrink=0.9, aspect=30)
+    bar.set_label(label)
+    set_fonts(bar.ax)
+    return bar
+
+
+def relief(face, face_mask, pixel_size, *, remove="plane"):
+    """The face's height about its least-squares plane or its mean over the face.
+
+    Parameters
+    ----------
+    face : ndarray, shape (nx, ny), m
+        Heights at the pixel centres (values off the face are ignored).
+    face_mask : ndarray of bool, shape (nx, ny)
+    pixel_size : float, m
+        Pixel side (any positive length when only the mean is removed).
+    remove : {"plane", "mean"}, optional
+        Remove the least-squares plane ``c0 + c1 x + c2 y`` (default; the
+        relief of :func:`steady.relief.rms_height`) or only the mean.
+
+    Returns
+    -------
+    ndarray, shape (nx, ny), m
+        Zero mean over the face; NaN off it.
+
+    Raises
+    ------
+    ValueError
+        ``remove`` is neither ``"plane"`` nor ``"mean"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> mask = np.ones((4, 3), dtype=bool)
+    >>> tilted = 2.0 + np.arange(4.0)[:, None] + np.zeros(3)
+    >>> print(np.abs(relief(tilted, mask, 1.0)).max() < 1e-12)
+    True
+    >>> relief(tilted, mask, 1.0, remove="mean")[:, 0]
+    array([-1.5, -0.5,  0.5,  1.5])
+    """
+    if remove not in _RELIEF:
+        raise ValueError(f"remove must be 'plane' or 'mean', got {remove!r}")
+    face_mask = np.asarray(face_mask, dtype=bool)
+    face = np.asarray(face, dtype=float)
+    out = np.full(face.shape, np.nan)
+    if not face_mask.any():
+        return out
+    if remove == "plane":
+        out[face_mask] = PlaneFit(face_mask, pixel_size).residual(face)
+    else:
+        values = face[face_mask]
+        out[face_mask] = values - values.mean()
+    return out
+
+
+def pressure_unit(values):
+    """The unit that suits pressures of this size: ``(factor, unit)``, Pa per unit.
+
+    Parameters
+    ----------
+    values : array_like, Pa
+        NaN ignored.
+
+    Returns
+    -------
+    factor : float
+        ``1``, ``1e3``, ``1e6`` or ``1e9``.
+    unit : str
+        ``"Pa"``, ``"kPa"``, ``"MPa"`` or ``"GPa"``: the largest unit in
+        which the largest magnitude is at least 1.
+
+    Examples
+    --------
+    >>> pressure_unit([2.0e5, 3.5e5])
+    (1000.0, 'kPa')
+    """
+    values = np.abs(np.asarray(values, dtype=float))
+    top = float(np.nanmax(values)) if np.any(np.isfinite(values)) else 0.0
+    for factor, unit in ((1e9, "GPa"), (1e6, "MPa"), (1e3, "kPa")):
+        if top >= factor:
+            return factor, unit
+    return 1.0, "Pa"
+
+
+def _steady(source):
+    """``(SteadyResult, phase names)`` of a file, a StoredResult or a SteadyResult.
+
+    The names: those the file stores (:attr:`steady.output.StoredResult.phase_names`),
+    else the result's own, else ``"phase 0"``, ...
+    """
+    if isinstance(source, (str, os.PathLike)):
+        source = read_result(source)
+    if hasattr(source, "result") and hasattr(source, "scene_text"):
+        source, names = source.result, tuple(getattr(source, "phase_names", ()) or ())
+    elif hasattr(source, "labels") and hasattr(source, "face"):
+        names = tuple(getattr(source, "phase_names", ()) or ())
+    else:
+        raise ValueError(f"expected a steady result file, StoredResult or SteadyResult, got "
+                         f"{type(source).__name__}")
+    if len(names) != source.n_phases:
+        names = default_phase_names(source.n_phases)
+    return source, tuple(str(name) for name in names)
+
+
+def _phase_names(res, known, names):
+    """``names`` checked (one per phase), or the names ``known`` from the result."""
+    if names is None:
+        return known
+    names = tuple(str(name) for name in names)
+    if len(names) != res.n_phases:
+        raise ValueError(f"names has {len(names)} entries, expected one per phase "
+                         f"({res.n_phases})")
+    return names
+
+
+def map_height(shape, width):
+    """Height in inches of a map panel ``width`` inches wide for a grid of ``shape``.
+
+    Room for the map at its aspect (within 0.9 to 7 inches), its axis
+    labels and title, and a colour bar below a wide map (:func:`colour_bar`).
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(nx, ny)`` of the grid.
+    width : float, inches
+
+    Returns
+    -------
+    float, inches
+    """
+    nx, ny = shape
+    below = 0.8 if nx > 1.5 * ny else 0.0
+    return float(np.clip(0.75 * width * ny / nx, 0.9, 7.0)) + 0.8 + below
+
+
+def plot_phases(source, *, ax=None, names=None, details=True):
+    """The phase map, with the phase names in the legend.
+
+    Parameters
+    ----------
+    source : str, path-like, StoredResult or SteadyResult
+        A result file of :func:`steady.output.write_result`, or a result.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure a column wide).
+    names : sequence of str, optional
+        One name per phase, phase 0 first (default: the names the file
+        stores, else the result's own, else ``"phase 0"``, ...).
+    details : bool, optional
+        Add each phase's wear coefficient, area fraction and steady
+        pressure (eq. 7) to its legend entry (default True).
 
     Returns
     -------
     matplotlib.figure.Figure
-        Left: phase map; right: limiting face ``f_inf`` in micrometres.
-        Axes in mm.
+        The figure drawn into; axes in mm, x horizontal, y up.
     """
-    res = stored.result
-    nx, ny = res.shape
-    hx_mm, hy_mm = 0.5 * nx * res.pixel_size * 1e3, 0.5 * ny * res.pixel_size * 1e3
-    extent = (-hx_mm, hx_mm, -hy_mm, hy_mm)
-    n_phases = res.n_phases
-    colours = [_PHASE_COLOURS[i % len(_PHASE_COLOURS)] for i in range(n_phases)]
+    res, known = _steady(source)
+    names = _phase_names(res, known, names)
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH) + 0.6))
+    colours = phase_colours(res.n_phases)
     cmap = ListedColormap(colours).with_extremes(bad="white")
-    norm = BoundaryNorm(np.arange(n_phases + 1) - 0.5, n_phases)
-    phase = np.ma.masked_less(res.labels, 0)
-
-    # Wide faces side by side; tall ones too, at a height that keeps them legible.
-    fig = Figure(figsize=(10.5, 4.6 if nx >= ny else min(9.0, 3.2 + 1.6 * ny / nx)),
-                 layout="constrained")
-    FigureCanvasAgg(fig)
-    ax_phase, ax_face = fig.subplots(1, 2)
-    # Arrays are indexed [x, y]; imshow wants [row = y, column = x].
-    im = ax_phase.imshow(phase.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
-                         interpolation="nearest")
-    cb = fig.colorbar(im, ax=ax_phase, ticks=np.arange(n_phases), shrink=0.85)
-    cb.set_ticklabels([f"phase {i}\nk = {k:.3g} 1/Pa\narea {100 * rho:.1f} %"
-                       for i, (k, rho) in enumerate(zip(res.wear_coefficients,
-                                                        res.fill_factors, strict=True))])
-    ax_phase.set_title("phase map")
-
-    face_um = res.face * 1e6
-    im = ax_face.imshow(face_um.T, origin="lower", extent=extent, cmap="viridis",
-                        interpolation="nearest")
-    cb = fig.colorbar(im, ax=ax_face, shrink=0.85)
-    cb.set_label(r"limiting face $f_\infty$ (µm)")
-    error = (f" ± {res.rms_slope_error / res.reference_slope:.1g}"
-             if np.isfinite(res.rms_slope_error) else "")
-    ax_face.set_title(f"rms slope {res.rms_slope:.4g} = ({res.normalised_rms_slope:.4g}{error}) "
-                      r"$\nabla f_\infty^0$")
-    for ax in (ax_phase, ax_face):
-        ax.set_xlabel("x (mm)")
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal")
-    fig.suptitle(f"{res.outline.describe()}, F = {res.normal_force:.3g} N, "
-                 f"E* = {res.E_star / 1e6:.3g} MPa, n = {res.n}")
+    norm = BoundaryNorm(np.arange(res.n_phases + 1) - 0.5, res.n_phases)
+    draw_map(ax, np.ma.masked_less(res.labels, 0), grid_extent(res.shape, res.pixel_size),
+             cmap=cmap, norm=norm)
+    labels = list(names)
+    if details:
+        factor, unit = pressure_unit(res.phase_pressures)
+        labels = [f"{name}: k = {k:.3g} 1/Pa, {100 * rho:.1f} %, p = {p / factor:.3g} {unit}"
+                  for name, k, rho, p in zip(names, res.wear_coefficients, res.fill_factors,
+                                             res.phase_pressures, strict=True)]
+    handles = [Patch(facecolor=c, edgecolor="0.4", lw=0.5, label=label)
+               for c, label in zip(colours, labels, strict=True)]
+    # Below the axes, clear of the x tick labels and label whatever the axes' height.
+    below = offset_copy(ax.transAxes, fig=fig, y=-3.6 * FONT_SIZES["label"], units="points")
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+              bbox_transform=below, frameon=False, fontsize=FONT_SIZES["legend"])
+    set_fonts(ax)
     return fig
 
 
-def plot_file(result_path, png_path, *, force=False, dpi=120):
-    """Draw the figure of an HDF5 result into a PNG file.
+def plot_face(source, *, ax=None, remove="plane", units="um", cmap="viridis"):
+    """The limiting face ``f_inf`` as relief about its mean plane.
+
+    Parameters
+    ----------
+    source : str, path-like, StoredResult or SteadyResult
+        A result file of :func:`steady.output.write_result`, or a result.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure a column wide).
+    remove : {"plane", "mean"}, optional
+        Draw the height about the face's least-squares plane (default) or
+        about its mean (:func:`relief`); the colour bar says which.
+    units : {"um", "normalised"}, optional
+        Heights in micrometres (default) or in ``grad_f0 L`` (eq. 15 over
+        ``L``; ``L`` the outline's scale, the radius of a disk).
+    cmap : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn into; axes in mm, x horizontal, y up, with a
+        colour bar.
+    """
+    res, _ = _steady(source)
+    if units not in ("um", "normalised"):
+        raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH)))
+    height = relief(res.face, res.labels >= 0, res.pixel_size, remove=remove)
+    if units == "um":
+        field, unit = height * 1e6, "µm"
+    else:
+        field, unit = height / (res.reference_slope * res.scale), r"$\nabla f^0_\infty L$"
+    image = draw_map(ax, field, grid_extent(res.shape, res.pixel_size), cmap=cmap)
+    colour_bar(image, f"height {_RELIEF[remove]} ({unit})")
+    set_fonts(ax)
+    return fig
+
+
+def result_figure(stored, *, axes=None, remove="plane", names=None):
+    """Two-panel figure of a steady result: phase map beside the face's relief.
+
+    Parameters
+    ----------
+    stored : str, path-like, StoredResult or SteadyResult
+        From :func:`steady.output.read_result`, or a result file.
+    axes : sequence of 2 matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure a page wide).
+    remove : {"plane", "mean"}, optional
+        What the face panel removes from ``f_inf`` (:func:`plot_face`).
+    names : sequence of str, optional
+        Phase names (:func:`plot_phases`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: phase map with the phase names; right: the limiting face
+        ``f_inf`` about its plane in micrometres, titled with its rms
+        slope; a new figure is titled with the outline, load, modulus and
+        grid.  Axes in mm, x horizontal, y up.
+
+    Examples
+    --------
+    A block twice as long along x as along y is drawn wider than tall:
+
+    >>> from steady import FacePhases, Problem, Rectangle, Voronoi, solve
+    >>> grid = Rectangle(8e-3, 4e-3).grid(48)
+    >>> phases = FacePhases(grid, Voronoi(40, (0.5, 0.5), seed=2024).labels(grid), 2)
+    >>> result = solve(Problem(phases, [1e-13, 1e-12], 4.0, 1.3e6))
+    >>> fig = result_figure(result)
+    >>> [ax.get_xlabel() for ax in fig.axes[:2]]
+    ['x (mm)', 'x (mm)']
+    >>> fig.axes[1].images[0].get_extent()
+    [-4.0, 4.0, -2.0, 2.0]
+    """
+    res, known = _steady(stored)
+    own = axes is None
+    if own:
+        fig = new_figure(PAGE_WIDTH, map_height(res.shape, 0.5 * PAGE_WIDTH) + 0.9)
+        axes = fig.subplots(1, 2)
+    else:
+        fig = root_figure(axes[0])
+    ax_phase, ax_face = axes
+    plot_phases(res, ax=ax_phase, names=_phase_names(res, known, names))
+    plot_face(res, ax=ax_face, remove=remove)
+    ax_phase.set_title("phase map")
+    error = (f" ± {res.rms_slope_error / res.reference_slope:.1g}"
+             if np.isfinite(res.rms_slope_error) else "")
+    ax_face.set_title(f"limiting face, rms slope {res.rms_slope:.3g}\n"
+                      f"= ({res.normalised_rms_slope:.4g}{error}) " r"$\nabla f^0_\infty$")
+    if own:  # a title of the inputs on a figure of ours, not on the caller's
+        fig.suptitle(f"{res.outline.describe()}, F = {res.normal_force:.3g} N, "
+                     f"E* = {res.E_star / 1e6:.3g} MPa, n = {res.n}",
+                     fontsize=FONT_SIZES["title"])
+    set_fonts(ax_phase, ax_face)
+    return fig
+
+
+def plot_file(result_path, png_path, *, force=False, dpi=200):
+    """Draw the figure of an HDF5 result (:func:`result_figure`) into a PNG file.
 
     Parameters
     ----------
@@ -95,6 +466,7 @@ def plot_file(result_path, png_path, *, force=False, dpi=120):
     force : bool, optional
         Overwrite an existing image (default False).
     dpi : int, optional
+        Resolution (default 200 dots per inch of the printed size).
 
     Returns
     -------
@@ -109,7 +481,7 @@ def plot_file(result_path, png_path, *, force=False, dpi=120):
     return save_png(result_figure(read_result(result_path)), png_path, force=force, dpi=dpi)
 
 
-def save_png(fig, png_path, *, force=False, dpi=120):
+def save_png(fig, png_path, *, force=False, dpi=200):
     """Write a figure to a PNG file, creating missing parent directories.
 
     Parameters
@@ -119,6 +491,7 @@ def save_png(fig, png_path, *, force=False, dpi=120):
     force : bool, optional
         Overwrite an existing image (default False).
     dpi : int, optional
+        Resolution (default 200).
 
     Returns
     -------

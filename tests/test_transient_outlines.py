@@ -531,9 +531,9 @@ def test_figure_extent_comes_from_the_grid(tmp_path):
     result, attrs, _ = read_run(path)
     fig = run_figure(result, attrs)
     image = fig.axes[3].images[0]
-    # A face taller than wide lies down: y along the horizontal axis.
-    assert list(image.get_extent()) == pytest.approx([-4.0, 4.0, -2.0, 2.0])
-    assert fig.axes[3].get_xlabel() == "y (mm)"
+    # x along the horizontal axis, y up, as in the steady figures.
+    assert list(image.get_extent()) == pytest.approx([-2.0, 2.0, -4.0, 4.0])
+    assert fig.axes[3].get_xlabel() == "x (mm)"
     assert plot_run(path, tmp_path / "run.png").stat().st_size > 10000
 
 

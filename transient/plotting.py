@@ -1,7 +1,19 @@
-"""Figure of a run file: the friction proxy's history beside the final face and pressure.
+"""Figures of a run: the rms slope's history, the worn face as relief and its pressure.
 
-Reads the HDF5 file written by :func:`transient.output.write_run`, so a
-figure can be redrawn without running again.  Uses matplotlib's Agg
+Each ``plot_*`` function takes a run file (written by
+:func:`transient.output.write_run`) or a :class:`transient.runin.RunResult`,
+draws into the axes given as ``ax=`` (or a new figure) and returns the
+:class:`~matplotlib.figure.Figure`::
+
+    from transient.plotting import plot_history
+    plot_history("run.h5", units="m").savefig("history.png")
+
+:func:`run_figure` puts them together, and :func:`plot_run` writes that
+figure into a PNG (the ``--plot`` of ``runin-transient``).  Distances are
+in metres with ``s*`` on a secondary axis (or the other way round), the
+face is relief about its plane in micrometres, pressures in kPa or MPa,
+lengths in mm; every map follows :func:`steady.plotting.draw_map` (x
+horizontal, y up), as the steady figures do.  Uses matplotlib's Agg
 canvas directly (no pyplot, no global backend state).
 :func:`draw_rms_slope_history` draws the history panel for other figures
 too (``studies/runin_history.py``).
@@ -9,16 +21,43 @@ too (``studies/runin_history.py``).
 
 from __future__ import annotations
 
-import pathlib
+import dataclasses
+import math
+import os
 
 import h5py
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
+from matplotlib.ticker import NullLocator
+
+from steady.plotting import (
+    COLUMN_WIDTH,
+    FONT_SIZES,
+    PAGE_WIDTH,
+    colour_bar,
+    draw_map,
+    figure_and_axes,
+    map_height,
+    new_figure,
+    pressure_unit,
+    relief,
+    root_figure,
+    save_png,
+    set_fonts,
+)
 
 from .output import read_run
 
-__all__ = ["draw_rms_slope_history", "extent", "plot_run", "run_figure"]
+__all__ = ["RUN_IN_WITHIN", "add_distance_axis", "distance_scale", "draw_rms_slope_history",
+           "extent", "format_metres", "plot_face", "plot_history", "plot_pressure", "plot_run",
+           "run_figure", "run_in_distance_of"]
+
+#: The tolerance of the run-in distance marked on the history: the distance
+#: after which the run stays within 1 % of the steady state.
+RUN_IN_WITHIN = 0.01
+
+# Histories whose last step jumped to "infinity" when the steady state was
+# reached: points beyond this many s* are not drawn.
+_JUMP = 1e6
 
 
 def _error_band(history, reference):
@@ -31,9 +70,22 @@ def _error_band(history, reference):
     return error / reference
 
 
+def _check_units(units):
+    if units not in ("m", "s*"):
+        raise ValueError(f"units must be 'm' or 's*', got {units!r}")
+
+
+def _distance_ticks(left, right):
+    """Powers of ten between ``10 left`` and ``right``: every decade, every other when many."""
+    low, high = math.floor(math.log10(10 * left)), math.ceil(math.log10(right))
+    step = 1 if high - low <= 6 else 2
+    ticks = [10.0 ** k for k in range(low - low % step, high + 1, step)]
+    return [t for t in ticks if 10 * left < t <= right * (1 + 1e-12)]
+
+
 def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, steady=None,
                            color="C0", label="continuum estimate",
-                           plain_label="plain pixel value"):
+                           plain_label="plain pixel value", units="s*"):
     """The rms slope against the sliding distance, with its error band.
 
     The distance axis is logarithmic; the value at ``s = 0`` (the initial
@@ -49,9 +101,10 @@ def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, stea
         ``rms_slope_error``, ``rms_slope_spatial_error``, ``rms_slope_plain``
         (:data:`transient.runin.HISTORY_UNITS`).
     distance_scale : float, m
-        ``s*``, the unit of the distance axis.
+        ``s*``, the distance scale of the run.
     reference_slope : float
-        ``grad_f0``, the unit of the slope axis.
+        The unit of the slope axis: ``grad_f0`` for the normalised rms
+        slope, 1 for the rms slope itself.
     steady : (float, float), optional
         The steady face's rms slope and its error bar (dimensional), drawn
         as the asymptote.
@@ -61,150 +114,336 @@ def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, stea
         Legend of the plain pixel value, drawn faintly when the history has
         it (``"_nolegend_"`` to leave it out of the legend, None not to draw
         it).
+    units : {"s*", "m"}, optional
+        Distance axis in ``s*`` (default) or in metres.
 
     Returns
     -------
     float
-        The position of the ``s = 0`` point on the axis, in ``s*``.
+        The position of the ``s = 0`` point on the axis, in ``units``.
     """
+    _check_units(units)
+    scale = 1.0 if units == "s*" else float(distance_scale)
     s = np.asarray(history["distance"], dtype=float) / distance_scale
     y = np.asarray(history["rms_slope"], dtype=float) / reference_slope
     err = _error_band(history, reference_slope)
     pos = s > 0
-    # The last step of a run that reached the steady state is a jump of ~1e8 s*.
-    finite_end = s[pos][s[pos] < 1e6] if np.any(pos) else np.array([1.0])
+    finite_end = s[pos & (s < _JUMP)]
     right = max(100.0, 3 * float(finite_end.max()) if finite_end.size else 100.0)
     left = float(s[pos].min()) / 4 if np.any(pos) else 1e-6
     shown = pos & (s <= right)
-    ax.fill_between(s[shown], (y - err)[shown], (y + err)[shown], color=color, alpha=0.25,
+    x = s * scale
+    ax.fill_between(x[shown], (y - err)[shown], (y + err)[shown], color=color, alpha=0.25,
                     lw=0)
-    ax.semilogx(s[shown], y[shown], "-", color=color, lw=1.2, label=label)
+    ax.semilogx(x[shown], y[shown], "-", color=color, lw=1.4, label=label)
     if plain_label is not None and "rms_slope_plain" in history:
-        ax.semilogx(s[shown], np.asarray(history["rms_slope_plain"])[shown] / reference_slope,
-                    "-", color=color, lw=0.8, alpha=0.35, label=plain_label)
+        ax.semilogx(x[shown], np.asarray(history["rms_slope_plain"])[shown] / reference_slope,
+                    "-", color=color, lw=0.9, alpha=0.35, label=plain_label)
     if np.any(s == 0) and np.any(pos):
         y0 = float(y[s == 0][0])
         first = int(np.flatnonzero(pos)[0])
-        ax.plot([left], [y0], "o", color=color, ms=5, mfc="white", zorder=3)
-        ax.plot([left, s[first]], [y0, y[first]], ":", color=color, lw=0.9)
+        ax.plot([left * scale], [y0], "o", color=color, ms=5, mfc="white", zorder=3)
+        ax.plot([left * scale, x[first]], [y0, y[first]], ":", color=color, lw=0.9)
     if steady is not None:
         value, error = (v / reference_slope for v in steady)
         if np.isfinite(error):
             ax.axhspan(value - error, value + error, color="k", alpha=0.08, lw=0)
+        shown_error = f" $\\pm$ {error:.2g}" if np.isfinite(error) else ""
         ax.axhline(value, color="k", ls="--", lw=0.8,
-                   label=f"steady face {value:.4f} $\\pm$ {error:.2g}")
+                   label=f"steady face {value:.4g}{shown_error}")
+    left, right = left * scale, right * scale
     ax.set_xlim(left / 1.5, right)
-    # Powers of ten, every other decade, clear of the "0" at the left edge.
-    ticks = [t for t in 10.0 ** np.arange(-12, 13, 2) if 10 * left < t <= right]
+    ticks = _distance_ticks(left, right)
     ax.set_xticks([left] + ticks)
-    ax.set_xticklabels(["0"] + [f"$10^{{{int(np.log10(t))}}}$" for t in ticks])
-    ax.set_xlabel("sliding distance / s*  (s = 0 at the left edge)")
-    ax.set_ylabel("rms slope / grad_f0")
+    ax.set_xticklabels(["0"] + [f"$10^{{{round(math.log10(t))}}}$" for t in ticks])
+    ax.xaxis.set_minor_locator(NullLocator())
+    if units == "s*":
+        ax.set_xlabel("sliding distance / s*  (s = 0 at the left edge)")
+    else:
+        ax.set_xlabel("sliding distance (m)")
+    ax.set_ylabel("rms slope / grad_f0" if reference_slope != 1 else "rms slope")
     return left
 
 
-def _comparison(run_path):
-    """Attributes of the run file's ``comparison`` group, or an empty dict."""
-    with h5py.File(run_path, "r") as f:
-        return dict(f["comparison"].attrs) if "comparison" in f else {}
+def format_metres(value):
+    r"""A length in metres as text (mathtext), a power of ten when large or small.
+
+    Examples
+    --------
+    >>> print(format_metres(46153.8), "|", format_metres(1234.5), "|", format_metres(0.25))
+    4.62$\times 10^{4}$ m | 1230 m | 0.25 m
+    """
+    if 100 <= abs(value) < 1e4:  # three significant figures without an exponent
+        return f"{float(f'{value:.3g}'):.0f} m"
+    if value == 0 or 1e-3 <= abs(value) < 1e4:
+        return f"{value:.3g} m"
+    exponent = math.floor(math.log10(abs(value)))
+    mantissa = value / 10.0 ** exponent
+    if round(mantissa, 2) >= 10:
+        mantissa, exponent = mantissa / 10, exponent + 1
+    return f"{mantissa:.3g}$\\times 10^{{{exponent}}}$ m"
 
 
-def run_figure(result, attrs, comparison=None):
-    """Five-panel figure of a stored run.
+def add_distance_axis(ax, distance_scale, units="m"):
+    """A secondary distance axis on top: ``s*`` over an axis in metres, or the reverse.
 
     Parameters
     ----------
-    result : transient.runin.RunResult
-    attrs : mapping
-        Root attributes of the run file (``steady_rms_slope``; ``radius``
-        when the result carries no outline).
-    comparison : mapping, optional
-        The run file's ``comparison`` attributes
-        (:class:`transient.comparison.SteadyComparison`): the steady face's
-        rms slope and rms height with their error bars.
+    ax : matplotlib.axes.Axes
+        Axes whose x axis is the sliding distance in ``units``.
+    distance_scale : float, m
+        ``s*``; its value is printed in the secondary axis' label.
+    units : {"m", "s*"}, optional
+        The unit of ``ax``'s x axis (default ``"m"``).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The secondary axis (``ax.secondary_xaxis``).
+    """
+    _check_units(units)
+    s_star = float(distance_scale)
+    if units == "m":
+        functions = (lambda s: s / s_star, lambda u: u * s_star)
+        label = f"sliding distance / s*  (s* = {format_metres(s_star)})"
+    else:
+        functions = (lambda u: u * s_star, lambda s: s / s_star)
+        label = f"sliding distance (m)  (s* = {format_metres(s_star)})"
+    top = ax.secondary_xaxis("top", functions=functions)
+    top.set_xlabel(label)
+    set_fonts(top)
+    return top
+
+
+@dataclasses.dataclass(frozen=True)
+class _Run:
+    """A run's result with what its file adds (each empty when absent).
+
+    The root attributes, the ``comparison`` group's attributes and the
+    ``run_in_distance`` group's datasets.
+    """
+
+    result: object
+    attrs: dict
+    comparison: dict
+    run_in: dict
+
+    @property
+    def distance_scale(self):
+        """``s*``, m."""
+        return distance_scale(self.result)
+
+
+def _groups(run_path):
+    """The run file's ``comparison`` attributes and ``run_in_distance`` datasets, or empty."""
+    with h5py.File(run_path, "r") as f:
+        comparison = dict(f["comparison"].attrs) if "comparison" in f else {}
+        group = f.get("run_in_distance")
+        run_in = ({name: ds[()] for name, ds in group.items() if isinstance(ds, h5py.Dataset)}
+                  if isinstance(group, h5py.Group) else {})
+    return comparison, run_in
+
+
+def _run(source):
+    """The :class:`_Run` of a run file or a RunResult."""
+    if isinstance(source, _Run):
+        return source
+    if isinstance(source, (str, os.PathLike)):
+        result, attrs, _ = read_run(source)
+        return _Run(result, dict(attrs), *_groups(source))
+    if hasattr(source, "history") and hasattr(source, "depth_scale"):
+        return _Run(source, {}, {}, {})
+    raise ValueError(f"expected a run file or a RunResult, got {type(source).__name__}")
+
+
+def distance_scale(result):
+    """``s* = L / (k_min E*)`` of a run, m (``distance_scale``, formerly ``run_in_distance``)."""
+    scale = getattr(result, "distance_scale", None)
+    return float(result.run_in_distance if scale is None else scale)
+
+
+def _steady_slope(attrs, comparison):
+    """The steady face's rms slope and its error bar (NaN if unknown), or None."""
+    if "steady_rms_slope" in comparison:
+        return (float(comparison["steady_rms_slope"]),
+                float(comparison.get("steady_rms_slope_uncertainty", np.nan)))
+    if "steady_rms_slope" in attrs:
+        return float(attrs["steady_rms_slope"]), np.nan
+    return None
+
+
+def run_in_distance_of(source, within=RUN_IN_WITHIN, *, table=None):
+    """The run-in distance within ``within`` of the steady state, m, or None.
+
+    From the run file's group ``run_in_distance`` (datasets ``within``,
+    ``reached``, ``distance``), else from the result's
+    ``run_in_distance(within)`` method where it has one; None when neither
+    gives a distance the run reached.
+
+    Parameters
+    ----------
+    source : str, path-like or RunResult
+    within : float, optional
+        Relative tolerance (default :data:`RUN_IN_WITHIN`, 1 %).
+    table : mapping of str to ndarray, optional
+        The group's datasets, in place of the file's.
+
+    Returns
+    -------
+    float or None, m
+    """
+    run = _run(source)
+    table = run.run_in if table is None else table
+    if {"within", "distance"} <= table.keys():
+        tolerances = np.atleast_1d(np.asarray(table["within"], dtype=float))
+        distances = np.atleast_1d(np.asarray(table["distance"], dtype=float))
+        reached = np.atleast_1d(np.asarray(table.get("reached", np.ones_like(distances)),
+                                           dtype=float))
+        match = np.flatnonzero(np.isclose(tolerances, within, rtol=1e-9, atol=0.0))
+        if match.size and reached[match[0]] > 0 and np.isfinite(distances[match[0]]):
+            return float(distances[match[0]])
+        return None
+    method = getattr(run.result, "run_in_distance", None)
+    if callable(method):
+        try:
+            found = method(within)
+        except ValueError:
+            return None
+        if found.reached and math.isfinite(found.distance_m):
+            return float(found.distance_m)
+    return None
+
+
+def _distance(run, units):
+    """Positive distances before any final jump, in ``units``, and their mask."""
+    s = np.asarray(run.result.history["distance"], dtype=float) / run.distance_scale
+    pos = (s > 0) & (s < _JUMP)
+    return s * (1.0 if units == "s*" else run.distance_scale), pos
+
+
+def _draw_slope(ax, run, units, normalised):
+    result = run.result
+    g0 = result.reference_slope if normalised else 1.0
+    draw_rms_slope_history(ax, result.history, run.distance_scale, g0,
+                           steady=_steady_slope(run.attrs, run.comparison), units=units)
+    ax.set_ylabel(r"rms slope / $\nabla f^0_\infty$" if normalised else "rms slope")
+    mark = run_in_distance_of(run)
+    if mark is not None:
+        x = mark / run.distance_scale if units == "s*" else mark
+        ax.axvline(x, color="0.3", ls=":", lw=1.0,
+                   label=f"run-in distance ({100 * RUN_IN_WITHIN:g} %) {format_metres(mark)}")
+
+
+def _draw_height(ax, run, units, normalised):
+    result, comparison = run.result, run.comparison
+    h = result.history
+    x, pos = _distance(run, units)
+    scale = result.outline.scale if result.outline is not None else math.nan
+    if normalised:
+        y, unit = np.asarray(h["normalised_rms_height"]), r" / $(\nabla f^0_\infty L)$"
+        reference = result.reference_slope * scale
+    else:
+        y, unit = np.asarray(h["rms_height"]) * 1e6, " (µm)"
+        reference = 1e-6
+    ax.semilogx(x[pos], y[pos], "-", color="C2", lw=1.4, label="worn face")
+    if "steady_rms_height" in comparison and np.isfinite(reference):
+        ax.axhline(comparison["steady_rms_height"] / reference, color="k", ls="--", lw=0.8,
+                   label="steady face")
+    ax.set_ylabel(f"rms height{unit}")
+    ax.set_xlabel("sliding distance (m)" if units == "m" else "sliding distance / s*")
+
+
+def _draw_convergence(ax, run, units, normalised):
+    del normalised  # the measures are relative already
+    h = run.result.history
+    x, pos = _distance(run, units)
+    ax.loglog(x[pos], np.maximum(h["spread"][pos], 1e-17), ".-", ms=2,
+              label="wear-rate spread")
+    ax.loglog(x[pos], np.maximum(h["shape_rate"][pos], 1e-17), ".-", ms=2,
+              label="shape change (f* per s*)")
+    ax.set_ylabel("convergence measure")
+    ax.set_xlabel("sliding distance (m)" if units == "m" else "sliding distance / s*")
+
+
+#: The panels of :func:`plot_history` by quantity: ``draw(ax, run, units, normalised)``.
+_PANELS = {"rms_slope": _draw_slope, "rms_height": _draw_height,
+           "convergence": _draw_convergence}
+
+
+def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",), ax=None,
+                 secondary=True, legend=True):
+    r"""The rms slope (and other measures) against the sliding distance.
+
+    Parameters
+    ----------
+    source : str, path-like or RunResult
+        A run file of :func:`transient.output.write_run`, or a result.
+    units : {"m", "s*"}, optional
+        The distance axis in metres (default) or in ``s*``; the other on a
+        secondary axis on top, with the value of ``s*`` in its label.
+    normalised : bool, optional
+        Rms slope in ``grad_f0`` and rms height in ``grad_f0 L`` (default),
+        else the rms slope itself and the rms height in micrometres.
+    quantities : sequence of str, optional
+        Panels, one each, top to bottom: ``"rms_slope"`` (with its error
+        band, the plain pixel value, the steady face's value and the run-in
+        distance when the file has them), ``"rms_height"`` (about the best
+        plane), ``"convergence"`` (the stop test's measures).
+    ax : matplotlib.axes.Axes or sequence of them, optional
+        Axes to draw into, one per quantity (default: a new figure a
+        column wide).
+    secondary : bool, optional
+        Add the secondary distance axis (default True).
+    legend : bool, optional
 
     Returns
     -------
     matplotlib.figure.Figure
-        Top: the rms slope (converged estimate with its error band, the
-        plain pixel value faint, the steady value as the asymptote), the rms
-        height, and the convergence measures against the sliding distance;
-        bottom: final face (in ``f*``) and pressure (in the mean pressure),
-        axes in mm (in pixels when the run's outline is unknown); a face
-        longer along y than along x is drawn lying, y horizontal.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``units`` or quantity, or not as many axes as quantities.
+
+    Examples
+    --------
+    >>> from steady import Circle, FacePhases, Problem, Voronoi
+    >>> from transient import initial_face
+    >>> from transient.problem import WearProblem
+    >>> from transient.runin import RunOptions, run_in
+    >>> grid = Circle(4e-3).grid(24)
+    >>> phases = FacePhases(grid, Voronoi(16, (0.5, 0.5), seed=2024).labels(grid), 2)
+    >>> problem = WearProblem(Problem(phases, [1e-13, 1e-12], 10.0, 1.3e6))
+    >>> result = run_in(problem, initial_face.flat(problem.grid), RunOptions(tol=1e-2))
+    >>> fig = plot_history(result, units="m")
+    >>> print(fig.axes[0].get_xlabel(), "|", fig.axes[0].child_axes[0].get_xlabel())
+    sliding distance (m) | sliding distance / s*  (s* = 3.08$\times 10^{4}$ m)
     """
-    comparison = comparison or {}
-    h = result.history
-    g0 = result.reference_slope
-    fig = Figure(figsize=(15, 8.5))
-    FigureCanvasAgg(fig)
-    grid = fig.add_gridspec(2, 6)
-    ax_slope = fig.add_subplot(grid[0, 0:2])
-    ax_height = fig.add_subplot(grid[0, 2:4])
-    ax_conv = fig.add_subplot(grid[0, 4:6])
-    ax_face = fig.add_subplot(grid[1, 0:3])
-    ax_pressure = fig.add_subplot(grid[1, 3:6])
-    steady = None
-    if "steady_rms_slope" in comparison:
-        steady = (comparison["steady_rms_slope"],
-                  comparison.get("steady_rms_slope_uncertainty", np.nan))
-    elif "steady_rms_slope" in attrs:
-        steady = (attrs["steady_rms_slope"], np.nan)
-    draw_rms_slope_history(ax_slope, h, result.distance_scale, g0, steady=steady)
-    ax_slope.legend(fontsize=8, loc="best")
-    ax_slope.set_title(f"{result.scheme}: {result.steps} steps, {result.solves} contact solves",
-                       fontsize=10)
-    s = h["distance"] / result.distance_scale
-    pos = (s > 0) & (s < 1e6)
-    outline = _outline(result, attrs)
-    scale = np.nan if outline is None else outline.scale
-    length = "a" if outline is None or outline.kind == "circle" else "L"
-    if "normalised_rms_height" in h:
-        ax_height.semilogx(s[pos], h["normalised_rms_height"][pos], "-", color="C2",
-                           label="worn face")
-        if "steady_rms_height" in comparison:
-            ax_height.axhline(comparison["steady_rms_height"] / (g0 * scale), color="k",
-                              ls="--", lw=0.8, label="steady face")
-        ax_height.legend(fontsize=8, loc="lower right")
-    ax_height.set_xlabel("sliding distance / s*")
-    ax_height.set_ylabel(f"rms height / (grad_f0 {length}), best plane removed")
-    a = ax_conv
-    a.loglog(s[pos], np.maximum(h["spread"][pos], 1e-17), ".-", ms=2, label="wear-rate spread")
-    a.loglog(s[pos], np.maximum(h["shape_rate"][pos], 1e-17), ".-", ms=2,
-             label="shape change (f* per s*)")
-    a.set_xlabel("sliding distance / s*")
-    a.legend(fontsize=8)
-    a.set_title(f"status: {result.status}", fontsize=10)
-    nx, ny = result.height.shape
-    ext, unit = extent(result.height.shape, outline)
-    # Arrays are indexed [x, y]; imshow wants [row, column]: x along the
-    # horizontal axis, unless the face is taller than wide (ny > nx), which
-    # is drawn lying down, its long side y horizontal, to fill the panel.
-    lying = ny > nx
-    if lying:
-        ext = ext[2:] + ext[:2]
-
-    def show(ax, field):
-        return ax.imshow(field if lying else field.T, origin="lower", extent=ext)
-
-    # A wide image gets a colour bar of its own height (the default spans the axes).
-    ratio = (ext[3] - ext[2]) / (ext[1] - ext[0])
-    bar = {"fraction": 0.046 * ratio, "pad": 0.04} if ratio < 0.9 else {}
-
-    face = result.face - np.nanmin(result.face)
-    im = show(ax_face, face / result.depth_scale)
-    fig.colorbar(im, ax=ax_face, label="face height / f*", **bar)
-    grid = f"n = {nx}" if nx == ny else f"n = {max(nx, ny)}, {nx} x {ny} pixels"
-    described = "" if outline is None else f"{outline.describe()}, "
-    ax_face.set_title(f"final face ({described}{grid})", fontsize=10)
-    pr = np.where(result.face_mask, result.pressure / result.pixel_mean_pressure, np.nan)
-    im = show(ax_pressure, pr)
-    fig.colorbar(im, ax=ax_pressure, label="pressure / pbar", **bar)
-    ax_pressure.set_title("final pressure", fontsize=10)
-    for a in (ax_face, ax_pressure):
-        a.set_xlabel(f"{'y' if lying else 'x'} ({unit})")
-        a.set_ylabel(f"{'x' if lying else 'y'} ({unit})")
-    fig.tight_layout()
+    _check_units(units)
+    quantities = (quantities,) if isinstance(quantities, str) else tuple(quantities)
+    unknown = [q for q in quantities if q not in _PANELS]
+    if unknown or not quantities:
+        raise ValueError(f"unknown quantity {unknown[0] if unknown else quantities!r}: "
+                         f"expected some of {', '.join(_PANELS)}")
+    run = _run(source)
+    if ax is None:
+        fig = new_figure(COLUMN_WIDTH, 0.4 + 2.6 * len(quantities))
+        axes = list(np.atleast_1d(fig.subplots(len(quantities), 1, sharex=True)))
+    else:
+        axes = [ax] if hasattr(ax, "plot") else list(ax)
+        if len(axes) != len(quantities):
+            raise ValueError(f"{len(axes)} axes given for {len(quantities)} quantities")
+        fig = root_figure(axes[0])
+    for a, quantity in zip(axes, quantities, strict=True):
+        _PANELS[quantity](a, run, units, normalised)
+        if legend:
+            a.legend(loc="best", fontsize=FONT_SIZES["legend"])
+        set_fonts(a)
+    if ax is None:
+        for a in axes[:-1]:
+            a.set_xlabel("")
+    if secondary:
+        add_distance_axis(axes[0], run.distance_scale, units)
     return fig
 
 
@@ -245,21 +484,193 @@ def extent(shape, outline):
     return [-0.5 * nx * h_mm, 0.5 * nx * h_mm, -0.5 * ny * h_mm, 0.5 * ny * h_mm], "mm"
 
 
-def plot_run(run_path, png_path):
-    """Draw a run file into a PNG.
+def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cmap="viridis"):
+    """The worn face as relief about its plane (or mean), the final one or a snapshot.
+
+    Parameters
+    ----------
+    source : str, path-like or RunResult
+        A run file of :func:`transient.output.write_run`, or a result.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure a column wide).
+    remove : {"plane", "mean"}, optional
+        Draw the height about the face's least-squares plane (default) or
+        about its mean (:func:`steady.plotting.relief`); the colour bar
+        says which.
+    units : {"um", "normalised"}, optional
+        Heights in micrometres (default) or in ``f*``, the run's depth
+        scale.
+    snapshot : int, optional
+        Index of a stored snapshot (:attr:`RunResult.snapshot_distance`);
+        default the final face.
+    cmap : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Axes in mm (in pixels when the run's outline is unknown), x
+        horizontal, y up, as in :mod:`steady.plotting`.
+    """
+    if units not in ("um", "normalised"):
+        raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
+    run = _run(source)
+    result = run.result
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
+    outline = _outline(result, run.attrs)
+    ext, unit = extent(result.shape, outline)
+    h = 2.0 * outline.scale / max(result.shape) if outline is not None else 1.0
+    if snapshot is None:
+        face = result.face
+    else:
+        count = len(result.snapshot_distance)
+        if not -count <= snapshot < count:
+            raise ValueError(f"snapshot {snapshot} out of range: the run has {count}")
+        face = -np.asarray(result.snapshot_height[snapshot], dtype=float)
+    mask = result.face_mask & np.isfinite(face)
+    height = relief(face, mask, h, remove=remove)
+    field, scale = ((height * 1e6, "µm") if units == "um"
+                    else (height / result.depth_scale, "f*"))
+    image = draw_map(ax, field, ext, unit=unit, cmap=cmap)
+    about = "the best-fit plane" if remove == "plane" else "the mean"
+    colour_bar(image, f"height about {about} ({scale})")
+    set_fonts(ax)
+    return fig
+
+
+def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
+    """The final contact pressure on the face.
+
+    Parameters
+    ----------
+    source : str, path-like or RunResult
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure a column wide).
+    units : {"Pa", "normalised"}, optional
+        Pressure in Pa, kPa, MPa or GPa, whichever suits its size
+        (:func:`steady.plotting.pressure_unit`; default), or in the mean
+        pressure over the face's pixels.
+    cmap : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Axes in mm (pixels when the outline is unknown), x horizontal, y up.
+    """
+    if units not in ("Pa", "normalised"):
+        raise ValueError(f"units must be 'Pa' or 'normalised', got {units!r}")
+    run = _run(source)
+    result = run.result
+    fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
+    ext, unit = extent(result.shape, _outline(result, run.attrs))
+    pressure = np.where(result.face_mask, result.pressure, np.nan)
+    if units == "Pa":
+        factor, label = pressure_unit(pressure)
+    else:
+        factor, label = result.pixel_mean_pressure, "mean pressure"
+    image = draw_map(ax, pressure / factor, ext, unit=unit, cmap=cmap)
+    colour_bar(image, f"pressure ({label})")
+    set_fonts(ax)
+    return fig
+
+
+def run_figure(result, attrs=None, comparison=None, run_in=None, *, units="m",
+               normalised=True):
+    """Summary figure of a run: histories above, final face and pressure below.
+
+    Parameters
+    ----------
+    result : transient.runin.RunResult or str or path-like
+        A result, or a run file (then ``attrs``, ``comparison`` and
+        ``run_in`` are read from it).
+    attrs : mapping, optional
+        Root attributes of the run file (``steady_rms_slope``; ``radius``
+        when the result carries no outline).
+    comparison : mapping, optional
+        The run file's ``comparison`` attributes
+        (:class:`transient.comparison.SteadyComparison`): the steady face's
+        rms slope and rms height with their error bars.
+    run_in : mapping, optional
+        The run file's ``run_in_distance`` datasets (``within``,
+        ``reached``, ``distance``): the run-in distance marked on the
+        history (:func:`run_in_distance_of`).
+    units : {"m", "s*"}, optional
+        Distance axes in metres (default, ``s*`` on a secondary axis) or
+        in ``s*``.
+    normalised : bool, optional
+        Rms slope and height in ``grad_f0`` and ``grad_f0 L`` (default).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A page wide.  Top: the rms slope (continuum estimate with its
+        error band, plain pixel value faint, the steady face's value as
+        the asymptote); middle: rms height and the convergence measures;
+        bottom: the final face as relief about its plane (µm) and the
+        final pressure (kPa or MPa), axes in mm (pixels when the outline
+        is unknown), x horizontal and y up.
+    """
+    if isinstance(result, (str, os.PathLike)):
+        source = _run(result)
+    else:
+        source = _Run(result, dict(attrs or {}), dict(comparison or {}), dict(run_in or {}))
+    result, attrs = source.result, source.attrs
+    maps = map_height(result.shape, 0.5 * PAGE_WIDTH)
+    fig = new_figure(PAGE_WIDTH, 2.6 + 2.3 + maps + 0.5)
+    grid = fig.add_gridspec(3, 2, height_ratios=(2.6, 2.3, maps))
+    ax_slope = fig.add_subplot(grid[0, :])
+    ax_height = fig.add_subplot(grid[1, 0])
+    ax_conv = fig.add_subplot(grid[1, 1], sharex=ax_height)
+    ax_face = fig.add_subplot(grid[2, 0])
+    ax_pressure = fig.add_subplot(grid[2, 1], sharex=ax_face, sharey=ax_face)
+    plot_history(source, units=units, normalised=normalised, ax=ax_slope)
+    has_height = "rms_height" in result.history and "normalised_rms_height" in result.history
+    if has_height:
+        plot_history(source, units=units, normalised=normalised, ax=ax_height,
+                     quantities="rms_height", secondary=False)
+    else:
+        ax_height.set_axis_off()
+    plot_history(source, units=units, ax=ax_conv, quantities="convergence", secondary=False)
+    plot_face(source, ax=ax_face)
+    plot_pressure(source, ax=ax_pressure)
+    nx, ny = result.shape
+    grid_text = f"n = {nx}" if nx == ny else f"{nx} x {ny} pixels"
+    outline = _outline(result, attrs)
+    described = "" if outline is None else f"{outline.describe()}, "
+    fig.suptitle(f"{described}{grid_text}\n{result.scheme}: {result.steps} steps, "
+                 f"{result.solves} contact solves, status: {result.status}",
+                 fontsize=FONT_SIZES["title"])
+    for ax, title in ((ax_height, "rms height"), (ax_conv, "convergence"),
+                      (ax_face, "final face"), (ax_pressure, "final pressure")):
+        ax.set_title(title)
+    set_fonts(ax_slope, ax_height, ax_conv, ax_face, ax_pressure)
+    return fig
+
+
+def plot_run(run_path, png_path, *, force=True, dpi=200, units="m"):
+    """Draw a run file's :func:`run_figure` into a PNG.
 
     Parameters
     ----------
     run_path : str or path-like
-        HDF5 file of ``python -m transient``.
+        HDF5 file of ``runin-transient``.
     png_path : str or path-like
+        Output image; missing parent directories are created.
+    force : bool, optional
+        Replace an existing image (default True: the command checks before
+        the run whether it may).
+    dpi : int, optional
+        Resolution (default 200).
+    units : {"m", "s*"}, optional
+        Distance axes (:func:`run_figure`).
 
     Returns
     -------
     pathlib.Path
         The PNG written.
+
+    Raises
+    ------
+    ValueError
+        Unreadable run file, or ``png_path`` exists and ``force`` is False.
     """
-    result, attrs, _ = read_run(run_path)
-    png_path = pathlib.Path(png_path)
-    run_figure(result, attrs, _comparison(run_path)).savefig(png_path, dpi=100)
-    return png_path
+    return save_png(run_figure(run_path, units=units), png_path, force=force, dpi=dpi)
