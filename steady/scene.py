@@ -68,7 +68,9 @@ MAX_SCENE_BYTES = 2 ** 20
 #: The keys of the sections that name no kind.
 SECTIONS = {
     "load": (Key("normal_force", "number", unit="N", low=0.0, required=True,
-                 doc="the normal force F_N"),),
+                 doc="the normal force F_N"),
+             Key("sliding_speed", "number", unit="m/s", low=0.0,
+                 doc="sliding speed, optional: the run-in distance is also given as a time")),
     "counterbody": (Key("E_star", "number", unit="Pa", low=0.0, required=True,
                         doc="effective modulus E / (1 - nu^2) of the counter-body"),),
     "grid": (Key("n", "integer", low=2, low_open=False, required=True,
@@ -124,6 +126,9 @@ class Scene:
     phase_names : tuple of str or None
         ``[phases] names``, one per phase; None when the scene names none
         (:attr:`steady.problem.FacePhases.names` then holds the defaults).
+    sliding_speed : float or None, m/s
+        ``[load] sliding_speed``; None when the scene gives none.  Nothing
+        depends on it but the conversion of sliding distances into times.
     """
 
     outline: object
@@ -138,6 +143,7 @@ class Scene:
         default_factory=lambda: types.MappingProxyType({}))
     ignored_sections: tuple = ()
     phase_names: tuple | None = None
+    sliding_speed: float | None = None
 
     @property
     def n_phases(self):
@@ -315,7 +321,7 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
                  geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
-                 phase_names=names)
+                 phase_names=names, sliding_speed=values["load"].get("sliding_speed"))
 
 
 def _toml(text):

@@ -83,7 +83,7 @@ def run_case(point, *, tol, distances):
         raise RuntimeError(f"{point}: run-in ended {result.status}: {result.message}")
     g0 = result.reference_slope
     h = result.history
-    s = h["distance"] / result.run_in_distance
+    s = h["distance"] / result.distance_scale
     at = [int(np.argmin(np.abs(s - d))) for d in distances]
     energy = SlopeEnergy(n, problem.halfspace.h, problem.halfspace.E_star)
     face = problem.face_mask
@@ -93,7 +93,7 @@ def run_case(point, *, tol, distances):
     for d, p in zip(distances, result.snapshot_pressure, strict=True):
         integrals = energy(p, face)
         uncorrected.append(float(integrals.rms_slope) / g0)
-        excess.append(float(np.mean(rim_layer_excess(growth * d * result.run_in_distance))))
+        excess.append(float(np.mean(rim_layer_excess(growth * d * result.distance_scale))))
     steady = solve_scene(scene, n=n)
     return {"distance": np.asarray(distances),
             "rms_slope": h["normalised_rms_slope"][at],

@@ -1,18 +1,17 @@
-"""Run-in distance: how far a face slides before its friction proxy is within 1 % of steady.
+"""Run-in distance: how far a face slides before it is within 1 % (and 0.1 %) of steady.
 
 From a flat face, :func:`transient.runin.run_in` (ESDIRK3, local error
-``tol`` in ``f*``) wears biphasic Voronoi punches to their steady state; the
-friction proxy is the history's ``normalised_rms_slope`` (the continuum
-estimate of :mod:`transient.history`, in units of ``grad_f0``).  The run-in
-distance ``s_1%`` is the distance after which it stays within 1 % of its
-steady value (the run's last value, the steady face of eq. 9): the last
-crossing of the 1 % band, interpolated in ``log s``.  Its bounds use the
-history's error bar: the band widened and narrowed by the error at each
-step.  Distances are in ``s* = a / (k_min E*)`` (``k_min`` the smaller wear
+``tol`` in ``f*``) wears biphasic Voronoi punches to their steady state.
+The run-in distance is :meth:`transient.runin.RunResult.run_in_distance`:
+the distance after which both the friction proxy (the history's continuum
+rms slope, :mod:`transient.history`) and the face (its rms deviation from
+the steady face of eq. 9 over the steady face's relief) stay within the
+band of the steady state (docs/model.md, "The run-in distance"), with its
+bounds from the step errors and the estimator's rim-layer error.
+Distances are in ``s* = a / (k_min E*)`` (``k_min`` the smaller wear
 coefficient) and, for the epoxy scene (``steady/examples/epoxy_cylinder.toml``:
 ``a = 4 mm``, ``E* = 1.3 MPa``, its ``k = 1e-13 1/Pa`` for the matrix), in
-metres.  Also the mean depth worn off by ``s_1%`` at the steady wear rate
-``k_eff pbar`` (``k_eff = 1 / sum_i rho_i / k_i``, eq. 6), in units of
+metres.  Also the mean depth worn off by then, in units of
 ``f* = pbar a / E*``: it does not depend on the wear coefficients' scale.
 
 Sweeps (around ``k_2/k_1 = 0.1``, ``rho_2 = 0.3``, 20^2 seeds; four
@@ -52,43 +51,12 @@ QUICK = {"n": 32, "scheme": "esdirk3", "tol": 1e-3, "band": 0.01,
          "grids": [32, 48], "grid_levels": [25], "scene": "epoxy_cylinder.toml"}
 
 
-def crossing(distance, value, band):
-    """Distance after which ``|value - value[-1]|`` stays within ``band`` (array or scalar).
-
-    Parameters
-    ----------
-    distance : ndarray, shape (S,)
-        Increasing sliding distances (the first is 0).
-    value : ndarray, shape (S,)
-        The history; its last value is the steady one.
-    band : float or ndarray, shape (S,)
-        Allowed deviation at each sample.
-
-    Returns
-    -------
-    float
-        Interpolated in ``log s`` between the last sample outside the band and
-        the next; 0 if every sample after the first is inside; NaN if the last
-        outside sample is followed by a jump to the steady state (``s`` grows
-        by more than 1e3 in one step: the crossing is not resolved).
-    """
-    dev = np.abs(value - value[-1]) - band
-    outside = np.flatnonzero(dev > 0)
-    outside = outside[outside > 0]  # the flat face at s = 0 is not a history value
-    if outside.size == 0:
-        return 0.0
-    i = outside[-1]
-    if i + 1 >= distance.size or distance[i + 1] > 1e3 * distance[i]:
-        return float("nan")
-    t = dev[i] / (dev[i] - dev[i + 1])
-    return float(np.exp(np.log(distance[i]) + t * np.log(distance[i + 1] / distance[i])))
-
-
 def _run(case, n, scheme, tol, band):
-    """One run-in from a flat face; its history and run-in distances."""
+    """One run-in from a flat face; its history and run-in distances (``band`` and a tenth)."""
     from transient.initial_face import flat
     from transient.options import RunOptions
     from transient.problem import WearProblem
+    from transient.run_in_distance import deviations
     from transient.runin import run_in
 
     if case["n_seeds"] == 0:
@@ -104,20 +72,21 @@ def _run(case, n, scheme, tol, band):
     if not result.success:
         raise ValueError(f"run-in of {case} ended {result.status}: {result.message}")
     h = result.history
-    s = h["distance"] / result.run_in_distance
-    value = h["normalised_rms_slope"]
-    error = h["rms_slope_error"] / result.reference_slope
-    steady = value[-1]
-    # Steady wear rate k_eff pbar with k_eff = 1 / sum_i (rho_i / k_i) (eq. 6): the mean
-    # depth worn off by the distance s (in s*) is s k_eff / k_min, in units of f*.
-    rho = problem.counts / problem.counts.sum()
-    depth_factor = 1.0 / np.sum(rho / np.asarray(k)) / min(k)
-    return {"distance": s, "value": value, "error": error, "steady": steady,
-            "depth_factor": depth_factor,
-            "s1": crossing(s, value, band * steady),
-            "s1_low": crossing(s, value, band * steady + error),
-            "s1_high": crossing(s, value, np.maximum(band * steady - error, 0.0)),
-            "steps": result.steps, "wall_time": result.wall_time}
+    s_star, f_star = result.distance_scale, result.depth_scale
+    out = {"distance": h["distance"] / s_star,
+           "value": h["normalised_rms_slope"],
+           "deviation": deviations(result)[0],
+           "steady": result.steady_rms_slope / result.reference_slope,
+           "steps": result.steps, "wall_time": result.wall_time}
+    for key, within in (("s1", band), ("s01", band / 10)):
+        found = result.run_in_distance(within)
+        if not found.reached:
+            raise ValueError(f"run-in of {case}: {found.message}")
+        out.update({key: found.distance_s_star, f"{key}_low": found.low_m / s_star,
+                    f"{key}_high": found.high_m / s_star,
+                    f"{key}_depth": found.mean_worn_depth_m / f_star,
+                    f"{key}_rim_depth": found.rim_worn_depth_m / f_star})
+    return out
 
 
 def cases(params):
@@ -152,12 +121,13 @@ def compute(path, params):
         if key not in done:
             done[key] = _run(case, n, params["scheme"], params["tol"], params["band"])
         v = done[key]
-        for field in ("distance", "value", "error"):
-            datasets[f"{name}/{field}"] = (v[field], "s*" if field == "distance" else "grad_f0")
-        for field in ("steady", "s1", "s1_low", "s1_high", "depth_factor", "steps",
+        for field, unit in (("distance", "s*"), ("value", "grad_f0"), ("deviation", "1")):
+            datasets[f"{name}/{field}"] = (v[field], unit)
+        for field in ("steady", "s1", "s1_low", "s1_high", "s1_depth", "s1_rim_depth", "s01",
+                      "s01_low", "s01_high", "s01_depth", "s01_rim_depth", "steps",
                       "wall_time"):
-            unit = {"steady": "grad_f0", "steps": "1", "wall_time": "s",
-                    "depth_factor": "f* per s*"}.get(field, "s*")
+            unit = {"steady": "grad_f0", "steps": "1", "wall_time": "s"}.get(
+                field, "f*" if field.endswith("depth") else "s*")
             attrs[f"{name.replace('/', '_')}_{field}"] = (v[field], unit)
     scene = load_scene(study_io.ROOT / "steady" / "examples" / params["scene"])
     radius = scene.outline.radius
@@ -177,9 +147,8 @@ def epoxy_metres(attrs, ratio):
 def _group(attrs, params, group):
     """Run-in distances of a group over its realisations: values, lows, highs (s*), depth (f*)."""
     keys = [f"{group}_seed{s}" for s in params["seeds"]]
-    s1, low, high, factor = (np.array([attrs[f"{k}_{f}"] for k in keys])
-                             for f in ("s1", "s1_low", "s1_high", "depth_factor"))
-    return s1, low, high, s1 * factor
+    return tuple(np.array([attrs[f"{k}_{f}"] for k in keys])
+                 for f in ("s1", "s1_low", "s1_high", "s1_depth"))
 
 
 def plot(path, png):
@@ -193,20 +162,22 @@ def plot(path, png):
     ax = axes[0, 0]
     names = ["homogeneous"] + [f"ratio_{r:g}/seed{seed0}" for r in p["ratios"]]
     for j, name in enumerate(names):
-        s, v = d[f"{name}/distance"], d[f"{name}/value"]
-        ok = (s > 0) & (s < 1e6)
+        s, v = d[f"{name}/distance"], d[f"{name}/deviation"]
+        ok = s > 0
         label = ("homogeneous" if name == "homogeneous"
                  else f"$k_2/k_1$ = {name.split('/')[0][6:]}")
-        ax.loglog(s[ok], np.abs(v[ok] / v[-1] - 1), color=f"C{j}", lw=1, label=label)
-        s1 = a[f"{name.replace('/', '_')}_s1"]
-        ax.plot([s1], [p["band"]], "o", color=f"C{j}", ms=4)
-    ax.axhline(p["band"], color="k", lw=0.7, ls="--")
+        ax.loglog(s[ok], v[ok], color=f"C{j}", lw=1, label=label)
+        key = name.replace('/', '_')
+        ax.plot([a[f"{key}_s1"], a[f"{key}_s01"]], [p["band"], p["band"] / 10], "o",
+                color=f"C{j}", ms=4)
+    for band in (p["band"], p["band"] / 10):
+        ax.axhline(band, color="k", lw=0.7, ls="--")
     ax.set_ylim(1e-5, 2)
     ax.set_xlabel(r"sliding distance / $s^* = a/(k_{min} E^*)$")
-    ax.set_ylabel("|rms slope / steady - 1|")
+    ax.set_ylabel("deviation from steady: max(rms slope, face)")
     ax.set_title(f"from a flat face, $\\rho_2$ = {base['fill']:g}, "
                  f"{int(round(np.sqrt(base['n_seeds'])))}$^2$ seeds, seed {seed0}, "
-                 f"n = {p['n']}; dots: $s_{{1\\%}}$", fontsize=9)
+                 f"n = {p['n']}; dots: $s_{{1\\%}}$, $s_{{0.1\\%}}$", fontsize=9)
     ax.legend(fontsize=7)
     homog = a["homogeneous_s1"]
     panels = [(axes[0, 1], "ratios", "ratio", r"wear ratio $k_2/k_1$", True),
@@ -222,7 +193,8 @@ def plot(path, png):
             jitter = x_plot[i] * (1 + 0.025 * (np.arange(s1.size) - 0.5 * (s1.size - 1)))
             ax.errorbar(jitter, s1, yerr=[s1 - lo, hi - s1], fmt="o", ms=3.5, color="C0",
                         capsize=2, lw=0.7,
-                        label=r"$s_{1\%}/s^*$ (bars: history error)" if i == 0 else "_nolegend_")
+                        label=r"$s_{1\%}/s^*$ (bars: step and rim errors)" if i == 0
+                        else "_nolegend_")
             ax.plot(jitter, depth, "s", ms=4, mfc="none", color="C3",
                     label=r"mean worn depth at $s_{1\%}$ / $f^*$" if i == 0 else "_nolegend_")
         ax.axhline(homog, color="0.4", ls="--", lw=0.8, label="homogeneous (both)")

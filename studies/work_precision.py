@@ -173,14 +173,14 @@ def run_scheme(n, scheme, tol, distances, *, companion=False):
     s = result.history["distance"]
     at = []
     for d in distances:
-        i = int(np.argmin(np.abs(s - d * result.run_in_distance)))
-        assert abs(s[i] / (d * result.run_in_distance) - 1) < 1e-9, (s[i], d)
+        i = int(np.argmin(np.abs(s - d * result.distance_scale)))
+        assert abs(s[i] / (d * result.distance_scale) - 1) < 1e-9, (s[i], d)
         at.append(i)
     face_end = result.snapshot_height[-1]
     out = dict(wall=wall, solves=result.solves, iterations=result.iterations,
                steps=result.steps, rejected=result.rejected,
                slopes=result.history["rms_slope"][at], errors=result.history["rms_slope_error"][at],
-               face=face_end, s_star=result.run_in_distance, depth_scale=result.depth_scale)
+               face=face_end, s_star=result.distance_scale, depth_scale=result.depth_scale)
     if companion:
         t = time.perf_counter()
         try:
@@ -197,7 +197,7 @@ def run_baseline(n, distances, end):
     """The loop users write: fixed-step explicit Euler around a contact solve."""
     problem = build(n, contact_rtol=1e-10)
     hs, face, wear = problem.halfspace, problem.face_mask, problem.coefficient_field
-    s_star = problem.run_in_distance
+    s_star = problem.distance_scale
     p = solve_contact(hs, face, np.zeros((n, n)), FORCE, rtol=CONTACT_RTOL).pressure
     limit = problem.stable_step(p) / s_star
     per = math.ceil(1e-4 / limit)          # steps per 1e-4 s*, so steps land on distances

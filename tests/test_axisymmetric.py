@@ -51,7 +51,7 @@ def test_steady_state_is_eq10(model):
     Measured with 200 rings at s = 30 s*: face within 2.4e-9 of the relief,
     rms slope 0.999979, rms height within 1.1e-5, pressure uniform to 3e-8.
     """
-    state = model.state(30 * model.run_in_distance)
+    state = model.state(30 * model.distance_scale)
     pbar = model.mean_pressure
     exact = reference.disk_face(model.centres, model.radius, pbar, model.E_star)
     diff = state.face - exact
@@ -71,7 +71,7 @@ def test_exact_in_distance_against_a_matrix_exponential(model):
     generator = np.zeros((n + 1, n + 1))
     generator[:n, :n] = -model.wear_coefficient * model._b
     generator[:n, n] = model.wear_coefficient * model._c
-    s = 0.05 * model.run_in_distance
+    s = 0.05 * model.distance_scale
     w = scipy.linalg.expm(generator * s)[:n, n]
     shape = w - model.height(s)
     # Measured: 1.5e-9 of the relief (the scaling and squaring of a stiff generator).
@@ -81,7 +81,7 @@ def test_exact_in_distance_against_a_matrix_exponential(model):
 
 def test_history_jumps_at_s0_and_rises_to_one(model):
     """Flat face: rms slope 0 at s = 0, about 0.848 grad_f0 just after, then rising to 1."""
-    s = np.array([0.0, 1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]) * model.run_in_distance
+    s = np.array([0.0, 1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]) * model.distance_scale
     slopes = np.array([model.state(d).rms_slope for d in s]) / model.reference_slope
     assert slopes[0] == 0.0, "the flat face's slope is 0"
     assert 0.84 < slopes[1] < 0.86, f"rms slope just after s = 0: {slopes[1]:.4f}"

@@ -418,7 +418,7 @@ def test_passed_snapshots_are_reported_missing(tmp_path, scene_file, capsys):
     assert "note: snapshots at 0.1 s* were passed before this resume (at s = 0.5" in err and \
         "are not in the file (listed in the attribute snapshots_missing)" in err, err
     result, attrs, _ = read_run(out)
-    s_star = result.run_in_distance
+    s_star = result.distance_scale
     assert np.allclose(attrs["snapshots_missing"], [0.1 * s_star], rtol=1e-12), \
         f"snapshots_missing {attrs['snapshots_missing']}"
     assert np.allclose(result.snapshot_distance, [s_star], rtol=1e-12), \

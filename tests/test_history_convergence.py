@@ -32,7 +32,7 @@ def test_homogeneous_history_converges_to_the_axisymmetric_reference():
         result = run_in(problem, np.zeros((n, n)), RunOptions(
             tol=1e-5, snapshots=DISTANCES, max_distance=DISTANCES[-1], jump_spread=0.0))
         g0 = result.reference_slope
-        s = result.history["distance"] / result.run_in_distance
+        s = result.history["distance"] / result.distance_scale
         at = [int(np.argmin(np.abs(s - d))) for d in DISTANCES]
         value = result.history["normalised_rms_slope"][at]
         bar = result.history["rms_slope_error"][at] / g0

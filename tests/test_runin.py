@@ -80,8 +80,13 @@ def test_run_in_reaches_the_steady_face(case):
         f"{case}: run ends at {end:.5f} +- {bar:.5f}, steady (n = {2 * n}) " \
         f"{steady.rms_slope:.5f} +- {steady.error:.5f}"
     assert cmp.rms_slope_agrees, cmp.summary()
-    assert result.history["rms_height"][-1] == pytest.approx(cmp.steady_rms_height, rel=1e-6), \
-        f"{case}: the history's last rms height is not the steady face's"
+    # The history ends where the dynamics end, the wear-rate spread below jump_spread
+    # (1e-3): measured 0.3e-4 .. 1.4e-4 from the steady face's rms height.
+    assert result.history["rms_height"][-1] == pytest.approx(
+        cmp.steady_rms_height, rel=RunOptions().jump_spread), \
+        f"{case}: the history's last rms height is not near the steady face's"
+    assert cmp.rms_height == pytest.approx(cmp.steady_rms_height, rel=1e-6), \
+        f"{case}: the final face's rms height is not the steady face's"
 
 
 def test_homogeneous_run_in_history_is_physical():
@@ -90,11 +95,18 @@ def test_homogeneous_run_in_history_is_physical():
     # The flat punch's edge singularity at s = 0: the rim pixels carry the
     # largest pressure, which the run-in removes.
     assert h["peak_pressure"][0] > 3 * result.pixel_mean_pressure, "no edge concentration at s = 0"
-    assert h["peak_pressure"][-1] == pytest.approx(result.pixel_mean_pressure, rel=1e-6), \
+    assert result.pressure.max() == pytest.approx(result.pixel_mean_pressure, rel=1e-6), \
         "steady pressure of a homogeneous punch is uniform"
-    # The first steps are on the fast (pixel) scale, the last ones huge.
+    # The history ends where the dynamics end, the spread below jump_spread (measured 2e-4).
+    assert h["peak_pressure"][-1] == pytest.approx(result.pixel_mean_pressure,
+                                                   rel=RunOptions().jump_spread), \
+        "pressure at the end of the dynamics is not near uniform"
+    # The first steps are on the fast (pixel) scale; the jump to the steady state is
+    # taken (an accepted step) but not recorded: no step of the history is huge.
     assert h["step"][1] < 10 * result.fast_distance, "first step too large for the edge layer"
-    assert h["step"][-1] > 1e6 * result.run_in_distance, "no jump to the steady state"
+    assert result.steps > len(h["distance"]) - 1, "no jump to the steady state"
+    assert h["step"][1:].max() < 10 * result.distance_scale, "a jump is in the history"
+    assert result.distance == h["distance"][-1], "the run does not end at its last history point"
     assert np.all(np.diff(h["worn_volume"]) > 0), "worn volume must grow"
     # Volume balance: d(volume)/ds = sum k p h^2 = k F for a homogeneous punch.
     assert h["worn_volume"][-1] == pytest.approx(K1 * FORCE * result.distance, rel=1e-9), \
@@ -250,7 +262,7 @@ def test_run_file_round_trip(tmp_path):
         f"layout {attrs['format']!r} version {attrs['format_version']!r}, expected " \
         "'runin.transient' version 3"
     assert back.snapshot_distance.tolist() == pytest.approx(
-        [0.0, 0.1 * result.run_in_distance, result.run_in_distance], rel=1e-12), \
+        [0.0, 0.1 * result.distance_scale, result.distance_scale], rel=1e-12), \
         "snapshots not at the requested distances"
     assert back.snapshot_height.shape == (3, 32, 32), \
         "expected back.snapshot_height.shape == (3, 32, 32)"

@@ -68,7 +68,7 @@ def test_core_sections_name_their_keys_in_the_readme():
     block = README.split("```toml", 1)[1].split("```", 1)[0]
     for section, keys in SECTIONS.items():
         for key in keys:
-            assert re.search(rf"\[{section}\]\s*\n{key.name} =", block), \
+            assert re.search(rf"\[{section}\]\s*\n(?:[^\[\n]*\n)*{key.name} =", block), \
                 f"README's scene example lacks [{section}] {key.name}"
 
 
@@ -176,8 +176,8 @@ def test_a_wear_law_is_one_registration(tmp_path):
     # The steady face depends on the ratios only; the run-in distance s* = a / (k E*).
     a, b = solve_scene(scaled, face_only=True), solve_scene(plain, face_only=True)
     assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "steady face"
-    ratio = (WearProblem.from_scene(plain).run_in_distance
-             / WearProblem.from_scene(scaled).run_in_distance)
+    ratio = (WearProblem.from_scene(plain).distance_scale
+             / WearProblem.from_scene(scaled).distance_scale)
     assert ratio == pytest.approx(4.0, rel=1e-12), f"s* ratio {ratio}"
 
 

@@ -79,7 +79,7 @@ def exact():
     M[:size, :size] = A
     M[:size, size] = b
     h0 = uniform_pressure_face(problem)
-    y = scipy.linalg.expm(M * DISTANCE * problem.run_in_distance) @ np.append(h0.ravel()[idx],
+    y = scipy.linalg.expm(M * DISTANCE * problem.distance_scale) @ np.append(h0.ravel()[idx],
                                                                               1.0)
     return h0, idx, y[:size]
 
@@ -116,7 +116,7 @@ def test_adaptive_scheme_matches_exact_run_in(name, exact):
                          shape_tol=1e-300)
     result = run_in(problem, h0, options)
     assert result.status == "stopped", result.message
-    assert result.distance == pytest.approx(DISTANCE * result.run_in_distance, rel=1e-12), \
+    assert result.distance == pytest.approx(DISTANCE * result.distance_scale, rel=1e-12), \
         "run did not end at the requested distance"
     assert np.all(result.history["contact_fraction"] == 1.0), \
         f"{name}: contact lost, the exact solution does not apply"
@@ -187,7 +187,7 @@ def test_explicit_euler_refuses_steps_beyond_stability_limit():
     ExplicitEuler().step(problem, state, 0.99 * limit)
     with pytest.raises(ValueError, match="stability limit"):
         run_in(problem, h0, run_options(scheme="explicit_euler",
-                                       step=2 * limit / problem.run_in_distance))
+                                       step=2 * limit / problem.distance_scale))
 
 
 def test_adaptive_explicit_euler_stays_below_its_limit():
@@ -209,7 +209,7 @@ def test_huge_implicit_step_is_the_steady_state():
     for ratio in (1e4, 1e8):
         state = StepState(h0, res0.pressure, res0.approach)
         trial = get_scheme("implicit_euler").step(problem, state,
-                                                  ratio * problem.run_in_distance)
+                                                  ratio * problem.distance_scale)
         rate = problem.rate(trial.pressure)[problem.face_mask]
         spread = (rate.max() - rate.min()) / rate.mean()
         assert spread < 10.0 / ratio, f"ds = {ratio:g} s*: spread {spread:.3g}"
@@ -236,7 +236,7 @@ def test_power_law_implicit_step_solves_the_nonlinear_stage(exponent):
     problem = make_problem(16, 10.0, exponent=exponent)
     h0 = uniform_pressure_face(problem)
     res0 = problem.contact(h0)
-    ds = 0.3 * problem.run_in_distance
+    ds = 0.3 * problem.distance_scale
     w, res = problem.implicit(h0, ds, res0.pressure)
     # The face is consistent with its own contact pressure ...
     again = problem.contact(w, x0=res.pressure)

@@ -110,14 +110,14 @@ def test_run_file_opens_as_labelled_arrays(files):
             f"dims {ds['worn_depth'].dims}, {ds['pressure'].dims}"
         assert ds["x"].attrs["units"] == "m", "x in m"
         assert tuple(ds["phase_name"].values.tolist()) == NAMES, "phase names as a coordinate"
-        assert ds.attrs["run_in_distance_units"] == "m", "s* in m"
+        assert ds.attrs["distance_scale_units"] == "m", "s* in m"
     with xr.open_dataset(files["run"], engine="h5netcdf", group="history") as hist:
         assert hist["distance"].attrs["units"] == "m", "distance in m"
         assert np.array_equal(hist["distance"].values, run.history["distance"]), "distance"
         for name in HISTORY_UNITS:
             if name != "distance" and len(run.history[name]) == len(run.history["distance"]):
                 assert hist[name].dims == ("distance",), f"history/{name} dims {hist[name].dims}"
-        assert hist.attrs["run_in_distance"] == run.run_in_distance, "s* beside the history"
+        assert hist.attrs["distance_scale"] == run.distance_scale, "s* beside the history"
     with xr.open_dataset(files["run"], engine="h5netcdf", group="snapshots") as snaps:
         assert snaps["height"].dims == ("distance", "x", "y"), f"{snaps['height'].dims}"
         assert np.array_equal(snaps["distance"].values, run.snapshot_distance), "snapshots"

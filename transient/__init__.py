@@ -60,6 +60,7 @@ _MODULE_OF = {
     "InitialFace": "scene",
     "JacobiPreconditioner": "preconditioners",
     "PRECONDITIONERS": "preconditioners",
+    "RunInDistance": "run_in_distance",
     "RunOptions": "options",
     "RunResult": "runin",
     "RunState": "runin",

@@ -119,7 +119,7 @@ class AxisymmetricRunIn:
     >>> flat = ref.state(0.0)
     >>> print(f"{flat.approach / (ref.normal_force / (2 * ref.radius * ref.E_star)):.4f}")
     1.0000
-    >>> state = ref.state(0.1 * ref.run_in_distance)
+    >>> state = ref.state(0.1 * ref.distance_scale)
     >>> print(f"{state.rms_slope / ref.reference_slope:.3f}")
     0.887
     """
@@ -160,7 +160,7 @@ class AxisymmetricRunIn:
         return 4.0 * self.mean_pressure / (math.pi * self.E_star)
 
     @property
-    def run_in_distance(self):
+    def distance_scale(self):
         """``s* = a / (k E*)``, m."""
         return self.radius / (self.wear_coefficient * self.E_star)
 
@@ -330,7 +330,7 @@ def reference_history(distances, *, rings=1200, grading=4.0):
     counts = (int(rings) // 2, int(rings))
     for count in counts:
         model = AxisymmetricRunIn(count, grading=grading)
-        states = [model.state(d * model.run_in_distance) for d in s]
+        states = [model.state(d * model.distance_scale) for d in s]
         values.append((np.array([st.rms_slope for st in states]) / model.reference_slope,
                        np.array([st.rms_height for st in states])
                        / (model.reference_slope * model.radius)))

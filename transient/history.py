@@ -75,7 +75,7 @@ import numpy as np
 
 from steady.halfspace import HalfSpace
 from steady.relief import PlaneFit, rms_height
-from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope
+from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope, estimate_rms_slope
 
 from .contact import solve_contact
 from .diagnostics import face_rms_slope, masked_gradient
@@ -234,9 +234,14 @@ class FaceEstimator:
         Of the initial face (:func:`face_statistics`).
     map_error : float
         Relative error of the corrected estimator on the run's phase map at
-        the steady state (:func:`steady.rms_slope.estimate_map_rms_slope`:
+        the steady state: with the scene's phase geometry
+        (``problem.geometry``) the ladder of the geometry rasterised on
+        coarser grids (:func:`steady.rms_slope.estimate_rms_slope`, the
+        error bar of ``runin-steady``); for a bare label map the ladder of
+        the map resampled (:func:`steady.rms_slope.estimate_map_rms_slope`:
         from coarser grids, or from the map refined where a phase vanishes
-        on every coarser one); infinite where no error can be estimated,
+        on every coarser one), which also measures the resampling's half
+        pixel and is larger; infinite where no error can be estimated,
         and then the history's ``rms_slope_error`` is infinite too (no
         bound: never NaN).
 
@@ -292,8 +297,16 @@ class FaceEstimator:
         # Layer width per unit sliding distance, in pixels.
         self._rim_growth = rate * hs.E_star / hs.h
         self._rim_weight = self._rim_weights(h0)
-        estimate = estimate_map_rms_slope(problem.labels, problem.wear, problem.normal_force,
-                                          problem.outline, hs.E_star, energy=self.energy)
+        geometry = getattr(problem, "geometry", None)
+        if geometry is not None:
+            # The ladder of the geometry rasterised on coarser grids, as the steady
+            # command's error bar (steady.solution.solve_scene): one bar for one value.
+            estimate = estimate_rms_slope(geometry, problem.wear, problem.normal_force,
+                                          problem.outline, hs.E_star, problem.n)
+        else:
+            estimate = estimate_map_rms_slope(problem.labels, problem.wear,
+                                              problem.normal_force, problem.outline,
+                                              hs.E_star, energy=self.energy)
         self.map_error = (estimate.error / estimate.rms_slope
                           if math.isfinite(estimate.error) and estimate.rms_slope > 0
                           else math.inf)

@@ -15,9 +15,10 @@ Layout (root group)::
     attributes    format "runin.transient", format_version 3
                   status, message, scheme, distance (m), steps, rejected,
                   failures, solves, iterations, wall_time (s), offset (m),
-                  approach (m), depth_scale (m), run_in_distance (m),
+                  approach (m), depth_scale (m), distance_scale (m),
                   fast_distance (m), pixel_mean_pressure (Pa),
-                  reference_slope, previous_step (m, NaN if none),
+                  reference_slope, steady_rms_slope, steady_rms_slope_error,
+                  sliding_speed (m s-1, NaN if none), previous_step (m, NaN if none),
                   next_step (m, NaN if none), jumps (jumps to the steady
                   state so far; files written before it was stored lack
                   it and are read as 0);
@@ -40,11 +41,16 @@ Layout (root group)::
                   pressure_history, pressure_history_displacement
     history/      one dataset per :data:`transient.runin.HISTORY_UNITS` name,
                   along the dimension scale ``distance`` (m); attribute
-                  run_in_distance (s*, m)
+                  distance_scale (s*, m)
     snapshots/    distance (k,) m (a dimension scale), height (k, nx, ny) m,
                   pressure (k, nx, ny) Pa (byte shuffle and deflate, except
                   in a checkpoint)
     comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
+    run_in_distance/  the run-in distances within 1 % and 0.1 % (dimension ``within``):
+                  distance, distance_s_star, uncertainty, low, high, mean_worn_depth,
+                  rim_worn_depth, time, time_uncertainty, reached, each with ``units``
+                  and ``long_name`` (:func:`transient.run_in_distance.distance_table`;
+                  absent when the history lacks the figures)
     outline/      the face's outline, as :func:`steady.output.write_outline`
                   writes it (kind, area, its lengths; a mask's ``mask``)
 
@@ -112,6 +118,7 @@ from steady.output import (
     write_phase_names,
 )
 
+from .run_in_distance import distance_table
 from .runin import HISTORY_UNITS, RunResult, RunState
 
 try:
@@ -147,9 +154,13 @@ _READABLE_VERSIONS = (2, 3)
 _SCALARS = {
     "status": "", "message": "", "scheme": "", "distance": "m", "steps": "1",
     "rejected": "1", "failures": "1", "solves": "1", "iterations": "1", "wall_time": "s",
-    "offset": "m", "approach": "m", "depth_scale": "m", "run_in_distance": "m",
+    "offset": "m", "approach": "m", "depth_scale": "m", "distance_scale": "m",
     "fast_distance": "m", "pixel_mean_pressure": "Pa", "reference_slope": "1",
 }
+# Root attributes of the result that files written before them lack: read as NaN (a sliding
+# speed of NaN is none: None).  Files that name the distance scale run_in_distance are read too.
+_LATER_SCALARS = {"steady_rms_slope": "1", "steady_rms_slope_error": "1", "sliding_speed": "m s-1"}
+_FORMER_NAMES = {"run_in_distance": "distance_scale"}
 # Root attributes of the state (RunState); a step absent is stored as NaN.
 _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
 # Root attributes of the state that files written before them lack: read as these defaults.
@@ -432,6 +443,7 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
         _write_state(f, result, scales[:2])
         _write_history(f, result)
         _write_snapshots(f, result, scales[:2])
+        _write_run_in_distances(f, result)
         if comparison is not None:
             _write_comparison(f, comparison, scales[2])
         _seal_groups(f)
@@ -451,6 +463,9 @@ def _write_scalars(f, result):
         _attribute(f.attrs, name, np.nan if value is None else value, unit)
     for name, (unit, _) in _LATER_STATE_SCALARS.items():
         _attribute(f.attrs, name, getattr(result.state, name), unit)
+    for name, unit in _LATER_SCALARS.items():
+        value = getattr(result, name)
+        _attribute(f.attrs, name, np.nan if value is None else value, unit)
 
 
 def _write_coordinates(f, result, names):
@@ -482,7 +497,7 @@ def _write_state(f, result, grid_scales):
 def _write_history(f, result):
     """The group ``history``: one dataset per recorded quantity along ``distance``."""
     hist = f.create_group("history")
-    _attribute(hist.attrs, "run_in_distance", result.run_in_distance, "m")
+    _attribute(hist.attrs, "distance_scale", result.distance_scale, "m")
     distance = None
     if "distance" in result.history:
         distance = _put(hist, "distance", result.history["distance"], *history_cf("distance"))
@@ -527,6 +542,19 @@ def _write_comparison(f, comparison, phase_scale):
             unit = None if isinstance(value, (bool, np.bool_)) else _COMPARISON_UNITS.get(
                 fld.name, "1")
             _attribute(g.attrs, fld.name, value, unit)
+
+
+def _write_run_in_distances(f, result):
+    """The group ``run_in_distance`` (:func:`transient.run_in_distance.distance_table`)."""
+    table = distance_table(result)
+    if table:
+        g = f.create_group("run_in_distance")
+        g.attrs["long_name"] = ("run-in distances: where the rms slope and the face stay within "
+                                "each tolerance of the steady state (docs/model.md)")
+        within = _put(g, "within", *table.pop("within"))
+        within.make_scale("within")
+        for name, (value, unit, long_name) in table.items():
+            _put(g, name, value, unit, long_name, dims=(within,))
 
 
 def _write_outline(f, result):
@@ -722,7 +750,10 @@ def read_run(path):
 
 def _result(path, datasets, groups):
     """The :class:`RunResult` of a run file's contents."""
-    root = groups[""]
+    root = dict(groups[""])
+    for old, new in _FORMER_NAMES.items():
+        if new not in root and old in root:
+            root[new] = root[old]
     needed = ["pressure", "history/distance", "snapshots/distance", "snapshots/height",
               "snapshots/pressure"] + [f"state/{name}" for name in _REQUIRED_STATE]
     missing = [name for name in needed if name not in datasets]
@@ -745,8 +776,12 @@ def _result(path, datasets, groups):
             if int(value) != value or value < 0:
                 raise ValueError(f"{name} = {value!r} is not a count")
             state[name] = int(value)
+        for name in _LATER_SCALARS:
+            kw[name] = float(attrs.get(name, math.nan))
     except (TypeError, ValueError) as err:
         raise DamagedRunFileError(path, f"a root attribute is malformed ({err})") from None
+    if math.isnan(kw["sliding_speed"]):
+        kw["sliding_speed"] = None
     state.update({name: datasets[f"state/{name}"][0] if f"state/{name}" in datasets else None
                   for name in _STATE_UNITS})
     history = {name[len("history/"):]: value for name, (value, _) in datasets.items()

@@ -187,6 +187,11 @@ class WearProblem:
         self._predicted = None
         self._reference = None
         self._stage_shift = None  # the levels of the linear law's stage shifts c k
+        #: m/s, the scene's ``[load] sliding_speed`` (None: not given); only for reporting times.
+        self.sliding_speed = None
+        #: The scene's phase geometry (None: built from a label map), for the error bar of the
+        #: rms slope from the geometry's own grid ladder, as ``runin-steady`` gives it.
+        self.geometry = None
 
     @classmethod
     def from_scene(cls, scene, *, n=None, **options):
@@ -234,7 +239,10 @@ class WearProblem:
         except ValueError as err:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
-        return cls(problem, **options)
+        wear_problem = cls(problem, **options)
+        wear_problem.sliding_speed = scene.sliding_speed
+        wear_problem.geometry = scene.geometry
+        return wear_problem
 
     @property
     def n_phases(self):
@@ -288,7 +296,7 @@ class WearProblem:
         return self.pixel_mean_pressure * self.scale / self.halfspace.E_star
 
     @property
-    def run_in_distance(self):
+    def distance_scale(self):
         """``s* = L / (k_min E*)``, m: the slow (run-in) sliding distance (``L = a``, a disk).
 
         For ``m != 1`` the rate constant is ``k m pbar^(m-1)``.

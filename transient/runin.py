@@ -41,7 +41,9 @@ pending, the run takes implicit Euler steps of ``jump_step`` s* (default
 The face after an implicit stage is rebuilt from its pressure,
 ``w = d - K p`` on the contact (with the solver's own ``K p``), so
 that the solver's residual, which scales with the shifted operator, does
-not enter the face.
+not enter the face.  A jump's state is the steady face at no particular
+distance: it stays out of the history, the distance and the rigid wear, so
+that the history ends where the dynamics end.
 
 Contact tolerance
 -----------------
@@ -78,7 +80,7 @@ import types
 import numpy as np
 
 from .control import DIVERGENCE_RELIEF, StepController, StopTests, checkpoint_due, contact_tolerance
-from .diagnostics import shape_rms, wear_rate_spread
+from .diagnostics import masked_gradient, shape_rms, wear_rate_spread
 from .history import FaceEstimator
 from .options import RunOptions
 from .problem import StepFailure, WarmStart
@@ -118,7 +120,23 @@ HISTORY_UNITS = {
     "approach": "m",
     "worn_volume": "m^3",
     "solves": "1",
+    "face_deviation": "1 (rms over the face of the face minus the steady face f_inf, their "
+                      "least-squares constant removed, / relief max - min of f_inf)",
+    "face_deviation_step_error": "1 (rms over the face of the step's local error estimate, "
+                                 "its mean removed, / relief of f_inf; 0 at s = 0)",
+    "rms_slope_step_error": "1 (rms slope of the step's local error estimate; 0 at s = 0)",
+    "rim_worn_depth": "m (worn depth, mean over the rim pixels of the face)",
+    "face_deviation_spatial_error": "1 (|D_n - D_m| of face_deviation from the same run on a "
+                                    "coarser grid m; empty unless transient.spatial_error "
+                                    "filled it)",
+    "rms_slope_deviation_spatial_error": "1 (the same of rms_slope / steady_rms_slope - 1, each "
+                                         "run's own steady value; empty unless "
+                                         "transient.spatial_error filled it)",
 }
+
+# History datasets that files written before them lack (read as NaN when resumed).
+_LATER_HISTORY = ("face_deviation", "face_deviation_step_error", "rms_slope_step_error",
+                  "rim_worn_depth")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -196,13 +214,19 @@ class RunResult:
     message : str
     scheme : str
     distance : float, m
-        Sliding distance reached.
+        Sliding distance reached: the end of the dynamics, the last point of
+        :attr:`history`.  A jump to the steady state does not advance it.
     steps, rejected, failures : int
-        Accepted steps, rejected steps (error too large), failed attempts.
+        Accepted steps (jumps to the steady state included), rejected steps
+        (error too large), failed attempts.
     solves, iterations : int
         Contact solves and contact-solver iterations.
     wall_time : float, s
-    history : mapping of str to ndarray, shape (steps + 1,)
+    history : mapping of str to ndarray, shape (K,)
+        One point at ``s = 0`` and one per accepted regular step; jumps to
+        the steady state are not in it (their state is the run's final
+        :attr:`state`; the steady figures are :attr:`steady_rms_slope` and
+        the face's deviation from ``f_inf``, ``face_deviation``).
         See :data:`HISTORY_UNITS` and :mod:`transient.history`: ``rms_slope``
         is the continuum rms slope of the face with its ``rms_slope_error``
         (at ``s = 0`` the initial face's own value), ``rms_slope_plain`` the
@@ -213,9 +237,11 @@ class RunResult:
     snapshot_height : ndarray, shape (k, nx, ny), m
         ``worn depth + initial shape`` at the snapshots (NaN off the face).
     snapshot_pressure : ndarray, shape (k, nx, ny), Pa
-    depth_scale, run_in_distance, fast_distance, pixel_mean_pressure,
+    depth_scale, distance_scale, fast_distance, pixel_mean_pressure,
     reference_slope : float
-        ``f*`` (m), ``s*`` (m), ``h / (k_max E*)`` (m), ``F`` over the
+        ``f*`` (m), the distance scale ``s* = L / (k_min E*)`` (m; not a
+        distance the run took: see :meth:`run_in_distance`),
+        ``h / (k_max E*)`` (m), ``F`` over the
         face's pixel area (Pa), ``grad_f0`` (the homogeneous face's rms
         slope: ``4 pbar / (pi E*)`` for a disk, eq. 12;
         :func:`steady.normalisation.reference_slope`).
@@ -233,6 +259,15 @@ class RunResult:
         The problem the run solved (load, modulus, wear law, phase map and
         names), which :func:`transient.output.write_run` stores; None for a
         run read from a file.
+    steady_rms_slope, steady_rms_slope_error : float
+        The rms slope of the closed-form steady face ``f_inf`` (eq. 9) by the
+        history's estimator (:class:`transient.history.FaceEstimator`, the
+        rim layer fully worn) and its error bar: the value the history's
+        ``rms_slope`` tends to.  NaN when unknown (a run file written
+        without them).
+    sliding_speed : float or None, m/s
+        The scene's ``[load] sliding_speed`` (None: not given): turns
+        distances into times.
     """
 
     status: str
@@ -250,7 +285,7 @@ class RunResult:
     snapshot_height: np.ndarray
     snapshot_pressure: np.ndarray
     depth_scale: float
-    run_in_distance: float
+    distance_scale: float
     fast_distance: float
     pixel_mean_pressure: float
     reference_slope: float
@@ -259,6 +294,45 @@ class RunResult:
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
     problem: object = None
+    steady_rms_slope: float = math.nan
+    steady_rms_slope_error: float = math.nan
+    sliding_speed: float | None = None
+
+    def run_in_distance(self, within=0.01, *, sliding_speed=None):
+        """The sliding distance after which the run stays within ``within`` of the steady state.
+
+        Both the friction proxy (the history's ``rms_slope`` against
+        :attr:`steady_rms_slope`) and the face (``face_deviation``: the rms
+        of the face minus the steady face over the steady face's relief)
+        must stay within ``within``; see
+        :func:`transient.run_in_distance.run_in_distance` and docs/model.md,
+        "The run-in distance".
+
+        Parameters
+        ----------
+        within : float, optional
+            Relative tolerance, in (0, 1) (default 0.01: 1 %).
+        sliding_speed : float, optional, m/s
+            Gives the time too; default :attr:`sliding_speed`.
+
+        Returns
+        -------
+        transient.run_in_distance.RunInDistance
+
+        Examples
+        --------
+        >>> from transient import RunOptions, WearProblem, run_in
+        >>> from transient.scene import load_transient_scene
+        >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
+        >>> problem = WearProblem.from_scene(scene, n=40)
+        >>> result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-3))
+        >>> one, tenth = result.run_in_distance(0.01), result.run_in_distance(0.001)
+        >>> one.reached and tenth.reached and one.distance_m < tenth.distance_m
+        True
+        """
+        from .run_in_distance import run_in_distance
+
+        return run_in_distance(self, within, sliding_speed=sliding_speed)
 
     @property
     def height(self):
@@ -351,11 +425,15 @@ class _Run:
       ``rejected``, ``failures``, ``wall_time`` (s, spent before this call),
       ``t0`` (monotonic clock at the start of this call), ``history``
       (lists), the snapshots ``snap_d``, ``snap_h``, ``snap_p`` and
-      ``snap_index`` (the next requested one);
+      ``snap_index`` (the next requested one), ``latest`` (the current
+      point's spread and shape change, which the stop tests judge);
+    - the steady state the history measures against: ``steady_face``,
+      ``steady_relief``, ``steady_slope`` (:meth:`_steady_reference`);
     - the history's worker thread: ``_worker``, ``_estimator_workers``,
       ``_pending``.
 
-    ``on_step`` callbacks read ``s``, ``s_star``, ``steps`` and ``history``.
+    ``on_step`` callbacks read ``s``, ``s_star``, ``steps``, ``history`` and
+    ``latest`` (the current point's wear-rate spread and shape change).
 
     Parameters
     ----------
@@ -374,7 +452,7 @@ class _Run:
         self.problem = problem
         self.options = options
         self.scheme = get_scheme(options.scheme)
-        self.s_star = problem.run_in_distance
+        self.s_star = problem.distance_scale
         self.f_star = problem.depth_scale
         self.controller = StepController(options, self.s_star)
         self.stop = StopTests(options, self.s_star)
@@ -392,6 +470,7 @@ class _Run:
                                  f"problem's {problem.shape}")
             self.estimator = FaceEstimator.of(
                 problem, np.where(face_mask, state.initial_height, 0.0))
+        self._steady_reference()
 
         def clean(a):
             return None if a is None else np.where(face_mask, a, 0.0)
@@ -424,10 +503,20 @@ class _Run:
             problem.solves, problem.iterations = resume.solves, resume.iterations
             self.wall_time = resume.wall_time
             self.history = {k: list(v.tolist()) for k, v in resume.history.items()}
+            for name in _LATER_HISTORY:
+                self.history.setdefault(name, [math.nan] * len(self.history["distance"]))
             self.snap_d = list(resume.snapshot_distance.tolist())
             self.snap_h = list(resume.snapshot_height)
             self.snap_p = list(resume.snapshot_pressure)
         self.snap_index = len(self.snap_d)
+        # (spread, shape_rate) of the current point, which the stop tests judge: the last
+        # history point's, or the figures of the state a jump reached (not in the history).
+        self.latest = None
+        if resume is not None:
+            self.latest = (self.history["spread"][-1], self.history["shape_rate"][-1])
+            if (self.jumps and self.prev_step is not None
+                    and self.prev_step != self.history["step"][-1]):
+                self.latest = self._jump_point()  # the last accepted step was a jump
 
         self._worker = None
         self._estimator_workers = None
@@ -444,14 +533,46 @@ class _Run:
                         approach=float(res.approach), initial_height=h0,
                         next_step=self.controller.first_step(p.halfspace.h, p.scale))
 
+    def _steady_reference(self):
+        """The closed-form steady face ``f_inf`` (eq. 9), its relief and its figures.
+
+        Sets ``steady_face`` (m, zero off the face), ``steady_relief`` (m,
+        max - min over the face) and ``steady_slope`` (the estimator's rms
+        slope of ``f_inf`` and its error bar, the rim layer fully worn:
+        distance infinite).
+        """
+        p = self.problem
+        face_mask = p.face_mask
+        steady = p.solve_steady()
+        self.steady_face = np.where(face_mask, steady.face, 0.0)
+        self.steady_relief = float(np.ptp(steady.face[face_mask]))
+        figures = self.estimator.figures(math.inf, -self.steady_face,
+                                         np.where(face_mask, steady.pressure, 0.0), 0.0)
+        self.steady_slope = (float(figures["rms_slope"]), float(figures["rms_slope_error"]))
+
+    def _jump_point(self):
+        """``(spread, shape_rate)`` of the state a jump reached, from the state alone.
+
+        Computed the same way after the jump and from a checkpoint taken
+        after it, so that a resumed run judges the same figures.
+        """
+        p = self.problem
+        change = shape_rms(self.height - self.prev_height, p.face_mask)
+        return (wear_rate_spread(p, self.pressure),
+                change / self.f_star / (self.prev_step / self.s_star))
+
     def begin(self):
         """Record the starting point of a new run: history at ``s = 0``, snapshots due there."""
         self.record(0.0, math.inf)
         self._take_due_snapshots()
 
     # -- recording -----------------------------------------------------
-    def record(self, step, shape_rate):
-        """Append the current point to the history (:class:`transient.history.FaceEstimator`)."""
+    def record(self, step, shape_rate, error=None):
+        """Append the current point to the history (:class:`transient.history.FaceEstimator`).
+
+        ``error`` is the accepted step's local error estimate (m, shape
+        (nx, ny)); None at ``s = 0``.
+        """
         p = self.problem
         face_mask = p.face_mask
         hist = self.history
@@ -478,11 +599,33 @@ class _Run:
         worn = self.height + self.offset - self.initial_height
         hist["worn_volume"].append(float(np.sum(worn[face_mask])) * p.halfspace.h ** 2)
         hist["solves"].append(p.solves)
+        hist["rim_worn_depth"].append(float(worn[self.estimator.rim].mean()))
+        diff = (self.approach - self.height - self.steady_face)[face_mask]
+        hist["face_deviation"].append(
+            float(np.sqrt(np.mean((diff - diff.mean()) ** 2))) / self.steady_relief)
+        step_error = slope_error = 0.0
+        if error is not None:
+            step_error = shape_rms(error, face_mask) / self.steady_relief
+            gx, gy = masked_gradient(np.where(face_mask, error, 0.0), face_mask, p.halfspace.h)
+            slope_error = float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
+        hist["face_deviation_step_error"].append(step_error)
+        hist["rms_slope_step_error"].append(slope_error)
+        self.latest = (hist["spread"][-1], shape_rate)
+        self.collect(wait=False)
 
-    def collect(self):
-        """Wait for the face's figures still being computed and put them into the history."""
+    def collect(self, wait=True):
+        """Put the face's figures into the history, waiting for those still being computed.
+
+        With ``wait`` False only those already computed (for progress displays).
+        """
         hist = self.history
-        pending, self._pending = self._pending, []
+        if wait:
+            pending, self._pending = self._pending, []
+        else:
+            done = [item[1].done() for item in self._pending]
+            pending = [item for item, ok in zip(self._pending, done, strict=True) if ok]
+            self._pending = [item for item, ok in zip(self._pending, done, strict=True)
+                             if not ok]
         for index, future in pending:
             figures = future.result()
             for name in _FACE_FIGURES:
@@ -541,12 +684,14 @@ class _Run:
             snapshot_distance=np.array(self.snap_d, dtype=float),
             snapshot_height=np.array(self.snap_h).reshape(k, *shape),
             snapshot_pressure=np.array(self.snap_p).reshape(k, *shape),
-            depth_scale=self.f_star, run_in_distance=self.s_star,
+            depth_scale=self.f_star, distance_scale=self.s_star,
             fast_distance=self.problem.fast_distance,
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
             reference_slope=self.grad_f0, state=self.current_state(),
             outline=self.problem.outline, reference_slope_error=self.reference.error,
-            reference_slope_source=self.reference.source, problem=self.problem.problem)
+            reference_slope_source=self.reference.source, problem=self.problem.problem,
+            steady_rms_slope=self.steady_slope[0], steady_rms_slope_error=self.steady_slope[1],
+            sliding_speed=self.problem.sliding_speed)
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
@@ -584,7 +729,7 @@ class _Run:
         # and solves to what the step's error and the spread need.
         atol = 0.0
         if not (jump or self.controller.fixed) and p.wear.linear:
-            atol = contact_tolerance(self.options.tol, self.f_star, self.history["spread"][-1],
+            atol = contact_tolerance(self.options.tol, self.f_star, self.latest[0],
                                      p.compliance_floor, p.pixel_mean_pressure)
         state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
                           self.approach, self.prev_height, self.prev_rate, self.prev_step,
@@ -597,8 +742,13 @@ class _Run:
             raise StepFailure(f"face relief above {DIVERGENCE_RELIEF:g} f*: divergence")
         return trial, err
 
-    def accept(self, trial, ds):
-        """Move to the trial point; the rigid part of the wear goes into ``offset``."""
+    def accept(self, trial, ds, jump=False):
+        """Move to the trial point; the rigid part of the wear goes into ``offset``.
+
+        A jump's state is the steady face at no particular distance: it
+        advances neither the distance nor the rigid wear, and stays out of
+        the history (its figures go to ``latest``).
+        """
         p = self.problem
         face_mask = p.face_mask
         new_height = np.where(face_mask, trial.height, 0.0)
@@ -610,12 +760,15 @@ class _Run:
         self.prev_rate = p.rate(self.pressure)
         self.prev_step = ds
         self.height = new_height
-        self.offset += c
         self.pressure = trial.pressure
         self.approach = trial.approach - c
-        self.s += ds
         self.steps += 1
-        self.record(ds, shape_rate)
+        if jump:
+            self.latest = self._jump_point()
+            return
+        self.offset += c
+        self.s += ds
+        self.record(ds, shape_rate, trial.error)
         self._take_due_snapshots()
 
     def loop(self, on_step, on_checkpoint):
@@ -634,8 +787,8 @@ class _Run:
         checkpoint_cost = 0.0
         consecutive = 0
         while True:
-            spread = self.history["spread"][-1]
-            ended = stop.check(spread, self.history["shape_rate"][-1], self.s, self.steps)
+            spread, shape_rate = self.latest
+            ended = stop.check(spread, shape_rate, self.s, self.steps)
             if ended is not None:
                 return ended
             target = self.pending_target()
@@ -666,7 +819,7 @@ class _Run:
                 continue
             if not jump:
                 self.next_step = controller.after_accept(ds, err, scheme)
-            self.accept(trial, ds)
+            self.accept(trial, ds, jump)
             if on_step is not None:
                 on_step(self)
             if on_checkpoint is not None and (
@@ -696,7 +849,9 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
         ``initial_height`` is then taken from it.
     on_step : callable, optional
         ``on_step(run)`` after each accepted step, with attributes ``s``,
-        ``s_star``, ``steps`` and ``history`` (for progress displays).
+        ``s_star``, ``steps``, ``history``, ``latest`` (``(spread,
+        shape_rate)`` of the current point, a jump's too) and ``options``
+        (for progress displays).
     on_checkpoint : callable, optional
         ``on_checkpoint(result)`` with a ``"running"`` :class:`RunResult`
         every ``options.checkpoint_interval`` seconds.

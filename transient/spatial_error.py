@@ -33,6 +33,10 @@ logger = logging.getLogger(__name__)
 
 #: History dataset the companion run's error goes into.
 DATASET = "rms_slope_spatial_error"
+#: History dataset the companion's error of the face deviation goes into.
+FACE_DATASET = "face_deviation_spatial_error"
+#: History dataset the companion's error of the rms slope's relative deviation goes into.
+SLOPE_DEVIATION_DATASET = "rms_slope_deviation_spatial_error"
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -52,12 +56,23 @@ class SpatialError:
     error : ndarray, shape (K,)
         ``|S_n - S_m| * m / (n - m)`` at the main run's recorded distances;
         0 at ``s = 0``, where both are the initial face's own value.
+    face_deviation_error : ndarray, shape (K,), or None
+        ``|D_n - D_m| * m / (n - m)`` of the history's ``face_deviation``
+        (the face's distance from the steady face, relative to its relief),
+        likewise; None when either run lacks it.
+    slope_deviation_error : ndarray, shape (K,), or None
+        The same of the rms slope's relative deviation from each run's own
+        steady value, ``S / S_inf - 1`` (the grids' different steady values
+        left out: what the run-in distance sees); None when either run
+        lacks ``steady_rms_slope``.
     """
 
     grid: int
     run: object
     rms_slope: np.ndarray
     error: np.ndarray
+    face_deviation_error: np.ndarray | None = None
+    slope_deviation_error: np.ndarray | None = None
 
     def attach(self, result):
         """``result`` with its history's ``rms_slope_spatial_error`` filled from :attr:`error`.
@@ -76,6 +91,10 @@ class SpatialError:
                              f"{len(result.history['distance'])}: not the same run")
         history = dict(result.history)
         history[DATASET] = np.array(self.error, dtype=float)
+        for name, value in ((FACE_DATASET, self.face_deviation_error),
+                            (SLOPE_DEVIATION_DATASET, self.slope_deviation_error)):
+            if value is not None:
+                history[name] = np.array(value, dtype=float)
         return dataclasses.replace(result, history=types.MappingProxyType(history))
 
 
@@ -167,7 +186,8 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
     >>> result = run_in(problem, initial.height(problem.grid), options)
     >>> companion = spatial_error(scene, initial, options, result)
     >>> result = companion.attach(result)
-    >>> companion.grid, result.history["rms_slope_spatial_error"].shape == (result.steps + 1,)
+    >>> error = result.history["rms_slope_spatial_error"]
+    >>> companion.grid, error.shape == result.history["distance"].shape
     (40, True)
     """
     n = max(result.height.shape)
@@ -186,7 +206,21 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
     main = result.history["rms_slope"]
     error = np.array([ladder_error([m, n], [sc, sn]) for sc, sn in zip(values, main,
                                                                         strict=True)])
-    return SpatialError(grid=m, run=coarse, rms_slope=values, error=error)
+    face_error = slope_error = None
+    if "face_deviation" in coarse.history and "face_deviation" in result.history:
+        face = _at(coarse.history["distance"], coarse.history["face_deviation"],
+                   result.history["distance"], steady=coarse.success)
+        face_error = _ladder(m, n, face, result.history["face_deviation"])
+    if np.isfinite(coarse.steady_rms_slope) and np.isfinite(result.steady_rms_slope):
+        slope_error = _ladder(m, n, values / coarse.steady_rms_slope,
+                              main / result.steady_rms_slope)
+    return SpatialError(grid=m, run=coarse, rms_slope=values, error=error,
+                        face_deviation_error=face_error, slope_deviation_error=slope_error)
+
+
+def _ladder(m, n, coarse, fine):
+    """First-order error of each value of ``fine`` (grid ``n``) from ``coarse`` (grid ``m``)."""
+    return np.array([ladder_error([m, n], [c, f]) for c, f in zip(coarse, fine, strict=True)])
 
 
 def _at(distance, values, targets, *, steady):

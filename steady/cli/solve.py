@@ -25,8 +25,10 @@ solve; without ``-o`` it is all the command writes.
 
 from __future__ import annotations
 
+import logging
 import math
 import pathlib
+import time
 
 from ..memory import check_memory, steady_memory
 from ..micrograph import Micrograph
@@ -53,6 +55,8 @@ from .common import (
 )
 
 __all__ = ["build_parser", "main", "summary_lines"]
+
+logger = logging.getLogger(__name__)
 
 def build_parser():
     """The argument parser of ``runin-steady`` (``python -m steady``)."""
@@ -128,13 +132,20 @@ def run(args):
     saved = None
     try:
         scene = _check(args)
+        logger.info("scene %s checked: %s, n = %d, %d phases", args.scene,
+                    scene.outline.describe(), scene.n, scene.n_phases)
         if args.segmentation is not None:
             _draw_segmentation(args, scene)
             if args.output is None:
                 print(f"segmentation     {scene.geometry.segmentation.summary()}\n"
                       f"segmentation PNG {args.segmentation}")
                 return EXIT_OK
+        started = time.monotonic()
+        logger.info("solving the steady state%s", " and the rms slope's error ladder"
+                    if args.slope_error else "")
         result = solve_scene(scene, face_only=not args.slope_error)
+        logger.info("solved in %.3g s: rms slope %.6g", time.monotonic() - started,
+                    result.rms_slope)
         lines = summary_lines(result, scene.phase_names)
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
@@ -142,8 +153,10 @@ def run(args):
             lines.append(f"segmentation PNG {args.segmentation}")
         write_result(args.output, result, scene, force=args.force, checked=True)
         saved = args.output
+        logger.info("wrote %s", args.output)
         lines.append(f"result           {args.output}")
         if args.plot:
+            logger.info("drawing %s", args.plot)
             _plot(args)
             lines.append(f"figure           {args.plot}")
     except KeyboardInterrupt:

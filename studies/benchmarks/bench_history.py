@@ -57,9 +57,9 @@ def measure(n, distance):
     mid = run_in(problem, h0, RunOptions(tol=1e-4, snapshots=(0.1,), max_distance=0.1,
                                          jump_spread=0.0))
     height, pressure = np.where(problem.face_mask, mid.height, 0.0), mid.pressure
-    call = _median(lambda: estimator.figures(0.1 * mid.run_in_distance, height, pressure,
+    call = _median(lambda: estimator.figures(0.1 * mid.distance_scale, height, pressure,
                                              mid.approach), REPEATS)
-    shift = 1e-2 * mid.run_in_distance * problem.coefficient_field
+    shift = 1e-2 * mid.distance_scale * problem.coefficient_field
     solve = _median(lambda: problem.contact(height, shift=shift, x0=pressure), 3)
     # A whole run with the estimator's calls timed.
     spent = []

@@ -152,7 +152,7 @@ class RunFile:
             Snapshot distances (s*) for the run: the stored ones, then the
             requested ones still ahead.
         """
-        s_star = stored.run_in_distance
+        s_star = stored.distance_scale
         here = stored.distance / s_star
         self.ours = True
         self.replaces = file_identity(self.path)
@@ -234,7 +234,7 @@ class RunFile:
                 output.backup_path(self.path).unlink(missing_ok=True)
             self.ours = True
             previous, self.saved = self.saved, (result.steps,
-                                                result.distance / result.run_in_distance)
+                                                result.distance / result.distance_scale)
             if result.success:
                 self._drop_backup(previous)
 
@@ -279,6 +279,6 @@ def read_resume(out):
             hint = "no intact previous checkpoint is left; start over with --force"
         else:
             hint = (f"the previous checkpoint {str(backup)!r} "
-                    f"({at_text(prev.steps, prev.distance / prev.run_in_distance)}) is intact: "
+                    f"({at_text(prev.steps, prev.distance / prev.distance_scale)}) is intact: "
                     f"rename it to {str(out)!r} and --resume")
         raise ValueError(f"{err}; {hint}") from None

@@ -1,0 +1,325 @@
+"""The run-in distance: how far the face slides before it stays within a tolerance of steady.
+
+The history of a run (:class:`transient.runin.RunResult`) records, at
+every accepted step, two relative deviations from the steady state
+(docs/model.md, "The run-in distance"):
+
+- the friction proxy's, ``d_S = |S(s) - S_inf| / S_inf``: the history's
+  ``rms_slope`` against the rms slope of the closed-form steady face by the
+  same estimator (:attr:`~transient.runin.RunResult.steady_rms_slope`);
+- the face's, ``d_f = rms(f(s) - f_inf - c) / (max f_inf - min f_inf)``:
+  the history's ``face_deviation`` (``c`` the least-squares constant: the
+  rigid offset is not part of the shape).
+
+The run is *within x* at a point where ``max(d_S, d_f) <= x``; the run-in
+distance ``s_x`` is where it enters that band for the last time: after the
+last recorded point outside the band the deviation is interpolated to
+``x``, with ``log(deviation)`` linear in ``s`` between the two recorded
+points (exact for the exponential approach of the slowest relaxation mode,
+which governs the end of a run-in).
+
+Its uncertainty comes from the errors the run estimates at every point:
+the step's local error (``rms_slope_step_error``,
+``face_deviation_step_error``: time integration), the part of the slope
+estimator's error bar that the steady value does not share (the rim layer;
+the map's share is common to both and cancels in ``d_S``) and, when the
+companion run of :mod:`transient.spatial_error` filled them, the spatial
+errors of the two deviations, ``rms_slope_deviation_spatial_error`` and
+``face_deviation_spatial_error`` (the same run on a coarser grid, each
+deviation from its own grid's steady state: ``rms_slope_spatial_error``
+holds the difference of the steady values too, which the distance does
+not see).  Without the companion the grid's error
+of the face is not in the uncertainty (:attr:`RunInDistance.spatial` is
+False): on the homogeneous disk it is the larger part (docs/model.md).  The band is widened and
+narrowed by them: the first crossing of the narrowed band and the last of
+the widened one bound ``s_x``, and the uncertainty is the larger of the two
+distances to ``s_x``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+__all__ = ["TOLERANCES", "RunInDistance", "deviations", "distance_table", "entry",
+           "run_in_distance"]
+
+#: The tolerances a run file and the summary of ``runin-transient`` give the run-in distance for.
+TOLERANCES = (0.01, 0.001)
+
+
+@dataclasses.dataclass(frozen=True)
+class RunInDistance:
+    """The run-in distance of a run within one tolerance.
+
+    Attributes
+    ----------
+    within : float
+        The relative tolerance ``x`` (0.01: 1 %).
+    reached : bool
+        Whether the run's last recorded point is within ``x``.  When False
+        the distances and depths are NaN (and :attr:`message` says why).
+    distance_m : float, m
+        ``s_x``: the sliding distance after which the friction proxy and
+        the face stay within ``x`` of the steady state.
+    distance_s_star : float
+        The same in units of the distance scale ``s*``.
+    uncertainty_m : float, m
+        Its uncertainty from the step and grid errors (module notes);
+        infinite when the widened band is not entered before the run's end.
+    low_m, high_m : float, m
+        The bounds it comes from (``high_m`` infinite as above).
+    mean_worn_depth_m, rim_worn_depth_m : float, m
+        Depth worn off at ``s_x``, mean over the face and over its rim
+        pixels (linear in ``s`` between recorded points).
+    time_s, time_uncertainty_s : float or None, s
+        ``s_x`` and its uncertainty over the sliding speed; None without one.
+    end_m : float, m
+        The last recorded distance of the run (the end of its dynamics).
+    distance_scale : float, m
+        ``s*``.
+    spatial : bool
+        Whether the companion run's spatial errors are in the uncertainty.
+    message : str
+        Why it was not reached ("" when reached).
+    """
+
+    within: float
+    reached: bool
+    distance_m: float
+    distance_s_star: float
+    uncertainty_m: float
+    low_m: float
+    high_m: float
+    mean_worn_depth_m: float
+    rim_worn_depth_m: float
+    time_s: float | None
+    time_uncertainty_s: float | None
+    end_m: float
+    distance_scale: float
+    spatial: bool = False
+    message: str = ""
+
+    @property
+    def uncertainty_s_star(self):
+        """:attr:`uncertainty_m` in units of ``s*``."""
+        return self.uncertainty_m / self.distance_scale
+
+    def summary(self):
+        """One line for the terminal."""
+        pct = f"{100 * self.within:g} %"
+        if not self.reached:
+            return f"run-in distance within {pct}: not reached ({self.message})"
+        line = (f"run-in distance within {pct}: s = {self.distance_m:.5g} +- "
+                f"{self.uncertainty_m:.2g} m = {self.distance_s_star:.4g} +- "
+                f"{self.uncertainty_s_star:.2g} s*; worn depth there {self.mean_worn_depth_m:.4g} m"
+                f" (mean), {self.rim_worn_depth_m:.4g} m (rim)")
+        if self.time_s is not None:
+            line += f"; time {self.time_s:.5g} +- {self.time_uncertainty_s:.2g} s"
+        return line + ("" if self.spatial else " (+- without the grid's error: no companion "
+                                               "run)")
+
+
+def deviations(result):
+    """Relative deviations from the steady state at the recorded points, and their errors.
+
+    Parameters
+    ----------
+    result : transient.runin.RunResult
+
+    Returns
+    -------
+    deviation, low, high : ndarray, shape (K,)
+        ``max(d_S, d_f)`` at each recorded point (module notes), and its
+        bounds from the errors ``e_S``, ``e_f`` of each:
+        ``max(d_S - e_S, d_f - e_f, 0)`` and ``max(d_S + e_S, d_f + e_f)``.
+
+    Raises
+    ------
+    ValueError
+        The result lacks the steady rms slope or the face deviation (a run
+        file written before they were recorded).
+    """
+    h = result.history
+    steady, steady_error = result.steady_rms_slope, result.steady_rms_slope_error
+    if not math.isfinite(steady) or steady <= 0 or "face_deviation" not in h:
+        raise ValueError("the run lacks the steady rms slope or the face deviation history "
+                         "(written before they were recorded): no run-in distance")
+    face = np.asarray(h["face_deviation"], dtype=float)
+    if not np.all(np.isfinite(face[1:])):
+        raise ValueError("the run's face deviation history is incomplete (resumed from a run "
+                         "file written before it was recorded): no run-in distance")
+    slope = np.asarray(h["rms_slope"], dtype=float)
+    d_slope = np.abs(slope / steady - 1.0)
+    # The estimator's error bar is hypot(rim layer, map error * S); the steady value's is
+    # the map's share alone (no rim layer at s = inf), which d_S does not see.
+    bar = np.asarray(h["rms_slope_error"], dtype=float)
+    map_share = (steady_error / steady) * slope if math.isfinite(steady_error) else 0.0
+    rim = np.sqrt(np.maximum(bar ** 2 - map_share ** 2, 0.0))
+    parts = [rim / steady, _dataset(h, "rms_slope_step_error") / steady,
+             _dataset(h, "rms_slope_deviation_spatial_error")]
+    # An infinite error bar (no estimate possible) stays infinite: no bound.
+    e_slope = np.sqrt(sum(np.nan_to_num(p, nan=0.0, posinf=np.inf) ** 2 for p in parts))
+    e_face = np.hypot(*(np.nan_to_num(_dataset(h, name), nan=0.0, posinf=np.inf) for name in (
+        "face_deviation_step_error", "face_deviation_spatial_error")))
+    # At s = 0 the slope is the initial face's own, exact, value.
+    e_slope[0], e_face[0] = 0.0, 0.0
+    deviation = np.maximum(d_slope, face)
+    low = np.maximum(np.maximum(d_slope - e_slope, 0.0), np.maximum(face - e_face, 0.0))
+    high = np.maximum(d_slope + e_slope, face + e_face)
+    return deviation, low, high
+
+
+def _dataset(history, name):
+    """A history dataset as floats; zeros when absent (or empty: no spatial error)."""
+    n = len(history["distance"])
+    value = np.asarray(history.get(name, ()), dtype=float)
+    return value if value.shape == (n,) else np.zeros(n)
+
+
+def entry(distance, deviation, within):
+    """Distance (m) after which ``deviation`` stays at or below ``within``; None if it ends above.
+
+    Parameters
+    ----------
+    distance : ndarray, shape (K,), m
+        Increasing recorded distances.
+    deviation : ndarray, shape (K,)
+    within : float
+
+    Returns
+    -------
+    float or None
+        ``distance[0]`` if every point is within; else between the last
+        point above ``within`` and the next, ``log(deviation)`` linear in
+        the distance (linear in the deviation where the next point is 0).
+    """
+    outside = np.flatnonzero(deviation > within)
+    if outside.size == 0:
+        return float(distance[0])
+    i = int(outside[-1])
+    if i + 1 >= distance.size:
+        return None
+    d0, d1 = float(deviation[i]), float(deviation[i + 1])
+    if d1 > 0:
+        t = math.log(d0 / within) / math.log(d0 / d1)
+    else:
+        t = (d0 - within) / d0
+    return float(distance[i] + t * (distance[i + 1] - distance[i]))
+
+
+def run_in_distance(result, within=0.01, *, sliding_speed=None):
+    """The run-in distance of ``result`` within ``within`` (module notes).
+
+    Parameters
+    ----------
+    result : transient.runin.RunResult
+    within : float, optional
+        Relative tolerance in (0, 1); default 0.01.
+    sliding_speed : float, optional, m/s
+        Default ``result.sliding_speed``; gives the time.
+
+    Returns
+    -------
+    RunInDistance
+
+    Raises
+    ------
+    ValueError
+        ``within`` or ``sliding_speed`` out of range, or a result without
+        the figures it needs (:func:`deviations`).
+    """
+    within = float(within)
+    if not 0.0 < within < 1.0:
+        raise ValueError(f"within must lie in (0, 1), got {within!r}")
+    speed = result.sliding_speed if sliding_speed is None else float(sliding_speed)
+    if speed is not None and not (math.isfinite(speed) and speed > 0):
+        raise ValueError(f"sliding_speed must be a finite number > 0 (m/s), got {speed!r}")
+    h = result.history
+    s = np.asarray(h["distance"], dtype=float)
+    deviation, low, high = deviations(result)
+    s_star = result.distance_scale
+    nan = math.nan
+    spatial = _dataset(h, "face_deviation_spatial_error").any() or \
+        _dataset(h, "rms_slope_deviation_spatial_error").any()
+    common = dict(within=within, end_m=float(s[-1]), distance_scale=float(s_star),
+                  spatial=bool(spatial))
+    found = entry(s, deviation, within)
+    if found is None:
+        if result.status == "steady":
+            status = ("; the jump to the steady state skipped the rest: lower jump_spread to "
+                      "follow it")
+        else:
+            status = f"; the run {result.status}"
+        return RunInDistance(
+            reached=False, distance_m=nan, distance_s_star=nan, uncertainty_m=nan, low_m=nan,
+            high_m=nan, mean_worn_depth_m=nan, rim_worn_depth_m=nan, time_s=None,
+            time_uncertainty_s=None,
+            message=(f"the dynamics end at s = {s[-1]:.4g} m = {s[-1] / s_star:.4g} s*, "
+                     f"{100 * deviation[-1]:.3g} % from the steady state{status}"), **common)
+    lo = entry(s, low, within)
+    hi = entry(s, high, within)
+    lo = found if lo is None else min(lo, found)
+    hi = math.inf if hi is None else max(hi, found)
+    uncertainty = max(found - lo, hi - found)
+    area = float(np.count_nonzero(result.face_mask)) * result.pixel_size ** 2
+    mean_depth = float(np.interp(found, s, np.asarray(h["worn_volume"], dtype=float))) / area
+    rim = _dataset(h, "rim_worn_depth")
+    rim_depth = float(np.interp(found, s, rim)) if np.all(np.isfinite(rim)) else nan
+    return RunInDistance(
+        reached=True, distance_m=found, distance_s_star=float(found / s_star),
+        uncertainty_m=uncertainty, low_m=lo, high_m=hi, mean_worn_depth_m=mean_depth,
+        rim_worn_depth_m=rim_depth, time_s=None if speed is None else found / speed,
+        time_uncertainty_s=None if speed is None else uncertainty / speed, **common)
+
+
+def distance_table(result, tolerances=TOLERANCES):
+    """The run-in distances of ``result`` as the run file's group ``run_in_distance`` holds them.
+
+    Parameters
+    ----------
+    result : transient.runin.RunResult
+    tolerances : sequence of float, optional
+        Default :data:`TOLERANCES`.
+
+    Returns
+    -------
+    dict
+        ``name -> (values, units, long_name)``, each ``values`` of shape
+        ``(len(tolerances),)`` (NaN where not reached; ``time`` NaN without
+        a sliding speed); empty when the result lacks the figures
+        (:func:`deviations`).
+    """
+    try:
+        found = [run_in_distance(result, x) for x in tolerances]
+    except ValueError:
+        return {}
+
+    def column(name):
+        return np.array([math.nan if getattr(d, name) is None else getattr(d, name)
+                         for d in found], dtype=float)
+
+    return {
+        "within": (np.array(tolerances, dtype=float), "1",
+                   "relative tolerance of the deviation from the steady state"),
+        "reached": (column("reached"), "1",
+                    "1 where the run ends within the tolerance, else 0"),
+        "distance": (column("distance_m"), "m",
+                     "sliding distance after which the rms slope and the face stay within the "
+                     "tolerance of the steady state"),
+        "distance_s_star": (column("distance_s_star"), "1",
+                            "the same distance over the distance scale s*"),
+        "uncertainty": (column("uncertainty_m"), "m",
+                        "uncertainty of the distance from the step and grid errors"),
+        "low": (column("low_m"), "m", "lower bound of the distance"),
+        "high": (column("high_m"), "m", "upper bound of the distance (inf: not resolved)"),
+        "mean_worn_depth": (column("mean_worn_depth_m"), "m",
+                            "depth worn off at that distance, mean over the face"),
+        "rim_worn_depth": (column("rim_worn_depth_m"), "m",
+                           "depth worn off at that distance, mean over the rim pixels"),
+        "time": (column("time_s"), "s", "that distance over the sliding speed (NaN: none)"),
+        "time_uncertainty": (column("time_uncertainty_s"), "s",
+                             "uncertainty of the time (NaN: no sliding speed)"),
+    }
