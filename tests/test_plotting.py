@@ -174,7 +174,7 @@ def test_phase_names_of_the_scene_go_with_the_file(tmp_path, scene_file):
     path = scene_file("steady", extra='names = ["epoxy", "bronze"]')
     scene = load_scene(path)
     out = tmp_path / "r.h5"
-    write_result(out, solve_scene(scene, slope_error=False), scene)
+    write_result(out, solve_scene(scene, face_only=True), scene)
     texts = [t.get_text() for t in plot_phases(out).axes[0].get_legend().get_texts()]
     assert [t.split(":")[0] for t in texts] == ["epoxy", "bronze"], texts
     assert "k = 1e-09 1/Pa" in texts[0], texts[0]
@@ -234,7 +234,7 @@ def test_fit_figure_draws_relief_not_the_dome(tmp_path, scene_file):
     from steady.fit_files import fit_figure, read_fit, write_fit
 
     scene = load_scene(scene_file("steady"))
-    face = solve_scene(scene, slope_error=False).face
+    face = solve_scene(scene, face_only=True).face
     measured = MeasuredFace(face, scene.grid(scene.n).h)
     stored = read_fit(write_fit(tmp_path / "fit.h5", fit_scene(scene, measured), scene))
     fig = fit_figure(stored)

@@ -22,6 +22,8 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
   homogeneous cylinder, the reference of the history;
 - :mod:`transient.runin` -- the run loop, its result and the state a
   resumed run needs, history and checkpoints;
+- :mod:`transient.run_in_distance` -- the run-in distance within a tolerance
+  of the steady state, with its uncertainty;
 - :mod:`transient.comparison` -- agreement with the steady face;
 - :mod:`transient.output` -- HDF5 run files;
 - :mod:`transient.options` -- the run options, each declared once for the
