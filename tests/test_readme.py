@@ -76,3 +76,22 @@ def test_quick_start_runs_twice_in_an_empty_directory(tmp_path, monkeypatch, cap
     assert (tmp_path / "run.png").stat().st_size > 10_000, "figure not drawn"
     assert sorted(p.name for p in (tmp_path / "example").iterdir()) == \
         ["voronoi_transient.toml"], "the example copy"
+    # What a new user reads next: the run-in distance in metres from the summary, the run file
+    # as labelled arrays, the history in metres in one call.
+    summary = capsys.readouterr().out
+    line = re.search(r"run-in distance within 1 %: s = (\S+) \+- (\S+) m = (\S+) ", summary)
+    assert line is not None, f"no run-in distance in metres in the summary:\n{summary}"
+    distance, error, in_s_star = (float(v) for v in line.groups())
+    with h5py.File(tmp_path / "run.h5", "r") as f:
+        scale = f.attrs["distance_scale"]
+    assert abs(distance / scale - in_s_star) <= 0.0011 * in_s_star, (distance, scale, in_s_star)
+    assert 0 < error < distance
+    xarray = pytest.importorskip("xarray")
+    with xarray.open_dataset(tmp_path / "run.h5", engine="h5netcdf") as ds:
+        assert ds["x"].attrs["units"] == "m" and ds["worn_depth"].dims == ("x", "y"), ds
+    with xarray.open_dataset(tmp_path / "run.h5", engine="h5netcdf", group="history") as ds:
+        assert ds["distance"].attrs["units"] == "m"
+        assert float(ds["distance"][-1]) > distance, "the history ends before the run-in"
+    from transient.plotting import plot_history
+    fig = plot_history(tmp_path / "run.h5", units="m")
+    assert fig.axes[0].get_xlabel() == "sliding distance (m)"
