@@ -28,9 +28,14 @@ import logging
 import numpy as np
 import scipy.fft
 
-__all__ = ["HalfSpace", "grid_shape", "pixel_integral", "pixel_integral_gradient"]
+__all__ = ["HalfSpace", "default_workers", "grid_shape", "pixel_integral",
+           "pixel_integral_gradient"]
 
 logger = logging.getLogger(__name__)
+
+# Grids from this many pixels have their transforms on all cores; smaller ones on
+# one thread (docs/benchmarks.md, "Contact solve on run-in problems").
+_THREADED_PIXELS = 512 * 512
 
 
 def _corner_sum(values):
@@ -147,6 +152,15 @@ def _influence_quadrant(cx, cy, asinh_yx, asinh_xy):
     return _corner_sum(cx[:, None] * asinh_yx + cy[None, :] * asinh_xy)
 
 
+def default_workers(shape):
+    """Threads (:mod:`scipy.fft` ``workers``) for the transforms of an ``(nx, ny)`` grid.
+
+    One below ``_THREADED_PIXELS`` pixels, where a second thread costs more than
+    it saves; all cores (``-1``) from there.
+    """
+    return -1 if shape[0] * shape[1] >= _THREADED_PIXELS else 1
+
+
 def grid_shape(shape):
     """``(nx, ny)`` of a grid given as ``(nx, ny)`` or one ``n`` (square), checked.
 
@@ -185,7 +199,10 @@ class HalfSpace:
     E_star : float, Pa
         Effective modulus ``E / (1 - nu^2)`` of the half-space.
     workers : int, optional
-        Threads for :mod:`scipy.fft` (default: all cores).
+        Threads for :mod:`scipy.fft` (as its ``workers``; default: one below
+        ``512 x 512`` pixels, where a second thread costs more than it saves,
+        all cores from there; docs/benchmarks.md, "Contact solve on run-in
+        problems").
 
     Notes
     -----
@@ -211,7 +228,7 @@ class HalfSpace:
     1.002
     """
 
-    def __init__(self, shape, h, E_star, *, workers=-1):
+    def __init__(self, shape, h, E_star, *, workers=None):
         self.shape = grid_shape(shape)
         if not (np.isfinite(h) and h > 0):
             raise ValueError(f"pixel size h must be positive and finite, got {h!r} m")
@@ -220,7 +237,7 @@ class HalfSpace:
         nx, ny = self.shape
         self.h = float(h)
         self.E_star = float(E_star)
-        self.workers = workers
+        self.workers = default_workers(self.shape) if workers is None else workers
         self._corners = _corner_asinh(self.shape, self.h)
         self._influence_q = self._even_spectrum(self.influence_quadrant)
         self._influence_q.flags.writeable = False
@@ -316,7 +333,13 @@ class HalfSpace:
         out[:nx] = scipy.fft.rfft(self._rows, axis=1, workers=self.workers)
         out[nx:] = 0.0
         # A complex, contiguous input with overwrite_x is transformed in place.
-        return scipy.fft.fft(out, axis=0, workers=self.workers, overwrite_x=True)
+        result = scipy.fft.fft(out, axis=0, workers=self.workers, overwrite_x=True)
+        if not (result.ctypes.data == out.ctypes.data and result.strides == out.strides):
+            out[...] = result
+        # ``out`` itself rather than the view scipy returns: numpy cannot tell that a view
+        # of a ufunc's output buffer is that buffer and would copy it first (a third of a
+        # product at n = 1024).
+        return out
 
     def inverse(self, spectrum_q, *, overwrite=False):
         """Real field on the grid from a padded half spectrum.
