@@ -65,6 +65,10 @@ _DIAGONAL_DOMINANCE = 10.0
 # Most levels of the stitched Fourier preconditioner for a non-uniform shift
 # (one FFT pair each); more distinct values are interpolated between nodes.
 _MAX_LEVELS = 4
+# Floating-point types of the unpadded Fourier preconditioner's transforms.  Single
+# precision halves their cost; the outer iteration stays in double (docs/benchmarks.md,
+# "Contact solve on run-in problems").
+_PRECISIONS = {"single": np.dtype(np.float32), "double": np.dtype(np.float64)}
 # Relative spread of the shift (in units of the smallest eigenvalue plus the
 # smallest shift) below which it is treated as uniform.
 _UNIFORM_SPREAD = 1e-2
@@ -177,16 +181,21 @@ class FourierPreconditioner:
         Apply on the zero-padded ``2nx x 2ny`` grid (default False).
     max_levels : int, optional
         Most levels of a non-uniform shift (default 4).
+    precision : {"single", "double"}, optional
+        Floating-point precision of the unpadded transforms (default
+        ``"single"``: half the cost; an approximate inverse needs no more).
+        The padded form always uses the half-space's double-precision
+        transforms.  The result is double precision either way.
     """
 
     def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False,
-                 max_levels=_MAX_LEVELS):
+                 max_levels=_MAX_LEVELS, precision="single"):
         scale = float(_symbol(halfspace, padded).min())
         levels, weights = shift_levels(shift, face_mask, scale, max_levels)
-        self._set_levels(halfspace, levels, weights, padded)
+        self._set_levels(halfspace, levels, weights, padded, precision)
 
     @classmethod
-    def from_levels(cls, halfspace, levels, weights, *, padded=False):
+    def from_levels(cls, halfspace, levels, weights, *, padded=False, precision="single"):
         """The preconditioner of given levels and weights, as :func:`shift_levels` returns.
 
         For callers that know the levels of their shift without a pass over
@@ -194,20 +203,27 @@ class FourierPreconditioner:
         copied).
         """
         self = cls.__new__(cls)
-        self._set_levels(halfspace, [float(s) for s in levels], weights, padded)
+        self._set_levels(halfspace, [float(s) for s in levels], weights, padded, precision)
         return self
 
-    def _set_levels(self, halfspace, levels, weights, padded):
+    def _set_levels(self, halfspace, levels, weights, padded, precision):
+        if precision not in _PRECISIONS:
+            raise ValueError(f"precision must be one of {sorted(_PRECISIONS)}, "
+                             f"got {precision!r}")
         self.halfspace = halfspace
         self.padded = bool(padded)
+        # The padded transforms are the half-space's own, in double precision.
+        self.dtype = np.dtype(float) if self.padded else _PRECISIONS[precision]
         symbol = _symbol(halfspace, self.padded)
         self.levels = levels
         self.weights = weights
         self._field = self._spectrum = None  # work buffers of the stitched form
         if weights is None:
-            self.inverse_symbol = 1.0 / (symbol + levels[0])
+            self.inverse_symbol = (1.0 / (symbol + levels[0])).astype(self.dtype)
         else:
-            self.inverse_root = [1.0 / np.sqrt(symbol + s) for s in levels]
+            self.inverse_root = [(1.0 / np.sqrt(symbol + s)).astype(self.dtype) for s in levels]
+            if self.dtype != float:
+                self.weights = [phi.astype(self.dtype) for phi in weights]
 
     def _forward(self, field):
         hs = self.halfspace
@@ -222,17 +238,18 @@ class FourierPreconditioner:
         return scipy.fft.irfft2(spectrum, s=hs.shape, workers=hs.workers, overwrite_x=True)
 
     def __call__(self, residual, active):
-        """Apply to a residual (m), zero off the active set; returns Pa."""
+        """Apply to a residual (m), zero off the active set; returns Pa (float64)."""
+        if self._field is None:
+            self._field = np.empty(residual.shape, self.dtype)
         if self.weights is None:
-            spectrum = self._forward(residual)
+            self._field[...] = residual
+            spectrum = self._forward(self._field)
             spectrum *= self.inverse_symbol
             z = self._inverse(spectrum)
         else:
             # B^T r: one transform per level, summed in Fourier space ...
             # (the weighted residual and each level's spectrum go through work
             # buffers: fresh arrays of this size cost as much as a transform)
-            if self._field is None:
-                self._field = np.empty(residual.shape)
             total = None
             for phi, root in zip(self.weights, self.inverse_root, strict=True):
                 spectrum = self._forward(np.multiply(phi, residual, out=self._field))
@@ -246,8 +263,7 @@ class FourierPreconditioner:
                 part = self._inverse(np.multiply(total, root, out=self._spectrum))
                 part *= phi
                 z = part if z is None else z.__iadd__(part)
-        z *= active
-        return z
+        return np.multiply(z, active, out=np.empty(residual.shape))
 
 
 def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
