@@ -12,7 +12,7 @@ from steady import reference
 from steady.halfspace import HalfSpace
 from steady.outline import Circle
 from transient import initial_face
-from transient.contact import ContactResult, solve_contact
+from transient.contact import ContactResult, solve_contact, solve_trusted_contact
 from transient.preconditioners import PRECONDITIONERS
 
 # The paper's epoxy cylinder (Fig. 6): a = 4 mm, F = 10 N, E* = 1.3 MPa.
@@ -263,6 +263,29 @@ def test_known_displacement_of_the_warm_start_saves_a_product(n, monkeypatch):
     diff = np.abs(res.pressure - cold.pressure).max() / cold.pressure.max()
     assert res.success and diff < 1e-8, \
         f"a clipped warm start must not use the displacement of the unclipped one ({diff:.2e})"
+
+
+@pytest.mark.parametrize("n", [40, 41])
+def test_trusted_entry_is_the_checked_solver_bit_for_bit(n):
+    # The run-in loop's entry skips the checks, not any of the work: on valid
+    # arguments (a shifted stage, warm start and its displacement) it returns
+    # exactly what the checked entry returns.
+    hs, face = setup(n)
+    rng = np.random.default_rng(6133)
+    shift = np.where(face, hs.self_influence * np.where(rng.random((n, n)) < 0.3, 5.0, 0.5),
+                     0.0)
+    height = initial_face.crowned(grid(n), 0.3)
+    cold = solve_contact(hs, face, height, FORCE, shift=shift, rtol=1e-11)
+    x0 = np.where(face, cold.pressure * (1 + 0.02 * rng.random((n, n))), 0.0)
+    kw = dict(shift=shift, x0=x0, x0_displacement=hs.displacement(x0), rtol=1e-11)
+    checked = solve_contact(hs, face, height, FORCE, **kw)
+    trusted = solve_trusted_contact(hs, face, height, FORCE, **kw)
+    assert checked.success and checked.nit > 0, checked.message
+    for field in ("pressure", "displacement", "elastic_displacement", "residual_history"):
+        assert np.array_equal(getattr(trusted, field), getattr(checked, field)), \
+            f"trusted entry differs in {field}"
+    assert (trusted.approach, trusted.nit, trusted.message) == \
+        (checked.approach, checked.nit, checked.message), "trusted entry differs"
 
 
 # -- diagonal shift against a dense direct solve ------------------------------

@@ -276,6 +276,39 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     on_face, n_face, height, force, shift, x0, maxiter = _checked_inputs(
         halfspace, face_mask, height, normal_force, shift, x0, rtol, atol, maxiter,
         preconditioner)
+    return _solve(halfspace, on_face, n_face, height, force, shift, x0, x0_displacement,
+                  rtol, atol, maxiter, preconditioner, callback)
+
+
+def solve_trusted_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=None,
+                          x0_displacement=None, rtol=1e-8, atol=0.0, maxiter=None,
+                          preconditioner="auto"):
+    """:func:`solve_contact` on arguments its caller guarantees, without their checks.
+
+    The run-in loop's entry: it solves many problems whose arguments it has
+    built itself, and the checks of :func:`solve_contact` (several passes
+    over the grid's arrays) cost a few per cent of a solve.  The caller
+    guarantees what those checks would establish: arrays of the grid's shape
+    (float), ``face_mask`` boolean with at least one pixel, ``height`` and
+    ``x0`` finite on the face, ``normal_force`` finite and non-negative,
+    ``shift`` (m/Pa) finite, non-negative and zero off the face, tolerances
+    and ``maxiter`` valid, ``preconditioner`` a registered name or a callable.
+    On such arguments the result is that of :func:`solve_contact`, bit for
+    bit; on others it is undefined.
+
+    Parameters and returns as :func:`solve_contact` (without ``callback``).
+    """
+    on_face = face_mask
+    if maxiter is None:
+        maxiter = max(200, 10 * max(halfspace.shape))
+    return _solve(halfspace, on_face, int(np.count_nonzero(on_face)), height,
+                  float(normal_force), shift, x0, x0_displacement, rtol, atol, int(maxiter),
+                  preconditioner, None)
+
+
+def _solve(halfspace, on_face, n_face, height, force, shift, x0, x0_displacement, rtol, atol,
+           maxiter, preconditioner, callback):
+    """The iteration of :func:`solve_contact` on checked arguments."""
     operator = _Operator(halfspace, shift)
     h_face = np.where(on_face, height, 0.0)
     if force == 0.0:
