@@ -66,6 +66,13 @@ _REFRESH = 50
 # once (by at most eps |K p|), with a factor 2 for the growth of |K p|
 # between full recomputations.
 _ROUNDING_PER_ITERATION = 8.0
+# Solves that must reduce the first residual by more than this factor take the
+# preconditioner in double precision (FourierPreconditioner.accurate): the round-off of
+# single-precision transforms puts error into every eigencomponent at about 1e-7 of the
+# residual, which costs a cold flat-punch solve to rtol = 1e-10 up to 40 % more iterations
+# (10 to 14 on a 1:2 rectangle at n = 48); a run-in's warm-started solves start 2 to 20
+# tolerances away and lose none (docs/benchmarks.md, "Contact solve on run-in problems").
+_SINGLE_REDUCTION = 1e-4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -613,7 +620,8 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
                        f"> {tolerance:.3e} m")
             break
         it += 1
-        _update_direction(problem, state, r, active, work)
+        _update_direction(problem, state, r, active, work,
+                          accurate=tolerance < _SINGLE_REDUCTION * history[0])
         q = problem.operator(state.t)
         tq = _curvature(problem, state.t, q)
         if not tq > 0:
@@ -691,13 +699,19 @@ def _stopping_rule(residual, tolerance, state):
     return _ITERATE
 
 
-def _update_direction(problem, state, r, active, work):
+def _update_direction(problem, state, r, active, work, accurate=False):
     """The next conjugate direction ``state.t`` from the residual ``r`` (m, shape (nx, ny)).
 
-    ``work`` (shape (nx, ny)) is scratch.
+    ``work`` (shape (nx, ny)) is scratch.  ``accurate``: apply the preconditioner
+    in double precision (its ``accurate`` method, where it has one).
     """
     precondition = problem.precondition
-    z = r.copy() if precondition is None else precondition(r, active.mask)
+    if precondition is None:
+        z = r.copy()
+    elif accurate and hasattr(precondition, "accurate"):
+        z = precondition.accurate(r, active.mask)
+    else:
+        z = precondition(r, active.mask)
     # Zero mean on the active set, so that a step along it keeps the load.
     z -= np.multiply(active.weight, _dot(z, active.weight) / active.count, out=work)
     gz = _dot(r, z)

@@ -212,18 +212,33 @@ class FourierPreconditioner:
                              f"got {precision!r}")
         self.halfspace = halfspace
         self.padded = bool(padded)
-        # The padded transforms are the half-space's own, in double precision.
-        self.dtype = np.dtype(float) if self.padded else _PRECISIONS[precision]
-        symbol = _symbol(halfspace, self.padded)
         self.levels = levels
         self.weights = weights
-        self._field = self._spectrum = None  # work buffers of the stitched form
-        if weights is None:
-            self.inverse_symbol = (1.0 / (symbol + levels[0])).astype(self.dtype)
-        else:
-            self.inverse_root = [(1.0 / np.sqrt(symbol + s)).astype(self.dtype) for s in levels]
-            if self.dtype != float:
-                self.weights = [phi.astype(self.dtype) for phi in weights]
+        # The padded transforms are the half-space's own, in double precision.
+        self.dtype = np.dtype(float) if self.padded else _PRECISIONS[precision]
+        self._plans = {}
+        self._plan(self.dtype)
+
+    def _plan(self, dtype):
+        """Multipliers, weights and work buffers of the transforms in ``dtype``, built once.
+
+        The multipliers are ``1 / (C + sigma)`` for one level, ``(C + sigma_j)^(-1/2)``
+        for several.  The weighted residual and each level's spectrum go through work
+        buffers: fresh arrays of this size cost as much as a transform.
+        """
+        plan = self._plans.get(dtype)
+        if plan is None:
+            symbol = _symbol(self.halfspace, self.padded)
+            if self.weights is None:
+                multipliers, weights = [(1.0 / (symbol + self.levels[0])).astype(dtype)], None
+            else:
+                multipliers = [(1.0 / np.sqrt(symbol + s)).astype(dtype) for s in self.levels]
+                weights = [phi if phi.dtype == dtype else phi.astype(dtype)
+                           for phi in self.weights]
+            plan = self._plans[dtype] = dict(
+                multipliers=multipliers, weights=weights,
+                field=np.empty(self.halfspace.shape, dtype), spectrum=None)
+        return plan
 
     def _forward(self, field):
         hs = self.halfspace
@@ -239,28 +254,38 @@ class FourierPreconditioner:
 
     def __call__(self, residual, active):
         """Apply to a residual (m), zero off the active set; returns Pa (float64)."""
-        if self._field is None:
-            self._field = np.empty(residual.shape, self.dtype)
-        if self.weights is None:
-            self._field[...] = residual
-            spectrum = self._forward(self._field)
-            spectrum *= self.inverse_symbol
+        return self._apply(residual, active, self.dtype)
+
+    def accurate(self, residual, active):
+        """:meth:`__call__` with double-precision transforms whatever the precision.
+
+        For the last iterations of a tight solve, where the round-off of
+        single-precision transforms would cost conjugacy (see
+        :func:`transient.contact.solve_contact`).
+        """
+        return self._apply(residual, active, np.dtype(float))
+
+    def _apply(self, residual, active, dtype):
+        plan = self._plan(dtype)
+        field = plan["field"]
+        if plan["weights"] is None:
+            field[...] = residual
+            spectrum = self._forward(field)
+            spectrum *= plan["multipliers"][0]
             z = self._inverse(spectrum)
         else:
             # B^T r: one transform per level, summed in Fourier space ...
-            # (the weighted residual and each level's spectrum go through work
-            # buffers: fresh arrays of this size cost as much as a transform)
             total = None
-            for phi, root in zip(self.weights, self.inverse_root, strict=True):
-                spectrum = self._forward(np.multiply(phi, residual, out=self._field))
+            for phi, root in zip(plan["weights"], plan["multipliers"], strict=True):
+                spectrum = self._forward(np.multiply(phi, residual, out=field))
                 spectrum *= root
                 total = spectrum if total is None else total.__iadd__(spectrum)
             # ... then B: one inverse transform per level.
-            if self._spectrum is None:
-                self._spectrum = np.empty_like(total)
+            if plan["spectrum"] is None:
+                plan["spectrum"] = np.empty_like(total)
             z = None
-            for phi, root in zip(self.weights, self.inverse_root, strict=True):
-                part = self._inverse(np.multiply(total, root, out=self._spectrum))
+            for phi, root in zip(plan["weights"], plan["multipliers"], strict=True):
+                part = self._inverse(np.multiply(total, root, out=plan["spectrum"]))
                 part *= phi
                 z = part if z is None else z.__iadd__(part)
         return np.multiply(z, active, out=np.empty(residual.shape))
@@ -337,8 +362,9 @@ class ScaledShift:
         self.low, self.high = float(values.min()), float(values.max())
         distinct = _few_distinct(values, _MAX_LEVELS)
         self.values = None if distinct is None else [float(v) for v in distinct]
+        # (in the precision of the default transforms, so that no stage converts them)
         self.weights = (None if distinct is None or len(distinct) == 1
-                        else [(pattern == v).astype(float) for v in distinct])
+                        else [(pattern == v).astype(_PRECISIONS["single"]) for v in distinct])
         self._diagonal = _diagonal_floor(halfspace)
         self._scale = float(_symbol(halfspace, False).min())
 
