@@ -1,7 +1,6 @@
 """Load-controlled contact solver against closed forms and a dense direct solve."""
 
 import logging
-import sys
 
 import numpy as np
 import pytest
@@ -367,8 +366,6 @@ def test_big_shift_is_nearly_diagonal():
 
 @pytest.mark.parametrize("name", sorted(PRECONDITIONERS))
 def test_every_preconditioner_gives_the_same_answer(name):
-    if name == "amg":
-        pytest.importorskip("pyamg")
     n = 33
     hs, face = setup(n)
     rng = np.random.default_rng(9173)
@@ -464,15 +461,6 @@ def test_bad_input_raises(change, match):
     with pytest.raises(ValueError, match=match):
         solve_contact(args["halfspace"], args["face_mask"], args["height"],
                       args["normal_force"], **kwargs)
-
-
-def test_amg_without_pyamg_names_the_extra(monkeypatch):
-    # A missing optional dependency is an input error that says how to install it.
-    monkeypatch.setitem(sys.modules, "pyamg", None)
-    n = 9
-    hs, face = setup(n)
-    with pytest.raises(ValueError, match=r"pip install 'runin\[amg\]'"):
-        solve_contact(hs, face, np.zeros((n, n)), FORCE, preconditioner="amg")
 
 
 # -- large grids ---------------------------------------------------------------------

@@ -38,7 +38,6 @@ from steady.lazy import lazy_names
 
 #: Public names and the module of each.
 _MODULE_OF = {
-    "AMGPreconditioner": "preconditioners",
     "BDF2": "stepping",
     "ContactResult": "contact",
     "ExplicitEuler": "stepping",

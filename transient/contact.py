@@ -215,20 +215,19 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     maxiter : int, optional
         Maximum number of iterations (default ``max(200, 10 max(nx, ny))``).
     preconditioner : str or callable, optional
-        One of ``"auto"``, ``"fourier"``, ``"fourier-padded"``, ``"jacobi"``, ``"amg"``,
-        ``"none"``.  ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
-        ``K + shift`` aliased to the ``nx x ny`` grid (one unpadded FFT pair per iteration,
-        cheaper than a padded one; ``"fourier-padded"`` applies it on the padded grid); a
-        non-uniform shift is split into levels, one symbol and one FFT pair each, stitched by
-        the shift map (:class:`transient.preconditioners.FourierPreconditioner`).  Where the
-        shift is at least ten times the largest eigenvalue of ``K`` on every face pixel the
-        operator is diagonal to within 10 % and ``"auto"`` takes ``"jacobi"`` (free).
-        ``"amg"`` (one smoothed-aggregation V-cycle on a truncated kernel) needs :mod:`pyamg`
-        and is slower in every case of docs/benchmarks.md.  Or a preconditioner already built
-        for this face and shift, called as ``z = preconditioner(residual, active)`` (a
-        pressure, Pa, zero off ``active``, from a gap residual, m): a caller that solves many
-        problems of one shift pattern builds them with
-        :class:`transient.preconditioners.ScaledShift`.
+        One of ``"auto"``, ``"fourier"``, ``"fourier-padded"``, ``"jacobi"``, ``"none"``.
+        ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of ``K + shift``
+        aliased to the ``nx x ny`` grid (one unpadded FFT pair per iteration, cheaper than a
+        padded one: in single precision for a solve that starts within ``1e4`` tolerances,
+        as a warm-started one does, else in double; ``"fourier-padded"`` applies it on the
+        padded grid); a non-uniform shift is split into levels, one symbol and one FFT pair each,
+        stitched by the shift map (:class:`transient.preconditioners.FourierPreconditioner`).
+        Where the shift is at least ten times the largest eigenvalue of ``K`` on every face
+        pixel the operator is diagonal to within 10 % and ``"auto"`` takes ``"jacobi"``
+        (free).  Or a preconditioner already built for this face and shift, called as
+        ``z = preconditioner(residual, active)`` (a pressure, Pa, zero off ``active``, from a
+        gap residual, m): a caller that solves many problems of one shift pattern builds them
+        with :class:`transient.preconditioners.ScaledShift`.
     callback : callable, optional
         Called as ``callback(pressure)`` after each iteration with the
         current pressure (read-only view; copy it to keep it).

@@ -16,10 +16,6 @@ needs.
   shift map (:func:`shift_levels`).
 - :class:`JacobiPreconditioner`: ``1 / diag(A)``.  Free; exact in the
   limit ``shift >> self-influence``.
-- :class:`AMGPreconditioner`: one smoothed-aggregation V-cycle (pyamg) on
-  a sparse surrogate of ``A`` (the influence kernel truncated to a few
-  pixels, plus the shift).  Kept for comparison; needs the optional extra
-  ``runin[amg]``.
 
 Every preconditioner is registered by name (:data:`PRECONDITIONERS`,
 :func:`register_preconditioner`); :func:`make_preconditioner` builds one
@@ -34,14 +30,10 @@ J. Comput. Phys. 257 (2014) 333-351, doi:10.1016/j.jcp.2013.10.005.
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 import scipy.fft
-import scipy.sparse
 
 __all__ = [
-    "AMGPreconditioner",
     "FourierPreconditioner",
     "JacobiPreconditioner",
     "PRECONDITIONERS",
@@ -50,8 +42,6 @@ __all__ = [
     "register_preconditioner",
     "shift_levels",
 ]
-
-logger = logging.getLogger(__name__)
 
 #: Preconditioner factories by name, ``factory(halfspace, face_mask, shift)``
 #: (see :func:`register_preconditioner`); ``"none"`` maps to None.
@@ -390,74 +380,6 @@ class ScaledShift:
         return FourierPreconditioner.from_levels(hs, [c * v for v in self.values], self.weights)
 
 
-class AMGPreconditioner:
-    """One smoothed-aggregation V-cycle on a sparse surrogate of the operator.
-
-    The surrogate keeps the influence kernel within ``radius`` pixels
-    (plus the shift on the diagonal) on the face pixels; the hierarchy is
-    built once for the face and the V-cycle is restricted to the active
-    set, which keeps it symmetric positive definite there.
-
-    Parameters
-    ----------
-    halfspace : steady.halfspace.HalfSpace
-    face_mask : ndarray of bool, shape (nx, ny)
-    shift : ndarray, shape (nx, ny), m/Pa, or None
-    radius : int, optional
-        Truncation radius of the kernel, pixels (default 2).
-    """
-
-    def __init__(self, halfspace, face_mask, shift=None, *, radius=2):
-        try:
-            import pyamg  # optional dependency, imported on use
-        except ImportError:
-            raise ValueError("the 'amg' preconditioner needs pyamg: install the optional "
-                             "extra with pip install 'runin[amg]'") from None
-
-        nx, ny = halfspace.shape
-        radius = int(radius)
-        quadrant = halfspace.influence_quadrant[: radius + 1, : radius + 1]
-        index = -np.ones((nx, ny), dtype=np.int64)
-        ii, jj = np.nonzero(face_mask)
-        index[ii, jj] = np.arange(ii.size)
-        rows, cols, vals = [], [], []
-        for di in range(-radius, radius + 1):
-            for dj in range(-radius, radius + 1):
-                if di * di + dj * dj > radius * radius:
-                    continue
-                i2, j2 = ii + di, jj + dj
-                ok = (i2 >= 0) & (i2 < nx) & (j2 >= 0) & (j2 < ny)
-                ok[ok] &= face_mask[i2[ok], j2[ok]]
-                rows.append(index[ii[ok], jj[ok]])
-                cols.append(index[i2[ok], j2[ok]])
-                vals.append(np.full(ok.sum(), quadrant[abs(di), abs(dj)]))
-        rows, cols, vals = map(np.concatenate, (rows, cols, vals))
-        diag = np.zeros(ii.size)
-        if shift is not None:
-            diag = shift[ii, jj]
-        matrix = scipy.sparse.csr_matrix(
-            (np.concatenate([vals, diag]), (np.concatenate([rows, np.arange(ii.size)]),
-                                            np.concatenate([cols, np.arange(ii.size)]))),
-            shape=(ii.size, ii.size))
-        # Scale to O(1) entries so that pyamg's strength thresholds are meaningful.
-        self._scale = float(quadrant[0, 0])
-        self._solver = pyamg.smoothed_aggregation_solver(matrix / self._scale,
-                                                         symmetry="symmetric")
-        self._index = (ii, jj)
-        self._shape = (nx, ny)
-        logger.debug("AMG hierarchy: %d levels for %d face pixels",
-                     len(self._solver.levels), ii.size)
-
-    def __call__(self, residual, active):
-        """Apply to a residual (m) on the active set; returns Pa."""
-        ii, jj = self._index
-        r = np.where(active, residual, 0.0)[ii, jj]
-        x = self._solver.solve(r, x0=np.zeros_like(r), maxiter=1, cycle="V", tol=1e-300)
-        z = np.zeros(self._shape)
-        z[ii, jj] = x / self._scale
-        return np.where(active, z, 0.0)
-
-
 def _few_distinct(values, limit):
     """The sorted distinct values of an array if there are at most ``limit``, else None.
 
@@ -487,11 +409,6 @@ def _fourier(halfspace, face_mask, shift):
 @register_preconditioner("fourier-padded")
 def _fourier_padded(halfspace, face_mask, shift):
     return FourierPreconditioner(halfspace, shift, face_mask=face_mask, padded=True)
-
-
-@register_preconditioner("amg")
-def _amg(halfspace, face_mask, shift):
-    return AMGPreconditioner(halfspace, face_mask, shift)
 
 
 @register_preconditioner("auto")
