@@ -28,14 +28,9 @@ import logging
 import numpy as np
 import scipy.fft
 
-__all__ = ["HalfSpace", "default_workers", "grid_shape", "pixel_integral",
-           "pixel_integral_gradient"]
+__all__ = ["HalfSpace", "grid_shape", "pixel_integral", "pixel_integral_gradient"]
 
 logger = logging.getLogger(__name__)
-
-# Grids from this many pixels have their transforms on all cores; smaller ones on
-# one thread (docs/benchmarks.md, "Contact solve on run-in problems").
-_THREADED_PIXELS = 512 * 512
 
 
 def _corner_sum(values):
@@ -152,15 +147,6 @@ def _influence_quadrant(cx, cy, asinh_yx, asinh_xy):
     return _corner_sum(cx[:, None] * asinh_yx + cy[None, :] * asinh_xy)
 
 
-def default_workers(shape):
-    """Threads (:mod:`scipy.fft` ``workers``) for the transforms of an ``(nx, ny)`` grid.
-
-    One below ``_THREADED_PIXELS`` pixels, where a second thread costs more than
-    it saves; all cores (``-1``) from there.
-    """
-    return -1 if shape[0] * shape[1] >= _THREADED_PIXELS else 1
-
-
 def grid_shape(shape):
     """``(nx, ny)`` of a grid given as ``(nx, ny)`` or one ``n`` (square), checked.
 
@@ -199,10 +185,8 @@ class HalfSpace:
     E_star : float, Pa
         Effective modulus ``E / (1 - nu^2)`` of the half-space.
     workers : int, optional
-        Threads for :mod:`scipy.fft` (as its ``workers``; default: one below
-        ``512 x 512`` pixels, where a second thread costs more than it saves,
-        all cores from there; docs/benchmarks.md, "Contact solve on run-in
-        problems").
+        Threads for :mod:`scipy.fft` (default: all cores, at every size:
+        docs/benchmarks.md, "Contact solve on run-in problems").
 
     Notes
     -----
@@ -228,7 +212,7 @@ class HalfSpace:
     1.002
     """
 
-    def __init__(self, shape, h, E_star, *, workers=None):
+    def __init__(self, shape, h, E_star, *, workers=-1):
         self.shape = grid_shape(shape)
         if not (np.isfinite(h) and h > 0):
             raise ValueError(f"pixel size h must be positive and finite, got {h!r} m")
@@ -237,7 +221,7 @@ class HalfSpace:
         nx, ny = self.shape
         self.h = float(h)
         self.E_star = float(E_star)
-        self.workers = default_workers(self.shape) if workers is None else workers
+        self.workers = workers
         self._corners = _corner_asinh(self.shape, self.h)
         self._influence_q = self._even_spectrum(self.influence_quadrant)
         self._influence_q.flags.writeable = False
