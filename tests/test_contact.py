@@ -508,3 +508,33 @@ def test_benchmark_script_smoke(tmp_path):
     assert {row["scene"] for row in pc_rows} >= {"flat", "crowned"}, "preconditioner scenes"
     for row in pc_rows:
         assert row["auto"]["nit"] > 0, f"{row['scene']}: auto did not meet the accuracy"
+
+
+@pytest.mark.slow
+def test_run_in_solve_benchmark_smoke(tmp_path):
+    import importlib.util
+    import pathlib
+
+    import h5py
+
+    path = (pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
+            / "bench_contact_solve.py")
+    spec = importlib.util.spec_from_file_location("bench_contact_solve", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    problems = tmp_path / "problems"
+    kept = bench.main(["capture", "--n", "48", "--dir", str(problems), "--stride", "2",
+                       "--count", "2"])
+    assert kept == 2 and len(list(problems.glob("problem_*.npz"))) == 2, "two problems kept"
+    out = tmp_path / "replay.h5"
+    rows = bench.main(["replay", "--dir", str(problems), "--out", str(out), "--repeat", "1"])
+    assert all(row["success"] for row in rows), "every captured problem solves again"
+    with h5py.File(out) as f:
+        assert f["seconds"].attrs["units"] == "s" and f["nit"].shape == (2,), "replay file"
+    root = pathlib.Path(__file__).parents[1]
+    figures = bench.main(["compare", "--dir", str(problems), "--base", str(root), "--rounds",
+                          "2", "--out", str(tmp_path / "compare.h5")])
+    assert figures["iterations base"] == figures["iterations this"], "same solver, same tree"
+    assert figures["approach difference"] == 0.0, "the same tree gives the same approach"
+    rows = bench.main(["products", "--base", str(root), "--sizes", "16", "--rounds", "1"])
+    assert len(rows) == 8 and all(row["seconds"] > 0 for row in rows), "product timings"
