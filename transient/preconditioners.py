@@ -173,9 +173,11 @@ class FourierPreconditioner:
         Most levels of a non-uniform shift (default 4).
     precision : {"single", "double"}, optional
         Floating-point precision of the unpadded transforms (default
-        ``"single"``: half the cost; an approximate inverse needs no more).
-        The padded form always uses the half-space's double-precision
-        transforms.  The result is double precision either way.
+        ``"single"``: about half the cost, and an approximate inverse needs
+        no more while the residual is to fall by a few orders; :meth:`accurate`
+        applies it in double precision).  The padded form always uses the
+        half-space's double-precision transforms.  The result is double
+        precision either way.
     """
 
     def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False,
@@ -249,9 +251,10 @@ class FourierPreconditioner:
     def accurate(self, residual, active):
         """:meth:`__call__` with double-precision transforms whatever the precision.
 
-        For the last iterations of a tight solve, where the round-off of
-        single-precision transforms would cost conjugacy (see
-        :func:`transient.contact.solve_contact`).
+        For a solve that must reduce its residual by many orders, where the
+        round-off of single-precision transforms costs iterations
+        (:func:`transient.contact.solve_contact` takes it for a reduction of
+        more than ``1e4``).  Built on first use.
         """
         return self._apply(residual, active, np.dtype(float))
 
