@@ -185,7 +185,8 @@ class HalfSpace:
     E_star : float, Pa
         Effective modulus ``E / (1 - nu^2)`` of the half-space.
     workers : int, optional
-        Threads for :mod:`scipy.fft` (default: all cores).
+        Threads for :mod:`scipy.fft` (default: all cores, at every size:
+        docs/benchmarks.md, "Contact solve on run-in problems").
 
     Notes
     -----
@@ -316,7 +317,13 @@ class HalfSpace:
         out[:nx] = scipy.fft.rfft(self._rows, axis=1, workers=self.workers)
         out[nx:] = 0.0
         # A complex, contiguous input with overwrite_x is transformed in place.
-        return scipy.fft.fft(out, axis=0, workers=self.workers, overwrite_x=True)
+        result = scipy.fft.fft(out, axis=0, workers=self.workers, overwrite_x=True)
+        if not (result.ctypes.data == out.ctypes.data and result.strides == out.strides):
+            out[...] = result
+        # ``out`` itself rather than the view scipy returns: numpy cannot tell that a view
+        # of a ufunc's output buffer is that buffer and would copy it first (a third of a
+        # product at n = 1024).
+        return out
 
     def inverse(self, spectrum_q, *, overwrite=False):
         """Real field on the grid from a padded half spectrum.

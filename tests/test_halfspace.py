@@ -77,6 +77,14 @@ def test_product_reuse_does_not_alias():
     assert np.array_equal(ua, keep), "a later product overwrote an earlier result"
 
 
+def test_threads_change_no_product():
+    """Threads split the transforms, not the sums: the same numbers with one or two."""
+    p = np.random.default_rng(5273).random((96, 80))
+    one, two = (HalfSpace((96, 80), 1.0, 1.0, workers=w) for w in (1, 2))
+    assert np.array_equal(one.displacement(p), two.displacement(p)), \
+        "threads changed the product"
+
+
 @pytest.mark.parametrize("n", [63, 64])
 def test_uniform_disk_against_eq10(n):
     """Uniform pressure on the face: displacement vs eq. 10, error O(h)."""

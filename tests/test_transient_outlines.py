@@ -153,11 +153,6 @@ def test_every_preconditioner_solves_the_rectangle_alike(shifted):
     if shifted:
         shift = np.where(VORONOI.labels(grid) == 1, 10.0, 1.0) * 3.0 * hs.self_influence
     names = ["fourier", "fourier-padded", "jacobi", "none"]
-    try:
-        import pyamg  # noqa: F401
-        names.append("amg")
-    except ImportError:
-        pass
     pressures = {}
     for name in names:
         res = solve_contact(hs, grid.mask, height, FORCE, shift=shift, rtol=1e-12,

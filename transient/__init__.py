@@ -49,7 +49,6 @@ from steady.lazy import lazy_names
 #: Public names and the module of each.
 _MODULE_OF = {
     "__version__": "version",
-    "AMGPreconditioner": "preconditioners",
     "BDF2": "stepping",
     "ContactResult": "contact",
     "ExplicitEuler": "stepping",

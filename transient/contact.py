@@ -66,6 +66,13 @@ _REFRESH = 50
 # once (by at most eps |K p|), with a factor 2 for the growth of |K p|
 # between full recomputations.
 _ROUNDING_PER_ITERATION = 8.0
+# Solves that must reduce the first residual by more than this factor take the
+# preconditioner in double precision (FourierPreconditioner.accurate): the round-off of
+# single-precision transforms puts error into every eigencomponent at about 1e-7 of the
+# residual, which costs a cold flat-punch solve to rtol = 1e-10 up to 40 % more iterations
+# (10 to 14 on a 1:2 rectangle at n = 48); a run-in's warm-started solves start 2 to 20
+# tolerances away and lose none (docs/benchmarks.md, "Contact solve on run-in problems").
+_SINGLE_REDUCTION = 1e-4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -208,20 +215,19 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     maxiter : int, optional
         Maximum number of iterations (default ``max(200, 10 max(nx, ny))``).
     preconditioner : str or callable, optional
-        One of ``"auto"``, ``"fourier"``, ``"fourier-padded"``, ``"jacobi"``, ``"amg"``,
-        ``"none"``.  ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of
-        ``K + shift`` aliased to the ``nx x ny`` grid (one unpadded FFT pair per iteration,
-        cheaper than a padded one; ``"fourier-padded"`` applies it on the padded grid); a
-        non-uniform shift is split into levels, one symbol and one FFT pair each, stitched by
-        the shift map (:class:`transient.preconditioners.FourierPreconditioner`).  Where the
-        shift is at least ten times the largest eigenvalue of ``K`` on every face pixel the
-        operator is diagonal to within 10 % and ``"auto"`` takes ``"jacobi"`` (free).
-        ``"amg"`` (one smoothed-aggregation V-cycle on a truncated kernel) needs :mod:`pyamg`
-        and is slower in every case of docs/benchmarks.md.  Or a preconditioner already built
-        for this face and shift, called as ``z = preconditioner(residual, active)`` (a
-        pressure, Pa, zero off ``active``, from a gap residual, m): a caller that solves many
-        problems of one shift pattern builds them with
-        :class:`transient.preconditioners.ScaledShift`.
+        One of ``"auto"``, ``"fourier"``, ``"fourier-padded"``, ``"jacobi"``, ``"none"``.
+        ``"auto"`` (default) is ``"fourier"``, the inverse Fourier symbol of ``K + shift``
+        aliased to the ``nx x ny`` grid (one unpadded FFT pair per iteration, cheaper than a
+        padded one: in single precision for a solve that starts within ``1e4`` tolerances,
+        as a warm-started one does, else in double; ``"fourier-padded"`` applies it on the
+        padded grid); a non-uniform shift is split into levels, one symbol and one FFT pair each,
+        stitched by the shift map (:class:`transient.preconditioners.FourierPreconditioner`).
+        Where the shift is at least ten times the largest eigenvalue of ``K`` on every face
+        pixel the operator is diagonal to within 10 % and ``"auto"`` takes ``"jacobi"``
+        (free).  Or a preconditioner already built for this face and shift, called as
+        ``z = preconditioner(residual, active)`` (a pressure, Pa, zero off ``active``, from a
+        gap residual, m): a caller that solves many problems of one shift pattern builds them
+        with :class:`transient.preconditioners.ScaledShift`.
     callback : callable, optional
         Called as ``callback(pressure)`` after each iteration with the
         current pressure (read-only view; copy it to keep it).
@@ -276,6 +282,39 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     on_face, n_face, height, force, shift, x0, maxiter = _checked_inputs(
         halfspace, face_mask, height, normal_force, shift, x0, rtol, atol, maxiter,
         preconditioner)
+    return _solve(halfspace, on_face, n_face, height, force, shift, x0, x0_displacement,
+                  rtol, atol, maxiter, preconditioner, callback)
+
+
+def solve_trusted_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=None,
+                          x0_displacement=None, rtol=1e-8, atol=0.0, maxiter=None,
+                          preconditioner="auto"):
+    """:func:`solve_contact` on arguments its caller guarantees, without their checks.
+
+    The run-in loop's entry: it solves many problems whose arguments it has
+    built itself, and the checks of :func:`solve_contact` (several passes
+    over the grid's arrays) cost a few per cent of a solve.  The caller
+    guarantees what those checks would establish: arrays of the grid's shape
+    (float), ``face_mask`` boolean with at least one pixel, ``height`` and
+    ``x0`` finite on the face, ``normal_force`` finite and non-negative,
+    ``shift`` (m/Pa) finite, non-negative and zero off the face, tolerances
+    and ``maxiter`` valid, ``preconditioner`` a registered name or a callable.
+    On such arguments the result is that of :func:`solve_contact`, bit for
+    bit; on others it is undefined.
+
+    Parameters and returns as :func:`solve_contact` (without ``callback``).
+    """
+    on_face = face_mask
+    if maxiter is None:
+        maxiter = max(200, 10 * max(halfspace.shape))
+    return _solve(halfspace, on_face, int(np.count_nonzero(on_face)), height,
+                  float(normal_force), shift, x0, x0_displacement, rtol, atol, int(maxiter),
+                  preconditioner, None)
+
+
+def _solve(halfspace, on_face, n_face, height, force, shift, x0, x0_displacement, rtol, atol,
+           maxiter, preconditioner, callback):
+    """The iteration of :func:`solve_contact` on checked arguments."""
     operator = _Operator(halfspace, shift)
     h_face = np.where(on_face, height, 0.0)
     if force == 0.0:
@@ -580,7 +619,8 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
                        f"> {tolerance:.3e} m")
             break
         it += 1
-        _update_direction(problem, state, r, active, work)
+        _update_direction(problem, state, r, active, work,
+                          accurate=tolerance < _SINGLE_REDUCTION * history[0])
         q = problem.operator(state.t)
         tq = _curvature(problem, state.t, q)
         if not tq > 0:
@@ -658,13 +698,19 @@ def _stopping_rule(residual, tolerance, state):
     return _ITERATE
 
 
-def _update_direction(problem, state, r, active, work):
+def _update_direction(problem, state, r, active, work, accurate=False):
     """The next conjugate direction ``state.t`` from the residual ``r`` (m, shape (nx, ny)).
 
-    ``work`` (shape (nx, ny)) is scratch.
+    ``work`` (shape (nx, ny)) is scratch.  ``accurate``: apply the preconditioner
+    in double precision (its ``accurate`` method, where it has one).
     """
     precondition = problem.precondition
-    z = r.copy() if precondition is None else precondition(r, active.mask)
+    if precondition is None:
+        z = r.copy()
+    elif accurate and hasattr(precondition, "accurate"):
+        z = precondition.accurate(r, active.mask)
+    else:
+        z = precondition(r, active.mask)
     # Zero mean on the active set, so that a step along it keeps the load.
     z -= np.multiply(active.weight, _dot(z, active.weight) / active.count, out=work)
     gz = _dot(r, z)

@@ -16,10 +16,6 @@ needs.
   shift map (:func:`shift_levels`).
 - :class:`JacobiPreconditioner`: ``1 / diag(A)``.  Free; exact in the
   limit ``shift >> self-influence``.
-- :class:`AMGPreconditioner`: one smoothed-aggregation V-cycle (pyamg) on
-  a sparse surrogate of ``A`` (the influence kernel truncated to a few
-  pixels, plus the shift).  Kept for comparison; needs the optional extra
-  ``runin[amg]``.
 
 Every preconditioner is registered by name (:data:`PRECONDITIONERS`,
 :func:`register_preconditioner`); :func:`make_preconditioner` builds one
@@ -34,14 +30,10 @@ J. Comput. Phys. 257 (2014) 333-351, doi:10.1016/j.jcp.2013.10.005.
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 import scipy.fft
-import scipy.sparse
 
 __all__ = [
-    "AMGPreconditioner",
     "FourierPreconditioner",
     "JacobiPreconditioner",
     "PRECONDITIONERS",
@@ -50,8 +42,6 @@ __all__ = [
     "register_preconditioner",
     "shift_levels",
 ]
-
-logger = logging.getLogger(__name__)
 
 #: Preconditioner factories by name, ``factory(halfspace, face_mask, shift)``
 #: (see :func:`register_preconditioner`); ``"none"`` maps to None.
@@ -65,6 +55,10 @@ _DIAGONAL_DOMINANCE = 10.0
 # Most levels of the stitched Fourier preconditioner for a non-uniform shift
 # (one FFT pair each); more distinct values are interpolated between nodes.
 _MAX_LEVELS = 4
+# Floating-point types of the unpadded Fourier preconditioner's transforms.  Single
+# precision halves their cost; the outer iteration stays in double (docs/benchmarks.md,
+# "Contact solve on run-in problems").
+_PRECISIONS = {"single": np.dtype(np.float32), "double": np.dtype(np.float64)}
 # Relative spread of the shift (in units of the smallest eigenvalue plus the
 # smallest shift) below which it is treated as uniform.
 _UNIFORM_SPREAD = 1e-2
@@ -177,16 +171,23 @@ class FourierPreconditioner:
         Apply on the zero-padded ``2nx x 2ny`` grid (default False).
     max_levels : int, optional
         Most levels of a non-uniform shift (default 4).
+    precision : {"single", "double"}, optional
+        Floating-point precision of the unpadded transforms (default
+        ``"single"``: about half the cost, and an approximate inverse needs
+        no more while the residual is to fall by a few orders; :meth:`accurate`
+        applies it in double precision).  The padded form always uses the
+        half-space's double-precision transforms.  The result is double
+        precision either way.
     """
 
     def __init__(self, halfspace, shift=None, *, face_mask=None, padded=False,
-                 max_levels=_MAX_LEVELS):
+                 max_levels=_MAX_LEVELS, precision="single"):
         scale = float(_symbol(halfspace, padded).min())
         levels, weights = shift_levels(shift, face_mask, scale, max_levels)
-        self._set_levels(halfspace, levels, weights, padded)
+        self._set_levels(halfspace, levels, weights, padded, precision)
 
     @classmethod
-    def from_levels(cls, halfspace, levels, weights, *, padded=False):
+    def from_levels(cls, halfspace, levels, weights, *, padded=False, precision="single"):
         """The preconditioner of given levels and weights, as :func:`shift_levels` returns.
 
         For callers that know the levels of their shift without a pass over
@@ -194,20 +195,42 @@ class FourierPreconditioner:
         copied).
         """
         self = cls.__new__(cls)
-        self._set_levels(halfspace, [float(s) for s in levels], weights, padded)
+        self._set_levels(halfspace, [float(s) for s in levels], weights, padded, precision)
         return self
 
-    def _set_levels(self, halfspace, levels, weights, padded):
+    def _set_levels(self, halfspace, levels, weights, padded, precision):
+        if precision not in _PRECISIONS:
+            raise ValueError(f"precision must be one of {sorted(_PRECISIONS)}, "
+                             f"got {precision!r}")
         self.halfspace = halfspace
         self.padded = bool(padded)
-        symbol = _symbol(halfspace, self.padded)
         self.levels = levels
         self.weights = weights
-        self._field = self._spectrum = None  # work buffers of the stitched form
-        if weights is None:
-            self.inverse_symbol = 1.0 / (symbol + levels[0])
-        else:
-            self.inverse_root = [1.0 / np.sqrt(symbol + s) for s in levels]
+        # The padded transforms are the half-space's own, in double precision.
+        self.dtype = np.dtype(float) if self.padded else _PRECISIONS[precision]
+        self._plans = {}
+        self._plan(self.dtype)
+
+    def _plan(self, dtype):
+        """Multipliers, weights and work buffers of the transforms in ``dtype``, built once.
+
+        The multipliers are ``1 / (C + sigma)`` for one level, ``(C + sigma_j)^(-1/2)``
+        for several.  The weighted residual and each level's spectrum go through work
+        buffers: fresh arrays of this size cost as much as a transform.
+        """
+        plan = self._plans.get(dtype)
+        if plan is None:
+            symbol = _symbol(self.halfspace, self.padded)
+            if self.weights is None:
+                multipliers, weights = [(1.0 / (symbol + self.levels[0])).astype(dtype)], None
+            else:
+                multipliers = [(1.0 / np.sqrt(symbol + s)).astype(dtype) for s in self.levels]
+                weights = [phi if phi.dtype == dtype else phi.astype(dtype)
+                           for phi in self.weights]
+            plan = self._plans[dtype] = dict(
+                multipliers=multipliers, weights=weights,
+                field=np.empty(self.halfspace.shape, dtype), spectrum=None)
+        return plan
 
     def _forward(self, field):
         hs = self.halfspace
@@ -222,32 +245,43 @@ class FourierPreconditioner:
         return scipy.fft.irfft2(spectrum, s=hs.shape, workers=hs.workers, overwrite_x=True)
 
     def __call__(self, residual, active):
-        """Apply to a residual (m), zero off the active set; returns Pa."""
-        if self.weights is None:
-            spectrum = self._forward(residual)
-            spectrum *= self.inverse_symbol
+        """Apply to a residual (m), zero off the active set; returns Pa (float64)."""
+        return self._apply(residual, active, self.dtype)
+
+    def accurate(self, residual, active):
+        """:meth:`__call__` with double-precision transforms whatever the precision.
+
+        For a solve that must reduce its residual by many orders, where the
+        round-off of single-precision transforms costs iterations
+        (:func:`transient.contact.solve_contact` takes it for a reduction of
+        more than ``1e4``).  Built on first use.
+        """
+        return self._apply(residual, active, np.dtype(float))
+
+    def _apply(self, residual, active, dtype):
+        plan = self._plan(dtype)
+        field = plan["field"]
+        if plan["weights"] is None:
+            field[...] = residual
+            spectrum = self._forward(field)
+            spectrum *= plan["multipliers"][0]
             z = self._inverse(spectrum)
         else:
             # B^T r: one transform per level, summed in Fourier space ...
-            # (the weighted residual and each level's spectrum go through work
-            # buffers: fresh arrays of this size cost as much as a transform)
-            if self._field is None:
-                self._field = np.empty(residual.shape)
             total = None
-            for phi, root in zip(self.weights, self.inverse_root, strict=True):
-                spectrum = self._forward(np.multiply(phi, residual, out=self._field))
+            for phi, root in zip(plan["weights"], plan["multipliers"], strict=True):
+                spectrum = self._forward(np.multiply(phi, residual, out=field))
                 spectrum *= root
                 total = spectrum if total is None else total.__iadd__(spectrum)
             # ... then B: one inverse transform per level.
-            if self._spectrum is None:
-                self._spectrum = np.empty_like(total)
+            if plan["spectrum"] is None:
+                plan["spectrum"] = np.empty_like(total)
             z = None
-            for phi, root in zip(self.weights, self.inverse_root, strict=True):
-                part = self._inverse(np.multiply(total, root, out=self._spectrum))
+            for phi, root in zip(plan["weights"], plan["multipliers"], strict=True):
+                part = self._inverse(np.multiply(total, root, out=plan["spectrum"]))
                 part *= phi
                 z = part if z is None else z.__iadd__(part)
-        z *= active
-        return z
+        return np.multiply(z, active, out=np.empty(residual.shape))
 
 
 def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):
@@ -321,8 +355,9 @@ class ScaledShift:
         self.low, self.high = float(values.min()), float(values.max())
         distinct = _few_distinct(values, _MAX_LEVELS)
         self.values = None if distinct is None else [float(v) for v in distinct]
+        # (in the precision of the default transforms, so that no stage converts them)
         self.weights = (None if distinct is None or len(distinct) == 1
-                        else [(pattern == v).astype(float) for v in distinct])
+                        else [(pattern == v).astype(_PRECISIONS["single"]) for v in distinct])
         self._diagonal = _diagonal_floor(halfspace)
         self._scale = float(_symbol(halfspace, False).min())
 
@@ -346,74 +381,6 @@ class ScaledShift:
         if self.weights is None:
             return FourierPreconditioner(hs, shift, face_mask=self.face_mask)
         return FourierPreconditioner.from_levels(hs, [c * v for v in self.values], self.weights)
-
-
-class AMGPreconditioner:
-    """One smoothed-aggregation V-cycle on a sparse surrogate of the operator.
-
-    The surrogate keeps the influence kernel within ``radius`` pixels
-    (plus the shift on the diagonal) on the face pixels; the hierarchy is
-    built once for the face and the V-cycle is restricted to the active
-    set, which keeps it symmetric positive definite there.
-
-    Parameters
-    ----------
-    halfspace : steady.halfspace.HalfSpace
-    face_mask : ndarray of bool, shape (nx, ny)
-    shift : ndarray, shape (nx, ny), m/Pa, or None
-    radius : int, optional
-        Truncation radius of the kernel, pixels (default 2).
-    """
-
-    def __init__(self, halfspace, face_mask, shift=None, *, radius=2):
-        try:
-            import pyamg  # optional dependency, imported on use
-        except ImportError:
-            raise ValueError("the 'amg' preconditioner needs pyamg: install the optional "
-                             "extra with pip install 'runin[amg]'") from None
-
-        nx, ny = halfspace.shape
-        radius = int(radius)
-        quadrant = halfspace.influence_quadrant[: radius + 1, : radius + 1]
-        index = -np.ones((nx, ny), dtype=np.int64)
-        ii, jj = np.nonzero(face_mask)
-        index[ii, jj] = np.arange(ii.size)
-        rows, cols, vals = [], [], []
-        for di in range(-radius, radius + 1):
-            for dj in range(-radius, radius + 1):
-                if di * di + dj * dj > radius * radius:
-                    continue
-                i2, j2 = ii + di, jj + dj
-                ok = (i2 >= 0) & (i2 < nx) & (j2 >= 0) & (j2 < ny)
-                ok[ok] &= face_mask[i2[ok], j2[ok]]
-                rows.append(index[ii[ok], jj[ok]])
-                cols.append(index[i2[ok], j2[ok]])
-                vals.append(np.full(ok.sum(), quadrant[abs(di), abs(dj)]))
-        rows, cols, vals = map(np.concatenate, (rows, cols, vals))
-        diag = np.zeros(ii.size)
-        if shift is not None:
-            diag = shift[ii, jj]
-        matrix = scipy.sparse.csr_matrix(
-            (np.concatenate([vals, diag]), (np.concatenate([rows, np.arange(ii.size)]),
-                                            np.concatenate([cols, np.arange(ii.size)]))),
-            shape=(ii.size, ii.size))
-        # Scale to O(1) entries so that pyamg's strength thresholds are meaningful.
-        self._scale = float(quadrant[0, 0])
-        self._solver = pyamg.smoothed_aggregation_solver(matrix / self._scale,
-                                                         symmetry="symmetric")
-        self._index = (ii, jj)
-        self._shape = (nx, ny)
-        logger.debug("AMG hierarchy: %d levels for %d face pixels",
-                     len(self._solver.levels), ii.size)
-
-    def __call__(self, residual, active):
-        """Apply to a residual (m) on the active set; returns Pa."""
-        ii, jj = self._index
-        r = np.where(active, residual, 0.0)[ii, jj]
-        x = self._solver.solve(r, x0=np.zeros_like(r), maxiter=1, cycle="V", tol=1e-300)
-        z = np.zeros(self._shape)
-        z[ii, jj] = x / self._scale
-        return np.where(active, z, 0.0)
 
 
 def _few_distinct(values, limit):
@@ -445,11 +412,6 @@ def _fourier(halfspace, face_mask, shift):
 @register_preconditioner("fourier-padded")
 def _fourier_padded(halfspace, face_mask, shift):
     return FourierPreconditioner(halfspace, shift, face_mask=face_mask, padded=True)
-
-
-@register_preconditioner("amg")
-def _amg(halfspace, face_mask, shift):
-    return AMGPreconditioner(halfspace, face_mask, shift)
 
 
 @register_preconditioner("auto")

@@ -21,7 +21,7 @@ from steady.normalisation import reference_slope
 from steady.problem import Problem, check_scale, input_names
 from steady.solution import solve
 
-from .contact import solve_contact
+from .contact import solve_trusted_contact
 from .preconditioners import ScaledShift
 
 __all__ = ["PEAK_RATE_LIMIT", "WarmStart", "StepFailure", "WearProblem", "check_run_in_scales"]
@@ -393,10 +393,10 @@ class WearProblem:
         predicted, self._predicted = self._predicted, None
         if x0_displacement is None and predicted is not None and predicted[0] is x0:
             x0_displacement = predicted[1]
-        res = solve_contact(self.halfspace, self.face_mask, height, self.normal_force,
-                            shift=shift, x0=x0, x0_displacement=x0_displacement,
-                            rtol=self.contact_rtol, atol=atol, maxiter=self.contact_maxiter,
-                            preconditioner=preconditioner)
+        res = solve_trusted_contact(self.halfspace, self.face_mask, height, self.normal_force,
+                                    shift=shift, x0=x0, x0_displacement=x0_displacement,
+                                    rtol=self.contact_rtol, atol=atol,
+                                    maxiter=self.contact_maxiter, preconditioner=preconditioner)
         self.solves += 1
         self.iterations += int(res.nit)
         if not res.success:

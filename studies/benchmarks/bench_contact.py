@@ -8,7 +8,7 @@ Reproduces the tables of the "Contact solver" section of docs/benchmarks.md:
    :func:`transient.contact.solve_contact` and of the two peers'
    Polonsky-Keer solvers, at equal accuracy.
 2. The preconditioners of :func:`solve_contact` (none, Jacobi, Fourier on
-   the padded and on the unpadded grid, AMG, auto) at equal accuracy,
+   the padded and on the unpadded grid, auto) at equal accuracy,
    without and with a diagonal shift.
 
 Equal accuracy: all three codes use the same discrete operator (the exact
@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib.util
 import io
 import logging
 import os
@@ -361,7 +360,7 @@ def preconditioner_table(sizes, repeat):
     list of dict
     """
     rows = []
-    names = ["none", "jacobi", "fourier-padded", "fourier", "amg", "auto"]
+    names = ["none", "jacobi", "fourier-padded", "fourier", "auto"]
     for n in sizes:
         hs = CountingHalfSpace(n, Circle(RADIUS).grid(n).h, E_STAR, workers=1)
         unit = fft_unit(hs)
@@ -388,10 +387,6 @@ def preconditioner_table(sizes, repeat):
                         force=force):
                     return run_ours(hs, face, height, force, tol, preconditioner=name,
                                     shift=shift)
-                if name == "amg" and importlib.util.find_spec("pyamg") is None:
-                    row[name] = dict(tol=np.nan, time=np.nan, nit=-1, pairs=None,
-                                     approach=np.nan, error="pyamg is not installed")
-                    continue
                 row[name] = at_equal_accuracy(run, OUR_RTOL, approach, d_ref, repeat)
             rows.append(row)
             logger.info("%s n=%d: %s", label, n,
@@ -423,7 +418,7 @@ def markdown_peers(rows, found):
 
 def markdown_preconditioners(rows):
     """Table 2 in Markdown, from the rows of :func:`preconditioner_table`."""
-    names = ["none", "jacobi", "fourier-padded", "fourier", "amg", "auto"]
+    names = ["none", "jacobi", "fourier-padded", "fourier", "auto"]
     head = ("| scene | n | "
             + " | ".join(f"{k}: time (s), it, FFT pairs, rtol" for k in names) + " |")
     lines = [head, "|" + "---|" * (len(names) + 2)]
