@@ -20,7 +20,9 @@ The keys are declared once, with their types, units, ranges and meanings:
 registries of the tables that name a kind -- the face outline
 (:data:`steady.outline.OUTLINES`, ``[punch] shape``), the phase map
 (:data:`steady.phases.PHASE_MAPS`, ``[phases] map kind``) and the wear law
-(:data:`steady.wear.WEAR_LAWS`, ``[wear] law``).  The README's tables of
+(:data:`steady.wear.WEAR_LAWS`, ``[wear] law``), and of the optional
+``[sliding]`` section, the sliding kinematics (:data:`steady.sliding.SLIDING`,
+``[sliding] kind``; absent, a translation).  The README's tables of
 scene keys are checked against them (``tests/test_scene.py``).  Lengths of
 phase geometries are in m in the file and in units of the outline's scale
 ``L`` in the geometry objects (the radius of a disk; else the larger half
