@@ -533,6 +533,10 @@ class FaceModel:
         if not isinstance(problem.wear, PowerLaw):
             raise ValueError(f"the fit supports the power law k p^m, not the "
                              f"{problem.wear.describe()}")
+        if problem.sliding is not None:
+            # Its model is a pressure constant on each phase: a face of K chi_i per phase.
+            raise ValueError(f"the fit assumes a uniform sliding speed (pressure constant on "
+                             f"each phase), not the sliding {problem.sliding.describe()}")
         grid = problem.grid
         labels = problem.labels
         self.problem = problem

@@ -39,8 +39,9 @@ from .halfspace import HalfSpace
 from .labels import validate_labels
 from .outline import FaceGrid
 from .schema import SCALE_RANGE as _SCALE_RANGE
+from .sliding import steady_pressure as sliding_pressure
 from .text import shorten
-from .wear import as_wear_law
+from .wear import PowerLaw, as_wear_law
 
 __all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_phase_names", "check_scale",
            "check_scales", "default_phase_names", "input_names"]
@@ -330,20 +331,29 @@ class Problem:
     E_star : float, Pa
         Effective modulus ``E / (1 - nu^2)`` of the counter-body, positive
         and finite.
+    sliding : sliding kinematics, optional
+        The local sliding speed (:mod:`steady.sliding`, ``[sliding]``);
+        default None, a translation (the paper's uniform speed), which a
+        :class:`~steady.sliding.Translation` also becomes.  Another kind
+        multiplies the coefficient field by ``v / v_ref``
+        (:meth:`coefficient_field`) and makes the steady pressure vary
+        within each phase (:meth:`steady_pressure`); it needs the power law.
 
     Raises
     ------
     ValueError
         A wear law for another number of phases, a force or modulus that is
-        not positive and finite, or a scale of the problem outside
-        :data:`SCALE_RANGE` (:func:`check_scales`); the message names the
-        value.
+        not positive and finite, a scale of the problem outside
+        :data:`SCALE_RANGE` (:func:`check_scales`), or kinematics whose axis
+        lies on the face or with another law than the power law; the message
+        names the value.
     """
 
     phases: FacePhases
     wear: object
     normal_force: float
     E_star: float
+    sliding: object = None
 
     def __post_init__(self):
         """Check the law against the phases, the force and the modulus."""
@@ -360,6 +370,28 @@ class Problem:
         object.__setattr__(self, "E_star", _positive(self.E_star, "E_star", "Pa"))
         check_scales(self.outline, self.normal_force, self.E_star, n=self.n, wear=wear,
                      counts=self.phases.counts)
+        if self.sliding is not None:
+            self._check_sliding(wear)
+
+    def _check_sliding(self, wear):
+        """Check non-uniform kinematics against the face and the law; a translation is None."""
+        sliding = self.sliding
+        if not hasattr(sliding, "speed_ratio") or not hasattr(sliding, "uniform"):
+            raise ValueError(f"sliding must be a kind of steady.sliding.SLIDING, got "
+                             f"{type(sliding).__name__}")
+        if sliding.uniform:
+            object.__setattr__(self, "sliding", None)
+            return
+        sliding.check_outline(self.outline, "sliding")
+        if not isinstance(wear, PowerLaw):
+            raise ValueError(f"sliding {sliding.describe()} needs the power law k p^m, not the "
+                             f"{wear.describe()}")
+        pressure = self.steady_pressure()[self.face_mask]
+        names = input_names(self.outline, self.normal_force, self.E_star, self.n, wear)
+        for p, what in ((pressure.max(), "largest"), (pressure.min(), "smallest")):
+            check_scale(float(p), f"the {what} steady pixel pressure under the sliding "
+                        f"{sliding.describe()}", "Pa", ("wear", "normal_force", "outline"),
+                        names)
 
     @classmethod
     def from_scene(cls, scene, *, n=None):
@@ -389,7 +421,10 @@ class Problem:
         except ValueError as err:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
-        return cls(phases, scene.wear, scene.normal_force, scene.E_star)
+        sliding = getattr(scene, "sliding", None)
+        if sliding is None:
+            return cls(phases, scene.wear, scene.normal_force, scene.E_star)
+        return cls(phases, scene.wear, scene.normal_force, scene.E_star, sliding)
 
     # -- the grid --------------------------------------------------------
     @property
@@ -448,16 +483,48 @@ class Problem:
         """``pbar = F_N / A``, ``A`` the outline's exact area (``pi a^2`` for a disk), Pa."""
         return self.normal_force / self.outline.area
 
+    @functools.cached_property
+    def speed_ratio(self):
+        """``v / v_ref`` at every pixel centre, shape (nx, ny), read-only; None: a translation."""
+        if self.sliding is None:
+            return None
+        ratio = self.sliding.speed_ratio(self.grid)
+        ratio.flags.writeable = False
+        return ratio
+
     def phase_pressures(self):
-        """Steady pressure of each phase (eq. 7, the wear law's), Pa, shape (P,)."""
+        """Steady pressure of each phase (eq. 7, the wear law's), Pa, shape (P,).
+
+        Under non-uniform sliding (:attr:`sliding`) the pressure varies within
+        a phase: this is then each phase's mean, its load over its area.
+        """
+        if self.sliding is not None:
+            load = np.bincount(self.labels[self.face_mask],
+                               weights=self.steady_pressure()[self.face_mask],
+                               minlength=self.n_phases)
+            return load / self.phases.counts
         return self.wear.phase_pressures(self.phases.counts, self.normal_force,
                                          self.pixel_area)
 
     def steady_pressure(self):
-        """Steady pressure of every pixel, Pa, shape (nx, ny); zero off the face."""
+        """Steady pressure of every pixel, Pa, shape (nx, ny); zero off the face.
+
+        Constant on each phase (eq. 7); under non-uniform sliding the pixel-wise
+        closed form ``k_i v(x) p^m / v_ref = C`` (:func:`steady.sliding.steady_pressure`).
+        """
+        if self.sliding is not None:
+            return sliding_pressure(self.coefficient_field(), self.normal_force,
+                                    self.pixel_area, self.wear.exponent)
         # Label -1 (off the face) picks the trailing zero.
         return np.append(self.phase_pressures(), 0.0)[self.labels]
 
     def coefficient_field(self):
-        """The wear law's coefficient of every pixel, zero off the face, shape (nx, ny)."""
+        """The wear law's coefficient of every pixel, zero off the face, shape (nx, ny).
+
+        Under non-uniform sliding, times the speed ratio ``v / v_ref``
+        (:attr:`speed_ratio`): the law's rate ``k p^m`` of this field is the
+        wear per unit sliding distance of the reference point.
+        """
+        if self.sliding is not None:
+            return self.wear.coefficient_field(self.labels) * self.speed_ratio
         return self.wear.coefficient_field(self.labels)

@@ -58,9 +58,10 @@ import numpy as np
 import scipy.fft
 
 from .halfspace import grid_shape, pixel_integral_gradient
-from .labels import extend_off_face
+from .labels import extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_outline
 from .phases import Homogeneous
+from .sliding import steady_pressure
 from .wear import pressure_field
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
@@ -750,7 +751,16 @@ def ladder_error(grids, values):
     return np.max(diffs * factors.reshape((-1,) + (1,) * (v.ndim - 1)), axis=0)
 
 
-def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n):
+def _steady_pressure(labels, wear, normal_force, grid, sliding):
+    """The steady pressure of a map on ``grid``: per phase (eq. 7), or pixel-wise under sliding."""
+    if sliding is None:
+        return pressure_field(labels, wear, normal_force, grid.pixel_area)[0]
+    validate_labels(labels, wear.n_phases)
+    coefficients = wear.coefficient_field(labels) * sliding.speed_ratio(grid)
+    return steady_pressure(coefficients, normal_force, grid.pixel_area, wear.exponent)
+
+
+def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, sliding=None):
     """Energy-corrected rms slope of the limiting face, with an error estimate.
 
     Parameters
@@ -768,6 +778,10 @@ def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n):
     n : int
         Grid of the estimate, pixels along the longer side of the face's
         bounding box.
+    sliding : sliding kinematics, optional
+        Non-uniform sliding (:mod:`steady.sliding`): the pressure on every
+        grid of the ladder is then its pixel-wise closed form, not constant
+        per phase (default None: a translation).
 
     Returns
     -------
@@ -784,7 +798,7 @@ def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n):
     for m in grids:
         grid = FaceGrid(outline, m)
         labels = geometry.labels(grid)
-        pressure, _, _ = pressure_field(labels, wear, normal_force, grid.pixel_area)
+        pressure = _steady_pressure(labels, wear, normal_force, grid, sliding)
         integrals = SlopeEnergy(grid.shape, grid.h, E_star)(pressure, labels >= 0)
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)
@@ -874,7 +888,8 @@ def mean_chord(labels):
     return 2.0 * float(face.sum()) / edges if edges else float("inf")
 
 
-def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energy=None):
+def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energy=None,
+                          sliding=None):
     """Corrected rms slope of the limiting face of a pixel map, with an error estimate.
 
     As :func:`estimate_rms_slope`, for a map that exists only on its grid:
@@ -914,6 +929,8 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
     E_star : float, Pa
     energy : SlopeEnergy, optional
         The estimator of grid ``n``, if the caller has one.
+    sliding : sliding kinematics, optional
+        As in :func:`estimate_rms_slope`.
 
     Returns
     -------
@@ -948,7 +965,7 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
         g = grid if m == n else FaceGrid(outline, m)
         lab = labels if m == n else resample_labels(labels, m, outline)
         try:
-            pressure, _, _ = pressure_field(lab, wear, normal_force, g.pixel_area)
+            pressure = _steady_pressure(lab, wear, normal_force, g, sliding)
         except ValueError:
             continue  # a phase vanished on the coarse grid
         estimator = energy if (m == n and energy is not None) else SlopeEnergy(g.shape, g.h,
@@ -966,7 +983,7 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
     try:
         fine = FaceGrid(outline, 2 * n)
         lab = resample_labels(labels, 2 * n, outline)
-        pressure, _, _ = pressure_field(lab, wear, normal_force, fine.pixel_area)
+        pressure = _steady_pressure(lab, wear, normal_force, fine, sliding)
     except ValueError:
         logger.debug("no grid beside n = %d keeps every phase: no error estimate", n)
     else:

@@ -20,7 +20,9 @@ The keys are declared once, with their types, units, ranges and meanings:
 registries of the tables that name a kind -- the face outline
 (:data:`steady.outline.OUTLINES`, ``[punch] shape``), the phase map
 (:data:`steady.phases.PHASE_MAPS`, ``[phases] map kind``) and the wear law
-(:data:`steady.wear.WEAR_LAWS`, ``[wear] law``).  The README's tables of
+(:data:`steady.wear.WEAR_LAWS`, ``[wear] law``), and of the optional
+``[sliding]`` section, the sliding kinematics (:data:`steady.sliding.SLIDING`,
+``[sliding] kind``; absent, a translation).  The README's tables of
 scene keys are checked against them (``tests/test_scene.py``).  Lengths of
 phase geometries are in m in the file and in units of the outline's scale
 ``L`` in the geometry objects (the radius of a disk; else the larger half
@@ -55,11 +57,12 @@ from .outline import FaceGrid, outline_from_table
 from .phases import PHASE_MAPS, Voronoi
 from .problem import check_phase_names, check_scales
 from .schema import Context, Key, read_table
+from .sliding import sliding_from_table
 from .text import one_line, shorten
 from .wear import wear_law_from_table
 
-__all__ = ["MAX_SCENE_BYTES", "PHASE_KEYS", "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene",
-           "parse_scene"]
+__all__ = ["MAX_SCENE_BYTES", "OPTIONAL_SECTIONS", "PHASE_KEYS", "RUN_IN_SECTIONS", "SECTIONS",
+           "Scene", "load_scene", "parse_scene"]
 
 #: Largest scene file read, bytes: a scene is a few lines; large data belong in
 #: ``.npy`` files (a 40 MB list would take Python's TOML parser half a minute).
@@ -85,6 +88,10 @@ PHASE_KEYS = (Key("names", "strings",
 
 #: Every section a scene file has: those of :data:`SECTIONS` and the ones that name a kind.
 CORE_SECTIONS = ("punch", "load", "counterbody", "grid", "wear", "phases")
+
+#: Optional sections of the model, read here when present: ``[sliding]``, the
+#: sliding kinematics (:data:`steady.sliding.SLIDING`; absent: a translation).
+OPTIONAL_SECTIONS = ("sliding",)
 
 #: Sections read by the run-in command (package ``transient``).  Unless named
 #: in ``extra_sections`` they are skipped, not refused: the steady state does
@@ -129,6 +136,10 @@ class Scene:
     sliding_speed : float or None, m/s
         ``[load] sliding_speed``; None when the scene gives none.  Nothing
         depends on it but the conversion of sliding distances into times.
+    sliding : sliding kinematics or None
+        ``[sliding]`` (:mod:`steady.sliding`); None when the scene has no
+        such section or its kind is ``"translation"``: the paper's uniform
+        sliding speed.
     """
 
     outline: object
@@ -144,6 +155,7 @@ class Scene:
     ignored_sections: tuple = ()
     phase_names: tuple | None = None
     sliding_speed: float | None = None
+    sliding: object = None
 
     @property
     def n_phases(self):
@@ -269,22 +281,24 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
         message names the key and the value), missing map file.
     """
     extra_sections = tuple(extra_sections)
-    clash = sorted(set(extra_sections) & set(CORE_SECTIONS))
+    clash = sorted(set(extra_sections) & set(CORE_SECTIONS + OPTIONAL_SECTIONS))
     if clash:
         raise ValueError(f"extra section {clash[0]!r} clashes with a core section")
     doc = _toml(text)
     base_dir = pathlib.Path(base_dir)
     ignored = tuple(sorted(name for name in RUN_IN_SECTIONS
                            if name in doc and name not in extra_sections))
-    unknown = sorted(set(doc) - set(CORE_SECTIONS) - set(extra_sections) - set(ignored))
+    unknown = sorted(set(doc) - set(CORE_SECTIONS) - set(OPTIONAL_SECTIONS) - set(extra_sections)
+                     - set(ignored))
     if unknown:
-        allowed = ", ".join(sorted(set(CORE_SECTIONS) | set(extra_sections)
-                                   | set(RUN_IN_SECTIONS)))
+        allowed = ", ".join(sorted(set(CORE_SECTIONS) | set(OPTIONAL_SECTIONS)
+                                   | set(extra_sections) | set(RUN_IN_SECTIONS)))
         raise ValueError(f"unknown section [{shorten(unknown[0])[1:-1]}] (allowed: {allowed})")
     for name in CORE_SECTIONS:
         if name not in doc:
             raise ValueError(f"missing section [{name}]")
-    for name in (*CORE_SECTIONS, *ignored, *(n for n in extra_sections if n in doc)):
+    optional = tuple(name for name in OPTIONAL_SECTIONS if name in doc)
+    for name in (*CORE_SECTIONS, *optional, *ignored, *(n for n in extra_sections if n in doc)):
         if not isinstance(doc[name], dict):
             raise ValueError(f"[{name}] must be a table, got {shorten(doc[name])}")
     values = {name: read_table(doc[name], f"[{name}]", keys, base_dir)
@@ -316,12 +330,18 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
 
+    sliding = None
+    if "sliding" in doc:
+        sliding = sliding_from_table(doc["sliding"], outline, base_dir)
+        sliding = None if sliding.uniform else sliding
+
     extra = {name: doc[name] for name in extra_sections if name in doc}
     return Scene(outline=outline, normal_force=force, E_star=E_star, n=n, wear=wear,
                  geometry=geometry,
                  source_path=None if source_path is None else pathlib.Path(source_path),
                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
-                 phase_names=names, sliding_speed=values["load"].get("sliding_speed"))
+                 phase_names=names, sliding_speed=values["load"].get("sliding_speed"),
+                 sliding=sliding)
 
 
 def _toml(text):

@@ -52,9 +52,12 @@ class SteadyResult:
     labels : ndarray, shape (nx, ny), int
         Phase index on the face, -1 off it.
     pressure : ndarray, shape (nx, ny), Pa
-        Steady pressure, constant on each phase, zero off the face.
+        Steady pressure, constant on each phase, zero off the face; under
+        non-uniform sliding (:mod:`steady.sliding`) the pixel-wise closed
+        form ``k_i v(x) p^m / v_ref = C``.
     phase_pressures : ndarray, shape (P,), Pa
-        Pressure on each phase (eq. 7).
+        Pressure on each phase (eq. 7); under non-uniform sliding the mean
+        over each phase.
     face : ndarray, shape (nx, ny), m
         Limiting face ``f_inf = K p`` (eq. 9) at the pixel centres; NaN
         off the face.
@@ -245,10 +248,12 @@ def _solve(problem, geometry, face_only):
         return dataclasses.replace(result, rms_slope=math.nan)
     if geometry is None:
         estimate = estimate_map_rms_slope(problem.labels, problem.wear, problem.normal_force,
-                                          problem.outline, problem.E_star)
+                                          problem.outline, problem.E_star,
+                                          sliding=problem.sliding)
     else:
         estimate = estimate_rms_slope(geometry, problem.wear, problem.normal_force,
-                                      problem.outline, problem.E_star, problem.n)
+                                      problem.outline, problem.E_star, problem.n,
+                                      sliding=problem.sliding)
     logger.debug("steady %s rms slope %.6g +- %.2g (grids %s), plain %.6g", problem.shape,
                  estimate.rms_slope, estimate.error, estimate.grids, result.rms_slope_plain)
     return dataclasses.replace(result, rms_slope=estimate.rms_slope,

@@ -17,6 +17,7 @@ from steady.outline import OUTLINES, Circle, MaskOutline
 from steady.phases import PHASE_MAPS
 from steady.scene import SECTIONS, load_scene, parse_scene
 from steady.schema import Key, read_table
+from steady.sliding import SLIDING
 from steady.solution import solve, solve_scene
 from steady.wear import WEAR_LAWS, ArchardLaw, PowerLaw
 from transient.cli.runin import build_parser
@@ -42,7 +43,8 @@ def _table(header):
 
 @pytest.mark.parametrize("registry, header", [(OUTLINES, "| shape | keys |"),
                                               (PHASE_MAPS, "| kind | keys |"),
-                                              (WEAR_LAWS, "| law | keys |")])
+                                              (WEAR_LAWS, "| law | keys |"),
+                                              (SLIDING, "| sliding kind | keys |")])
 def test_readme_tables_list_what_is_registered(registry, header):
     rows = _table(header)
     assert set(rows) == set(registry), \

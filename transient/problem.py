@@ -319,6 +319,8 @@ class WearProblem:
         The limit of an implicit Euler step as ``ds -> infinity``: the warm
         start of a jump.
         """
+        if self.problem.sliding is not None:  # pixel-wise, k_i v p^m / v_ref = C
+            return self.problem.steady_pressure()
         p_phase = self.wear.phase_pressures(self.counts, self.normal_force,
                                             self.halfspace.h ** 2)
         return np.append(p_phase, 0.0)[self.labels]
