@@ -319,18 +319,24 @@ class _BoxGradient:
         # then the column transforms of the zero-padded result.
         rows = scipy.fft.rfft(sources, n=size[1], axis=-1, workers=w)
         spectrum = scipy.fft.fft(rows, n=size[0], axis=-2, workers=w)
+        del rows
         if self.dipoles:
             sq, mxq, myq = spectrum
             xx, xy, yy = self.hessian_q
-            products = (sq * self.gx_q + mxq * xx + myq * xy,
-                        sq * self.gy_q + mxq * xy + myq * yy)
+            terms = ((self.gx_q, xx, xy), (self.gy_q, xy, yy))
         else:
             sq = spectrum
-            products = (sq * self.gx_q, sq * self.gy_q)
+            terms = ((self.gx_q,), (self.gy_q,))
         out = []
-        for product in products:
+        for kernels in terms:
+            # One product at a time, summed in place: a padded spectrum fewer alive.
+            product = sq * kernels[0]
+            if self.dipoles:
+                product += mxq * kernels[1]
+                product += myq * kernels[2]
             # Column pass, then the row pass on the output rows only.
             cols = scipy.fft.ifft(product, axis=0, workers=w, overwrite_x=True)[self.rows]
+            del product
             out.append(scipy.fft.irfft(cols, n=size[1], axis=1, workers=w)[:, self.cols])
         return tuple(out)
 
