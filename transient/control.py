@@ -59,7 +59,7 @@ _DISTANCE_SLACK = 1e-12
 #: Most of a run's wall time its checkpoints may take (see :func:`checkpoint_due`).
 CHECKPOINT_SHARE = 0.05
 #: Share of a step's error tolerance ``tol f*`` left to its contact solves.
-SOLVE_ERROR_SHARE = 1e-2
+SOLVE_ERROR_SHARE = 1e-3
 #: Share of the last wear-rate spread that a solve may move the pressure by.
 SOLVE_SPREAD_SHARE = 1e-2
 

@@ -47,7 +47,7 @@ Contact tolerance
 -----------------
 The contact solves of a regular step stop at the absolute residual
 :func:`transient.control.contact_tolerance` leaves them, or at
-``contact_rtol`` times the displacement, whichever is larger: a hundredth
+``contact_rtol`` times the displacement, whichever is larger: a thousandth
 of the step's error tolerance ``tol f*``, and no more than moves the
 pressure by a hundredth of the last wear-rate spread.  Far from the steady
 state that is several orders above ``contact_rtol`` and the warm start
