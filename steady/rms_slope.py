@@ -57,7 +57,7 @@ import math
 import numpy as np
 import scipy.fft
 
-from .halfspace import grid_shape, pixel_integral_gradient
+from .halfspace import grid_shape
 from .labels import extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_outline
 from .phases import Homogeneous
@@ -227,11 +227,22 @@ def second_moment_tail(force, second_moment, centre, box, E_star):
 
 
 def _corner_sum(ox, oy, H, antiderivative):
-    """Corner sum of ``antiderivative(X, Y)`` over the pixel of side ``H`` (offsets 1-D)."""
-    xm, xp = ox[:, None] - H / 2, ox[:, None] + H / 2
-    ym, yp = oy[None, :] - H / 2, oy[None, :] + H / 2
-    return (antiderivative(xp, yp) - antiderivative(xm, yp) - antiderivative(xp, ym)
-            + antiderivative(xm, ym))
+    """Corner sum of ``antiderivative(X, Y)`` over the pixel of side ``H``.
+
+    ``ox``, ``oy`` are runs of consecutive integer offsets (in pixels): the
+    pixels' corners form one lattice, ``(k - 1/2) H``, on which the
+    antiderivative is evaluated once (a quarter of the evaluations of four
+    corners per offset); no corner lies on an axis.
+    """
+    cx = (np.arange(ox[0], ox[-1] + 2) - 0.5) * H
+    cy = (np.arange(oy[0], oy[-1] + 2) - 0.5) * H
+    values = antiderivative(cx[:, None], cy[None, :])
+    return values[1:, 1:] - values[:-1, 1:] - values[1:, :-1] + values[:-1, :-1]
+
+
+def _asinh_yx(X, Y):
+    """``asinh(Y / |X|)``: the x-derivative of the antiderivative of ``1/r`` (no ``X = 0``)."""
+    return np.arcsinh(Y / np.abs(X))
 
 
 def _border_weights(shape):
@@ -275,9 +286,13 @@ class _BoxGradient:
         ix, iy = np.mod(ox, size[0]), np.mod(oy, size[1])
         scale = 1.0 / (np.pi * E_star)
         kernel = np.zeros(size)
-        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(ox * H, oy * H, H) * scale
+        # The gradient kernels of steady.halfspace.pixel_integral_gradient, from
+        # the corner lattice; the y-kernel is the x-kernel with the axes swapped.
+        gx = _corner_sum(ox, oy, H, _asinh_yx)
+        kernel[np.ix_(ix, iy)] = gx * scale
         self.gx_q = scipy.fft.rfft2(kernel, workers=workers)
-        kernel[np.ix_(ix, iy)] = pixel_integral_gradient(oy * H, ox * H, H).T * scale
+        gy = gx.T if np.array_equal(ox, oy) else _corner_sum(oy, ox, H, _asinh_yx).T
+        kernel[np.ix_(ix, iy)] = gy * scale
         self.gy_q = scipy.fft.rfft2(kernel, workers=workers)
         self.dipoles = dipoles
         if dipoles:
@@ -289,7 +304,7 @@ class _BoxGradient:
                        lambda X, Y: X / (Y * np.hypot(X, Y))]
             self.hessian_q = []
             for antiderivative in hessian:
-                kernel[np.ix_(ix, iy)] = _corner_sum(ox * H, oy * H, H, antiderivative) * scale
+                kernel[np.ix_(ix, iy)] = _corner_sum(ox, oy, H, antiderivative) * scale
                 self.hessian_q.append(scipy.fft.rfft2(kernel, workers=workers))
         self.rows = np.mod(np.arange(lo[0], lo[0] + m[0]), size[0])
         self.cols = np.mod(np.arange(lo[1], lo[1] + m[1]), size[1])
@@ -305,18 +320,24 @@ class _BoxGradient:
         # then the column transforms of the zero-padded result.
         rows = scipy.fft.rfft(sources, n=size[1], axis=-1, workers=w)
         spectrum = scipy.fft.fft(rows, n=size[0], axis=-2, workers=w)
+        del rows
         if self.dipoles:
             sq, mxq, myq = spectrum
             xx, xy, yy = self.hessian_q
-            products = (sq * self.gx_q + mxq * xx + myq * xy,
-                        sq * self.gy_q + mxq * xy + myq * yy)
+            terms = ((self.gx_q, xx, xy), (self.gy_q, xy, yy))
         else:
             sq = spectrum
-            products = (sq * self.gx_q, sq * self.gy_q)
+            terms = ((self.gx_q,), (self.gy_q,))
         out = []
-        for product in products:
+        for kernels in terms:
+            # One product at a time, summed in place: a padded spectrum fewer alive.
+            product = sq * kernels[0]
+            if self.dipoles:
+                product += mxq * kernels[1]
+                product += myq * kernels[2]
             # Column pass, then the row pass on the output rows only.
             cols = scipy.fft.ifft(product, axis=0, workers=w, overwrite_x=True)[self.rows]
+            del product
             out.append(scipy.fft.irfft(cols, n=size[1], axis=1, workers=w)[:, self.cols])
         return tuple(out)
 

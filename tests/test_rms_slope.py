@@ -2,8 +2,10 @@
 
 import numpy as np
 import pytest
+import scipy.fft
 
 from steady import reference
+from steady.halfspace import pixel_integral_gradient
 from steady.outline import UNIT_DISK, Circle
 from steady.phases import ArrayMap, Homogeneous, Voronoi
 from steady.rms_slope import (
@@ -223,3 +225,21 @@ def test_map_ladder_without_geometry():
     assert mean_chord(Homogeneous().labels(32)) == np.inf, "one phase has no boundary"
     coarse = estimate_map_rms_slope(geometry.labels(64), [1.0, 10.0], np.pi, 1.0, 1.0)
     assert coarse.grids == (48, 64), f"n = 64: the coarsest admitted multiple of 8, {coarse.grids}"
+
+
+@pytest.mark.parametrize("shape", [(24, 24), (23, 30)])
+def test_box_gradient_kernels_are_the_pixel_integral_gradient(shape):
+    # The kernels come from one lattice of pixel corners; the closed form of
+    # steady.halfspace evaluates four corners per offset.  Same sums, other
+    # rounding (and an FFT round trip here): measured 8e-16 of the largest entry.
+    energy = SlopeEnergy(shape, 2e-4, 1.3e6)
+    box = energy._fine
+    h, scale = energy.h, 1.0 / (np.pi * energy.E_star)
+    ox, oy = (np.arange(l0 - a + 1, l0 + b) for a, l0, b in zip(box.ns, box.lo, box.m,
+                                                              strict=True))
+    ix, iy = np.mod(ox, box.size[0]), np.mod(oy, box.size[1])
+    for spectrum, kernel in ((box.gx_q, pixel_integral_gradient(ox * h, oy * h, h)),
+                             (box.gy_q, pixel_integral_gradient(oy * h, ox * h, h).T)):
+        got = scipy.fft.irfft2(spectrum, s=box.size)[np.ix_(ix, iy)] / scale
+        error = np.max(np.abs(got - kernel)) / np.max(np.abs(kernel))
+        assert error < 1e-14, f"{shape}: kernel differs by {error:.2g} of its largest entry"

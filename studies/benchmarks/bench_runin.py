@@ -8,7 +8,10 @@ What it reproduces
     overridable, flat start to the steady state, no checkpoints): accepted
     steps, contact solves, solver iterations, iterations per solve, padded
     FFT products (``HalfSpace.displacement``), unpadded FFT pairs of the
-    preconditioner and the wall time of the run, per grid.
+    preconditioner, the wall time of the run and the process's peak
+    resident memory after it, also per pixel (the grids run in ascending
+    order in one process, so the high-water mark is the largest grid's so
+    far; it includes the interpreter and its libraries, about 110 MiB).
 
     ``--schemes``: the same scene (wear ratio overridable with ``--ratio``)
     at one grid, no jump, up to ``3 s*``: every implicit integrator of the
@@ -26,6 +29,7 @@ What it reproduces
 
 How to run
     python studies/benchmarks/bench_runin.py --table --sizes 64 128 256 512 1024   # ~5 min
+    python studies/benchmarks/bench_runin.py --table --sizes 2048   # manual, not CI: ~5 min
     python studies/benchmarks/bench_runin.py --schemes --n 256          # ~15 min on 2 cores
     python studies/benchmarks/bench_runin.py --schemes --n 256 --ratio 1000
     python studies/benchmarks/bench_runin.py --table --schemes --sizes 40 --n 40 --quick
@@ -43,6 +47,7 @@ import dataclasses
 import logging
 import pathlib
 import platform
+import resource
 import sys
 import time
 
@@ -62,7 +67,6 @@ from transient.stepping import SCHEMES
 SCENE = (pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
          / "voronoi_transient.toml")
 SIZES = (64, 128, 256, 512, 1024)
-TABLE_TOL = 1e-4
 SCHEME_N = 256
 DISTANCES = (1e-4, 1e-3, 1e-2, 0.1, 0.3, 1.0, 3.0)   # s*, where the history is compared
 REFERENCE = ("sdirk2", 1e-6)
@@ -113,11 +117,17 @@ def problem_of(scene, n, ratio=None):
     return WearProblem.from_scene(scene, n=n)
 
 
+def _peak_rss():
+    """The process's peak resident memory so far, bytes (Linux counts ``ru_maxrss`` in KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
 def run_counted(problem, initial_height, options):
     """One run-in with its work: ``(result, row)``.
 
     ``row``: steps, rejected, solves, iterations, products (padded FFT
-    products), pairs (unpadded FFT pairs, the preconditioner's), wall (s).
+    products), pairs (unpadded FFT pairs, the preconditioner's), wall (s),
+    peak_rss (bytes, the process's high-water mark after the run).
     """
     with counted_transforms() as counts:
         t = time.perf_counter()
@@ -126,13 +136,14 @@ def run_counted(problem, initial_height, options):
     row = dict(status=result.status, steps=result.steps, rejected=result.rejected,
                solves=result.solves, iterations=result.iterations,
                products=counts["products"], pairs=counts["pairs"],
-               wall=wall)
+               wall=wall, peak_rss=_peak_rss())
     return result, row
 
 
 def grid_table(scene_path, sizes, tol):
     """Rows of the table: the scene at each grid size, to the steady state."""
     scene, options, initial = load_transient_scene(scene_path)
+    tol = options.tol if tol is None else tol
     options = dataclasses.replace(options, tol=tol, checkpoint_interval=1e9)
     rows = []
     for n in sizes:
@@ -189,13 +200,15 @@ def scheme_table(scene_path, n, ratio, ladders, reference=REFERENCE):
 def markdown_table(rows):
     """The grid table in Markdown."""
     lines = ["| n | scheme, tol | steps | contact solves | iterations | iterations / solve "
-             "| padded products | preconditioner pairs | wall (s) |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| padded products | preconditioner pairs | wall (s) | peak memory (MiB) "
+             "| bytes / pixel |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['n']} | {r['scheme']}, {r['tol']:.0e} | {r['steps']} | "
+        lines.append(f"| {r['n']} | {r['scheme']}, {r['tol']:.2g} | {r['steps']} | "
                      f"{r['solves']} | {r['iterations']} | "
                      f"{r['iterations'] / r['solves']:.1f} | {r['products']} | {r['pairs']} | "
-                     f"{r['wall']:.1f} |")
+                     f"{r['wall']:.1f} | {r['peak_rss'] / 2 ** 20:.0f} | "
+                     f"{r['peak_rss'] / r['n'] ** 2:.0f} |")
     return "\n".join(lines)
 
 
@@ -205,7 +218,7 @@ def markdown_schemes(rows):
              "| history error (at s/s*) | face error at 3 s* | wall (s) |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['scheme']} | {r['tol']:.0e} | {r['steps']} | {r['solves']} | "
+        lines.append(f"| {r['scheme']} | {r['tol']:.2g} | {r['steps']} | {r['solves']} | "
                      f"{r['iterations']} | {r['products']} | {r['history_error']:.1e} "
                      f"({r['worst_distance']:g}) | {r['face_error']:.1e} | {r['wall']:.1f} |")
     return "\n".join(lines)
@@ -243,7 +256,7 @@ def main(argv=None):
     parser.add_argument("--schemes", action="store_true", help="integrators at equal error")
     parser.add_argument("--scene", type=pathlib.Path, default=SCENE)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
-    parser.add_argument("--tol", type=float, default=TABLE_TOL, help="tol of --table")
+    parser.add_argument("--tol", type=float, help="tol of --table (default: the scene's)")
     parser.add_argument("--n", type=int, default=SCHEME_N, help="grid of --schemes")
     parser.add_argument("--ratio", type=float, help="k_2/k_1 of --schemes (default: the scene's)")
     parser.add_argument("--quick", action="store_true", help="smoke test: short ladders")
