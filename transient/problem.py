@@ -175,6 +175,12 @@ class WearProblem:
         self.face_mask = problem.face_mask
         self.coefficient_field = problem.coefficient_field()
         self.normal_force = problem.normal_force
+        #: N, the force of the contact solves: ``normal_force`` unless a load programme's run
+        #: sets the force of its current distance (:attr:`load_programme`).
+        self.applied_force = self.normal_force
+        #: The scene's ``[load] programme`` (a :class:`steady.load_programme.LoadProgramme`;
+        #: None: constant load); ``normal_force`` is then its last force.
+        self.load_programme = None
         self.contact_rtol = float(contact_rtol)
         self.contact_maxiter = contact_maxiter
         self.newton_rtol = float(newton_rtol)
@@ -241,6 +247,7 @@ class WearProblem:
             raise ValueError(f"{where}{err}") from None
         wear_problem = cls(problem, **options)
         wear_problem.sliding_speed = scene.sliding_speed
+        wear_problem.load_programme = getattr(scene, "load_programme", None)
         wear_problem.geometry = scene.geometry
         return wear_problem
 
@@ -393,7 +400,7 @@ class WearProblem:
         predicted, self._predicted = self._predicted, None
         if x0_displacement is None and predicted is not None and predicted[0] is x0:
             x0_displacement = predicted[1]
-        res = solve_contact(self.halfspace, self.face_mask, height, self.normal_force,
+        res = solve_contact(self.halfspace, self.face_mask, height, self.applied_force,
                             shift=shift, x0=x0, x0_displacement=x0_displacement,
                             rtol=self.contact_rtol, atol=atol, maxiter=self.contact_maxiter,
                             preconditioner=preconditioner)
