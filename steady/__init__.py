@@ -19,6 +19,8 @@ bottom floor up:
   extra ``runin[micrograph]``);
 - :mod:`steady.pressures`, :mod:`steady.wear` -- eq. 7, and the local wear
   laws;
+- :mod:`steady.load_programme` -- a normal force that steps along the
+  sliding distance (``[load] programme``);
 - :mod:`steady.problem` -- the one checked problem definition;
 - :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
 - :mod:`steady.rms_slope` -- the energy-corrected rms slope and its error

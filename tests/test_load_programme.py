@@ -7,6 +7,9 @@ face scales with the load); a resumed run repeats the uninterrupted one bit
 for bit across a breakpoint; a bad programme is refused with its value.
 """
 
+import importlib
+import pathlib
+
 import h5py
 import numpy as np
 import pytest
@@ -19,6 +22,8 @@ from transient import RunOptions, WearProblem, compare_with_steady, run_in
 from transient.cli import runin as runin_cli
 from transient.output import read_run, write_run
 from transient.runin import HISTORY_UNITS
+
+STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
 #: The gallery run-in scene's distance scale s* = a / (k_min E*), m.
 S_STAR = 0.004 / (1.0e-13 * 1.3e6)
@@ -101,6 +106,48 @@ def test_final_face_is_the_steady_face_of_the_last_force():
     assert abs(ratio - 2.0) < 1e-12, f"steady relief ratio {ratio!r}, expected 2"
     worn = np.ptp(result.face[mask]) / np.ptp(plain.face[mask])
     assert abs(worn - 2.0) < 1e-5, f"run-in relief ratio {worn!r}, expected 2"
+
+
+def _from_steady_face(programme, options):
+    """A run under ``programme`` from the steady face of 10 N (eq. 9), and its problem."""
+    problem = WearProblem.from_scene(parse_scene(programme_text(programme), "."))
+    first = WearProblem.from_scene(parse_scene(scene_text("runin"), ".")).solve_steady()
+    return run_in(problem, -np.where(problem.face_mask, first.face, 0.0), options)
+
+
+def test_a_load_step_from_the_steady_face_is_the_run_in_from_flat_scaled():
+    # The linear law's dynamics is linear in the deviation e = f - f_inf(F) as long as the
+    # whole face stays in contact.  From f_inf(F_1) under F_2 the deviation starts at
+    # (F_1 / F_2 - 1) f_inf(F_2), from flat at -f_inf(F_2): with the same fixed steps the
+    # face deviations after a step up from 10 N to 20 N are the flat run's times
+    # |1 - F_1 / F_2| = 1/2, to the contact solves' tolerance (measured 3.9e-9).  BDF2
+    # restarts at the breakpoint as at s = 0; without the restart the two would differ.
+    s_b = 0.2
+    step = _from_steady_face([(s_b * S_STAR, 20.0)],
+                             RunOptions(scheme="bdf2", step=0.02, max_distance=s_b + 0.4))
+    problem = WearProblem.from_scene(parse_scene(scene_text("runin", normal_force=20.0), "."))
+    flat = run_in(problem, np.zeros(problem.shape),
+                  RunOptions(scheme="bdf2", step=0.02, max_distance=0.4))
+    distance = step.history["distance"]
+    at = int(np.flatnonzero(distance == s_b * S_STAR)[0])
+    after, reference = step.history["face_deviation"][at:], flat.history["face_deviation"]
+    assert after.shape == reference.shape, f"{after.shape} points against {reference.shape}"
+    error = np.max(np.abs(after - 0.5 * reference) / (0.5 * reference))
+    assert error < 1e-7, f"relative difference {error:.3g} from half the run-in from flat"
+    assert np.all(step.history["contact_fraction"] == 1.0), "the face lost contact"
+
+
+def test_a_load_step_down_lifts_the_rim_off():
+    # Halving the load of the steady face: the pressure increment is the flat punch's
+    # under -F/2, singular at the rim, so the rim lifts off (measured: 61 % of the face in
+    # contact right after the step) and the response is no longer the scaled run-in.
+    s_b = 0.2
+    step = _from_steady_face([(s_b * S_STAR, 5.0)],
+                             RunOptions(scheme="bdf2", step=0.02, max_distance=s_b + 0.1))
+    distance, contact = step.history["distance"], step.history["contact_fraction"]
+    before = distance < s_b * S_STAR
+    assert np.all(contact[before] == 1.0), "contact lost before the step"
+    assert contact[~before][0] < 0.8, f"contact fraction {contact[~before][0]:.3g} after it"
 
 
 def test_steady_problem_of_a_programme_scene_takes_the_last_force():
@@ -194,3 +241,18 @@ def test_bad_programme_on_the_command_line_exits_2(tmp_path, capsys):
     assert status == 2, f"exit status {status}"
     assert "distances must increase, got 0.5 m after 1.0 m" in err and "Traceback" not in err, \
         err
+
+
+def test_load_step_study_quick(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(STUDIES))
+    study = importlib.import_module("load_step")
+    h5, png = tmp_path / "load_step.h5", tmp_path / "load_step.png"
+    assert study.main(["--quick", "-o", str(h5), "--png", str(png)]) == 0, "study failed"
+    assert png.stat().st_size > 10000, "no figure"
+    with h5py.File(h5) as f:
+        up, flat = f.attrs["factor_2_resettle"], f.attrs["constant_resettle"]
+        # Half the deviation of the run from flat: within 1 % sooner (quick: 0.86 vs 1.14 s*).
+        assert 0.5 * flat < up < flat, f"re-settled after {up:.3g} s*, from flat {flat:.3g}"
+        assert f["factor_0.5/contact_fraction"][()].min() < 0.8, "the rim did not lift off"
+        final = f["factor_2/rms_slope"][-1] / f["constant/rms_slope"][-1]
+        assert abs(final - 2.0) < 0.01, f"final rms slope ratio {final:.4g}, expected 2"

@@ -582,12 +582,18 @@ class _Run:
         self._take_due_snapshots()
 
     # -- recording -----------------------------------------------------
-    def record(self, step, shape_rate, error=None):
+    def record(self, step, shape_rate, error=None, face_state=None):
         """Append the current point to the history (:class:`transient.history.FaceEstimator`).
 
         ``error`` is the accepted step's local error estimate (m, shape
-        (nx, ny)); None at ``s = 0``.
+        (nx, ny)); None at ``s = 0``.  ``face_state`` is ``(rim distance,
+        pressure, approach)`` of the face's figures when they are not the
+        current ones: at a step of the load, the face (continuous) is
+        measured from its contact before the step, whose rim layer the
+        estimator knows.
         """
+        if face_state is None:
+            face_state = (self.rim_distance(), self.pressure, self.approach)
         p = self.problem
         face_mask = p.face_mask
         hist = self.history
@@ -600,8 +606,8 @@ class _Run:
             self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
         index = len(hist["distance"])
         self._pending.append((index, self._worker.submit(
-            self.estimator.figures, self.s, self.height.copy(), self.pressure.copy(),
-            self.approach)))
+            self.estimator.figures, face_state[0], self.height.copy(), face_state[1].copy(),
+            face_state[2])))
         hist["distance"].append(self.s)
         hist["step"].append(step)
         for name in _FACE_FIGURES:
@@ -731,6 +737,28 @@ class _Run:
         """Distance of the load programme's next breakpoint (m), or None."""
         return None if self.programme is None else self.programme.next_breakpoint(self.s)
 
+    def rim_distance(self, *, before_change=False):
+        """Distance the rim's singular pressure has worn the rim (m): since the last step up.
+
+        A step up of the load adds the flat punch's pressure under the
+        increment, singular at the rim, whose worn layer grows from the step
+        on (:meth:`transient.history.FaceEstimator.rim_layer_pixels`); a
+        step down lifts the rim off and leaves the layer as it was.  With
+        ``before_change`` a breakpoint at the current distance is not yet
+        applied.
+        """
+        if self.programme is None:
+            return self.s
+        start = 0.0
+        force = self.programme.initial_force
+        for s, f in self.programme.pairs:
+            if s > self.s * (1 + 1e-12) or before_change and s >= self.s * (1 - 1e-12):
+                break
+            if f > force and s > 0.0:
+                start = s
+            force = f
+        return self.s - start
+
     def change_load(self):
         """Apply the load programme's force at the current distance, if it changed.
 
@@ -739,11 +767,19 @@ class _Run:
         pressure, which the solver scales to it), and the recent pressures
         of the warm start and BDF2's previous point, which belong to the
         old load, are dropped: both restart as at the start of a run.
+
+        Returns
+        -------
+        tuple or None
+            ``(rim distance, pressure, approach)`` before the change, from
+            which the history measures the face (:meth:`record`); None when
+            the force did not change.
         """
         p = self.problem
         force = self.programme.force_at(self.s)
         if force == p.applied_force:
-            return
+            return None
+        before = (self.rim_distance(before_change=True), self.pressure, self.approach)
         logger.info("load %.6g N -> %.6g N at s = %.6g m", p.applied_force, force, self.s)
         p.applied_force = force
         res = p.contact(self.height, x0=self.pressure)
@@ -751,6 +787,7 @@ class _Run:
         self.approach = float(res.approach)
         self.pressures = None
         self.prev_height = self.prev_rate = self.prev_step = None
+        return before
 
     def plan(self, jump, target):
         """Scheme and length (m) of the next attempt."""
@@ -812,10 +849,11 @@ class _Run:
             return
         self.offset += c
         self.s += ds
+        face_state = None
         if self.programme is not None:
             self.s = self.programme.snap(self.s)
-            self.change_load()
-        self.record(ds, shape_rate, trial.error)
+            face_state = self.change_load()
+        self.record(ds, shape_rate, trial.error, face_state)
         self._take_due_snapshots()
 
     def loop(self, on_step, on_checkpoint):
