@@ -240,14 +240,23 @@ class WearProblem:
         (40, 2)
         """
         problem = Problem.from_scene(scene, n=n)
+        programme = getattr(scene, "load_programme", None)
         try:
-            check_run_in_scales(problem, scene.input_names())
+            if programme is None:
+                check_run_in_scales(problem, scene.input_names())
+            for force in () if programme is None else (programme.initial_force,
+                                                         *programme.forces):
+                # Each force of a programme is a load the run meets.
+                names = scene.input_names()
+                if force != scene.normal_force:
+                    names["normal_force"] = f"[load] programme force {force!r}"
+                check_run_in_scales(dataclasses.replace(problem, normal_force=force), names)
         except ValueError as err:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
         wear_problem = cls(problem, **options)
         wear_problem.sliding_speed = scene.sliding_speed
-        wear_problem.load_programme = getattr(scene, "load_programme", None)
+        wear_problem.load_programme = programme
         wear_problem.geometry = scene.geometry
         return wear_problem
 
