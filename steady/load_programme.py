@@ -119,6 +119,28 @@ class LoadProgramme:
         i = self._reached(s)
         return self.breakpoints[i] if i < len(self.pairs) else None
 
+    def last_rise(self, s, *, before=False):
+        """The last breakpoint reached at ``s`` (m) where the force rose, m; 0 if none.
+
+        A breakpoint at ``s = 0`` does not count (the run starts there).
+        With ``before`` a breakpoint at ``s`` itself is not yet reached.
+
+        Examples
+        --------
+        >>> p = LoadProgramme(10.0, ((1.0, 20.0), (2.0, 5.0), (3.0, 8.0)))
+        >>> p.last_rise(2.5), p.last_rise(3.0), p.last_rise(3.0, before=True)
+        (1.0, 3.0, 1.0)
+        """
+        reached = self._reached(s)
+        if before and reached and self.breakpoints[reached - 1] >= s * (1 - BREAKPOINT_SLACK):
+            reached -= 1
+        start, force = 0.0, self.initial_force
+        for s_i, f_i in self.pairs[:reached]:
+            if f_i > force and s_i > 0.0:
+                start = s_i
+            force = f_i
+        return start
+
     def snap(self, s):
         """``s`` (m) replaced by the breakpoint it reached within the slack, if any."""
         i = self._reached(s)

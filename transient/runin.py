@@ -749,15 +749,7 @@ class _Run:
         """
         if self.programme is None:
             return self.s
-        start = 0.0
-        force = self.programme.initial_force
-        for s, f in self.programme.pairs:
-            if s > self.s * (1 + 1e-12) or before_change and s >= self.s * (1 - 1e-12):
-                break
-            if f > force and s > 0.0:
-                start = s
-            force = f
-        return self.s - start
+        return self.s - self.programme.last_rise(self.s, before=before_change)
 
     def change_load(self):
         """Apply the load programme's force at the current distance, if it changed.
