@@ -119,27 +119,31 @@ class LoadProgramme:
         i = self._reached(s)
         return self.breakpoints[i] if i < len(self.pairs) else None
 
-    def last_rise(self, s, *, before=False):
-        """The last breakpoint reached at ``s`` (m) where the force rose, m; 0 if none.
+    def rises(self, s, *, before=False):
+        """The rises of the force reached at ``s`` (m): ``(s_j, dF_j)`` pairs, m and N.
 
-        A breakpoint at ``s = 0`` does not count (the run starts there).
-        With ``before`` a breakpoint at ``s`` itself is not yet reached.
+        The first is the load applied at the start, ``(0, F(0))``; then each
+        breakpoint where the force rose, with its increase.  With
+        ``before`` a breakpoint at ``s`` itself is not yet reached.
 
         Examples
         --------
         >>> p = LoadProgramme(10.0, ((1.0, 20.0), (2.0, 5.0), (3.0, 8.0)))
-        >>> p.last_rise(2.5), p.last_rise(3.0), p.last_rise(3.0, before=True)
-        (1.0, 3.0, 1.0)
+        >>> p.rises(2.5)
+        ((0.0, 10.0), (1.0, 10.0))
+        >>> p.rises(3.0), p.rises(3.0, before=True)
+        (((0.0, 10.0), (1.0, 10.0), (3.0, 3.0)), ((0.0, 10.0), (1.0, 10.0)))
         """
         reached = self._reached(s)
         if before and reached and self.breakpoints[reached - 1] >= s * (1 - BREAKPOINT_SLACK):
             reached -= 1
-        start, force = 0.0, self.initial_force
+        force = self.force_at(0.0)
+        out = [(0.0, force)]
         for s_i, f_i in self.pairs[:reached]:
-            if f_i > force and s_i > 0.0:
-                start = s_i
+            if s_i > 0.0 and f_i > force:
+                out.append((s_i, f_i - force))
             force = f_i
-        return start
+        return tuple(out)
 
     def snap(self, s):
         """``s`` (m) replaced by the breakpoint it reached within the slack, if any."""

@@ -107,7 +107,7 @@ def plot(path, png):
     ax_force = ax_slope.twinx()
     for j, name in enumerate(names):
         s = d[f"{name}/distance"]
-        ax_slope.plot(s, d[f"{name}/rms_slope"] * 1e3, color=f"C{j}", lw=1.2, label=labels[name])
+        ax_slope.plot(s, d[f"{name}/rms_slope"], color=f"C{j}", lw=1.2, label=labels[name])
         ax_force.step(s, d[f"{name}/force"], where="post", color=f"C{j}", lw=0.8, ls=":")
         ax_contact.plot(s, d[f"{name}/contact_fraction"], color=f"C{j}", lw=1.2)
         start = 0.0 if name == "constant" else s_b
@@ -125,7 +125,7 @@ def plot(path, png):
     for ax in (ax_slope, ax_contact):
         ax.axvline(s_b, color="0.6", lw=0.6)
         ax.set_xlabel(r"sliding distance / $s^* = a/(k_{min} E^*)$")
-    ax_slope.set_ylabel(r"rms slope of the face ($10^{-3}$)")
+    ax_slope.set_ylabel("rms slope of the face")
     ax_force.set_ylabel("normal force (N), dotted")
     ax_slope.legend(fontsize=7, loc="lower right")
     ax_slope.set_title(f"n = {p['n']}, {p['scheme']}, tol = {p['tol']:g}; load step at "

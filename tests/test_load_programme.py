@@ -82,6 +82,25 @@ def test_steps_land_on_the_breakpoints_and_the_force_follows():
         "the final pressure does not carry the last force"
 
 
+def test_before_a_step_up_the_history_is_the_constant_load_one():
+    # With the same fixed steps the run up to a step up of the load is the run at constant
+    # load: the face, and the rms slope, whose rim layer the estimator weighs by
+    # (10 N / 20 N)^2 against the final force's grad_f0 (equal to round-off, measured
+    # 2.2e-16; the worn depth 9.2e-16).  At the breakpoint the face has not moved.
+    options = RunOptions(scheme="bdf2", step=0.02, max_distance=0.1)
+    plain, _ = run(options=options)
+    result, _ = run([(0.1 * S_STAR, 20.0)], options=options)
+    assert result.history["force"][-1] == 20.0, "the run did not reach the breakpoint"
+    slope, expected = result.history["rms_slope"], plain.history["rms_slope"]
+    assert slope.shape == expected.shape, f"{slope.shape} points against {expected.shape}"
+    assert np.allclose(slope, expected, rtol=1e-12, atol=0.0), \
+        f"rms slope {slope} against {expected} at constant load"
+    mask = np.isfinite(plain.worn_depth)
+    worn, expected = result.worn_depth[mask], plain.worn_depth[mask]
+    error = np.max(np.abs(worn - expected)) / np.max(np.abs(expected))
+    assert error < 1e-12, f"worn depth differs by {error:.3g} (the last step lands by round-off)"
+
+
 def test_no_steady_state_and_no_jump_before_the_last_breakpoint():
     # The same force from 6 s* on: nothing changes but the run must get there,
     # well beyond the distance (about 4 s*) at which it is steady without it.

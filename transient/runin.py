@@ -586,14 +586,14 @@ class _Run:
         """Append the current point to the history (:class:`transient.history.FaceEstimator`).
 
         ``error`` is the accepted step's local error estimate (m, shape
-        (nx, ny)); None at ``s = 0``.  ``face_state`` is ``(rim distance,
+        (nx, ny)); None at ``s = 0``.  ``face_state`` is ``(rim layers,
         pressure, approach)`` of the face's figures when they are not the
         current ones: at a step of the load, the face (continuous) is
         measured from its contact before the step, whose rim layer the
         estimator knows.
         """
         if face_state is None:
-            face_state = (self.rim_distance(), self.pressure, self.approach)
+            face_state = (self.rim_layers(), self.pressure, self.approach)
         p = self.problem
         face_mask = p.face_mask
         hist = self.history
@@ -606,8 +606,8 @@ class _Run:
             self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
         index = len(hist["distance"])
         self._pending.append((index, self._worker.submit(
-            self.estimator.figures, face_state[0], self.height.copy(), face_state[1].copy(),
-            face_state[2])))
+            self.estimator.figures, self.s, self.height.copy(), face_state[1].copy(),
+            face_state[2], rim_layers=face_state[0])))
         hist["distance"].append(self.s)
         hist["step"].append(step)
         for name in _FACE_FIGURES:
@@ -737,19 +737,21 @@ class _Run:
         """Distance of the load programme's next breakpoint (m), or None."""
         return None if self.programme is None else self.programme.next_breakpoint(self.s)
 
-    def rim_distance(self, *, before_change=False):
-        """Distance the rim's singular pressure has worn the rim (m): since the last step up.
+    def rim_layers(self, *, before_change=False):
+        """The rim layers of a load programme's run, for the history's estimator; None without.
 
-        A step up of the load adds the flat punch's pressure under the
-        increment, singular at the rim, whose worn layer grows from the step
-        on (:meth:`transient.history.FaceEstimator.rim_layer_pixels`); a
-        step down lifts the rim off and leaves the layer as it was.  With
-        ``before_change`` a breakpoint at the current distance is not yet
-        applied.
+        Each rise of the force adds the flat punch's pressure under the
+        increase, singular at the rim, whose worn layer grows from the rise
+        on: one ``(distance since the rise (m), (dF / F_N)^2)`` per rise
+        (:meth:`transient.history.FaceEstimator.figures`).  A step down
+        lifts the rim off and adds none.  With ``before_change`` a
+        breakpoint at the current distance is not yet applied.
         """
         if self.programme is None:
-            return self.s
-        return self.s - self.programme.last_rise(self.s, before=before_change)
+            return None
+        final = self.problem.normal_force
+        return tuple((self.s - s_j, (rise / final) ** 2)
+                     for s_j, rise in self.programme.rises(self.s, before=before_change))
 
     def change_load(self):
         """Apply the load programme's force at the current distance, if it changed.
@@ -763,7 +765,7 @@ class _Run:
         Returns
         -------
         tuple or None
-            ``(rim distance, pressure, approach)`` before the change, from
+            ``(rim layers, pressure, approach)`` before the change, from
             which the history measures the face (:meth:`record`); None when
             the force did not change.
         """
@@ -771,7 +773,7 @@ class _Run:
         force = self.programme.force_at(self.s)
         if force == p.applied_force:
             return None
-        before = (self.rim_distance(before_change=True), self.pressure, self.approach)
+        before = (self.rim_layers(before_change=True), self.pressure, self.approach)
         logger.info("load %.6g N -> %.6g N at s = %.6g m", p.applied_force, force, self.s)
         p.applied_force = force
         res = p.contact(self.height, x0=self.pressure)
