@@ -21,6 +21,8 @@ bottom floor up:
   laws;
 - :mod:`steady.sliding` -- the sliding kinematics (``[sliding]``): the local
   sliding speed over the face;
+- :mod:`steady.load_programme` -- a normal force that steps along the
+  sliding distance (``[load] programme``);
 - :mod:`steady.problem` -- the one checked problem definition;
 - :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
 - :mod:`steady.rms_slope` -- the energy-corrected rms slope and its error

@@ -404,6 +404,12 @@ class Problem:
             Grid size, pixels along the longer side; default ``scene.n``.
             The phase geometry is rasterised at this size.
 
+        Returns
+        -------
+        Problem
+            Under the scene's load, the last force of a ``[load] programme``
+            (the steady state's) when it has one.
+
         Raises
         ------
         ValueError
@@ -415,16 +421,21 @@ class Problem:
         grid = scene.grid(n)
         phases = FacePhases(grid, scene.phase_labels(grid), scene.geometry.n_phases,
                             getattr(scene, "phase_names", None))
+        # Under a load programme the steady state is the one of its last force.
+        force = getattr(scene, "final_force", scene.normal_force)
+        names = scene.input_names()
+        if force != scene.normal_force:
+            names["normal_force"] = f"[load] programme force {force!r}"
         try:
-            check_scales(scene.outline, scene.normal_force, scene.E_star, n=grid.n,
-                         wear=scene.wear, counts=phases.counts, names=scene.input_names())
+            check_scales(scene.outline, force, scene.E_star, n=grid.n,
+                         wear=scene.wear, counts=phases.counts, names=names)
         except ValueError as err:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
         sliding = getattr(scene, "sliding", None)
         if sliding is None:
-            return cls(phases, scene.wear, scene.normal_force, scene.E_star)
-        return cls(phases, scene.wear, scene.normal_force, scene.E_star, sliding)
+            return cls(phases, scene.wear, force, scene.E_star)
+        return cls(phases, scene.wear, force, scene.E_star, sliding)
 
     # -- the grid --------------------------------------------------------
     @property

@@ -53,6 +53,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from . import inclusions, micrograph  # noqa: F401 -- they register their map kinds
 from .labels import validate_labels
+from .load_programme import LoadProgramme
 from .outline import FaceGrid, outline_from_table
 from .phases import PHASE_MAPS, Voronoi
 from .problem import check_phase_names, check_scales
@@ -73,7 +74,12 @@ SECTIONS = {
     "load": (Key("normal_force", "number", unit="N", low=0.0, required=True,
                  doc="the normal force F_N"),
              Key("sliding_speed", "number", unit="m/s", low=0.0,
-                 doc="sliding speed, optional: the run-in distance is also given as a time")),
+                 doc="sliding speed, optional: the run-in distance is also given as a time"),
+             Key("programme", "pairs", unit="m, N",
+                 doc="load programme, optional: [[s_1, F_1], [s_2, F_2], ...], the force F_i "
+                     "(N) from the sliding distance s_i (m, increasing, >= 0) on; "
+                     "normal_force holds before s_1; the steady state is the one under the "
+                     "last force")),
     "counterbody": (Key("E_star", "number", unit="Pa", low=0.0, required=True,
                         doc="effective modulus E / (1 - nu^2) of the counter-body"),),
     "grid": (Key("n", "integer", low=2, low_open=False, required=True,
@@ -140,6 +146,9 @@ class Scene:
         ``[sliding]`` (:mod:`steady.sliding`); None when the scene has no
         such section or its kind is ``"translation"``: the paper's uniform
         sliding speed.
+    load_programme : steady.load_programme.LoadProgramme or None
+        ``[load] programme`` (with ``normal_force`` before its first
+        breakpoint); None when the scene gives none: the load is constant.
     """
 
     outline: object
@@ -156,6 +165,14 @@ class Scene:
     phase_names: tuple | None = None
     sliding_speed: float | None = None
     sliding: object = None
+    load_programme: LoadProgramme | None = None
+
+    @property
+    def final_force(self):
+        """The force of the steady state, N: the programme's last, else ``normal_force``."""
+        if self.load_programme is None:
+            return self.normal_force
+        return self.load_programme.final_force
 
     @property
     def n_phases(self):
@@ -325,6 +342,7 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
             raise ValueError(f"[phases] names: {err}") from None
     check_scales(outline, force, E_star, n=n, wear=wear,
                  names=input_names(outline, force, E_star, n, wear))
+    programme = _programme(values["load"], outline, E_star, n, wear)
     try:
         geometry.check_grid(FaceGrid(outline, n))
     except ValueError as err:
@@ -341,7 +359,19 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
                  source_path=None if source_path is None else pathlib.Path(source_path),
                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
                  phase_names=names, sliding_speed=values["load"].get("sliding_speed"),
-                 sliding=sliding)
+                 sliding=sliding, load_programme=programme)
+
+
+def _programme(load, outline, E_star, n, wear):
+    """The :class:`LoadProgramme` of ``[load]`` (None without one), every force's scales checked."""
+    if "programme" not in load:
+        return None
+    programme = LoadProgramme(load["normal_force"], load["programme"])
+    for force in programme.forces:
+        names = input_names(outline, force, E_star, n, wear)
+        names["normal_force"] = f"[load] programme force {force!r}"
+        check_scales(outline, force, E_star, n=n, wear=wear, names=names)
+    return programme
 
 
 def _toml(text):

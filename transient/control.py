@@ -218,7 +218,7 @@ class StopTests:
         self.options = options
         self.s_star = s_star
 
-    def check(self, spread, shape_rate, distance, steps):
+    def check(self, spread, shape_rate, distance, steps, *, held=False):
         """``(status, message)`` if the run is over at its current point, else None.
 
         Parameters
@@ -232,9 +232,12 @@ class StopTests:
             Sliding distance reached.
         steps : int
             Accepted steps so far.
+        held : bool, optional
+            A breakpoint of the load programme lies ahead: not steady yet
+            (default False).
         """
         o, s_star = self.options, self.s_star
-        if spread < o.spread_tol and shape_rate < o.shape_tol:
+        if not held and spread < o.spread_tol and shape_rate < o.shape_tol:
             return "steady", (f"steady state at s = {distance:.6g} m "
                               f"({distance / s_star:.6g} s*): wear-rate spread "
                               f"{spread:.3g}, shape change {shape_rate:.3g} f*/s*")

@@ -364,7 +364,7 @@ class FaceEstimator:
         """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels."""
         return float(np.min(self._rim_growth)) * distance
 
-    def figures(self, distance, height, pressure, approach):
+    def figures(self, distance, height, pressure, approach, *, rim_layers=None):
         """The history's figures of the face at one point of the run.
 
         Parameters
@@ -377,6 +377,11 @@ class FaceEstimator:
             Contact pressure of ``height``.
         approach : float, m
             Rigid approach in the frame of ``height``.
+        rim_layers : sequence of (float, float), optional
+            Under a load programme, one rim layer per rise of the force: the
+            distance (m) slid since the rise and its weight ``(dF / F_N)^2``
+            (the rise's share of the rim stress intensity, squared); default
+            one layer of ``distance`` and weight 1.
 
         Returns
         -------
@@ -412,8 +417,11 @@ class FaceEstimator:
             energy += float(np.sum((fx * fx + fy * fy - gx * gx - gy * gy)[off])) * self.h ** 2
             source = SOURCE_PARTIAL_CONTACT
         mean_square = energy / integrals.face_area
-        excess = self.reference_slope ** 2 * float(
-            np.mean(self._rim_weight * rim_layer_excess(self._rim_growth * distance)))
+        if rim_layers is None:
+            layers = rim_layer_excess(self._rim_growth * distance)
+        else:
+            layers = sum(w * rim_layer_excess(self._rim_growth * d) for d, w in rim_layers)
+        excess = self.reference_slope ** 2 * float(np.mean(self._rim_weight * layers))
         if self.problem.wear.linear:
             slope = math.sqrt(max(mean_square - excess, 0.0))
             spread = RIM_LAYER_SCATTER * excess

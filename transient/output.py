@@ -105,6 +105,7 @@ import types
 import h5py
 import numpy as np
 
+from steady.load_programme import LoadProgramme
 from steady.outline import Circle
 from steady.output import (
     DIMENSION_SCALE_ATTRIBUTES,
@@ -119,7 +120,7 @@ from steady.output import (
 )
 
 from .run_in_distance import distance_table
-from .runin import HISTORY_UNITS, RunResult, RunState
+from .runin import HISTORY_UNITS, PROGRAMME_HISTORY_UNITS, RunResult, RunState
 
 try:
     import fcntl
@@ -307,7 +308,8 @@ def history_cf(name):
     Parameters
     ----------
     name : str
-        A key of :data:`transient.runin.HISTORY_UNITS`.
+        A key of :data:`transient.runin.HISTORY_UNITS` or
+        :data:`transient.runin.PROGRAMME_HISTORY_UNITS`.
 
     Returns
     -------
@@ -321,7 +323,7 @@ def history_cf(name):
     >>> history_cf("distance")
     ('m', 'sliding distance')
     """
-    text = HISTORY_UNITS[name]
+    text = HISTORY_UNITS.get(name) or PROGRAMME_HISTORY_UNITS[name]
     unit, _, meaning = text.partition(" (")
     meaning = meaning[:-1] if meaning.endswith(")") else meaning
     if not meaning:
@@ -508,6 +510,24 @@ def _write_history(f, result):
         ds = _put(hist, name, value, *history_cf(name), dims=(distance,))
         if np.ndim(value) == 1 and (distance is None or len(value) != len(distance)):
             ds.make_scale(name)  # e.g. an empty spatial error: a dimension of its own
+    _write_load_programme(hist.attrs, result.load_programme)
+
+
+def _write_load_programme(attrs, programme):
+    """A load programme's breakpoints (m), forces (N) and initial force as attributes."""
+    if programme is None:
+        return
+    _attribute(attrs, "load_breakpoints", np.array(programme.breakpoints), "m")
+    _attribute(attrs, "load_forces", np.array(programme.forces), "N")
+    _attribute(attrs, "load_initial_force", programme.initial_force, "N")
+
+
+def _read_load_programme(attrs):
+    """The :class:`LoadProgramme` of :func:`_write_load_programme`'s attributes, or None."""
+    if "load_breakpoints" not in attrs:
+        return None
+    pairs = zip(np.ravel(attrs["load_breakpoints"]), np.ravel(attrs["load_forces"]), strict=True)
+    return LoadProgramme(float(attrs["load_initial_force"]), tuple(pairs))
 
 
 def _write_snapshots(f, result, grid_scales):
@@ -523,6 +543,12 @@ def _write_snapshots(f, result, grid_scales):
          "NaN off the face", dims=(distance, *grid_scales), **packed)
     _put(snaps, "pressure", result.snapshot_pressure, "Pa", "contact pressure",
          dims=(distance, *grid_scales), **packed)
+    programme = result.load_programme
+    if programme is not None:
+        _put(snaps, "force", np.array([programme.force_at(s) for s in result.snapshot_distance],
+                                      dtype=float),
+             "N", "normal force of the load programme at the snapshot", dims=(distance,))
+        _write_load_programme(snaps.attrs, programme)
 
 
 # The comparison's arrays (Pa, one value per phase) and its lengths; the rest is 1 or a flag.
@@ -812,7 +838,8 @@ def _result(path, datasets, groups):
         snapshot_height=datasets["snapshots/height"][0],
         snapshot_pressure=datasets["snapshots/pressure"][0],
         outline=outline, reference_slope_error=ref_error,
-        reference_slope_source=str(source))
+        reference_slope_source=str(source),
+        load_programme=_read_load_programme(groups.get("history", {})))
     arrays = {name: value for name, (value, _) in datasets.items()
               if "/" not in name and name not in ("worn_depth", "pressure", "x", "y")}
     return result, attrs, arrays

@@ -175,6 +175,12 @@ class WearProblem:
         self.face_mask = problem.face_mask
         self.coefficient_field = problem.coefficient_field()
         self.normal_force = problem.normal_force
+        #: N, the force of the contact solves: ``normal_force`` unless a load programme's run
+        #: sets the force of its current distance (:attr:`load_programme`).
+        self.applied_force = self.normal_force
+        #: The scene's ``[load] programme`` (a :class:`steady.load_programme.LoadProgramme`;
+        #: None: constant load); ``normal_force`` is then its last force.
+        self.load_programme = None
         self.contact_rtol = float(contact_rtol)
         self.contact_maxiter = contact_maxiter
         self.newton_rtol = float(newton_rtol)
@@ -234,13 +240,23 @@ class WearProblem:
         (40, 2)
         """
         problem = Problem.from_scene(scene, n=n)
+        programme = getattr(scene, "load_programme", None)
         try:
-            check_run_in_scales(problem, scene.input_names())
+            if programme is None:
+                check_run_in_scales(problem, scene.input_names())
+            for force in () if programme is None else (programme.initial_force,
+                                                         *programme.forces):
+                # Each force of a programme is a load the run meets.
+                names = scene.input_names()
+                if force != scene.normal_force:
+                    names["normal_force"] = f"[load] programme force {force!r}"
+                check_run_in_scales(dataclasses.replace(problem, normal_force=force), names)
         except ValueError as err:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
         wear_problem = cls(problem, **options)
         wear_problem.sliding_speed = scene.sliding_speed
+        wear_problem.load_programme = programme
         wear_problem.geometry = scene.geometry
         return wear_problem
 
@@ -395,7 +411,7 @@ class WearProblem:
         predicted, self._predicted = self._predicted, None
         if x0_displacement is None and predicted is not None and predicted[0] is x0:
             x0_displacement = predicted[1]
-        res = solve_trusted_contact(self.halfspace, self.face_mask, height, self.normal_force,
+        res = solve_trusted_contact(self.halfspace, self.face_mask, height, self.applied_force,
                                     shift=shift, x0=x0, x0_displacement=x0_displacement,
                                     rtol=self.contact_rtol, atol=atol,
                                     maxiter=self.contact_maxiter, preconditioner=preconditioner)

@@ -86,7 +86,7 @@ from .options import RunOptions
 from .problem import StepFailure, WarmStart
 from .stepping import StepState, get_scheme
 
-__all__ = ["HISTORY_UNITS", "RunResult", "RunState", "run_in"]
+__all__ = ["HISTORY_UNITS", "PROGRAMME_HISTORY_UNITS", "RunResult", "RunState", "run_in"]
 
 logger = logging.getLogger(__name__)
 
@@ -133,6 +133,9 @@ HISTORY_UNITS = {
                                          "run's own steady value; empty unless "
                                          "transient.spatial_error filled it)",
 }
+
+#: History datasets of a run under a ``[load] programme`` only, and their units.
+PROGRAMME_HISTORY_UNITS = {"force": "N (normal force of the load programme at the point)"}
 
 # History datasets that files written before them lack (read as NaN when resumed).
 _LATER_HISTORY = ("face_deviation", "face_deviation_step_error", "rms_slope_step_error",
@@ -268,6 +271,10 @@ class RunResult:
     sliding_speed : float or None, m/s
         The scene's ``[load] sliding_speed`` (None: not given): turns
         distances into times.
+    load_programme : steady.load_programme.LoadProgramme or None
+        The scene's ``[load] programme`` (None: a constant load).  With one,
+        the history holds the ``force`` of every point, steps land on its
+        breakpoints and the steady state is the one under its last force.
     """
 
     status: str
@@ -297,6 +304,7 @@ class RunResult:
     steady_rms_slope: float = math.nan
     steady_rms_slope_error: float = math.nan
     sliding_speed: float | None = None
+    load_programme: object = None
 
     def run_in_distance(self, within=0.01, *, sliding_speed=None):
         """The sliding distance after which the run stays within ``within`` of the steady state.
@@ -459,6 +467,11 @@ class _Run:
         self.reference = problem.reference
         self.grad_f0 = self.reference.value
         face_mask = problem.face_mask
+        self.programme = problem.load_programme
+        problem.applied_force = problem.normal_force
+        if self.programme is not None:
+            problem.applied_force = self.programme.force_at(
+                0.0 if resume is None else float(resume.distance))
         if resume is None:
             h0 = _initial_face(problem, initial_height)
             self.estimator = FaceEstimator.of(problem, h0)
@@ -495,6 +508,8 @@ class _Run:
             self.s, self.steps, self.rejected, self.failures = 0.0, 0, 0, 0
             self.wall_time = 0.0
             self.history = {name: [] for name in HISTORY_UNITS}
+            if self.programme is not None:
+                self.history.update({name: [] for name in PROGRAMME_HISTORY_UNITS})
             self.snap_d, self.snap_h, self.snap_p = [], [], []
         else:
             self.s = float(resume.distance)
@@ -567,12 +582,18 @@ class _Run:
         self._take_due_snapshots()
 
     # -- recording -----------------------------------------------------
-    def record(self, step, shape_rate, error=None):
+    def record(self, step, shape_rate, error=None, face_state=None):
         """Append the current point to the history (:class:`transient.history.FaceEstimator`).
 
         ``error`` is the accepted step's local error estimate (m, shape
-        (nx, ny)); None at ``s = 0``.
+        (nx, ny)); None at ``s = 0``.  ``face_state`` is ``(rim layers,
+        pressure, approach)`` of the face's figures when they are not the
+        current ones: at a step of the load, the face (continuous) is
+        measured from its contact before the step, whose rim layer the
+        estimator knows.
         """
+        if face_state is None:
+            face_state = (self.rim_layers(), self.pressure, self.approach)
         p = self.problem
         face_mask = p.face_mask
         hist = self.history
@@ -585,8 +606,8 @@ class _Run:
             self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
         index = len(hist["distance"])
         self._pending.append((index, self._worker.submit(
-            self.estimator.figures, self.s, self.height.copy(), self.pressure.copy(),
-            self.approach)))
+            self.estimator.figures, self.s, self.height.copy(), face_state[1].copy(),
+            face_state[2], rim_layers=face_state[0])))
         hist["distance"].append(self.s)
         hist["step"].append(step)
         for name in _FACE_FIGURES:
@@ -610,6 +631,8 @@ class _Run:
             slope_error = float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
         hist["face_deviation_step_error"].append(step_error)
         hist["rms_slope_step_error"].append(slope_error)
+        if "force" in hist:
+            hist["force"].append(p.applied_force)
         self.latest = (hist["spread"][-1], shape_rate)
         self.collect(wait=False)
 
@@ -691,7 +714,7 @@ class _Run:
             outline=self.problem.outline, reference_slope_error=self.reference.error,
             reference_slope_source=self.reference.source, problem=self.problem.problem,
             steady_rms_slope=self.steady_slope[0], steady_rms_slope_error=self.steady_slope[1],
-            sliding_speed=self.problem.sliding_speed)
+            sliding_speed=self.problem.sliding_speed, load_programme=self.programme)
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
@@ -702,11 +725,63 @@ class _Run:
 
     # -- stepping ------------------------------------------------------
     def pending_target(self):
-        """Distance of the next snapshot (m), or None."""
+        """Distance of the next snapshot or load breakpoint (m), or None."""
         snaps = self.options.snapshots
+        targets = [self.next_breakpoint()]
         if self.snap_index < len(snaps):
-            return snaps[self.snap_index] * self.s_star
-        return None
+            targets.append(snaps[self.snap_index] * self.s_star)
+        targets = [t for t in targets if t is not None]
+        return min(targets) if targets else None
+
+    def next_breakpoint(self):
+        """Distance of the load programme's next breakpoint (m), or None."""
+        return None if self.programme is None else self.programme.next_breakpoint(self.s)
+
+    def rim_layers(self, *, before_change=False):
+        """The rim layers of a load programme's run, for the history's estimator; None without.
+
+        Each rise of the force adds the flat punch's pressure under the
+        increase, singular at the rim, whose worn layer grows from the rise
+        on: one ``(distance since the rise (m), (dF / F_N)^2)`` per rise
+        (:meth:`transient.history.FaceEstimator.figures`).  A step down
+        lifts the rim off and adds none.  With ``before_change`` a
+        breakpoint at the current distance is not yet applied.
+        """
+        if self.programme is None:
+            return None
+        final = self.problem.normal_force
+        return tuple((self.s - s_j, (rise / final) ** 2)
+                     for s_j, rise in self.programme.rises(self.s, before=before_change))
+
+    def change_load(self):
+        """Apply the load programme's force at the current distance, if it changed.
+
+        The face is continuous across a step of the load, its pressure is
+        not: the contact is solved again under the new force (from the old
+        pressure, which the solver scales to it), and the recent pressures
+        of the warm start and BDF2's previous point, which belong to the
+        old load, are dropped: both restart as at the start of a run.
+
+        Returns
+        -------
+        tuple or None
+            ``(rim layers, pressure, approach)`` before the change, from
+            which the history measures the face (:meth:`record`); None when
+            the force did not change.
+        """
+        p = self.problem
+        force = self.programme.force_at(self.s)
+        if force == p.applied_force:
+            return None
+        before = (self.rim_layers(before_change=True), self.pressure, self.approach)
+        logger.info("load %.6g N -> %.6g N at s = %.6g m", p.applied_force, force, self.s)
+        p.applied_force = force
+        res = p.contact(self.height, x0=self.pressure)
+        self.pressure = res.pressure
+        self.approach = float(res.approach)
+        self.pressures = None
+        self.prev_height = self.prev_rate = self.prev_step = None
+        return before
 
     def plan(self, jump, target):
         """Scheme and length (m) of the next attempt."""
@@ -730,7 +805,7 @@ class _Run:
         atol = 0.0
         if not (jump or self.controller.fixed) and p.wear.linear:
             atol = contact_tolerance(self.options.tol, self.f_star, self.latest[0],
-                                     p.compliance_floor, p.pixel_mean_pressure)
+                                     p.compliance_floor, p.applied_force / p.area)
         state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
                           self.approach, self.prev_height, self.prev_rate, self.prev_step,
                           history=None if jump else self.pressures, contact_atol=atol)
@@ -768,7 +843,11 @@ class _Run:
             return
         self.offset += c
         self.s += ds
-        self.record(ds, shape_rate, trial.error)
+        face_state = None
+        if self.programme is not None:
+            self.s = self.programme.snap(self.s)
+            face_state = self.change_load()
+        self.record(ds, shape_rate, trial.error, face_state)
         self._take_due_snapshots()
 
     def loop(self, on_step, on_checkpoint):
@@ -788,7 +867,8 @@ class _Run:
         consecutive = 0
         while True:
             spread, shape_rate = self.latest
-            ended = stop.check(spread, shape_rate, self.s, self.steps)
+            ended = stop.check(spread, shape_rate, self.s, self.steps,
+                               held=self.next_breakpoint() is not None)
             if ended is not None:
                 return ended
             target = self.pending_target()

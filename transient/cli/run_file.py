@@ -49,6 +49,8 @@ def run_inputs(scene, problem):
              "n": problem.n, "normal_force": scene.normal_force,
              "E_star": scene.E_star, "exponent": scene.wear.exponent,
              "wear_coefficients": problem.wear_coefficients}
+    if scene.load_programme is not None:
+        attrs["load_programme"] = np.array(scene.load_programme.pairs)  # [s (m), F (N)] rows
     return attrs, {"phase": problem.labels}
 
 
@@ -67,6 +69,11 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
                           attrs["wear_coefficients"]):
         raise ValueError(f"{str(path)!r} was run with other wear coefficients "
                          f"({shorten(stored_attrs.get('wear_coefficients'))}); use --force")
+    stored_programme, programme = (a.get("load_programme") for a in (stored_attrs, attrs))
+    if (stored_programme is None) != (programme is None) or (
+            programme is not None and not np.array_equal(stored_programme, programme)):
+        raise ValueError(f"{str(path)!r} was run with another [load] programme "
+                         f"({shorten(stored_programme)}); use --force")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
     face_mask = arrays["phase"] >= 0
