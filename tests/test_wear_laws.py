@@ -18,6 +18,10 @@ threshold run starts from the flat punch, whose central pressure (about
 ``pbar / 2``) lies below both thresholds: its pressures cross ``p_th``.
 """
 
+import importlib.util
+import pathlib
+
+import h5py
 import numpy as np
 import pytest
 from conftest import FORCE, GEOMETRIES, K1, RADIUS, problem, run_cli, scene_text
@@ -25,6 +29,7 @@ from scipy.optimize import brentq
 
 import steady.cli.solve as steady_cli
 from steady.fit import FaceModel
+from steady.output import OutputExistsError
 from steady.scene import parse_scene
 from steady.solution import solve, solve_scene
 from steady.wear import PowerLaw, TableLaw, ThresholdLaw, wear_law_from_table
@@ -220,3 +225,19 @@ def test_the_fit_refuses_other_laws():
     for law in (ThresholdLaw((K1, K1), (1e3, 1e3)), sampled_table(5)[0]):
         with pytest.raises(ValueError, match="the fit supports the power law k p\\^m, not the "):
             FaceModel(steady_problem(law, n=16))
+
+
+def test_bench_wear_laws_smoke(tmp_path):
+    spec = importlib.util.spec_from_file_location(
+        "bench_wear_laws", pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
+        / "bench_wear_laws.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    out = tmp_path / "bench.h5"
+    rows = module.main(["--sizes", "40", "--out", str(out)])
+    assert [r["law"] for r in rows] == ["archard", "threshold"], rows
+    assert all(r["status"] == "steady" and r["failures"] == 0 for r in rows), rows
+    with h5py.File(out) as f:
+        assert f.attrs["format"] == "runin.bench_wear_laws" and len(f) == 2, dict(f.attrs)
+    with pytest.raises(OutputExistsError):
+        module.main(["--sizes", "40", "--out", str(out)])
