@@ -743,8 +743,7 @@ class TableLaw:
         """``g_i'`` at ``pbar`` above the phase's last zero-rate pressure, 1/Pa."""
         phase = _phase_of(field)
         shifted = np.append(0.0, self._zeros)[phase] + mean_pressure
-        return self._by_phase(self.phase_slope, shifted, field) if np.ndim(field) else \
-            float(self.phase_slope(int(phase) - 1, shifted))
+        return self._by_phase(self.phase_slope, shifted, field)
 
 
 def as_wear_law(wear):
