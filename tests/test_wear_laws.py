@@ -28,6 +28,7 @@ from conftest import FORCE, GEOMETRIES, K1, RADIUS, problem, run_cli, scene_text
 from scipy.optimize import brentq
 
 import steady.cli.solve as steady_cli
+import transient.__main__ as transient_cli
 from steady.fit import FaceModel
 from steady.output import OutputExistsError
 from steady.scene import parse_scene
@@ -241,3 +242,21 @@ def test_bench_wear_laws_smoke(tmp_path):
         assert f.attrs["format"] == "runin.bench_wear_laws" and len(f) == 2, dict(f.attrs)
     with pytest.raises(OutputExistsError):
         module.main(["--sizes", "40", "--out", str(out)])
+
+
+def test_resume_refuses_other_thresholds(tmp_path, capsys):
+    def scene(thresholds):
+        path = tmp_path / f"scene_{thresholds[1]:g}.toml"
+        path.write_text(scene_text("runin").replace(
+            "[wear]\n", f'[wear]\nlaw = "threshold"\nthresholds = {list(thresholds)}\n'))
+        return str(path)
+
+    out = str(tmp_path / "run.h5")
+    status, _, err = run_cli(transient_cli, [scene((1e5, 1.2e5)), "-o", out], capsys)
+    assert status == 0, err
+    status, _, err = run_cli(transient_cli, [scene((1e5, 1.3e5)), "-o", out, "--resume"],
+                             capsys)
+    assert status == 2 and "was run with another [wear] table" in err, err
+    status, _, err = run_cli(transient_cli, [scene((1e5, 1.2e5)), "-o", out, "--resume"],
+                             capsys)
+    assert status == 0, err
