@@ -448,8 +448,9 @@ class ThresholdLaw:
         Below its threshold (``p0 < p_th``) a pixel's rate and slope are 0: no
         shift and the height unchanged.  At or above it
         ``g ~ k q^m + k m q^(m-1) (p - p_th - q)`` with ``q = p0 - p_th``,
-        floored at ``floor`` for ``m < 1``.  With every threshold 0 this is
-        the power law's linearisation bit for bit.
+        floored at ``floor`` for ``m < 1``; for ``m < 1`` and a threshold
+        the chord ``g ~ k q^(m-1) (p - p_th)`` instead.  With every threshold
+        0 this is the power law's linearisation bit for bit.
 
         Returns
         -------
@@ -463,6 +464,13 @@ class ThresholdLaw:
         # Off the face and below the threshold k is taken as 0; 1 keeps q^(m-1) finite.
         k = np.where(above, k, 0.0)
         q = np.where(above, np.maximum(pressure - p_th, floor), 1.0)
+        if m < 1.0 and any(self.thresholds):
+            # The chord through (p_th, 0) and (p0, g(p0)): its slope k q^(m-1)
+            # does not follow the tangent's towards the infinite slope at the
+            # threshold, which pressures crossing it make Newton's iterates
+            # jump across (a Kachanov-type iteration: slower, but it holds).
+            shift = c * k * q ** (m - 1.0)
+            return shift, height - shift * p_th
         shift = c * k * m * q ** (m - 1.0)
         h_lin = height + c * k * (1.0 - m) * q ** m - shift * p_th
         return shift, h_lin
