@@ -73,6 +73,8 @@ _MODULE_OF = {
     "Micrograph": "micrograph",
     "PhaseBasis": "basis",
     "PowerLaw": "wear",
+    "TableLaw": "wear",
+    "ThresholdLaw": "wear",
     "Problem": "problem",
     "Rectangle": "outline",
     "ReferenceSlope": "normalisation",

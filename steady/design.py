@@ -19,6 +19,10 @@ Phases are numbered from 0, as everywhere in runin: ``rho_1`` is the fill
 factor of phase 1 and ``k_1 / k_0`` its wear coefficient over phase 0's (the
 paper, which numbers from 1, writes ``rho_2`` and ``k_2 / k_1``).
 
+The table is computed with Archard's law (``m = 1``) and takes no wear law:
+it does not apply to the power law of another exponent, the threshold law
+or a tabulated rate (:mod:`steady.wear`).
+
 The fine-grain limit in closed form,
 :func:`steady.reference.fine_grain_rms_slope`, is the check of the table.
 

@@ -735,7 +735,8 @@ def _write(f, result, scene, phase_names):
         f.attrs[name] = values[name]
         f.attrs[f"{name}_units"] = unit or wear_coefficient_units(result.exponent)
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
-    f.attrs["wear_law"] = PowerLaw(result.wear_coefficients, exponent=result.exponent).describe()
+    f.attrs["wear_law"] = result.wear_law or PowerLaw(result.wear_coefficients,
+                                                      exponent=result.exponent).describe()
     if isinstance(result.outline, Circle):
         f.attrs["radius"] = result.outline.radius
         f.attrs["radius_units"] = "m"
@@ -952,5 +953,6 @@ def _read(f, path):
         reference_slope_error=float(f.attrs.get("rms_slope_ref_error", 0.0)),
         reference_slope_source=_text(f.attrs.get("rms_slope_ref_source",
                                                  "disk: 4 pbar / (pi E*) (eq. 12)")),
+        wear_law=_text(f.attrs.get("wear_law", "")),
     )
     return result, scene_text

@@ -38,7 +38,7 @@ __all__ = ["SCALE_RANGE", "SCALE_UNITS", "Context", "Key", "Registry", "read_tab
 
 #: Types a key may hold.
 TYPES = ("number", "integer", "string", "path", "numbers", "integers", "pairs", "pair",
-         "strings", "boolean")
+         "strings", "boolean", "number_lists")
 
 #: The range of every scale of a problem, in SI units: lengths, forces,
 #: moduli and what follows from them (:func:`steady.problem.check_scales`).
@@ -128,10 +128,12 @@ class Key:
                 "path": "a file name", "numbers": "an array of numbers",
                 "integers": "an array of integers",
                 "strings": "an array of non-empty strings", "pairs": "an array of [x, y] pairs",
-                "pair": "an [x, y] pair", "boolean": "true or false"}[self.type]
+                "pair": "an [x, y] pair", "boolean": "true or false",
+                "number_lists": "an array of arrays of numbers"}[self.type]
         bound = self.range_text()
         if bound:
-            noun += f" {'each ' if self.type in ('numbers', 'integers', 'pairs') else ''}{bound}"
+            each = self.type in ("numbers", "integers", "pairs", "number_lists")
+            noun += f" {'each ' if each else ''}{bound}"
         if self.choices:
             noun = "one of " + ", ".join(repr(c) for c in self.choices)
         return f"{noun} ({self.unit})" if self.unit else noun
@@ -154,6 +156,16 @@ class Key:
         (float, float)
         """
         name = f"{where} {self.name}" if where else self.name
+        if self.type == "number_lists":
+            if not isinstance(value, list) or not all(isinstance(v, list) for v in value):
+                raise ValueError(f"{name} must be {self.describe()}, got {shorten(value)}")
+            single = dataclasses.replace(self, type="number")
+            try:
+                return tuple(tuple(single._scalar(v, name, value, base_dir) for v in row)
+                             for row in value)
+            except ValueError:
+                raise ValueError(f"{name} must be {self.describe()}, got "
+                                 f"{shorten(value)}") from None
         if self.type in ("numbers", "integers", "pairs", "strings"):
             if not isinstance(value, list):
                 raise ValueError(f"{name} must be {self.describe()}, got {shorten(value)}")

@@ -97,6 +97,8 @@ class SteadyResult:
         Uncertainty of ``reference_slope`` (0 for a closed form).
     reference_slope_source : str
         Where ``reference_slope`` comes from, in words.
+    wear_law : str
+        The wear law in words (its ``describe()``); empty when not known.
     """
 
     labels: np.ndarray
@@ -117,6 +119,7 @@ class SteadyResult:
     rms_height: float = math.nan
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
+    wear_law: str = ""
 
     @property
     def n(self):
@@ -301,6 +304,7 @@ def _limiting_face(problem):
         rms_height=height,
         reference_slope_error=ref.error,
         reference_slope_source=ref.source,
+        wear_law=problem.wear.describe(),
     )
 
 

@@ -20,7 +20,12 @@ Laws are registered in :data:`WEAR_LAWS` with their ``[wear]`` keys
 (``[wear] law``, default ``"power"``); docs/model.md ("The code") shows
 how a law is added, with :class:`ArchardLaw` as the example.  The laws are
 the power law ``g_i(p) = k_i p^m`` and Archard's ``k_i p`` (paper eq. 1-2),
-the power law with ``m = 1``.
+the power law with ``m = 1``; the threshold law ``k_i max(p - p_th,i, 0)^m``
+(:class:`ThresholdLaw`) and a tabulated monotone rate ``g_i(p)``
+(:class:`TableLaw`).  The last two key their per-pixel field by phase
+(phase + 1, 0 off the face) and are not linear: the run-in takes its
+Newton path.  The fit (:class:`steady.fit.FaceModel`), the design rule
+(:mod:`steady.design`) and the sweep basis assume the power law.
 
 Examples
 --------
@@ -43,8 +48,8 @@ from .pressures import phase_pressures
 from .schema import Context, Key, Registry
 from .text import shorten
 
-__all__ = ["WEAR_LAWS", "ArchardLaw", "PowerLaw", "as_wear_law", "pressure_field",
-           "wear_law_from_table"]
+__all__ = ["WEAR_LAWS", "ArchardLaw", "PowerLaw", "TableLaw", "ThresholdLaw", "as_wear_law",
+           "pressure_field", "wear_law_from_table"]
 
 #: Registered wear laws, by ``[wear] law`` (default ``"power"``).
 WEAR_LAWS = Registry("wear law", "law", default="power")
@@ -268,6 +273,485 @@ class ArchardLaw(PowerLaw):
     def from_values(cls, values, context):
         """From the checked ``[wear]`` keys; their count must be the phase map's."""
         return cls(PowerLaw.from_values(dict(values, exponent=1.0), context).coefficients)
+
+
+def _phase_field(labels, values):
+    """``values[i]`` on the pixels of phase ``i``, 0 off the face (``labels < 0``)."""
+    return np.append(np.asarray(values, dtype=float), 0.0)[np.asarray(labels)]
+
+
+def _phase_keys(labels):
+    """The per-pixel field of a law with phase-wise parameters: phase + 1, 0 off the face."""
+    labels = np.asarray(labels)
+    return np.where(labels >= 0, labels + 1.0, 0.0)
+
+
+def _phase_of(field):
+    """Phase index + 1 of every entry of a :func:`_phase_keys` field (0 off the face)."""
+    return np.rint(np.asarray(field, dtype=float)).astype(np.intp)
+
+
+def _numbers(values, name, unit):
+    """A flat tuple of finite floats, one per phase; ``ValueError`` naming ``name``."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers ({unit}), got {shorten(values)}") from None
+    if array.ndim != 1 or not array.size or not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be a list of finite numbers ({unit}), one per phase, "
+                         f"got {shorten(values)}")
+    return tuple(float(v) for v in array)
+
+
+@WEAR_LAWS.register("threshold", (
+    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True,
+        doc="k_i, one per phase (Pa^-m for an exponent m != 1)"),
+    Key("thresholds", "numbers", unit="Pa", required=True,
+        doc="p_th,i >= 0, one per phase: no wear at or below it"),
+    Key("exponent", "number", unit="1", low=0.0, default=1.0,
+        doc="m in dw/ds = k max(p - p_th, 0)^m (default 1)")),
+    doc="dw/ds = k_i max(p - p_th,i, 0)^m: no wear up to a threshold pressure")
+@dataclasses.dataclass(frozen=True)
+class ThresholdLaw:
+    """The threshold law ``dw/ds = k_i max(p - p_th,i, 0)^m`` of each phase.
+
+    No wear at or below the threshold pressure ``p_th,i`` of phase ``i``;
+    above it the power law of the excess pressure.  With every threshold 0
+    it is the power law (its steady pressures bit for bit, see
+    :meth:`phase_pressures`).
+
+    Parameters
+    ----------
+    coefficients : sequence of float, shape (P,), 1/Pa (Pa^-m)
+        ``k_i``, positive and finite.
+    thresholds : sequence of float, shape (P,), Pa
+        ``p_th,i``, finite and >= 0.
+    exponent : float, optional
+        ``m``, positive and finite (default 1).
+
+    Raises
+    ------
+    ValueError
+        A bad coefficient, threshold or exponent, or counts that differ.
+
+    Examples
+    --------
+    >>> law = ThresholdLaw((1e-13, 1e-12), (0.0, 0.1))
+    >>> law.phase_pressures([50, 50], 11.0, 1.0)    # p_th + eq. 7 for F - sum A p_th
+    array([0.10909091, 0.11090909])
+    """
+
+    coefficients: tuple
+    thresholds: tuple
+    exponent: float = 1.0
+
+    def __post_init__(self):
+        """Check the values (through :class:`PowerLaw`) and the thresholds."""
+        power = PowerLaw(self.coefficients, self.exponent)
+        p_th = _numbers(self.thresholds, "wear thresholds", "Pa")
+        if min(p_th) < 0:
+            raise ValueError(f"wear thresholds must be >= 0 (Pa), got {shorten(list(p_th))}")
+        if len(p_th) != power.n_phases:
+            raise ValueError(f"wear thresholds {shorten(list(p_th))} must be one per phase: "
+                             f"{power.n_phases} coefficients {shorten(list(power.coefficients))}")
+        object.__setattr__(self, "coefficients", power.coefficients)
+        object.__setattr__(self, "thresholds", p_th)
+        object.__setattr__(self, "exponent", power.exponent)
+
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[wear]`` keys; their count must be the phase map's."""
+        k = PowerLaw.from_values(values, context).coefficients
+        return cls(k, values["thresholds"], values["exponent"])
+
+    @property
+    def n_phases(self):
+        """Number of phases ``P``."""
+        return len(self.coefficients)
+
+    @property
+    def linear(self):
+        """False: the rate is not linear in the pressure (the run-in takes Newton's path)."""
+        return False
+
+    def describe(self):
+        """The law in words."""
+        k = ", ".join(f"{v:.4g}" for v in self.coefficients)
+        p = ", ".join(f"{v:.4g}" for v in self.thresholds)
+        return (f"threshold law dw/ds = k max(p - p_th, 0)^{self.exponent:g}, k = [{k}] "
+                f"Pa^-{self.exponent:g}, p_th = [{p}] Pa")
+
+    def phase_pressures(self, counts, normal_force, pixel_area):
+        """Steady pressures ``p_i = p_th,i + (eq. 7 for F_N - sum_j A_j p_th,j)``, Pa.
+
+        ``k_i (p_i - p_th,i)^m = C`` with ``sum_i A_i p_i = F_N``: the
+        excess pressures ``p_i - p_th,i`` are the power law's under the load
+        the thresholds leave.
+
+        Parameters
+        ----------
+        counts : array_like, shape (P,)
+            Face pixels of each phase.
+        normal_force : float, N
+        pixel_area : float, m^2
+
+        Returns
+        -------
+        ndarray, shape (P,), Pa
+
+        Raises
+        ------
+        ValueError
+            ``sum_i A_i p_th,i >= F_N``: no steady state in which every
+            phase wears; the message gives the thresholds and the load.
+        """
+        counts = np.asarray(counts)
+        p_th = np.asarray(self.thresholds)
+        held = pixel_area * np.dot(counts, p_th)
+        excess = normal_force - held
+        if not excess > 0:
+            raise ValueError(f"wear thresholds p_th = {shorten(list(self.thresholds))} Pa hold "
+                             f"sum_i A_i p_th,i = {held:.6g} N at or above the load F_N = "
+                             f"{normal_force:.6g} N: no steady state with every phase wearing "
+                             f"(lower the thresholds or raise the load)")
+        return p_th + phase_pressures(counts, self.coefficients, excess, pixel_area,
+                                      exponent=self.exponent)
+
+    def coefficient_field(self, labels):
+        """The per-pixel key of the law: phase + 1, 0 off the face (``labels < 0``).
+
+        Parameters
+        ----------
+        labels : ndarray of int, shape (nx, ny)
+
+        Returns
+        -------
+        ndarray, shape (nx, ny)
+        """
+        return _phase_keys(labels)
+
+    def _fields(self, field):
+        """``k`` and ``p_th`` of the pixels of a :meth:`coefficient_field` (k = 0 off the face)."""
+        phase = _phase_of(field)
+        k = np.append(0.0, self.coefficients)[phase]
+        return k, np.append(0.0, self.thresholds)[phase]
+
+    def rate(self, pressure, coefficient_field):
+        """Wear rate ``k max(p - p_th, 0)^m`` of every pixel, m/m; zero off the face."""
+        k, p_th = self._fields(coefficient_field)
+        q = np.maximum(np.asarray(pressure, dtype=float) - p_th, 0.0)
+        return k * q if self.exponent == 1.0 else k * q ** self.exponent
+
+    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
+        """The implicit stage linearised about ``pressure`` (see :meth:`PowerLaw.linearisation`).
+
+        Below its threshold (``p0 < p_th``) a pixel's rate and slope are 0: no
+        shift and the height unchanged.  At or above it
+        ``g ~ k q^m + k m q^(m-1) (p - p_th - q)`` with ``q = p0 - p_th``,
+        floored at ``floor`` for ``m < 1``; for ``m < 1`` and a threshold
+        the chord ``g ~ k q^(m-1) (p - p_th)`` instead.  With every threshold
+        0 this is the power law's linearisation bit for bit.
+
+        Returns
+        -------
+        shift : ndarray, shape (nx, ny), m/Pa
+        height : ndarray, shape (nx, ny), m
+        """
+        m = self.exponent
+        floor = floor if m < 1.0 else 0.0
+        k, p_th = self._fields(coefficient_field)
+        above = face_mask & (pressure >= p_th)
+        # Off the face and below the threshold k is taken as 0; 1 keeps q^(m-1) finite.
+        k = np.where(above, k, 0.0)
+        q = np.where(above, np.maximum(pressure - p_th, floor), 1.0)
+        if m < 1.0 and any(self.thresholds):
+            # The chord through (p_th, 0) and (p0, g(p0)): its slope k q^(m-1)
+            # does not follow the tangent's towards the infinite slope at the
+            # threshold, which pressures crossing it make Newton's iterates
+            # jump across (a Kachanov-type iteration: slower, but it holds).
+            shift = c * k * q ** (m - 1.0)
+            return shift, height - shift * p_th
+        shift = c * k * m * q ** (m - 1.0)
+        h_lin = height + c * k * (1.0 - m) * q ** m - shift * p_th
+        return shift, h_lin
+
+    def largest_rate_slope(self, pressure, coefficients, floor):
+        """``max dg/dp`` over the pixels given, 1/Pa: ``k m max(p - p_th, floor)^(m-1)``.
+
+        For ``m = 1`` the largest ``k`` (the slope once above the threshold);
+        below the threshold the pressure is taken at ``p_th + floor``.
+        """
+        k, p_th = self._fields(coefficients)
+        m = self.exponent
+        if m == 1.0:
+            return float(k.max())
+        q = np.maximum(np.asarray(pressure, dtype=float) - p_th, floor)
+        return float(np.max(k * m * q ** (m - 1.0)))
+
+    def rate_constant(self, field, mean_pressure):
+        """``k m pbar^(m-1)``, 1/Pa: ``dg/dp`` at ``pbar`` above the phase's threshold.
+
+        The slope of the rate at the mean pressure in excess of the
+        threshold: the power law's rate constant, which sets the natural
+        distances (the steady excess pressures are of order ``pbar``).
+        """
+        k, _ = self._fields(field)
+        m = self.exponent
+        return k * m * mean_pressure ** (m - 1.0)
+
+
+def _check_table(i, pressures, rates):
+    """One phase's table as float arrays; ``ValueError`` naming the phase and the bad values."""
+    p, g = np.asarray(pressures, dtype=float), np.asarray(rates, dtype=float)
+    name = f"wear table of phase {i}"
+    if p.ndim != 1 or g.ndim != 1 or p.size != g.size:
+        raise ValueError(f"{name}: pressures {shorten(list(pressures))} and rates "
+                         f"{shorten(list(rates))} must be lists of the same length")
+    if p.size < 2:
+        raise ValueError(f"{name} needs at least 2 points, got {p.size}")
+    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(g))):
+        raise ValueError(f"{name}: pressures and rates must be finite, got "
+                         f"{shorten(p.tolist())} Pa and {shorten(g.tolist())}")
+    if p[0] != 0.0 or g[0] != 0.0:
+        raise ValueError(f"{name} must start at p = 0 Pa with rate 0 (no wear without "
+                         f"pressure), got ({p[0]!r} Pa, {g[0]!r})")
+    if not np.all(np.diff(p) > 0):
+        raise ValueError(f"{name}: pressures must increase, got {shorten(p.tolist())} Pa")
+    if not np.all(np.diff(g) >= 0):
+        raise ValueError(f"{name}: rates must not decrease, got {shorten(g.tolist())}")
+    if not g[-1] > 0:
+        raise ValueError(f"{name}: the rate is 0 at every point {shorten(p.tolist())} Pa; "
+                         f"the phase never wears")
+    return p, g
+
+
+def _as_tables(values, name):
+    """A tuple of tuples of floats from lists of lists; ``ValueError`` naming ``name``."""
+    try:
+        return tuple(tuple(float(v) for v in row) for row in values)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be one list of numbers per phase, got "
+                         f"{shorten(values)}") from None
+
+
+@WEAR_LAWS.register("table", (
+    Key("pressures", "number_lists", unit="Pa", required=True,
+        doc="one list per phase: increasing pressures p_i,j, the first 0"),
+    Key("rates", "number_lists", unit="1", required=True,
+        doc="one list per phase: non-decreasing rates g_i(p_i,j) (m/m), the first 0")),
+    doc="dw/ds = g_i(p): a monotone (PCHIP) interpolation of points per phase")
+@dataclasses.dataclass(frozen=True)
+class TableLaw:
+    """A tabulated rate ``dw/ds = g_i(p)`` of each phase, interpolated monotonically.
+
+    Between the points ``g_i`` is the monotone cubic (PCHIP,
+    :class:`scipy.interpolate.PchipInterpolator`) through them; beyond the
+    last point it continues linearly with the interpolant's slope there;
+    the first point must be ``(0 Pa, 0)`` (no wear without pressure) and a
+    negative pressure wears nothing.
+
+    Parameters
+    ----------
+    pressures : sequence of sequence of float, shape (P, n_i), Pa
+        Increasing pressures of each phase's points, the first 0.
+    rates : sequence of sequence of float, shape (P, n_i), 1 (m/m)
+        The rates there: non-decreasing, the first 0, the last positive.
+
+    Raises
+    ------
+    ValueError
+        A table that is not one of increasing pressures and non-decreasing
+        rates of the same length, at least 2 points, starting at (0, 0);
+        tables not one per phase.
+
+    Examples
+    --------
+    >>> law = TableLaw(((0, 1e5, 2e5), (0, 1e5)), ((0, 1e-9, 4e-9), (0, 1e-8)))
+    >>> law.rate(np.array([1e5, 3e5, 2e5]), law.coefficient_field(np.array([0, 0, 1])))
+    array([1.e-09, 8.e-09, 2.e-08])
+    """
+
+    pressures: tuple
+    rates: tuple
+
+    def __post_init__(self):
+        """Check the tables; build the interpolants and their extrapolation slopes."""
+        from scipy.interpolate import PchipInterpolator
+
+        pressures = _as_tables(self.pressures, "wear table pressures")
+        rates = _as_tables(self.rates, "wear table rates")
+        if len(pressures) != len(rates) or not pressures:
+            raise ValueError(f"wear tables need one list of pressures and one of rates per "
+                             f"phase, got {len(pressures)} and {len(rates)}")
+        splines, ends, zeros = [], [], []
+        for i, (p, g) in enumerate(zip(pressures, rates, strict=True)):
+            p, g = _check_table(i, p, g)
+            spline = PchipInterpolator(p, g, extrapolate=False)
+            splines.append((spline, spline.derivative()))
+            ends.append((p[-1], g[-1], float(spline.derivative()(p[-1]))))
+            zeros.append(float(p[np.flatnonzero(g > 0)[0] - 1]))
+        object.__setattr__(self, "pressures", pressures)
+        object.__setattr__(self, "rates", rates)
+        object.__setattr__(self, "_splines", tuple(splines))
+        object.__setattr__(self, "_ends", tuple(ends))
+        #: Largest tabulated pressure of zero rate of each phase, Pa.
+        object.__setattr__(self, "_zeros", tuple(zeros))
+
+    @classmethod
+    def from_values(cls, values, context):
+        """From the checked ``[wear]`` keys; one table per phase of the phase map."""
+        p, g = values["pressures"], values["rates"]
+        if context.n_phases is not None and len(p) != context.n_phases:
+            raise ValueError(f"[wear] pressures has {len(p)} tables but the phase map has "
+                             f"{context.n_phases} phases")
+        return cls(p, g)
+
+    # -- what every law says -------------------------------------------
+    @property
+    def n_phases(self):
+        """Number of phases ``P``."""
+        return len(self.pressures)
+
+    @property
+    def linear(self):
+        """False: the run-in takes Newton's path."""
+        return False
+
+    @property
+    def coefficients(self):
+        """The secants ``g_i(p_last) / p_last`` of each phase, 1/Pa: Archard's equivalents.
+
+        Written to files as the wear coefficients (with exponent 1);
+        ``describe()`` gives the law itself.
+        """
+        return tuple(g / p for p, g, _ in self._ends)
+
+    @property
+    def exponent(self):
+        """1: files write :attr:`coefficients` as Archard's."""
+        return 1.0
+
+    def describe(self):
+        """The law in words."""
+        points = ", ".join(str(len(p)) for p in self.pressures)
+        top = ", ".join(f"{p:.4g}" for p, _, _ in self._ends)
+        return (f"tabulated law dw/ds = g_i(p) (PCHIP through [{points}] points up to "
+                f"[{top}] Pa, linear beyond)")
+
+    # -- one phase -------------------------------------------------------
+    def phase_rate(self, i, pressure):
+        """``g_i(p)`` of phase ``i``, m/m: PCHIP, linear beyond the last point, 0 for p <= 0."""
+        spline, _ = self._splines[i]
+        p_end, g_end, slope = self._ends[i]
+        p = np.maximum(np.asarray(pressure, dtype=float), 0.0)
+        inside = np.minimum(p, p_end)
+        return np.where(p > p_end, g_end + slope * (p - p_end), spline(inside))
+
+    def phase_slope(self, i, pressure):
+        """``g_i'(p)``, 1/Pa (0 below 0, the end slope beyond the last point)."""
+        _, derivative = self._splines[i]
+        p_end, _, slope = self._ends[i]
+        p = np.asarray(pressure, dtype=float)
+        inside = np.clip(p, 0.0, p_end)
+        return np.where(p > p_end, slope, np.where(p < 0, 0.0, derivative(inside)))
+
+    def phase_pressure(self, i, rate):
+        """``g_i^-1(C)`` for a rate ``C > 0``, Pa: the least pressure of that rate."""
+        from scipy.optimize import brentq
+
+        p, g = self.pressures[i], self.rates[i]
+        p_end, g_end, slope = self._ends[i]
+        if rate > g_end:
+            return p_end + (rate - g_end) / slope if slope > 0 else math.inf
+        j = int(np.searchsorted(g, rate))  # g[j-1] < rate <= g[j]
+        if g[j] == rate:
+            return p[j]
+        spline, _ = self._splines[i]
+        return brentq(lambda x: float(spline(x)) - rate, p[j - 1], p[j], xtol=1e-300,
+                      rtol=4 * np.finfo(float).eps)
+
+    # -- the steady state ----------------------------------------------
+    def phase_pressures(self, counts, normal_force, pixel_area):
+        """Steady pressures: ``g_i(p_i) = C`` with ``sum_i A_i p_i = F_N``, Pa, shape (P,).
+
+        ``sum_i A_i g_i^-1(C)`` increases with ``C``: bracketed and solved by
+        Brent's method in ``log C``.
+
+        Raises
+        ------
+        ValueError
+            A phase that cannot wear under the load (its rate is 0 up to the
+            pressure it would carry alone), or tables whose zero-rate
+            pressures hold the load; the load on a flat part of a table.
+        """
+        from scipy.optimize import brentq
+
+        areas = np.asarray(counts, dtype=float) * pixel_area
+        F = float(normal_force)
+        zero = float(np.dot(areas, self._zeros))
+        if not zero < F:
+            raise ValueError(f"the wear tables give no wear up to p = {shorten(list(self._zeros))}"
+                             f" Pa, which holds sum_i A_i p_i = {zero:.6g} N at or above the "
+                             f"load F_N = {F:.6g} N: no steady state with every phase wearing")
+        top = min(float(self.phase_rate(i, F / a)) for i, a in enumerate(areas))
+
+        def excess(log_rate):
+            C = math.exp(log_rate)
+            return sum(a * self.phase_pressure(i, C) for i, a in enumerate(areas)) - F
+
+        hi = math.log(top)
+        lo = hi - 1.0
+        while excess(lo) > 0:
+            lo -= 1.0 + (hi - lo)
+        log_rate = brentq(excess, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        p = np.array([self.phase_pressure(i, math.exp(log_rate)) for i in range(len(areas))])
+        balance = float(np.dot(areas, p))
+        if not abs(balance - F) <= 1e-9 * F:
+            raise ValueError(f"the load F_N = {F:.6g} N falls on a flat part of a wear table "
+                             f"(the phases carry {balance:.6g} N at the rate "
+                             f"{math.exp(log_rate):.6g}): the steady pressures are not unique")
+        return p
+
+    # -- the run-in, pixel by pixel ------------------------------------
+    def coefficient_field(self, labels):
+        """The per-pixel key of the law: phase + 1, 0 off the face (``labels < 0``)."""
+        return _phase_keys(labels)
+
+    def _by_phase(self, method, pressure, field):
+        """``method(i, p)`` on the pixels of each phase, 0 off the face."""
+        phase = _phase_of(field)
+        p = np.broadcast_to(np.asarray(pressure, dtype=float), phase.shape)
+        out = np.zeros(phase.shape)
+        for i in range(self.n_phases):
+            mine = phase == i + 1
+            if mine.any():
+                out[mine] = method(i, p[mine])
+        return out
+
+    def rate(self, pressure, coefficient_field):
+        """Wear rate ``g_i(p)`` of every pixel, m/m; zero off the face."""
+        return self._by_phase(self.phase_rate, pressure, coefficient_field)
+
+    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
+        """The implicit stage linearised about ``pressure``: shift ``c g'(p0)``.
+
+        The height is ``height + c (g(p0) - g'(p0) p0)``; ``floor`` is not
+        used (the interpolant's slopes are finite).
+        """
+        field = np.where(face_mask, coefficient_field, 0.0)
+        slope = self._by_phase(self.phase_slope, pressure, field)
+        g = self._by_phase(self.phase_rate, pressure, field)
+        return c * slope, height + c * (g - slope * np.where(face_mask, pressure, 0.0))
+
+    def largest_rate_slope(self, pressure, coefficients, floor):
+        """``max g'(p)`` over the pixels given, 1/Pa."""
+        return float(np.max(self._by_phase(self.phase_slope, pressure, coefficients)))
+
+    def rate_constant(self, field, mean_pressure):
+        """``g_i'`` at ``pbar`` above the phase's last zero-rate pressure, 1/Pa."""
+        phase = _phase_of(field)
+        shifted = np.append(0.0, self._zeros)[phase] + mean_pressure
+        return self._by_phase(self.phase_slope, shifted, field)
 
 
 def as_wear_law(wear):

@@ -75,13 +75,14 @@ def check_run_in_scales(problem, names=None):
     names = (input_names(problem.outline, F, E, problem.n, problem.wear) if names is None
              else names)
     h = problem.grid.h
-    k = np.asarray(problem.wear.coefficients, dtype=float)
+    wear = problem.wear
+    phases = wear.coefficient_field(np.arange(wear.n_phases))
     mean = F / (float(problem.face_mask.sum()) * h * h)
     with np.errstate(all="ignore"):
         # In numpy's floats: an underflow to 0 divides to inf rather than raising.
-        slow, fast = (np.float64(problem.wear.rate_constant(np.float64(v), np.float64(mean)))
-                      for v in (k.min(), k.max()))
-        peak = float(problem.wear.rate(np.float64(F / (h * h)), np.float64(k.max())))
+        constants = np.asarray(wear.rate_constant(phases, np.float64(mean)), dtype=float)
+        slow, fast = np.float64(constants.min()), np.float64(constants.max())
+        peak = float(np.max(wear.rate(np.full(wear.n_phases, F / (h * h)), phases)))
         s_star = float(problem.outline.scale / (slow * E))
         fastest = float(h / (fast * E))
     inputs = ("wear", "normal_force", "outline", "E_star")
@@ -317,17 +318,17 @@ class WearProblem:
 
         For ``m != 1`` the rate constant is ``k m pbar^(m-1)``.
         """
-        return self.scale / (self._rate_constant(self.wear_coefficients.min())
-                             * self.halfspace.E_star)
+        return self.scale / (self._rate_constants().min() * self.halfspace.E_star)
 
     @property
     def fast_distance(self):
         """``h / (k_max E*)``, m: the fastest (one-pixel) relaxation distance."""
-        return self.halfspace.h / (self._rate_constant(self.wear_coefficients.max())
-                                   * self.halfspace.E_star)
+        return self.halfspace.h / (self._rate_constants().max() * self.halfspace.E_star)
 
-    def _rate_constant(self, k):
-        return self.wear.rate_constant(k, self.pixel_mean_pressure)
+    def _rate_constants(self):
+        """The law's rate constant of each phase at the pixel mean pressure, 1/Pa, shape (P,)."""
+        phases = self.wear.coefficient_field(np.arange(self.n_phases))
+        return np.asarray(self.wear.rate_constant(phases, self.pixel_mean_pressure), dtype=float)
 
     def steady_pressure(self):
         """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (nx, ny).

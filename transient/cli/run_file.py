@@ -54,6 +54,19 @@ def run_inputs(scene, problem):
     return attrs, {"phase": problem.labels}
 
 
+def _wear_table(text):
+    """The ``[wear]`` table of a scene's text, empty when there is none or it does not parse."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+    try:
+        wear = tomllib.loads(str(text)).get("wear", {})
+    except tomllib.TOMLDecodeError:
+        return {}
+    return wear if isinstance(wear, dict) else {}
+
+
 def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, outline):
     """Refuse to resume a run of another problem (face, grid, load, phases, wear law, start)."""
     if stored.outline is None or stored.outline != outline:
@@ -74,6 +87,12 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
             programme is not None and not np.array_equal(stored_programme, programme)):
         raise ValueError(f"{str(path)!r} was run with another [load] programme "
                          f"({shorten(stored_programme)}); use --force")
+    wear = _wear_table(attrs.get("scene", ""))
+    if wear.get("law", "power") not in ("power", "archard") and \
+            _wear_table(stored_attrs.get("scene", "")) != wear:
+        # Thresholds and tables are not in the attributes compared above.
+        raise ValueError(f"{str(path)!r} was run with another [wear] table "
+                         f"({shorten(_wear_table(stored_attrs.get('scene', '')))}); use --force")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
     face_mask = arrays["phase"] >= 0
