@@ -4,7 +4,7 @@ What it reproduces
     docs/benchmarks.md, "Contact solve on run-in problems": the contact
     problems an implicit run-in meets, captured from the command line
     (``python -m transient``) on the shipped scene
-    ``studies/scenes/voronoi_transient.toml`` with only ``[grid] n`` changed,
+    ``steady/examples/voronoi_transient.toml`` with only ``[grid] n`` changed,
     then solved again as the run solves them (the entry the run calls,
     :func:`transient.contact.solve_trusted_contact` where the tree has it, else
     :func:`transient.contact.solve_contact`; same height, shift, warm start and
@@ -49,7 +49,7 @@ import types
 import numpy as np
 import scipy.fft
 
-SCENE = pathlib.Path(__file__).resolve().parents[1] / "scenes" / "voronoi_transient.toml"
+SCENE = pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples" / "voronoi_transient.toml"
 STRIDE = 8     # keep every STRIDE-th solve of the run
 COUNT = 24     # at most this many problems
 REPEAT = 3     # best of REPEAT solves per problem
