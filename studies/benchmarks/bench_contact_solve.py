@@ -49,7 +49,8 @@ import types
 import numpy as np
 import scipy.fft
 
-SCENE = pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples" / "voronoi_transient.toml"
+SCENE = (pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
+         / "voronoi_transient.toml")
 STRIDE = 8     # keep every STRIDE-th solve of the run
 COUNT = 24     # at most this many problems
 REPEAT = 3     # best of REPEAT solves per problem
