@@ -199,20 +199,20 @@ def slope_estimator_memory(n):
 def steady_memory(n, *, slope_error=True):
     """Estimated peak memory of a steady solve at grid ``n``, bytes.
 
-    Counted from the arrays :func:`steady.solution.solve_scene` allocates:
+    Counted from the arrays :func:`steady.solution.solve_scene` allocates,
+    in two stages of which the larger is the peak:
 
-    - the half-space operator with its gradient spectra
-      (:func:`halfspace_memory`, 128 bytes per pixel);
-    - the solution: labels, pressure, face, slope and the two gradient
-      components (the face and the components are views of ``n x 2n``
-      arrays): 64 bytes per pixel;
-    - without ``slope_error``: the transforms of the products
-      (:func:`product_memory`, 112 bytes per pixel);
-    - with ``slope_error`` (the default of the command): the labels and
-      pressure of the finest grid of the ladder (17 bytes per pixel) and
-      the slope estimator of :mod:`steady.rms_slope`, kept and applied
-      (:func:`slope_estimator_memory`, about 250 bytes per pixel), the
-      peak.
+    - throughout, the solution: labels, pressure, face, slope and the two
+      gradient components (the face and the components are views of
+      ``n x 2n`` arrays): 64 bytes per pixel;
+    - the face: the half-space operator with its gradient spectra
+      (:func:`halfspace_memory`, 128 bytes per pixel) and the transforms of
+      the products (:func:`product_memory`, 112 bytes per pixel); the
+      operator is freed with them (unless the problem holds one);
+    - with ``slope_error`` (the default of the command), then: the
+      pressure and face mask of the finest grid of the ladder (17 bytes per
+      pixel) and the slope estimator of :mod:`steady.rms_slope`, kept and
+      applied (:func:`slope_estimator_memory`, about 250 bytes per pixel).
 
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
@@ -238,15 +238,13 @@ def steady_memory(n, *, slope_error=True):
     Examples
     --------
     >>> print(format_bytes(steady_memory(1024)), format_bytes(steady_memory(12000)))
-    620 MiB 80.6 GiB
+    460 MiB 59.1 GiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
-    peak = halfspace_memory(n, gradient=True) + 8 * n * n * _FLOAT
+    peak = halfspace_memory(n, gradient=True) + product_memory(n)
     if slope_error:
-        peak += 17 * n * n + sum(slope_estimator_memory(n))
-    else:
-        peak += product_memory(n)
-    return int(_MARGIN * peak) + _BASE
+        peak = max(peak, 17 * n * n + sum(slope_estimator_memory(n)))
+    return int(_MARGIN * (8 * n * n * _FLOAT + peak)) + _BASE
 
 
 def fit_memory(model_shape, n_phases, measured_shape):

@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from .halfspace import HalfSpace
 from .normalisation import reference_slope
 from .problem import Problem
 from .relief import rms_height
@@ -256,7 +257,7 @@ def _solve(problem, geometry, face_only):
     else:
         estimate = estimate_rms_slope(geometry, problem.wear, problem.normal_force,
                                       problem.outline, problem.E_star, problem.n,
-                                      sliding=problem.sliding)
+                                      sliding=problem.sliding, labels=problem.labels)
     logger.debug("steady %s rms slope %.6g +- %.2g (grids %s), plain %.6g", problem.shape,
                  estimate.rms_slope, estimate.error, estimate.grids, result.rms_slope_plain)
     return dataclasses.replace(result, rms_slope=estimate.rms_slope,
@@ -265,7 +266,11 @@ def _solve(problem, geometry, face_only):
 
 def _limiting_face(problem):
     """The fields of the steady state (eq. 7, 9) and the plain pixel rms slope."""
-    halfspace = problem.halfspace
+    # The problem's operator if it has one; else one that is freed on return,
+    # before the slope estimator's arrays are allocated (steady.memory.steady_memory).
+    halfspace = problem.__dict__.get("halfspace")
+    if halfspace is None:
+        halfspace = HalfSpace(problem.shape, problem.grid.h, problem.E_star)
     on_face = problem.face_mask
     counts = problem.phases.counts
     p_phase = problem.phase_pressures()
@@ -308,7 +313,7 @@ def _limiting_face(problem):
     )
 
 
-def solve_scene(scene, *, n=None, face_only=False):
+def solve_scene(scene, *, n=None, face_only=False, problem=None):
     """Solve the steady state of a :class:`steady.scene.Scene`: :func:`solve` of its problem.
 
     Parameters
@@ -321,10 +326,19 @@ def solve_scene(scene, *, n=None, face_only=False):
     face_only : bool, optional
         Skip the rms slope estimate (``rms_slope`` and its error NaN),
         default False.
+    problem : steady.problem.Problem, optional
+        ``Problem.from_scene(scene, n=n)``, if the caller has built it (a
+        command that checks the scene's map before the solve): the map is
+        then not rasterised again.  Default: built here.
 
     Returns
     -------
     SteadyResult
+
+    Raises
+    ------
+    ValueError
+        A ``problem`` whose grid is not the scene's at ``n``.
 
     Warns
     -----
@@ -348,7 +362,12 @@ def solve_scene(scene, *, n=None, face_only=False):
     0.997 +- 0.012 grad_f0, plain 0.965
     """
     # The problem's map is the geometry's at n by construction: no need to check it.
-    result = _solve(Problem.from_scene(scene, n=n), scene.geometry, face_only)
+    if problem is None:
+        problem = Problem.from_scene(scene, n=n)
+    elif problem.shape != scene.grid(n).shape:
+        raise ValueError(f"the problem's grid {problem.shape[0]} x {problem.shape[1]} is not "
+                         f"the scene's at n = {scene.n if n is None else n}")
+    result = _solve(problem, scene.geometry, face_only)
     where = "the scene" if scene.source_path is None else str(scene.source_path)
     check_rms_slope(result.rms_slope if math.isfinite(result.rms_slope)
                     else result.rms_slope_plain, f"the steady face of {where}")

@@ -26,7 +26,7 @@ def test_estimates_grow_as_the_pixel_count():
 def test_refusal_names_both_numbers_and_the_override():
     with pytest.raises(ValueError) as err:
         check_memory(steady_memory(12000), "a steady solve at n = 12000", 16)
-    assert str(err.value) == ("a steady solve at n = 12000 needs about 80.6 GiB of memory; "
+    assert str(err.value) == ("a steady solve at n = 12000 needs about 59.1 GiB of memory; "
                               "16 GiB may be used (--memory-limit) (a larger --memory-limit GIB "
                               "overrides this check)"), f"{err.value}"
     check_memory(steady_memory(12000), "a steady solve", float("inf"))  # no check
@@ -80,17 +80,23 @@ print(json.dumps(after - before))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind, n, k", [("steady", 512, 0), ("steady", 1024, 0),
+@pytest.mark.parametrize("kind, n, k", [("steady", 256, 0), ("steady", 512, 0),
+                                        ("steady", 1024, 0),
                                         ("transient", 256, 0), ("transient", 256, 10),
                                         ("transient", 512, 3)])
 def test_estimate_bounds_the_measured_peak(kind, n, k):
     """The estimate over the measured peak lies in [1, 2].
 
     Peak resident memory of a fresh process beyond what its imports took.
-    Measured: steady 1.46 (n = 512), 1.42 (1024); run-in 1.27 (256), 1.33
-    (256, 10 snapshots), 1.12 to 1.18 (512, 3 snapshots).  (At n = 256
-    the 16 MiB that do not grow with n make the steady ratio 1.7 to 2.)
+    Measured: steady 1.87 (n = 256: the 16 MiB that do not grow with n
+    weigh most), 1.47 (512), 1.30 (1024); run-in 1.27 (256), 1.33
+    (256, 10 snapshots), 1.12 to 1.18 (512, 3 snapshots).
     """
+    _check_estimate(kind, n, k)
+
+
+def _check_estimate(kind, n, k):
+    """Assert ``1 <= estimate / measured peak <= 2`` for one run in a fresh process."""
     import pathlib
 
     tests = str(pathlib.Path(__file__).resolve().parent)

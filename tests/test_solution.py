@@ -12,6 +12,7 @@ from steady.outline import Circle
 from steady.phases import Homogeneous, Rods, Voronoi
 from steady.pressures import phase_pressures
 from steady.problem import FacePhases, Problem
+from steady.rms_slope import estimate_rms_slope
 from steady.scene import load_scene
 from steady.solution import solve, solve_scene
 from steady.wear import PowerLaw, pressure_field
@@ -367,3 +368,21 @@ def test_steady_summary_lists_the_phases_by_name():
         lines["fill factors     "], lines
     unnamed = {line[:17]: line[17:] for line in summary_lines(res)}
     assert unnamed["phase pressures  "].startswith("phase 0 "), unnamed
+
+
+@pytest.mark.parametrize("n", [63, 96])
+def test_a_given_problem_and_map_leave_the_result_unchanged(scene_file, n):
+    """``solve_scene(problem=)`` and the ladder's given map give the same numbers, bit by bit."""
+    scene = load_scene(scene_file("steady", n=n, n_seeds=100))
+    built = solve_scene(scene)
+    given = solve_scene(scene, problem=Problem.from_scene(scene))
+    for name in ("rms_slope", "rms_slope_error", "rms_slope_plain", "rms_height"):
+        assert getattr(given, name) == getattr(built, name), name
+    np.testing.assert_array_equal(given.face, built.face, err_msg="face")
+    rasterised = estimate_rms_slope(scene.geometry, scene.wear, scene.normal_force,
+                                    scene.outline, scene.E_star, n)
+    assert (rasterised.rms_slope, rasterised.error) == (built.rms_slope,
+                                                        built.rms_slope_error), "ladder"
+    with pytest.raises(ValueError, match=r"the problem's grid 32 x 32 is not the scene's at "
+                                         rf"n = {n}"):
+        solve_scene(scene, problem=Problem.from_scene(scene, n=32))

@@ -30,10 +30,10 @@ import math
 import pathlib
 import time
 
-from ..memory import check_memory, steady_memory
+from ..memory import check_memory, keep_freed_memory, steady_memory
 from ..micrograph import Micrograph
 from ..output import write_result
-from ..problem import default_phase_names
+from ..problem import Problem, default_phase_names
 from ..scene import load_scene
 from ..solution import solve_scene
 from .common import (
@@ -131,7 +131,7 @@ def run(args):
     """Do the work for parsed arguments; return the exit status."""
     saved = None
     try:
-        scene = _check(args)
+        scene, problem = _check(args)
         logger.info("scene %s checked: %s, n = %d, %d phases", args.scene,
                     scene.outline.describe(), scene.n, scene.n_phases)
         if args.segmentation is not None:
@@ -143,7 +143,7 @@ def run(args):
         started = time.monotonic()
         logger.info("solving the steady state%s", " and the rms slope's error ladder"
                     if args.slope_error else "")
-        result = solve_scene(scene, face_only=not args.slope_error)
+        result = solve_scene(scene, face_only=not args.slope_error, problem=problem)
         logger.info("solved in %.3g s: rms slope %.6g", time.monotonic() - started,
                     result.rms_slope)
         lines = summary_lines(result, scene.phase_names)
@@ -167,7 +167,7 @@ def run(args):
 
 
 def _check(args):
-    """Everything that can fail, checked before the solve, not after it; the scene."""
+    """Everything that can fail, checked before the solve, not after it; the scene and problem."""
     check_distinct([("the scene", args.scene), ("-o", args.output), ("--plot", args.plot),
                     ("--segmentation", args.segmentation)])
     for path, what in ((args.plot, "--plot"), (args.segmentation, "--segmentation")):
@@ -186,8 +186,8 @@ def _check(args):
              + ", ".join(f"[{name}]" for name in scene.ignored_sections))
     check_memory(steady_memory(scene.grid().shape, slope_error=args.slope_error),
                  f"a steady solve at n = {scene.n}", args.memory_limit)
-    scene.phase_labels()  # names a phase without a face pixel before the solve
-    return scene
+    # Names a phase without a face pixel before the solve; the solve takes its map.
+    return scene, Problem.from_scene(scene)
 
 
 def _draw_segmentation(args, scene):
@@ -236,4 +236,5 @@ def main(argv=None):
     if args.output is None and (args.segmentation is None or args.plot is not None):
         parser.error("the following arguments are required: -o/--output")
     configure_logging(args.verbose)
+    keep_freed_memory()  # the solve allocates grid-sized transforms over and over
     return run_command(run, args, verbose=args.verbose)
