@@ -144,7 +144,12 @@ def compare_with_steady(result, steady, problem):
     plain = face_rms_slope(problem.halfspace, face_mask, height, result.pressure,
                            result.approach)
     estimator = FaceEstimator.of(problem, np.where(face_mask, result.initial_height, 0.0))
-    final = estimator.figures(result.distance, height, result.pressure, result.approach)
+    # A state a jump reached is the steady face at no particular distance: its rim layer is
+    # fully worn (the distance of the history's end would measure it as barely worn, or, for a
+    # jump at s = 0, as the initial face).
+    jumped = result.state.jumps > 0 and result.status == "steady"
+    final = estimator.figures(math.inf if jumped else result.distance, height, result.pressure,
+                              result.approach)
     if math.isfinite(steady.rms_slope_error):
         steady_rms, steady_error = float(steady.rms_slope), float(steady.rms_slope_error)
     else:
