@@ -33,6 +33,7 @@ of them; they were measured with the same calls as the tests):
 import dataclasses
 import math
 import pathlib
+import warnings
 
 import h5py
 import numpy as np
@@ -276,13 +277,19 @@ def test_shipped_outline_scenes_run_in_to_the_steady_scene(name):
     of :func:`steady.solution.solve_scene`'s and within the error bars.
     """
     from steady.solution import solve_scene
+    from steady.validity import ValidityWarning
     from transient.scene import load_transient_scene
 
     scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" / f"{name}.toml")
     problem = WearProblem.from_scene(scene)
     result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-4))
     assert result.status == "steady", result.message
-    cmp = compare_with_steady(result, solve_scene(scene), problem)
+    with warnings.catch_warnings():
+        # The aggregate chip's face lies beyond the small slopes (0.445 rad): the comparison
+        # is of the linear model with itself all the same.
+        warnings.simplefilter("ignore", ValidityWarning)
+        steady = solve_scene(scene)
+    cmp = compare_with_steady(result, steady, problem)
     assert cmp.face_error < 1e-6 and cmp.phase_pressure_error < 1e-12, cmp.summary()
     assert cmp.rms_slope_agrees and abs(cmp.rms_slope_error) < 5e-3, cmp.summary()
 
