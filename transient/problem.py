@@ -536,12 +536,14 @@ class WarmStart:
         self._values = []
         self._products = []
         # Differences of consecutive pressures d_i = v_i - v_(i+1) and their
-        # products, newest first (rows 0 .. len - 2): they span the same affine
+        # products, newest first (i = 0 .. len - 2): they span the same affine
         # set as the differences from the newest, but stay the same when a
         # pressure is added, and so do their Gram matrices, which are kept:
         # <d_i, K d_j> (exact K symmetric: computed once per pair) and
         # <d_i, k d_j> with the wear coefficients k (filled when first asked).
-        self._diffs = self._kdiffs = None
+        # The differences themselves are not kept but formed when needed, one
+        # at a time (a subtraction, bit for bit the same each time): kept,
+        # they would double the memory of the history.
         self._gram = np.zeros((self.size - 1, self.size - 1))
         self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
         if pressures is not None:
@@ -566,23 +568,17 @@ class WarmStart:
         value = pressure.ravel()
         product = np.array(displacement, dtype=float).ravel()
         if self._values and self.size > 1:
-            if self._diffs is None:
-                self._diffs = np.empty((self.size - 1, value.size))
-                self._kdiffs = np.empty((self.size - 1, value.size))
             k = min(len(self), self.size - 1)  # differences held after this one
-            for stack in (self._diffs, self._kdiffs):
-                # Row by row, last first: an overlapping slice assignment
-                # would go through a temporary copy of the whole stack.
-                for i in range(k - 1, 0, -1):
-                    stack[i] = stack[i - 1]
-            np.subtract(value, self._values[0], out=self._diffs[0])
-            np.subtract(product, self._products[0], out=self._kdiffs[0])
             for gram in (self._gram, self._gram_k):
                 gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
-            d = self._diffs[0]
+            d = np.subtract(value, self._values[0])
+            work = np.subtract(product, self._products[0])
             # One product per pair, newest with older: the same numbers whatever
             # the order of the pushes and predictions that led here.
-            row = [float(np.einsum("j,j->", d, self._kdiffs[j])) for j in range(k)]
+            row = [float(np.einsum("j,j->", d, work))]
+            for j in range(1, k):  # K d_j of the older ones, their index after this push
+                row.append(float(np.einsum("j,j->", d, self._difference(
+                    self._products, j - 1, out=work))))
             self._gram[0, :k] = self._gram[:k, 0] = row
             self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
         self._values.insert(0, value)
@@ -601,16 +597,23 @@ class WarmStart:
         """Their elastic displacements ``K p``, newest first, m, shape (k, nx, ny)."""
         return np.array(self._products).reshape(-1, *self.problem.shape)
 
+    @staticmethod
+    def _difference(stack, i, out=None):
+        """``stack[i] - stack[i + 1]``: a consecutive difference of a list, newest first."""
+        return np.subtract(stack[i], stack[i + 1], out=out)
+
     def _coefficient_gram(self, k):
         """``<d_i, k d_j>`` for the ``k`` differences held, the missing entries filled."""
         gram = self._gram_k
         coefficients = self.problem.coefficient_field.ravel()  # zero off the face
+        work = None
         for i in range(k):
             missing = np.isnan(gram[i, i:k])
             if missing.any():
-                weighted = coefficients * self._diffs[i]
+                weighted = coefficients * self._difference(self._values, i)
                 for j in np.flatnonzero(missing) + i:
-                    gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, self._diffs[j]))
+                    work = self._difference(self._values, j, out=work)
+                    gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
         return gram[:k, :k]
 
     def predict(self, height, shift=None, *, shift_scale=None):
@@ -644,7 +647,6 @@ class WarmStart:
         k = len(self) - 1
         if k:
             face = self.problem.face_mask.ravel()
-            diff, kdiff = self._diffs[:k], self._kdiffs[:k]
             # x = v0 + D^T beta keeps the load, with the consecutive differences
             # D (a small Gram matrix free of cancellation); the pressures
             # vanish off the face, so the sums run over the face.
@@ -654,18 +656,39 @@ class WarmStart:
                 gram += shift_scale * self._coefficient_gram(k)
             elif shift is not None:
                 s = np.where(face, shift.ravel(), 0.0)
-                # einsum rather than BLAS: a threaded BLAS call on a loaded
-                # machine can cost more than an FFT pair.
-                gram += np.einsum("ij,kj->ik", diff, diff * s)
+                gram += self._shift_gram(k, s)
             else:
                 s = 0.0
             gradient = kv0 + s * v0 + height.ravel()
-            rhs = np.einsum("ij,j->i", diff, gradient - gradient[face].mean())
+            gradient -= gradient[face].mean()
+            work = np.empty_like(gradient)
+            # einsum rather than BLAS: a threaded BLAS call on a loaded
+            # machine can cost more than an FFT pair.
+            rhs = np.array([np.einsum("j,j->", self._difference(self._values, i, out=work),
+                                      gradient) for i in range(k)])
             w, q = np.linalg.eigh(0.5 * (gram + gram.T))
             keep = w > _GRAM_CUTOFF * max(float(w[-1]), 0.0)
             if keep.any():
                 beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
         if beta is None:
             return v0.reshape(shape).copy(), kv0.reshape(shape).copy()
-        return ((v0 + np.einsum("i,ij->j", beta, diff)).reshape(shape),
-                (kv0 + np.einsum("i,ij->j", beta, kdiff)).reshape(shape))
+        return (self._combination(self._values, beta, work).reshape(shape),
+                self._combination(self._products, beta, work).reshape(shape))
+
+    def _shift_gram(self, k, shift):
+        """``<d_i, diag(shift) d_j>`` for the ``k`` newest differences."""
+        gram = np.empty((k, k))
+        work = None
+        for i in range(k):
+            weighted = shift * self._difference(self._values, i)
+            for j in range(i, k):
+                work = self._difference(self._values, j, out=work)
+                gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
+        return gram
+
+    def _combination(self, stack, beta, work):
+        """``stack[0] + sum_i beta_i (stack[i] - stack[i + 1])``, one difference at a time."""
+        out = stack[0].copy()
+        for i, b in enumerate(beta):
+            out += np.multiply(self._difference(stack, i, out=work), b, out=work)
+        return out
