@@ -67,13 +67,13 @@ include this; the companion run on a coarser grid
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import weakref
 
 import numpy as np
 
-from steady.halfspace import HalfSpace
 from steady.relief import PlaneFit, rms_height
 from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope, estimate_rms_slope
 
@@ -370,8 +370,13 @@ class FaceEstimator:
         if not self._threaded:
             return self.problem.halfspace
         if self._own_halfspace is None:
+            # The problem's operator with work buffers of its own: the spectra
+            # (read-only) are shared, the buffers every product writes are not.
             hs = self.problem.halfspace
-            self._own_halfspace = HalfSpace(hs.shape, hs.h, hs.E_star, workers=self.workers)
+            own = copy.copy(hs)
+            own._rows, own._work = np.zeros_like(hs._rows), np.empty_like(hs._work)
+            own.workers = self.workers
+            self._own_halfspace = own
         return self._own_halfspace
 
     def rim_layer_pixels(self, distance):

@@ -498,6 +498,18 @@ class WearProblem:
         return w, res
 
 
+def _row_products(row, vector, rows):
+    """``<row, vector>``, summed as :func:`numpy.einsum` sums each of ``rows`` stacked rows.
+
+    The product of one row of a stack of ``rows`` (its summation order
+    depends on whether the stack has one row or more): the history's
+    differences, formed one at a time, give the numbers the stack of them
+    would.
+    """
+    stack = row[None] if rows == 1 else np.broadcast_to(row, (2, row.size))
+    return float(np.einsum("ij,j->i", stack, vector)[0])
+
+
 class WarmStart:
     """The last few contact pressures of a run: the warm start of its implicit stages.
 
@@ -664,8 +676,8 @@ class WarmStart:
             work = np.empty_like(gradient)
             # einsum rather than BLAS: a threaded BLAS call on a loaded
             # machine can cost more than an FFT pair.
-            rhs = np.array([np.einsum("j,j->", self._difference(self._values, i, out=work),
-                                      gradient) for i in range(k)])
+            rhs = np.array([_row_products(self._difference(self._values, i, out=work),
+                                          gradient, k) for i in range(k)])
             w, q = np.linalg.eigh(0.5 * (gram + gram.T))
             keep = w > _GRAM_CUTOFF * max(float(w[-1]), 0.0)
             if keep.any():
@@ -687,8 +699,13 @@ class WarmStart:
         return gram
 
     def _combination(self, stack, beta, work):
-        """``stack[0] + sum_i beta_i (stack[i] - stack[i + 1])``, one difference at a time."""
-        out = stack[0].copy()
+        """``stack[0] + sum_i beta_i (stack[i] - stack[i + 1])``, one difference at a time.
+
+        The sum is accumulated first, in the order of the differences, and
+        then added to the newest.
+        """
+        out = None
         for i, b in enumerate(beta):
-            out += np.multiply(self._difference(stack, i, out=work), b, out=work)
-        return out
+            term = np.multiply(self._difference(stack, i, out=work), b, out=work)
+            out = term.copy() if out is None else np.add(out, term, out=out)
+        return np.add(stack[0], out, out=out)

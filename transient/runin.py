@@ -595,9 +595,9 @@ class _Run:
             self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
             self.estimator.threaded = True
         index = len(hist["distance"])
+        # Not copied: the run replaces its face and pressure, never writes into them.
         self._pending.append((index, self._worker.submit(
-            self.estimator.figures, self.s, self.height.copy(), self.pressure.copy(),
-            self.approach)))
+            self.estimator.figures, self.s, self.height, self.pressure, self.approach)))
         hist["distance"].append(self.s)
         hist["step"].append(step)
         for name in _FACE_FIGURES:
