@@ -44,9 +44,10 @@ def run_in_memory(n, snapshots=0):
     - one history record computed on the worker thread beside the step
       (on the run's face and pressure, not copied): the estimator applied;
     - every checkpoint's pressure history (six pressures and their
-      displacements, copied into the result, 96, and again into the file
-      image, built in memory and copied to disk,
-      :func:`steady.output.atomic_h5`, 96): 192;
+      displacements, handed to the result without a copy, but the warm
+      start's next push writes them anew, 96; and the file image, built
+      in memory and copied to disk, :func:`steady.output.atomic_h5`, 96):
+      192;
     - each snapshot: face and pressure kept (16, shared by every
       checkpoint's result) and the checkpoint's file image (32): 48.
 

@@ -545,8 +545,12 @@ class WarmStart:
             raise ValueError(f"size must be a positive integer, got {size!r}")
         self.problem = problem
         self.size = int(size)
-        self._values = []
-        self._products = []
+        # The pressures [0] and their displacements [1], newest first, in rows
+        # of one array, which :meth:`pressures` and :meth:`displacements`
+        # hand out without a copy: the next push after that writes a new one.
+        self._stack = None
+        self._count = 0
+        self._shared = False
         # Differences of consecutive pressures d_i = v_i - v_(i+1) and their
         # products, newest first (i = 0 .. len - 2): they span the same affine
         # set as the differences from the newest, but stay the same when a
@@ -570,7 +574,17 @@ class WarmStart:
 
     def __len__(self):
         """Number of pressures held."""
-        return len(self._values)
+        return self._count
+
+    @property
+    def _values(self):
+        """The pressures held, newest first, shape (k, nx ny) (a view)."""
+        return self._stack[0, :self._count]
+
+    @property
+    def _products(self):
+        """Their displacements, newest first, shape (k, nx ny) (a view)."""
+        return self._stack[1, :self._count]
 
     def push(self, pressure, displacement=None):
         """Add a pressure (Pa, shape (nx, ny)) and its ``K p`` (m; computed if None)."""
@@ -578,8 +592,10 @@ class WarmStart:
         if displacement is None:
             displacement = self.problem.halfspace.displacement(pressure)
         value = pressure.ravel()
-        product = np.array(displacement, dtype=float).ravel()
-        if self._values and self.size > 1:
+        product = np.asarray(displacement, dtype=float).ravel()  # copied into the stack
+        if self._stack is None:
+            self._stack = np.empty((2, self.size, value.size))
+        if len(self) and self.size > 1:
             k = min(len(self), self.size - 1)  # differences held after this one
             for gram in (self._gram, self._gram_k):
                 gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
@@ -593,21 +609,39 @@ class WarmStart:
                     self._products, j - 1, out=work))))
             self._gram[0, :k] = self._gram[:k, 0] = row
             self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
-        self._values.insert(0, value)
-        self._products.insert(0, product)
-        del self._values[self.size:], self._products[self.size:]
+        kept = min(len(self), self.size - 1)
+        if self._shared:  # the rows handed out stay as they are
+            old, self._stack, self._shared = self._stack, np.empty_like(self._stack), False
+            self._stack[:, 1:kept + 1] = old[:, :kept]
+            del old
+        else:
+            # Row by row, oldest first: an overlapping slice assignment would
+            # go through a temporary copy of the whole stack.
+            for i in range(kept, 0, -1):
+                self._stack[:, i] = self._stack[:, i - 1]
+        self._stack[0, 0], self._stack[1, 0] = value, product
+        self._count = kept + 1
 
     def newest(self):
         """The newest pressure, Pa, shape (nx, ny)."""
         return self._values[0].reshape(self.problem.shape).copy()
 
     def pressures(self):
-        """The pressures held, newest first, Pa, shape (k, nx, ny)."""
-        return np.array(self._values).reshape(-1, *self.problem.shape)
+        """The pressures held, newest first, Pa, shape (k, nx, ny) (read-only, not a copy)."""
+        return self._handed_out(0)
 
     def displacements(self):
-        """Their elastic displacements ``K p``, newest first, m, shape (k, nx, ny)."""
-        return np.array(self._products).reshape(-1, *self.problem.shape)
+        """Their elastic displacements ``K p``, newest first, m, shape (k, nx, ny) (read-only)."""
+        return self._handed_out(1)
+
+    def _handed_out(self, which):
+        """Pressures (0) or displacements (1), read-only, which later pushes leave as they are."""
+        if self._stack is None:
+            return np.empty((0, *self.problem.shape))
+        self._shared = True
+        out = self._stack[which, :self._count].reshape(-1, *self.problem.shape)
+        out.flags.writeable = False
+        return out
 
     @staticmethod
     def _difference(stack, i, out=None):
