@@ -664,17 +664,21 @@ class _Run:
         self.snap_p = _frozen(np.concatenate([self.snap_p, self.pressure[None]]))
 
     def current_state(self):
-        """The state at the current point as a :class:`RunState` (copies; NaN off the face)."""
+        """The state at the current point as a :class:`RunState` (NaN off the face).
+
+        The arrays that are the run's own are read-only views, not copies: the
+        run replaces them at every step and never writes into them.
+        """
         face_mask = self.problem.face_mask
 
-        def copy(a):
-            return None if a is None else a.copy()
+        def shared(a):
+            return None if a is None else _frozen(a.view())
 
         return RunState(
             height=np.where(face_mask, self.height, np.nan), offset=self.offset,
-            pressure=self.pressure.copy(), approach=self.approach,
+            pressure=shared(self.pressure), approach=self.approach,
             initial_height=np.where(face_mask, self.initial_height, np.nan),
-            previous_height=copy(self.prev_height), previous_rate=copy(self.prev_rate),
+            previous_height=shared(self.prev_height), previous_rate=shared(self.prev_rate),
             previous_step=self.prev_step, next_step=self.next_step,
             pressure_history=None if self.pressures is None else self.pressures.pressures(),
             pressure_history_displacement=(None if self.pressures is None
