@@ -289,6 +289,28 @@ def test_history_restored_from_its_pressures_predicts_bit_for_bit():
         assert np.array_equal(a, b), "restored history predicts differently"
 
 
+def test_history_handed_out_stays_as_it_was():
+    # A checkpoint's pressures are the history's own rows, not a copy: later
+    # pushes must leave them as they were when handed out.
+    n = 32
+    problem = wear_problem("voronoi", (1.0, 10.0), n)
+    rng = np.random.default_rng(6067)
+    history = WarmStart(problem, size=3)
+    pushed = [np.where(problem.face_mask, 1e5 * (1 + rng.random((n, n))), 0.0) for _ in range(6)]
+    for p in pushed[:4]:
+        history.push(p)
+    held, moved = history.pressures(), history.displacements()
+    before = (held.copy(), moved.copy())
+    assert not held.flags.writeable, "handed-out pressures must be read-only"
+    for p in pushed[4:]:
+        history.push(p)
+    assert np.array_equal(held, before[0]) and np.array_equal(moved, before[1]), \
+        "a push changed the pressures handed out before it"
+    assert np.array_equal(held, np.array(pushed[3:0:-1])), "pressures held, newest first"
+    assert np.array_equal(history.pressures(), np.array(pushed[5:2:-1])), \
+        "pressures held after the pushes, newest first"
+
+
 def _galerkin_reference(history, height, shift, face):
     """The energy minimiser over the history's affine span, from scratch.
 

@@ -67,13 +67,13 @@ include this; the companion run on a coarser grid
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import weakref
 
 import numpy as np
 
-from steady.halfspace import HalfSpace
 from steady.relief import PlaneFit, rms_height
 from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope, estimate_rms_slope
 
@@ -284,6 +284,7 @@ class FaceEstimator:
         self.h = hs.h
         self.energy = SlopeEnergy(problem.shape, hs.h, hs.E_star)
         self._own_halfspace = None
+        self._threaded = False
         self._plane = PlaneFit(self.face_mask, hs.h)
         self.reference_slope = problem.reference_slope
         h0 = np.where(self.face_mask, np.asarray(initial_height, dtype=float), 0.0)
@@ -347,17 +348,35 @@ class FaceEstimator:
         if self._own_halfspace is not None:
             self._own_halfspace.workers = value
 
-    def _halfspace(self):
-        """A half-space operator of this estimator's own.
+    @property
+    def threaded(self):
+        """Whether :meth:`figures` runs beside the contact solves, on another thread.
 
-        Its work buffers are not shared with the run's contact solver, so
-        that :meth:`figures` may run on another thread than the solves (as
-        :func:`transient.runin.run_in` does).  Built on first use: a run in
-        full contact never needs it.
+        Then it uses a half-space operator of its own, whose work buffers
+        the run's solver does not share (built on first use: a run in full
+        contact never needs it); else the problem's (default False).
+        Setting it False frees the estimator's own.
         """
+        return self._threaded
+
+    @threaded.setter
+    def threaded(self, value):
+        self._threaded = bool(value)
+        if not self._threaded:
+            self._own_halfspace = None
+
+    def _halfspace(self):
+        """The half-space operator :meth:`figures` applies (see :attr:`threaded`)."""
+        if not self._threaded:
+            return self.problem.halfspace
         if self._own_halfspace is None:
+            # The problem's operator with work buffers of its own: the spectra
+            # (read-only) are shared, the buffers every product writes are not.
             hs = self.problem.halfspace
-            self._own_halfspace = HalfSpace(hs.shape, hs.h, hs.E_star, workers=self.workers)
+            own = copy.copy(hs)
+            own._rows, own._work = np.zeros_like(hs._rows), np.empty_like(hs._work)
+            own.workers = self.workers
+            self._own_halfspace = own
         return self._own_halfspace
 
     def rim_layer_pixels(self, distance):

@@ -32,8 +32,7 @@ def run_in_memory(n, snapshots=0):
       :func:`steady.memory.slope_estimator_memory`);
     - the pressure history of the warm starts
       (:class:`transient.problem.WarmStart`: six pressures and their
-      products, 96, and the differences of five consecutive ones of each,
-      80): 176;
+      products; their differences are formed one at a time): 96;
     - the larger of one step and the slope estimator's work: a step of
       ESDIRK3, the largest, has three stages, each a contact solve
       (pressure, gap, preconditioned residual, direction, its product,
@@ -42,14 +41,15 @@ def run_in_memory(n, snapshots=0):
       stitched preconditioner's weights, symbols and transforms (48) and
       the gradient of a partial-contact record (64): 352; the estimator
       applied (about 150);
-    - one history record computed on the worker thread beside the step:
-      the face and pressure it copies (16) and the estimator applied;
+    - one history record computed on the worker thread beside the step
+      (on the run's face and pressure, not copied): the estimator applied;
     - every checkpoint's pressure history (six pressures and their
-      displacements, copied into the result, 96, and again into the file
-      image, built in memory and copied to disk,
-      :func:`steady.output.atomic_h5`, 96): 192;
-    - each snapshot: face and pressure kept (16), their copies in every
-      checkpoint (16), and the checkpoint's file image (32): 64.
+      displacements, handed to the result without a copy, but the warm
+      start's next push writes them anew, 96; and the file image, built
+      in memory and copied to disk, :func:`steady.output.atomic_h5`, 96):
+      192;
+    - each snapshot: face and pressure kept (16, shared by every
+      checkpoint's result) and the checkpoint's file image (32): 48.
 
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
@@ -73,12 +73,11 @@ def run_in_memory(n, snapshots=0):
     --------
     >>> from steady.text import format_bytes
     >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
-    455 MiB 201 GiB
+    410 MiB 185 GiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     pixels = n * n
     kept, applied = slope_estimator_memory(n)
-    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 176 + 192) * pixels + kept
-            + max(352 * pixels, applied) + 16 * pixels + applied
-            + 64 * pixels * int(snapshots))
+    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 96 + 192) * pixels + kept
+            + max(352 * pixels, applied) + applied + 48 * pixels * int(snapshots))
     return int(1.25 * peak) + 16 * 2 ** 20

@@ -515,6 +515,18 @@ class WearProblem:
         return w, res
 
 
+def _row_products(row, vector, rows):
+    """``<row, vector>``, summed as :func:`numpy.einsum` sums each of ``rows`` stacked rows.
+
+    The product of one row of a stack of ``rows`` (its summation order
+    depends on whether the stack has one row or more): the history's
+    differences, formed one at a time, give the numbers the stack of them
+    would.
+    """
+    stack = row[None] if rows == 1 else np.broadcast_to(row, (2, row.size))
+    return float(np.einsum("ij,j->i", stack, vector)[0])
+
+
 class WarmStart:
     """The last few contact pressures of a run: the warm start of its implicit stages.
 
@@ -550,15 +562,21 @@ class WarmStart:
             raise ValueError(f"size must be a positive integer, got {size!r}")
         self.problem = problem
         self.size = int(size)
-        self._values = []
-        self._products = []
+        # The pressures [0] and their displacements [1], newest first, in rows
+        # of one array, which :meth:`pressures` and :meth:`displacements`
+        # hand out without a copy: the next push after that writes a new one.
+        self._stack = None
+        self._count = 0
+        self._shared = False
         # Differences of consecutive pressures d_i = v_i - v_(i+1) and their
-        # products, newest first (rows 0 .. len - 2): they span the same affine
+        # products, newest first (i = 0 .. len - 2): they span the same affine
         # set as the differences from the newest, but stay the same when a
         # pressure is added, and so do their Gram matrices, which are kept:
         # <d_i, K d_j> (exact K symmetric: computed once per pair) and
         # <d_i, k d_j> with the wear coefficients k (filled when first asked).
-        self._diffs = self._kdiffs = None
+        # The differences themselves are not kept but formed when needed, one
+        # at a time (a subtraction, bit for bit the same each time): kept,
+        # they would double the memory of the history.
         self._gram = np.zeros((self.size - 1, self.size - 1))
         self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
         if pressures is not None:
@@ -573,7 +591,17 @@ class WarmStart:
 
     def __len__(self):
         """Number of pressures held."""
-        return len(self._values)
+        return self._count
+
+    @property
+    def _values(self):
+        """The pressures held, newest first, shape (k, nx ny) (a view)."""
+        return self._stack[0, :self._count]
+
+    @property
+    def _products(self):
+        """Their displacements, newest first, shape (k, nx ny) (a view)."""
+        return self._stack[1, :self._count]
 
     def push(self, pressure, displacement=None):
         """Add a pressure (Pa, shape (nx, ny)) and its ``K p`` (m; computed if None)."""
@@ -581,53 +609,74 @@ class WarmStart:
         if displacement is None:
             displacement = self.problem.halfspace.displacement(pressure)
         value = pressure.ravel()
-        product = np.array(displacement, dtype=float).ravel()
-        if self._values and self.size > 1:
-            if self._diffs is None:
-                self._diffs = np.empty((self.size - 1, value.size))
-                self._kdiffs = np.empty((self.size - 1, value.size))
+        product = np.asarray(displacement, dtype=float).ravel()  # copied into the stack
+        if self._stack is None:
+            self._stack = np.empty((2, self.size, value.size))
+        if len(self) and self.size > 1:
             k = min(len(self), self.size - 1)  # differences held after this one
-            for stack in (self._diffs, self._kdiffs):
-                # Row by row, last first: an overlapping slice assignment
-                # would go through a temporary copy of the whole stack.
-                for i in range(k - 1, 0, -1):
-                    stack[i] = stack[i - 1]
-            np.subtract(value, self._values[0], out=self._diffs[0])
-            np.subtract(product, self._products[0], out=self._kdiffs[0])
             for gram in (self._gram, self._gram_k):
                 gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
-            d = self._diffs[0]
+            d = np.subtract(value, self._values[0])
+            work = np.subtract(product, self._products[0])
             # One product per pair, newest with older: the same numbers whatever
             # the order of the pushes and predictions that led here.
-            row = [float(np.einsum("j,j->", d, self._kdiffs[j])) for j in range(k)]
+            row = [float(np.einsum("j,j->", d, work))]
+            for j in range(1, k):  # K d_j of the older ones, their index after this push
+                row.append(float(np.einsum("j,j->", d, self._difference(
+                    self._products, j - 1, out=work))))
             self._gram[0, :k] = self._gram[:k, 0] = row
             self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
-        self._values.insert(0, value)
-        self._products.insert(0, product)
-        del self._values[self.size:], self._products[self.size:]
+        kept = min(len(self), self.size - 1)
+        if self._shared:  # the rows handed out stay as they are
+            old, self._stack, self._shared = self._stack, np.empty_like(self._stack), False
+            self._stack[:, 1:kept + 1] = old[:, :kept]
+            del old
+        else:
+            # Row by row, oldest first: an overlapping slice assignment would
+            # go through a temporary copy of the whole stack.
+            for i in range(kept, 0, -1):
+                self._stack[:, i] = self._stack[:, i - 1]
+        self._stack[0, 0], self._stack[1, 0] = value, product
+        self._count = kept + 1
 
     def newest(self):
         """The newest pressure, Pa, shape (nx, ny)."""
         return self._values[0].reshape(self.problem.shape).copy()
 
     def pressures(self):
-        """The pressures held, newest first, Pa, shape (k, nx, ny)."""
-        return np.array(self._values).reshape(-1, *self.problem.shape)
+        """The pressures held, newest first, Pa, shape (k, nx, ny) (read-only, not a copy)."""
+        return self._handed_out(0)
 
     def displacements(self):
-        """Their elastic displacements ``K p``, newest first, m, shape (k, nx, ny)."""
-        return np.array(self._products).reshape(-1, *self.problem.shape)
+        """Their elastic displacements ``K p``, newest first, m, shape (k, nx, ny) (read-only)."""
+        return self._handed_out(1)
+
+    def _handed_out(self, which):
+        """Pressures (0) or displacements (1), read-only, which later pushes leave as they are."""
+        if self._stack is None:
+            return np.empty((0, *self.problem.shape))
+        self._shared = True
+        out = self._stack[which, :self._count].reshape(-1, *self.problem.shape)
+        out.flags.writeable = False
+        return out
+
+    @staticmethod
+    def _difference(stack, i, out=None):
+        """``stack[i] - stack[i + 1]``: a consecutive difference of a list, newest first."""
+        return np.subtract(stack[i], stack[i + 1], out=out)
 
     def _coefficient_gram(self, k):
         """``<d_i, k d_j>`` for the ``k`` differences held, the missing entries filled."""
         gram = self._gram_k
         coefficients = self.problem.coefficient_field.ravel()  # zero off the face
+        work = None
         for i in range(k):
             missing = np.isnan(gram[i, i:k])
             if missing.any():
-                weighted = coefficients * self._diffs[i]
+                weighted = coefficients * self._difference(self._values, i)
                 for j in np.flatnonzero(missing) + i:
-                    gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, self._diffs[j]))
+                    work = self._difference(self._values, j, out=work)
+                    gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
         return gram[:k, :k]
 
     def predict(self, height, shift=None, *, shift_scale=None):
@@ -661,7 +710,6 @@ class WarmStart:
         k = len(self) - 1
         if k:
             face = self.problem.face_mask.ravel()
-            diff, kdiff = self._diffs[:k], self._kdiffs[:k]
             # x = v0 + D^T beta keeps the load, with the consecutive differences
             # D (a small Gram matrix free of cancellation); the pressures
             # vanish off the face, so the sums run over the face.
@@ -671,18 +719,44 @@ class WarmStart:
                 gram += shift_scale * self._coefficient_gram(k)
             elif shift is not None:
                 s = np.where(face, shift.ravel(), 0.0)
-                # einsum rather than BLAS: a threaded BLAS call on a loaded
-                # machine can cost more than an FFT pair.
-                gram += np.einsum("ij,kj->ik", diff, diff * s)
+                gram += self._shift_gram(k, s)
             else:
                 s = 0.0
             gradient = kv0 + s * v0 + height.ravel()
-            rhs = np.einsum("ij,j->i", diff, gradient - gradient[face].mean())
+            gradient -= gradient[face].mean()
+            work = np.empty_like(gradient)
+            # einsum rather than BLAS: a threaded BLAS call on a loaded
+            # machine can cost more than an FFT pair.
+            rhs = np.array([_row_products(self._difference(self._values, i, out=work),
+                                          gradient, k) for i in range(k)])
             w, q = np.linalg.eigh(0.5 * (gram + gram.T))
             keep = w > _GRAM_CUTOFF * max(float(w[-1]), 0.0)
             if keep.any():
                 beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
         if beta is None:
             return v0.reshape(shape).copy(), kv0.reshape(shape).copy()
-        return ((v0 + np.einsum("i,ij->j", beta, diff)).reshape(shape),
-                (kv0 + np.einsum("i,ij->j", beta, kdiff)).reshape(shape))
+        return (self._combination(self._values, beta, work).reshape(shape),
+                self._combination(self._products, beta, work).reshape(shape))
+
+    def _shift_gram(self, k, shift):
+        """``<d_i, diag(shift) d_j>`` for the ``k`` newest differences."""
+        gram = np.empty((k, k))
+        work = None
+        for i in range(k):
+            weighted = shift * self._difference(self._values, i)
+            for j in range(i, k):
+                work = self._difference(self._values, j, out=work)
+                gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
+        return gram
+
+    def _combination(self, stack, beta, work):
+        """``stack[0] + sum_i beta_i (stack[i] - stack[i + 1])``, one difference at a time.
+
+        The sum is accumulated first, in the order of the differences, and
+        then added to the newest.
+        """
+        out = None
+        for i, b in enumerate(beta):
+            term = np.multiply(self._difference(stack, i, out=work), b, out=work)
+            out = term.copy() if out is None else np.add(out, term, out=out)
+        return np.add(stack[0], out, out=out)

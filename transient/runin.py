@@ -177,7 +177,8 @@ class RunState:
     pressure_history : ndarray, shape (k, nx, ny), Pa, or None
         The last contact pressures, newest first: the warm start of the
         next implicit stages (:class:`transient.problem.WarmStart`);
-        None before the first attempt.
+        None before the first attempt, and in a steady result (a run that
+        reached the steady state takes no further step).
     pressure_history_displacement : ndarray, shape (k, nx, ny), m, or None
         Their elastic displacements ``K p`` as the run holds them (the
         solver's own, which a resumed run needs to repeat the run bit for
@@ -414,6 +415,12 @@ def _initial_face(problem, initial_height):
     return h0
 
 
+def _frozen(array):
+    """``array``, made read-only: a result shares it with the run and later results."""
+    array.flags.writeable = False
+    return array
+
+
 class _Run:
     """A run in progress: its state, and the loop that advances it.
 
@@ -432,7 +439,9 @@ class _Run:
     - the progress a :class:`RunResult` reports: ``s`` (m), ``steps``,
       ``rejected``, ``failures``, ``wall_time`` (s, spent before this call),
       ``t0`` (monotonic clock at the start of this call), ``history``
-      (lists), the snapshots ``snap_d``, ``snap_h``, ``snap_p`` and
+      (lists), the snapshots ``snap_d`` (a list), ``snap_h``, ``snap_p``
+      (read-only arrays, shape (k, nx, ny), replaced by a new one at each
+      snapshot: every result shares them, none copies them) and
       ``snap_index`` (the next requested one), ``latest`` (the current
       point's spread and shape change, which the stop tests judge);
     - the steady state the history measures against: ``steady_face``,
@@ -510,7 +519,8 @@ class _Run:
             self.history = {name: [] for name in HISTORY_UNITS}
             if self.programme is not None:
                 self.history.update({name: [] for name in PROGRAMME_HISTORY_UNITS})
-            self.snap_d, self.snap_h, self.snap_p = [], [], []
+            self.snap_d = []
+            self.snap_h = self.snap_p = _frozen(np.empty((0, *problem.shape)))
         else:
             self.s = float(resume.distance)
             self.steps, self.rejected = resume.steps, resume.rejected
@@ -521,8 +531,8 @@ class _Run:
             for name in _LATER_HISTORY:
                 self.history.setdefault(name, [math.nan] * len(self.history["distance"]))
             self.snap_d = list(resume.snapshot_distance.tolist())
-            self.snap_h = list(resume.snapshot_height)
-            self.snap_p = list(resume.snapshot_pressure)
+            self.snap_h = _frozen(np.array(resume.snapshot_height, dtype=float))
+            self.snap_p = _frozen(np.array(resume.snapshot_pressure, dtype=float))
         self.snap_index = len(self.snap_d)
         # (spread, shape_rate) of the current point, which the stop tests judge: the last
         # history point's, or the figures of the state a jump reached (not in the history).
@@ -604,10 +614,12 @@ class _Run:
                 max_workers=1, thread_name_prefix="runin-history")
             # One thread for the figures' transforms: the solver's use the cores.
             self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
+            self.estimator.threaded = True
         index = len(hist["distance"])
+        # Not copied: the run replaces its face and pressure, never writes into them.
         self._pending.append((index, self._worker.submit(
-            self.estimator.figures, self.s, self.height.copy(), face_state[1].copy(),
-            face_state[2], rim_layers=face_state[0])))
+            self.estimator.figures, self.s, self.height, face_state[1], face_state[2],
+            rim_layers=face_state[0])))
         hist["distance"].append(self.s)
         hist["step"].append(step)
         for name in _FACE_FIGURES:
@@ -664,27 +676,33 @@ class _Run:
             self._worker.shutdown(wait=True, cancel_futures=True)
             self._worker = None
             self.estimator.workers = self._estimator_workers
+            self.estimator.threaded = False  # frees its half-space before the comparison
         self._pending = []
 
     def snapshot(self):
         """Store the face and the pressure at the current distance."""
         face_mask = self.problem.face_mask
         self.snap_d.append(self.s)
-        self.snap_h.append(np.where(face_mask, self.height + self.offset, np.nan))
-        self.snap_p.append(self.pressure.copy())
+        self.snap_h = _frozen(np.concatenate(
+            [self.snap_h, np.where(face_mask, self.height + self.offset, np.nan)[None]]))
+        self.snap_p = _frozen(np.concatenate([self.snap_p, self.pressure[None]]))
 
     def current_state(self):
-        """The state at the current point as a :class:`RunState` (copies; NaN off the face)."""
+        """The state at the current point as a :class:`RunState` (NaN off the face).
+
+        The arrays that are the run's own are read-only views, not copies: the
+        run replaces them at every step and never writes into them.
+        """
         face_mask = self.problem.face_mask
 
-        def copy(a):
-            return None if a is None else a.copy()
+        def shared(a):
+            return None if a is None else _frozen(a.view())
 
         return RunState(
             height=np.where(face_mask, self.height, np.nan), offset=self.offset,
-            pressure=self.pressure.copy(), approach=self.approach,
+            pressure=shared(self.pressure), approach=self.approach,
             initial_height=np.where(face_mask, self.initial_height, np.nan),
-            previous_height=copy(self.prev_height), previous_rate=copy(self.prev_rate),
+            previous_height=shared(self.prev_height), previous_rate=shared(self.prev_rate),
             previous_step=self.prev_step, next_step=self.next_step,
             pressure_history=None if self.pressures is None else self.pressures.pressures(),
             pressure_history_displacement=(None if self.pressures is None
@@ -694,8 +712,6 @@ class _Run:
     def result(self, status, message):
         """The run so far as a :class:`RunResult`."""
         self.collect()
-        shape = self.problem.shape
-        k = len(self.snap_d)
         return RunResult(
             status=status, message=message, scheme=self.scheme.name, distance=self.s,
             steps=self.steps, rejected=self.rejected, failures=self.failures,
@@ -705,8 +721,7 @@ class _Run:
                                                          else np.int64)
                                             for k_, v in self.history.items()}),
             snapshot_distance=np.array(self.snap_d, dtype=float),
-            snapshot_height=np.array(self.snap_h).reshape(k, *shape),
-            snapshot_pressure=np.array(self.snap_p).reshape(k, *shape),
+            snapshot_height=self.snap_h, snapshot_pressure=self.snap_p,
             depth_scale=self.f_star, distance_scale=self.s_star,
             fast_distance=self.problem.fast_distance,
             pixel_mean_pressure=self.problem.pixel_mean_pressure,
@@ -980,6 +995,8 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
         status, message = run.loop(on_step, on_checkpoint)
         log = logger.info if status == "steady" else logger.warning
         log("%s: %s", status, message)
+        if status == "steady":
+            run.pressures = None  # freed before the result is built: not state any more
         return run.result(status, message)
     finally:
         run.close()
