@@ -14,9 +14,9 @@ What it reproduces
 
         # capture once (every 8th solve of the run, at most 24 of them)
         python studies/benchmarks/bench_contact_solve.py capture --n 1024 --dir /tmp/cs1024
-        # this tree against the tree at /work/main, 5 rounds
+        # this tree against another checkout, e.g. git worktree add ../base REV; 5 rounds
         python studies/benchmarks/bench_contact_solve.py compare --dir /tmp/cs1024 \
-            --base /work/main --out compare_1024.h5
+            --base ../base --out compare_1024.h5
 
     ``replay --dir DIR --preconditioner NAME`` solves the problems with this
     tree alone and a preconditioner of choice; ``products --base TREE``
