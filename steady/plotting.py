@@ -444,8 +444,12 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
     ax_phase.set_title("phase map")
     error = (f" ± {res.rms_slope_error / res.reference_slope:.1g}"
              if np.isfinite(res.rms_slope_error) else "")
-    ax_face.set_title(f"limiting face, rms slope {res.rms_slope:.3g}\n"
-                      f"= ({res.normalised_rms_slope:.4g}{error}) " r"$\nabla f^0_\infty$")
+    if np.isfinite(res.rms_slope):
+        ax_face.set_title(f"limiting face, rms slope {res.rms_slope:.3g}\n"
+                          f"= ({res.normalised_rms_slope:.4g}{error}) " r"$\nabla f^0_\infty$")
+    else:  # the face alone (--no-slope-error): the plain pixel value, named so
+        ax_face.set_title(f"limiting face, plain pixel rms slope {res.rms_slope_plain:.3g}\n"
+                          f"(no corrected estimate computed)")
     if own:  # a title of the inputs on a figure of ours, not on the caller's
         fig.suptitle(f"{res.outline.describe()}, F = {res.normal_force:.3g} N, "
                      f"E* = {res.E_star / 1e6:.3g} MPa, n = {res.n}",
