@@ -145,3 +145,13 @@ def test_transposed_grid_transposes_the_products():
     assert np.allclose(gx, gy_t.T, rtol=1e-13, atol=1e-16), "d/dx is d/dy of the transpose"
     assert np.allclose(gy, gx_t.T, rtol=1e-13, atol=1e-16), "d/dy is d/dx of the transpose"
     assert np.array_equal(a.aliased_symbol.shape, (9, 8)), "aliased symbol layout"
+
+
+def test_operator_with_own_buffers_shares_spectra_and_gives_the_same_products():
+    """Two threads' operators: spectra shared (read-only), buffers apart, products bitwise equal."""
+    hs = HalfSpace((24, 17), 0.1, 2.0)
+    own = hs.with_own_buffers(workers=1)
+    assert own._influence_q is hs._influence_q and not own._influence_q.flags.writeable
+    assert own._work is not hs._work and own._rows is not hs._rows and own.workers == 1
+    p = np.random.default_rng(3).random((24, 17))
+    assert np.array_equal(own.displacement(p), hs.displacement(p))

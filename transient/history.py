@@ -67,7 +67,6 @@ include this; the companion run on a coarser grid
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 import weakref
@@ -372,11 +371,7 @@ class FaceEstimator:
         if self._own_halfspace is None:
             # The problem's operator with work buffers of its own: the spectra
             # (read-only) are shared, the buffers every product writes are not.
-            hs = self.problem.halfspace
-            own = copy.copy(hs)
-            own._rows, own._work = np.zeros_like(hs._rows), np.empty_like(hs._work)
-            own.workers = self.workers
-            self._own_halfspace = own
+            self._own_halfspace = self.problem.halfspace.with_own_buffers(workers=self.workers)
         return self._own_halfspace
 
     def rim_layer_pixels(self, distance):
