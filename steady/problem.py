@@ -420,9 +420,9 @@ class Problem:
         """
         grid = scene.grid(n)
         phases = FacePhases(grid, scene.phase_labels(grid), scene.geometry.n_phases,
-                            getattr(scene, "phase_names", None))
+                            scene.phase_names)
         # Under a load programme the steady state is the one of its last force.
-        force = getattr(scene, "final_force", scene.normal_force)
+        force = scene.final_force
         names = scene.input_names()
         if force != scene.normal_force:
             names["normal_force"] = f"[load] programme force {force!r}"
@@ -432,10 +432,7 @@ class Problem:
         except ValueError as err:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
-        sliding = getattr(scene, "sliding", None)
-        if sliding is None:
-            return cls(phases, scene.wear, force, scene.E_star)
-        return cls(phases, scene.wear, force, scene.E_star, sliding)
+        return cls(phases, scene.wear, force, scene.E_star, scene.sliding)
 
     # -- the grid --------------------------------------------------------
     @property
