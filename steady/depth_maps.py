@@ -432,34 +432,17 @@ class Spheres:
         if volume - target > 2.0 / 3.0 * math.pi * radii[-1] ** 3:
             radii.pop()
         radii = np.sort(np.array(radii))[::-1]
-        cell = 2.0 * radii.max()
-        shape = np.maximum((period // cell).astype(int), 1)
-        bins = {}
-        centres = np.empty((len(radii), 3))
-        for i, r in enumerate(radii):
-            for _ in range(_MAX_TRIES):
-                c = low + rng.uniform(0.0, 1.0, 3) * period
-                key = tuple((((c - low) / period) * shape).astype(int) % shape)
-                near = [m for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)
-                        for m in bins.get(((key[0] + dx) % shape[0], (key[1] + dy) % shape[1],
-                                           (key[2] + dz) % shape[2]), ())]
-                if near:
-                    d = centres[near] - c
-                    d -= period * np.round(d / period)
-                    if np.any(np.einsum("ij,ij->i", d, d) < (radii[near] + r) ** 2):
-                        continue
-                centres[i] = c
-                bins.setdefault(key, []).append(i)
-                break
-            else:
-                reached = float(np.sum(4.0 / 3.0 * math.pi * radii[:i] ** 3)) / np.prod(period)
-                raise ValueError(f"sphere volume_fraction = {self.volume_fraction:g} is not "
-                                 f"reachable by random sequential addition: placing stalled "
-                                 f"at {reached:.3f} (radius {self.radius:.6g} L, spread "
-                                 f"{self.spread:g})")
+        centres = _place(radii, low, period, rng, self._stalled)
         centres.flags.writeable = False
         radii.flags.writeable = False
         return centres, radii
+
+    def _stalled(self, radii, placed, period):
+        """The error of a packing that random sequential addition cannot reach."""
+        reached = float(np.sum(4.0 / 3.0 * math.pi * radii[:placed] ** 3) / np.prod(period))
+        return ValueError(f"sphere volume_fraction = {self.volume_fraction:g} is not reachable "
+                          f"by random sequential addition: placing stalled at {reached:.3f} "
+                          f"(radius {self.radius:.6g} L, spread {self.spread:g})")
 
     def realised_volume_fraction(self):
         """Volume of the placed spheres over the placement box's volume."""
@@ -534,6 +517,44 @@ class Spheres:
         shape = (S,) + grid.shape
         return columns_from_segments(z.reshape(shape) * L, phases.reshape((S + 1,) + grid.shape),
                                      self.n_phases)
+
+
+def _place(radii, low, period, rng, stalled, batch=16):
+    """Random sequential addition of spheres of ``radii`` in a periodic box; centres (N, 3).
+
+    Candidates are drawn ``batch`` at a time and the first that overlaps no
+    sphere placed before is taken (the same law as one at a time); the
+    overlaps are looked up in cells of side ``>= 2 r_max``.  ``stalled(radii,
+    placed, period)`` is the error raised after :data:`_MAX_TRIES` misses.
+    """
+    shape = np.maximum((period // (2.0 * radii.max())).astype(int), 1)
+    slots = 4
+    cells = np.full(tuple(shape) + (slots,), -1, dtype=np.int64)
+    filled = np.zeros(tuple(shape), dtype=np.int64)
+    offsets = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)])
+    centres = np.zeros((len(radii) + 1, 3))  # the last row: that of the empty slots (-1)
+    padded = np.append(radii, 0.0)
+    for i, r in enumerate(radii):
+        for _ in range(-(-_MAX_TRIES // batch)):
+            c = low + rng.uniform(0.0, 1.0, (batch, 3)) * period
+            key = np.minimum(((c - low) / period * shape).astype(int), shape - 1)
+            near = (key[:, None, :] + offsets) % shape
+            idx = cells[near[..., 0], near[..., 1], near[..., 2]].reshape(batch, -1)
+            d = centres[idx] - c[:, None, :]
+            d -= period * np.round(d / period)
+            hit = (np.einsum("kmj,kmj->km", d, d) < (padded[idx] + r) ** 2) & (idx >= 0)
+            free = np.flatnonzero(~hit.any(axis=1))
+            if free.size:
+                break
+        else:
+            raise stalled(radii, i, period)
+        k = tuple(key[free[0]])
+        if filled[k] == cells.shape[-1]:
+            cells = np.concatenate([cells, np.full(cells.shape, -1, dtype=np.int64)], axis=-1)
+        centres[i] = c[free[0]]
+        cells[k + (filled[k],)] = i
+        filled[k] += 1
+    return centres[:-1].copy()
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

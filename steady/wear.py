@@ -698,15 +698,17 @@ class TableLaw:
 
         def excess(log_rate):
             C = math.exp(log_rate)
-            return sum(a * self.phase_pressure(i, C) for i, a in enumerate(areas)) - F
+            return sum(a * self.phase_pressure(i, C) for i, a in enumerate(areas) if a > 0) - F
 
         hi = math.log(top)
+        while excess(hi) < 0:  # rounding at a phase alone carrying the load at its rate
+            hi += 1e-9 * max(1.0, abs(hi))
         lo = hi - 1.0
         while excess(lo) > 0:
             lo -= 1.0 + (hi - lo)
         log_rate = brentq(excess, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
         p = np.array([self.phase_pressure(i, math.exp(log_rate)) for i in range(len(areas))])
-        balance = float(np.dot(areas, p))
+        balance = float(np.dot(areas[areas > 0], p[areas > 0]))
         if not abs(balance - F) <= 1e-9 * F:
             raise ValueError(f"the load F_N = {F:.6g} N falls on a flat part of a wear table "
                              f"(the phases carry {balance:.6g} N at the rate "
