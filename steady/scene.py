@@ -22,7 +22,9 @@ registries of the tables that name a kind -- the face outline
 (:data:`steady.phases.PHASE_MAPS`, ``[phases] map kind``) and the wear law
 (:data:`steady.wear.WEAR_LAWS`, ``[wear] law``), and of the optional
 ``[sliding]`` section, the sliding kinematics (:data:`steady.sliding.SLIDING`,
-``[sliding] kind``; absent, a translation).  The README's tables of
+``[sliding] kind``; absent, a translation), and of the optional ``[depth]``
+section, layers from the surface down over the ``[phases] map``
+(:data:`DEPTH_KEYS`, :data:`LAYER_KEYS`; :meth:`Scene.depth_columns`).  The README's tables of
 scene keys are checked against them (``tests/test_scene.py``).  Lengths of
 phase geometries are in m in the file and in units of the outline's scale
 ``L`` in the geometry objects (the radius of a disk; else the larger half
