@@ -41,8 +41,9 @@ keys (:class:`steady.schema.Registry`): besides the kinds here,
 ``inclusions`` (:mod:`steady.inclusions`), ``micrograph``
 (:mod:`steady.micrograph`) and the kinds that change with depth below the
 surface, ``voxels`` and ``spheres`` (:mod:`steady.depth_maps`: their
-``labels`` are the surface section, ``columns(grid)`` the rest).  Label checks and fill factors are in
-:mod:`steady.labels`, the readers of map files in :mod:`steady.array_files`.
+``labels`` are the surface section, ``columns(grid)`` the rest).  Label
+checks and fill factors are in :mod:`steady.labels`, the readers of map
+files in :mod:`steady.array_files`.
 """
 
 from __future__ import annotations
