@@ -322,6 +322,7 @@ def test_runin_steady_solves_the_section_it_is_given(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "section          0.0004 m below the initial surface" in out, out
     assert "fill factors     substrate 1.0000, coating 0.0000" in out, out
+    assert "phase pressures  substrate 198265 Pa; no pixel in this section: coating" in out, out
     assert steady_main([str(path), "-o", str(tmp_path / "b.h5"), "--depth", "-1"]) == 2
     err = capsys.readouterr().err
     assert "--depth must be a finite depth >= 0 (m), got -1.0" in err and "Traceback" not in err

@@ -103,8 +103,11 @@ def summary_lines(result, names=None):
                   or default_phase_names(result.n_phases))
     fill = ", ".join(f"{name} {v:.4f}" for name, v in zip(names, result.fill_factors,
                                                             strict=True))
-    pressures = ", ".join(f"{name} {v:.6g}" for name, v in zip(names, result.phase_pressures,
-                                                                strict=True))
+    rows = list(zip(names, result.phase_pressures, result.fill_factors, strict=True))
+    pressures = ", ".join(f"{name} {v:.6g}" for name, v, fill in rows if fill > 0) + " Pa"
+    absent = [name for name, _, fill in rows if fill == 0]  # a section may lack a phase
+    if absent:
+        pressures += f"; no pixel in this section: {', '.join(absent)}"
     plain = f"plain pixel value {result.rms_slope_plain:.6g}"
     if math.isnan(result.rms_slope):
         slope = f"rms slope        not estimated  ({plain})"
@@ -127,7 +130,7 @@ def summary_lines(result, names=None):
         + ("" if math.isfinite(result.rms_slope)
            else f"  (plain pixel value {result.normalised_rms_slope_plain:.6g})"),
         f"fill factors     {fill}",
-        f"phase pressures  {pressures} Pa",
+        f"phase pressures  {pressures}",
     ]
 
 
