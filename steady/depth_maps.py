@@ -458,8 +458,10 @@ class Spheres:
         """``n`` as an int; ``ValueError`` naming the radius, pixel and ``n`` if too coarse."""
         n = grid.n if isinstance(grid, FaceGrid) else int(grid)
         if n < self.min_grid():
-            raise ValueError(f"sphere radius {self.radius:.6g} L is under two pixels at n = {n} "
-                             f"(pixel {2.0 / n:.6g} L): the minimum is n = {self.min_grid()}")
+            L, unit = (grid.outline.scale, "m") if isinstance(grid, FaceGrid) else (1.0, "L")
+            raise ValueError(f"sphere radius {self.radius * L:.6g} {unit} is under two pixels at "
+                             f"n = {n} (pixel {2.0 * L / n:.6g} {unit}): the minimum is n = "
+                             f"{self.min_grid()}")
         return check_resolution(grid, self.min_grid(), f"spheres of radius {self.radius:.6g} L")
 
     def _intervals(self, grid):

@@ -177,8 +177,8 @@ def test_stereology_the_section_area_fraction_is_the_volume_fraction():
 
 
 @pytest.mark.parametrize("keys, n, fragment", [
-    ("radius = 2e-4", 32, r"sphere radius 0.05 L is under two pixels at n = 32 \(pixel 0.0625 L\)"
-                          r": the minimum is n = 80"),
+    ("radius = 2e-4", 32, r"\[grid\] n: sphere radius 0.0002 m is under two pixels at n = 32 "
+                          r"\(pixel 0.00025 m\): the minimum is n = 80"),
     ("volume_fraction = 0.6", 32, r"\[phases\] map volume_fraction must be a number in "
                                   r"\(0, 0.5\] \(1\), got 0.6"),
     ("volume_fraction = 0", 32, r"volume_fraction must be a number in \(0, 0.5\]"),
