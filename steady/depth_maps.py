@@ -471,22 +471,23 @@ class Spheres:
         period = np.array([2 * B, 2 * B, z1 - z0])
         x, y = grid.unit_x, grid.unit_y
         pix, tops, bottoms = [], [], []
-        shifts = [(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)]
-        for (cx, cy, cz), r in zip(centres, radii, strict=True):
-            for a, b, c in shifts:
-                px, py, pz = cx + a * period[0], cy + b * period[1], cz + c * period[2]
-                if pz + r <= 0.0 or pz - r >= self.depth or abs(px) > 1 + r or abs(py) > 1 + r:
-                    continue
-                i = np.flatnonzero(np.abs(x - px) < r)
-                j = np.flatnonzero(np.abs(y - py) < r)
-                if not (i.size and j.size):
-                    continue
-                rho2 = (x[i, None] - px) ** 2 + (y[None, j] - py) ** 2
-                ii, jj = np.nonzero(rho2 < r * r)
-                half = np.sqrt(r * r - rho2[ii, jj])
-                pix.append(i[ii] * grid.shape[1] + j[jj])
-                tops.append(np.maximum(pz - half, 0.0))
-                bottoms.append(np.minimum(pz + half, self.depth))
+        shifts = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)])
+        images = (centres[:, None, :] + shifts * period).reshape(-1, 3)
+        r_images = np.repeat(radii, len(shifts))
+        z = images[:, 2]
+        seen = ((z + r_images > 0.0) & (z - r_images < self.depth)
+                & np.all(np.abs(images[:, :2]) <= 1 + r_images[:, None], axis=1))
+        for (px, py, pz), r in zip(images[seen], r_images[seen], strict=True):
+            i = np.flatnonzero(np.abs(x - px) < r)
+            j = np.flatnonzero(np.abs(y - py) < r)
+            if not (i.size and j.size):
+                continue
+            rho2 = (x[i, None] - px) ** 2 + (y[None, j] - py) ** 2
+            ii, jj = np.nonzero(rho2 < r * r)
+            half = np.sqrt(r * r - rho2[ii, jj])
+            pix.append(i[ii] * grid.shape[1] + j[jj])
+            tops.append(np.maximum(pz - half, 0.0))
+            bottoms.append(np.minimum(pz + half, self.depth))
         if not pix:
             return np.zeros(0, int), np.zeros(0), np.zeros(0)
         return np.concatenate(pix), np.concatenate(tops), np.concatenate(bottoms)

@@ -326,3 +326,9 @@ def test_runin_steady_solves_the_section_it_is_given(tmp_path, capsys):
     assert steady_main([str(path), "-o", str(tmp_path / "b.h5"), "--depth", "-1"]) == 2
     err = capsys.readouterr().err
     assert "--depth must be a finite depth >= 0 (m), got -1.0" in err and "Traceback" not in err
+
+
+def test_a_phase_nowhere_in_the_columns_is_named(tmp_path):
+    s = scene(tmp_path, COATING.replace("phase = 1", "phase = 2"), k="[1e-12, 1e-13, 3e-13]")
+    with pytest.raises(ValueError, match=r"phase 1 occurs nowhere in the columns at n = 32"):
+        Problem.from_scene(s)
