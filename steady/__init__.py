@@ -19,6 +19,8 @@ bottom floor up:
 - :mod:`steady.phases`, :mod:`steady.inclusions`, :mod:`steady.micrograph`
   -- phase geometries rasterised at any grid size (micrographs need the
   extra ``runin[micrograph]``);
+- :mod:`steady.depth`, :mod:`steady.depth_maps` -- phase maps that change
+  with depth: columns of segments, voxel stacks, spheres, layers;
 - :mod:`steady.pressures`, :mod:`steady.wear` -- eq. 7, and the local wear
   laws;
 - :mod:`steady.sliding` -- the sliding kinematics (``[sliding]``): the local

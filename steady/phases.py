@@ -38,9 +38,12 @@ Resolution rules (``labels`` refuses coarser grids):
 
 Every kind is registered in :data:`PHASE_MAPS` with its ``[phases] map``
 keys (:class:`steady.schema.Registry`): besides the kinds here,
-``inclusions`` (:mod:`steady.inclusions`) and ``micrograph``
-(:mod:`steady.micrograph`).  Label checks and fill factors are in
-:mod:`steady.labels`, the readers of map files in :mod:`steady.array_files`.
+``inclusions`` (:mod:`steady.inclusions`), ``micrograph``
+(:mod:`steady.micrograph`) and the kinds that change with depth below the
+surface, ``voxels`` and ``spheres`` (:mod:`steady.depth_maps`: their
+``labels`` are the surface section, ``columns(grid)`` the rest).  Label
+checks and fill factors are in :mod:`steady.labels`, the readers of map
+files in :mod:`steady.array_files`.
 """
 
 from __future__ import annotations

@@ -35,6 +35,7 @@ import math
 
 import numpy as np
 
+from .depth import DepthColumns
 from .halfspace import HalfSpace
 from .labels import validate_labels
 from .outline import FaceGrid
@@ -251,6 +252,15 @@ class FacePhases:
         A name for each phase (``[phases] names``), used in summaries,
         figures and files; default ``("phase 0", "phase 1", ...)``.  Phases
         are numbered from 0 everywhere.
+    columns : steady.depth.DepthColumns, optional
+        The phase below every face pixel as a function of depth, for a map
+        that changes with depth (default None: columnar, the paper's punch).
+        With columns, ``labels`` is their section at ``depth`` and every
+        phase must occur somewhere in the columns, not necessarily in the
+        section: a phase may have no pixel (a zero area, ``counts`` 0).
+    depth : float or array_like, shape (nx, ny), m, optional
+        The depth below the initial surface of the section ``labels`` is
+        (default 0: the surface); only with ``columns``.
 
     Attributes
     ----------
@@ -262,13 +272,17 @@ class FacePhases:
     ValueError
         Labels of another shape, not integers, a pixel off the face not
         ``-1``, a face pixel outside ``0..P-1``, or a phase without a pixel
-        on the face (the message names it and the pixel counts).
+        on the face (the message names it and the pixel counts); with
+        columns, columns of another grid, face or phase count, or labels
+        that are not their section at ``depth`` (the message names a pixel).
     """
 
     grid: FaceGrid
     labels: np.ndarray
     n_phases: int
     names: tuple | None = None
+    columns: DepthColumns | None = None
+    depth: object = 0.0
 
     def __post_init__(self):
         """Check the labels against the grid and the declared phases; store them read-only."""
@@ -282,7 +296,10 @@ class FacePhases:
                              f"{labels.shape}")
         if isinstance(self.n_phases, (bool, np.bool_)) or int(self.n_phases) != self.n_phases:
             raise ValueError(f"n_phases must be an integer, got {self.n_phases!r}")
-        counts = validate_labels(labels, int(self.n_phases), face_mask=self.grid.mask)
+        if self.columns is None:
+            counts = validate_labels(labels, int(self.n_phases), face_mask=self.grid.mask)
+        else:
+            counts = self._section_counts(labels)
         labels = np.array(labels, copy=True)
         labels.flags.writeable = False
         counts.flags.writeable = False
@@ -293,6 +310,39 @@ class FacePhases:
                            if self.names is None
                            else check_phase_names(self.names, self.n_phases))
 
+    def _section_counts(self, labels):
+        """Check ``labels`` as the section of ``columns`` at ``depth``; the pixels of each phase."""
+        columns, grid = self.columns, self.grid
+        if not isinstance(columns, DepthColumns):
+            raise ValueError(f"columns must be a steady.depth.DepthColumns, got "
+                             f"{type(columns).__name__}")
+        if columns.shape != grid.shape or not np.array_equal(columns.face_mask, grid.mask):
+            raise ValueError(f"the columns ({columns.shape[0]} x {columns.shape[1]} pixels) are "
+                             f"not on the face of the {grid.outline.describe()} at n = {grid.n}")
+        if columns.n_phases != int(self.n_phases):
+            raise ValueError(f"the columns have {columns.n_phases} phase(s), n_phases is "
+                             f"{self.n_phases}")
+        depth = np.asarray(self.depth, dtype=float)
+        if depth.ndim and depth.shape != grid.shape:
+            raise ValueError(f"depth must be a number or have shape {grid.shape}, got "
+                             f"{depth.shape}")
+        if not np.all(np.isfinite(depth[grid.mask] if depth.ndim else depth)) or np.any(
+                (depth[grid.mask] if depth.ndim else depth) < 0):
+            raise ValueError("depth must be finite and >= 0 (m below the initial surface)")
+        if not np.issubdtype(labels.dtype, np.integer):
+            raise ValueError(f"phase labels must be integers, got dtype {labels.dtype}")
+        section = columns.phase_at(depth)
+        differ = np.argwhere(section != labels)
+        if differ.size:
+            i, j = (int(v) for v in differ[0])
+            raise ValueError(f"labels are not the columns' section at the given depth: pixel "
+                             f"({i}, {j}) has label {int(labels[i, j])}, the section phase "
+                             f"{int(section[i, j])} ({len(differ)} pixels differ)")
+        depth = np.array(depth, copy=True)
+        depth.flags.writeable = False
+        object.__setattr__(self, "depth", float(depth) if depth.ndim == 0 else depth)
+        return np.bincount(labels[grid.mask], minlength=columns.n_phases)
+
     @property
     def outline(self):
         """The face's outline."""
@@ -302,6 +352,21 @@ class FacePhases:
     def face_mask(self):
         """Face pixels, shape (nx, ny), read-only."""
         return self.grid.mask
+
+    @property
+    def depth_varying(self):
+        """Whether the phase map changes with depth below some face pixel."""
+        return self.columns is not None and not self.columns.columnar
+
+    def section(self, depth):
+        """The phases of the section at ``depth`` (m, scalar or (nx, ny)) of the columns."""
+        if self.columns is None:
+            raise ValueError("a columnar phase map has the same section at every depth: "
+                             "it has no columns")
+        depth = np.broadcast_to(np.asarray(depth, dtype=float), self.grid.shape) \
+            if np.ndim(depth) else float(depth)
+        return FacePhases(self.grid, self.columns.phase_at(depth), self.n_phases, self.names,
+                          self.columns, depth)
 
     @property
     def fill_factors(self):
@@ -415,12 +480,21 @@ class Problem:
         ValueError
             A grid too coarse for the outline or the geometry, a phase
             without a pixel on the face at this grid (named, with what to
-            change), or a scale out of range (:func:`check_scales`, naming
+            change; for a depth-varying scene, a phase nowhere in the
+            columns), or a scale out of range (:func:`check_scales`, naming
             the scene's keys).
+
+        Notes
+        -----
+        A depth-varying scene (``[depth]`` or a 3-d map kind,
+        :meth:`steady.scene.Scene.depth_columns`) gives a problem with
+        ``phases.columns``, its labels the surface section:
+        :meth:`section` gives the problem of a deeper one.
         """
         grid = scene.grid(n)
-        phases = FacePhases(grid, scene.phase_labels(grid), scene.geometry.n_phases,
-                            scene.phase_names)
+        columns = scene.depth_columns(grid)
+        labels = scene.phase_labels(grid) if columns is None else columns.phase_at(0.0)
+        phases = FacePhases(grid, labels, scene.n_phases, scene.phase_names, columns)
         # Under a load programme the steady state is the one of its last force.
         force = scene.final_force
         names = scene.input_names()
@@ -433,6 +507,32 @@ class Problem:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
         return cls(phases, scene.wear, force, scene.E_star, scene.sliding)
+
+    def section(self, depth):
+        """The problem of the section at ``depth``: the quasi-steady problem there.
+
+        Parameters
+        ----------
+        depth : float or array_like, shape (nx, ny), m
+            Worn depth below the initial surface, ``>= 0``; a number is a
+            plane section.
+
+        Returns
+        -------
+        Problem
+            Labels ``columns.phase_at(depth)``, the same columns, law, load,
+            modulus and kinematics.  ``steady.solve(problem.section(w))`` is
+            the quasi-steady face of the section: the limiting face the
+            punch would reach if the phase map no longer changed below ``w``.
+            A phase without a pixel in the section carries no load.
+
+        Raises
+        ------
+        ValueError
+            A columnar problem (no columns), or a depth that is negative,
+            not finite or of another shape.
+        """
+        return dataclasses.replace(self, phases=self.phases.section(depth))
 
     # -- the grid --------------------------------------------------------
     @property
@@ -504,13 +604,17 @@ class Problem:
         """Steady pressure of each phase (eq. 7, the wear law's), Pa, shape (P,).
 
         Under non-uniform sliding (:attr:`sliding`) the pressure varies within
-        a phase: this is then each phase's mean, its load over its area.
+        a phase: this is then each phase's mean, its load over its area (NaN
+        for a phase without a pixel in a section).  Without it a phase
+        without a pixel gets the pressure it would carry at the common wear
+        rate: it carries no load.
         """
         if self.sliding is not None:
             load = np.bincount(self.labels[self.face_mask],
                                weights=self.steady_pressure()[self.face_mask],
                                minlength=self.n_phases)
-            return load / self.phases.counts
+            counts = self.phases.counts
+            return np.where(counts > 0, load / np.maximum(counts, 1), np.nan)
         return self.wear.phase_pressures(self.phases.counts, self.normal_force,
                                          self.pixel_area)
 

@@ -22,7 +22,9 @@ registries of the tables that name a kind -- the face outline
 (:data:`steady.phases.PHASE_MAPS`, ``[phases] map kind``) and the wear law
 (:data:`steady.wear.WEAR_LAWS`, ``[wear] law``), and of the optional
 ``[sliding]`` section, the sliding kinematics (:data:`steady.sliding.SLIDING`,
-``[sliding] kind``; absent, a translation).  The README's tables of
+``[sliding] kind``; absent, a translation), and of the optional ``[depth]``
+section, layers from the surface down over the ``[phases] map``
+(:data:`DEPTH_KEYS`, :data:`LAYER_KEYS`; :meth:`Scene.depth_columns`).  The README's tables of
 scene keys are checked against them (``tests/test_scene.py``).  Lengths of
 phase geometries are in m in the file and in units of the outline's scale
 ``L`` in the geometry objects (the radius of a disk; else the larger half
@@ -51,7 +53,8 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from . import inclusions, micrograph  # noqa: F401 -- they register their map kinds
+from . import depth_maps, inclusions, micrograph  # noqa: F401 -- they register their map kinds
+from .depth_maps import DepthLayers, LayerPhase
 from .labels import validate_labels
 from .load_programme import LoadProgramme
 from .outline import FaceGrid, outline_from_table
@@ -62,8 +65,8 @@ from .sliding import sliding_from_table
 from .text import one_line, shorten
 from .wear import wear_law_from_table
 
-__all__ = ["MAX_SCENE_BYTES", "OPTIONAL_SECTIONS", "PHASE_KEYS", "RUN_IN_SECTIONS", "SECTIONS",
-           "Scene", "load_scene", "parse_scene"]
+__all__ = ["DEPTH_KEYS", "LAYER_KEYS", "MAX_SCENE_BYTES", "OPTIONAL_SECTIONS", "PHASE_KEYS",
+           "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene", "parse_scene"]
 
 #: Largest scene file read, bytes: a scene is a few lines; large data belong in
 #: ``.npy`` files (a 40 MB list would take Python's TOML parser half a minute).
@@ -92,12 +95,25 @@ PHASE_KEYS = (Key("names", "strings",
                       "(default: 'phase 0', 'phase 1', ...); used in summaries, figures and "
                       "files"),)
 
+#: The keys of ``[depth]`` besides its ``[[depth.layers]]`` (read by :data:`LAYER_KEYS`).
+DEPTH_KEYS = (Key("kind", "string", choices=("layers",), required=True,
+                  doc="how the phase map changes with depth: \"layers\", layers from the "
+                      "surface down over the [phases] map (the substrate)"),)
+
+#: The keys of each ``[[depth.layers]]`` entry, from the surface down; ``map`` is read by its kind.
+LAYER_KEYS = (Key("thickness", "number", unit="m", low=0.0, required=True,
+                  doc="thickness of the layer"),
+              Key("phase", "integer", low=0, low_open=False,
+                  doc="the phase of a homogeneous layer (or a map, not both)"))
+
 #: Every section a scene file has: those of :data:`SECTIONS` and the ones that name a kind.
 CORE_SECTIONS = ("punch", "load", "counterbody", "grid", "wear", "phases")
 
 #: Optional sections of the model, read here when present: ``[sliding]``, the
-#: sliding kinematics (:data:`steady.sliding.SLIDING`; absent: a translation).
-OPTIONAL_SECTIONS = ("sliding",)
+#: sliding kinematics (:data:`steady.sliding.SLIDING`; absent: a translation), and
+#: ``[depth]``, a phase map that changes with depth (absent: columnar, or a 3-d
+#: ``[phases] map`` kind).
+OPTIONAL_SECTIONS = ("sliding", "depth")
 
 #: Sections read by the run-in command (package ``transient``).  Unless named
 #: in ``extra_sections`` they are skipped, not refused: the steady state does
@@ -149,6 +165,9 @@ class Scene:
     load_programme : steady.load_programme.LoadProgramme or None
         ``[load] programme`` (with ``normal_force`` before its first
         breakpoint); None when the scene gives none: the load is constant.
+    depth : steady.depth_maps.DepthLayers or None
+        The ``[depth]`` section, parsed: layers over ``geometry`` (the
+        substrate); None without one.
     """
 
     outline: object
@@ -166,6 +185,7 @@ class Scene:
     sliding_speed: float | None = None
     sliding: object = None
     load_programme: LoadProgramme | None = None
+    depth: DepthLayers | None = None
 
     @property
     def final_force(self):
@@ -176,8 +196,46 @@ class Scene:
 
     @property
     def n_phases(self):
-        """Number of phases of the geometry."""
-        return self.geometry.n_phases
+        """Number of phases of the geometry (with ``[depth]``: of the layers and the substrate)."""
+        return self.layout.n_phases
+
+    @property
+    def layout(self):
+        """The phase geometry in 3-d: the ``[depth]`` layers if any, else ``geometry``."""
+        return self.geometry if self.depth is None else self.depth
+
+    @property
+    def depth_varying(self):
+        """Whether the phase map may change with depth (``[depth]`` or a 3-d map kind)."""
+        return hasattr(self.layout, "columns")
+
+    def depth_columns(self, n=None):
+        """The phase below every face pixel (:class:`steady.depth.DepthColumns`), or None.
+
+        Parameters
+        ----------
+        n : int or FaceGrid, optional
+            Grid size (default ``self.n``) or the scene outline's grid.
+
+        Returns
+        -------
+        DepthColumns or None
+            None for a columnar scene (no ``[depth]``, a 2-d map kind): its
+            map is :meth:`phase_labels` at every depth.
+
+        Raises
+        ------
+        ValueError
+            A phase that occurs nowhere in the columns at this grid.
+        """
+        if not self.depth_varying:
+            return None
+        grid = n if isinstance(n, FaceGrid) else self.grid(n)
+        try:
+            return self.layout.columns(grid)
+        except ValueError as err:
+            where = "" if self.source_path is None else f"{self.source_path}: "
+            raise ValueError(f"{where}{one_line(err, 300)} at n = {grid.n}") from None
 
     def input_names(self):
         """The scene's keys and values, by input, for messages (see :func:`input_names`)."""
@@ -204,7 +262,9 @@ class Scene:
         Returns
         -------
         ndarray, shape (nx, ny), int
-            Phase index on the face, -1 off it.
+            Phase index on the face, -1 off it.  For a depth-varying scene
+            the surface section (depth 0), whose phases are checked over the
+            columns (:meth:`depth_columns`): a coating's surface is one phase.
 
         Raises
         ------
@@ -215,6 +275,8 @@ class Scene:
         """
         grid = n if isinstance(n, FaceGrid) else self.grid(n)
         n = grid.n
+        if self.depth_varying:  # the surface section; every phase is looked for in the columns
+            return self.depth_columns(grid).phase_at(0.0)
         labels = self.geometry.labels(grid)
         counts = np.bincount(labels[labels >= 0], minlength=self.n_phases)
         empty = np.flatnonzero(counts[:self.n_phases] == 0)
@@ -256,9 +318,8 @@ def input_names(outline, normal_force, E_star, n, wear=None):
     return names
 
 
-def _geometry(table, outline, base_dir, n):
+def _geometry(table, outline, base_dir, n, where="[phases] map"):
     """The phase geometry of ``[phases] map`` (a registered kind of :data:`PHASE_MAPS`)."""
-    where = "[phases] map"
     if not isinstance(table, dict):
         raise ValueError(f"{where} must be an inline table with a 'kind', got {shorten(table)}")
     context = Context(base_dir=base_dir, outline=outline, n=n, where=where)
@@ -333,18 +394,24 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
     geometry = _geometry(doc["phases"]["map"], outline, base_dir, n)
-    wear = wear_law_from_table(doc["wear"], base_dir, n_phases=geometry.n_phases)
+    depth = _depth(doc["depth"], geometry, outline, base_dir, n) if "depth" in doc else None
+    layout = geometry if depth is None else depth
+    if depth is None:
+        wear = wear_law_from_table(doc["wear"], base_dir, n_phases=geometry.n_phases)
+    else:
+        wear = wear_law_from_table(doc["wear"], base_dir)
+        _check_layer_phases(depth, wear)
     names = phase_keys.get("names")
     if names is not None:
         try:
-            names = check_phase_names(names, geometry.n_phases)
+            names = check_phase_names(names, layout.n_phases)
         except ValueError as err:
             raise ValueError(f"[phases] names: {err}") from None
     check_scales(outline, force, E_star, n=n, wear=wear,
                  names=input_names(outline, force, E_star, n, wear))
     programme = _programme(values["load"], outline, E_star, n, wear)
     try:
-        geometry.check_grid(FaceGrid(outline, n))
+        layout.check_grid(FaceGrid(outline, n))
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
 
@@ -359,7 +426,48 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
                  source_path=None if source_path is None else pathlib.Path(source_path),
                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
                  phase_names=names, sliding_speed=values["load"].get("sliding_speed"),
-                 sliding=sliding, load_programme=programme)
+                 sliding=sliding, load_programme=programme, depth=depth)
+
+
+def _depth(table, substrate, outline, base_dir, n):
+    """The :class:`DepthLayers` of ``[depth]`` over the ``[phases] map`` ``substrate``."""
+    values = read_table(table, "[depth]", DEPTH_KEYS, base_dir, ignore=("layers",))
+    layers = table.get("layers")
+    if not isinstance(layers, list) or not layers or not all(isinstance(t, dict)
+                                                             for t in layers):
+        raise ValueError(f"[depth] (kind {values['kind']!r}) needs [[depth.layers]] tables, "
+                         f"one per layer from the surface down, got {shorten(layers)}")
+    thicknesses, maps = [], []
+    for i, layer in enumerate(layers):
+        where = f"[depth] layers[{i}]"
+        keys = read_table(layer, where, LAYER_KEYS, base_dir, ignore=("map",))
+        if ("phase" in keys) == ("map" in layer):
+            raise ValueError(f"{where} needs either 'phase' (a homogeneous layer) or 'map' (a "
+                             f"[phases] map kind), not {'both' if 'phase' in keys else 'neither'}")
+        if "phase" in keys:
+            maps.append(LayerPhase(keys["phase"]))
+        else:
+            maps.append(_geometry(layer["map"], outline, base_dir, n, where=f"{where} map"))
+        thicknesses.append(keys["thickness"])
+    return DepthLayers(tuple(thicknesses), tuple(maps), substrate)
+
+
+def _check_layer_phases(depth, wear):
+    """Refuse a layer phase outside the wear law's phases, and a law for other phases."""
+    top = wear.n_phases - 1
+    for i, g in enumerate(depth.maps):
+        if isinstance(g, LayerPhase) and g.phase > top:
+            raise ValueError(f"[depth] layers[{i}] phase = {g.phase} is outside the wear law's "
+                             f"phases 0..{top}")
+        if g.n_phases > wear.n_phases:
+            raise ValueError(f"[depth] layers[{i}] map has {g.n_phases} phases, the wear law "
+                             f"{wear.n_phases}")
+    if depth.substrate.n_phases > wear.n_phases:
+        raise ValueError(f"[phases] map has {depth.substrate.n_phases} phases, the wear law "
+                         f"{wear.n_phases}")
+    if depth.n_phases != wear.n_phases:
+        raise ValueError(f"[wear] has {wear.n_phases} phases, the [depth] layers and the "
+                         f"[phases] map use {depth.n_phases} (phases 0..{depth.n_phases - 1})")
 
 
 def _programme(load, outline, E_star, n, wear):

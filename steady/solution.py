@@ -38,6 +38,7 @@ from .problem import Problem
 from .relief import rms_height
 from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
 from .validity import check_rms_slope
+from .wear import restrict_phases
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
 
@@ -236,6 +237,9 @@ def solve(problem, *, geometry=None, face_only=False):
     """
     if not isinstance(problem, Problem):
         raise ValueError(f"solve takes a steady.problem.Problem, got {type(problem).__name__}")
+    if problem.phases.columns is not None:
+        geometry = None  # the section is the map; a 3-d geometry's labels are the surface's
+        _log_section(problem)
     if geometry is not None and not face_only:
         labels = geometry.labels(problem.grid)
         if not np.array_equal(labels, problem.labels):
@@ -251,7 +255,8 @@ def _solve(problem, geometry, face_only):
     if face_only:
         return dataclasses.replace(result, rms_slope=math.nan)
     if geometry is None:
-        estimate = estimate_map_rms_slope(problem.labels, problem.wear, problem.normal_force,
+        labels, wear = _present_phases(problem)
+        estimate = estimate_map_rms_slope(labels, wear, problem.normal_force,
                                           problem.outline, problem.E_star,
                                           sliding=problem.sliding)
     else:
@@ -262,6 +267,28 @@ def _solve(problem, geometry, face_only):
                  estimate.rms_slope, estimate.error, estimate.grids, result.rms_slope_plain)
     return dataclasses.replace(result, rms_slope=estimate.rms_slope,
                                rms_slope_error=estimate.error)
+
+
+def _log_section(problem):
+    """Say which section of a depth-varying problem is solved: its quasi-steady face."""
+    if not problem.phases.depth_varying:
+        return
+    depth = problem.phases.depth
+    where = (f"the section at depth {depth:.6g} m" if np.ndim(depth) == 0 and depth > 0
+             else "the surface section" if np.ndim(depth) == 0
+             else "the section at the given depth map")
+    logger.info("the phase map changes with depth: solving the quasi-steady face of %s", where)
+
+
+def _present_phases(problem):
+    """The labels and the law of the phases with a pixel, renumbered (a section may lack one)."""
+    counts = problem.phases.counts
+    if np.all(counts > 0):
+        return problem.labels, problem.wear
+    present = np.flatnonzero(counts > 0)
+    renumber = np.full(problem.n_phases + 1, -1)
+    renumber[present] = np.arange(present.size)
+    return renumber[problem.labels], restrict_phases(problem.wear, present)
 
 
 def _limiting_face(problem):
@@ -367,7 +394,11 @@ def solve_scene(scene, *, n=None, face_only=False, problem=None):
     elif problem.shape != scene.grid(n).shape:
         raise ValueError(f"the problem's grid {problem.shape[0]} x {problem.shape[1]} is not "
                          f"the scene's at n = {scene.n if n is None else n}")
-    result = _solve(problem, scene.geometry, face_only)
+    geometry = scene.geometry
+    if problem.phases.columns is not None:
+        geometry = None  # a depth-varying scene: the section is the map
+        _log_section(problem)
+    result = _solve(problem, geometry, face_only)
     where = "the scene" if scene.source_path is None else str(scene.source_path)
     check_rms_slope(result.rms_slope if math.isfinite(result.rms_slope)
                     else result.rms_slope_plain, f"the steady face of {where}")

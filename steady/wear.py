@@ -49,7 +49,7 @@ from .schema import Context, Key, Registry
 from .text import shorten
 
 __all__ = ["WEAR_LAWS", "ArchardLaw", "PowerLaw", "TableLaw", "ThresholdLaw", "as_wear_law",
-           "pressure_field", "wear_law_from_table"]
+           "pressure_field", "restrict_phases", "wear_law_from_table"]
 
 #: Registered wear laws, by ``[wear] law`` (default ``"power"``).
 WEAR_LAWS = Registry("wear law", "law", default="power")
@@ -693,19 +693,22 @@ class TableLaw:
             raise ValueError(f"the wear tables give no wear up to p = {shorten(list(self._zeros))}"
                              f" Pa, which holds sum_i A_i p_i = {zero:.6g} N at or above the "
                              f"load F_N = {F:.6g} N: no steady state with every phase wearing")
-        top = min(float(self.phase_rate(i, F / a)) for i, a in enumerate(areas))
+        # A phase without area (a section missing it) carries nothing and bounds nothing.
+        top = min(float(self.phase_rate(i, F / a)) for i, a in enumerate(areas) if a > 0)
 
         def excess(log_rate):
             C = math.exp(log_rate)
-            return sum(a * self.phase_pressure(i, C) for i, a in enumerate(areas)) - F
+            return sum(a * self.phase_pressure(i, C) for i, a in enumerate(areas) if a > 0) - F
 
         hi = math.log(top)
+        while excess(hi) < 0:  # rounding at a phase alone carrying the load at its rate
+            hi += 1e-9 * max(1.0, abs(hi))
         lo = hi - 1.0
         while excess(lo) > 0:
             lo -= 1.0 + (hi - lo)
         log_rate = brentq(excess, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
         p = np.array([self.phase_pressure(i, math.exp(log_rate)) for i in range(len(areas))])
-        balance = float(np.dot(areas, p))
+        balance = float(np.dot(areas[areas > 0], p[areas > 0]))
         if not abs(balance - F) <= 1e-9 * F:
             raise ValueError(f"the load F_N = {F:.6g} N falls on a flat part of a wear table "
                              f"(the phases carry {balance:.6g} N at the rate "
@@ -752,6 +755,38 @@ class TableLaw:
         phase = _phase_of(field)
         shifted = np.append(0.0, self._zeros)[phase] + mean_pressure
         return self._by_phase(self.phase_slope, shifted, field)
+
+
+def restrict_phases(wear, phases):
+    """The law of some of the phases only, renumbered ``0..len(phases)-1`` in that order.
+
+    A section that lacks a phase (:meth:`steady.problem.Problem.section`)
+    has the steady state of the law of its present phases: the absent one
+    carries no load.
+
+    Parameters
+    ----------
+    wear : wear law
+    phases : sequence of int
+        Phases kept, each in ``0..P-1``.
+
+    Returns
+    -------
+    wear law of the same kind
+    """
+    wear = as_wear_law(wear)
+    phases = [int(i) for i in phases]
+    if isinstance(wear, TableLaw):
+        return TableLaw(tuple(wear.pressures[i] for i in phases),
+                        tuple(wear.rates[i] for i in phases))
+    k = tuple(wear.coefficients[i] for i in phases)
+    if isinstance(wear, ThresholdLaw):
+        return ThresholdLaw(k, tuple(wear.thresholds[i] for i in phases), wear.exponent)
+    if isinstance(wear, ArchardLaw):
+        return ArchardLaw(k)
+    if isinstance(wear, PowerLaw):
+        return PowerLaw(k, wear.exponent)
+    raise ValueError(f"cannot restrict the {wear.describe()} to phases {phases}")
 
 
 def as_wear_law(wear):

@@ -30,7 +30,8 @@ COMMANDS = {"runin-steady": "steady", "runin-transient": "transient",
 #: The examples that name map files, and those files.
 MAP_FILES = {"aggregate_chip": ["aggregate_chip_mask.npy"],
              "checkerboard": ["checkerboard.npy"],
-             "micrograph_steady": ["micrograph_example.png"]}
+             "micrograph_steady": ["micrograph_example.png"],
+             "voxel_stack_transient": ["voxel_stack.npy"]}
 
 
 def test_every_scene_file_is_an_example_with_a_description():

@@ -128,7 +128,7 @@ def test_shipped_run_in_scene_loads_for_steady():
     ("seed = 2024", "seed = -3", "[phases] map seed must be an integer >= 0, got -3"),
     ('kind = "voronoi"', 'kind = "hexagons"',
      "kind must be one of ['file', 'homogeneous', 'inclusions', 'micrograph', 'rods', "
-     "'voronoi'], got 'hexagons'"),
+     "'spheres', 'voronoi', 'voxels'], got 'hexagons'"),
     ("seed = 2024", "seed = 2024, colour = 1",
      "unknown key 'colour' in [phases] map (kind 'voronoi')"),
     ("radius = 0.004", "radius = 0.004\nradus = 0.004", "unknown key 'radus' in [punch]"),

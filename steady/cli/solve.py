@@ -79,6 +79,10 @@ def build_parser():
                         help="skip the corrected rms slope and its error bar, which cost a "
                              "few more solves (rms_slope is then NaN; the plain pixel value is "
                              "still reported as such)")
+    parser.add_argument("--depth", type=float, default=0.0, metavar="M",
+                        help="for a phase map that changes with depth ([depth], a 3-d map "
+                             "kind): solve the section at this worn depth below the initial "
+                             "surface, m (default 0, the surface): its quasi-steady face")
     add_memory_limit(parser)
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log progress (-v) or details (-vv) to stderr")
@@ -99,8 +103,11 @@ def summary_lines(result, names=None):
                   or default_phase_names(result.n_phases))
     fill = ", ".join(f"{name} {v:.4f}" for name, v in zip(names, result.fill_factors,
                                                             strict=True))
-    pressures = ", ".join(f"{name} {v:.6g}" for name, v in zip(names, result.phase_pressures,
-                                                                strict=True))
+    rows = list(zip(names, result.phase_pressures, result.fill_factors, strict=True))
+    pressures = ", ".join(f"{name} {v:.6g}" for name, v, fill in rows if fill > 0) + " Pa"
+    absent = [name for name, _, fill in rows if fill == 0]  # a section may lack a phase
+    if absent:
+        pressures += f"; no pixel in this section: {', '.join(absent)}"
     plain = f"plain pixel value {result.rms_slope_plain:.6g}"
     if math.isnan(result.rms_slope):
         slope = f"rms slope        not estimated  ({plain})"
@@ -123,7 +130,7 @@ def summary_lines(result, names=None):
         + ("" if math.isfinite(result.rms_slope)
            else f"  (plain pixel value {result.normalised_rms_slope_plain:.6g})"),
         f"fill factors     {fill}",
-        f"phase pressures  {pressures} Pa",
+        f"phase pressures  {pressures}",
     ]
 
 
@@ -147,6 +154,9 @@ def run(args):
         logger.info("solved in %.3g s: rms slope %.6g", time.monotonic() - started,
                     result.rms_slope)
         lines = summary_lines(result, scene.phase_names)
+        if problem.phases.columns is not None:
+            lines.insert(1, f"section          {args.depth:.6g} m below the initial surface: "
+                            f"the quasi-steady face of this section")
         if isinstance(scene.geometry, Micrograph):
             lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
         if args.segmentation is not None:
@@ -186,8 +196,16 @@ def _check(args):
              + ", ".join(f"[{name}]" for name in scene.ignored_sections))
     check_memory(steady_memory(scene.grid().shape, slope_error=args.slope_error),
                  f"a steady solve at n = {scene.n}", args.memory_limit)
+    if not (math.isfinite(args.depth) and args.depth >= 0):
+        raise ValueError(f"--depth must be a finite depth >= 0 (m), got {args.depth!r}")
     # Names a phase without a face pixel before the solve; the solve takes its map.
-    return scene, Problem.from_scene(scene)
+    problem = Problem.from_scene(scene)
+    if problem.phases.columns is not None:
+        problem = problem.section(args.depth)
+    elif args.depth > 0:
+        note(f"the phase map does not change with depth: --depth {args.depth:g} m solves the "
+             f"same face as the surface")
+    return scene, problem
 
 
 def _draw_segmentation(args, scene):

@@ -2,7 +2,7 @@
 
 Each example is a scene file ``<name>.toml`` in this package's directory,
 with the ``.npy`` and ``.png`` files it names (``path`` keys: a mask, a
-phase map, a micrograph) beside it.  The first comment line of a scene is
+phase map, a micrograph; a voxel map's ``file``) beside it.  The first comment line of a scene is
 its one-line description.  The command ``runin-examples`` lists them and
 copies one, with its files, into a directory of the user's.
 
@@ -97,8 +97,8 @@ def files(name):
     -------
     list of str
         File names relative to the example directory: ``<name>.toml`` first,
-        then every relative ``path`` value of the scene (any table), in the
-        order of the file.
+        then every relative ``path`` value of the scene (any table, also a
+        voxel map's ``file``), in the order of the file.
     """
     scene = path(name)
     found = [scene.name]
@@ -107,7 +107,7 @@ def files(name):
         for key, value in table.items():
             if isinstance(value, dict):
                 walk(value)
-            elif key == "path" and isinstance(value, str) and value not in found:
+            elif key in ("path", "file") and isinstance(value, str) and value not in found:
                 found.append(value)
 
     walk(tomllib.loads(scene.read_text()))
