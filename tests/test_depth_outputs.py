@@ -309,3 +309,24 @@ def test_summary_lines(coated, swapped, columnar):
     depth = transient_cli._end_lines(dataclasses.replace(swapped[0], status="depth"))
     assert depth[0].startswith("run ended at the end depth"), depth
     assert transient_cli._end_lines(columnar) == []
+
+
+def test_history_figure_panels(tmp_path, coated, columnar):
+    """A depth run's figure has the depth panel and the quasi-steady slope; a columnar one not."""
+    from transient.plotting import plot_history, run_figure
+
+    result = coated[0]
+    fig = run_figure(result)
+    titles = [ax.get_title() for ax in fig.axes]
+    assert "worn depth and the section" in titles, titles
+    labels = [line.get_label() for line in fig.axes[0].get_lines()]
+    assert "quasi-steady face of the section" in labels, labels
+    legend = [t.get_text() for ax in fig.axes if ax.get_legend() is not None
+              for t in ax.get_legend().get_texts()]
+    for name in NAMES:
+        assert f"{name} (fraction)" in legend, legend
+    assert "coating worn through" in legend and "coating gone from the contact" in legend
+    assert "worn depth and the section" not in [ax.get_title()
+                                                for ax in run_figure(columnar).axes]
+    with pytest.raises(ValueError, match="no depth history"):
+        plot_history(columnar, quantities="depth")
