@@ -330,3 +330,23 @@ def test_history_figure_panels(tmp_path, coated, columnar):
                                                 for ax in run_figure(columnar).axes]
     with pytest.raises(ValueError, match="no depth history"):
         plot_history(columnar, quantities="depth")
+
+
+def test_resumed_depth_run_repeats_the_history(tmp_path, swapped):
+    """Stopped after 6 steps, written, read and resumed: the same depth history bit for bit."""
+    whole, columns, _ = swapped
+    problem = three_phases()
+    wear = WearProblem(problem)
+    wear.columns = columns
+    options = RunOptions(tol=1e-3, snapshots=SNAPSHOTS)
+    first = run_in(wear, np.zeros(problem.shape), dataclasses.replace(options, max_steps=6))
+    assert first.status != "steady", first.status
+    write_run(tmp_path / "run.h5", first)
+    stored = read_run(tmp_path / "run.h5")[0]
+    wear = WearProblem(problem)
+    wear.columns = stored.columns
+    resumed = run_in(wear, None, options, resume=stored)
+    assert resumed.status == "steady"
+    for name in (*DEPTH_HISTORY_UNITS, "distance", "rms_slope"):
+        np.testing.assert_array_equal(resumed.history[name], whole.history[name],
+                                      err_msg=f"resumed {name}")
