@@ -350,3 +350,32 @@ def test_resumed_depth_run_repeats_the_history(tmp_path, swapped):
     for name in (*DEPTH_HISTORY_UNITS, "distance", "rms_slope"):
         np.testing.assert_array_equal(resumed.history[name], whole.history[name],
                                       err_msg=f"resumed {name}")
+
+
+def test_quasi_steady_slope_of_a_changed_section(swapped):
+    """Where the section wears otherwise, its slope is the steady slope of that phase map."""
+    import math
+
+    from steady.solution import solve
+    from transient.history import FaceEstimator
+
+    _, columns, _ = swapped
+    problem = three_phases()
+    unequal = dataclasses.replace(problem, wear=PowerLaw([K1, 3 * K1, 10 * K1]))
+    result = run(unequal, columns)
+    h = result.history
+    fractions = np.asarray(h["phase_fraction"])
+    final = columns.phases[1]
+    assert np.array_equal(fractions[-1], columns.fractions(np.inf)), "not all past at the end"
+    bottom = dataclasses.replace(unequal, phases=FacePhases(problem.grid, final, 3, NAMES))
+    wear = WearProblem(bottom)
+    steady = solve(bottom, face_only=True)
+    face = bottom.face_mask
+    expected = FaceEstimator(wear, np.zeros(problem.shape)).figures(
+        math.inf, np.where(face, -steady.face, 0.0), np.where(face, steady.pressure, 0.0),
+        0.0)["rms_slope"]
+    quasi = np.asarray(h["quasi_steady_rms_slope"])
+    np.testing.assert_allclose(quasi[-1], expected, rtol=1e-12, err_msg="bottom section")
+    np.testing.assert_allclose(quasi[0], result.steady_rms_slope, rtol=1e-12,
+                               err_msg="surface section")
+    assert abs(quasi[-1] / quasi[0] - 1) > 0.01, "the sections' steady slopes do not differ"
