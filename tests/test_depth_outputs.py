@@ -379,3 +379,15 @@ def test_quasi_steady_slope_of_a_changed_section(swapped):
     np.testing.assert_allclose(quasi[0], result.steady_rms_slope, rtol=1e-12,
                                err_msg="surface section")
     assert abs(quasi[-1] / quasi[0] - 1) > 0.01, "the sections' steady slopes do not differ"
+
+
+def test_checkpoint_without_columns(tmp_path, coated):
+    """A checkpoint keeps the coating distances and the sections, not the columns."""
+    result = dataclasses.replace(coated[0], status="running")
+    path = tmp_path / "checkpoint.h5"
+    write_run(path, result)
+    with h5py.File(path, "r") as f:
+        assert "columns" not in f, "a checkpoint stores no columns"
+        assert f.attrs["coating_gone_distance"] == result.coating_gone.distance_m
+        np.testing.assert_array_equal(f["snapshots/section"][()], result.snapshot_sections)
+    assert read_run(path)[0].columns is None

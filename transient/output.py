@@ -49,7 +49,7 @@ Layout (root group)::
                   pressure (k, nx, ny) Pa (byte shuffle and deflate, except
                   in a checkpoint); for a depth run section (k, nx, ny)
                   int8, the phase map of the section at the worn depth
-    columns/      a depth run only (the problem's
+    columns/      a depth run only, not in a checkpoint (the problem's
                   :class:`steady.depth.DepthColumns`): interfaces
                   (S, nx, ny) m, phases (S + 1, nx, ny) int8, attribute
                   n_phases; with the root attributes
@@ -590,30 +590,35 @@ def _section_dtype(columns):
 
 
 def _write_columns(f, result, grid_scales):
-    """The group ``columns`` of a depth run and the coating distances as root attributes.
+    """The group ``columns`` of a depth run (not of a checkpoint) and its coating distances.
 
     ``interfaces`` (S, nx, ny) m and ``phases`` (S + 1, nx, ny) of
     :class:`steady.depth.DepthColumns`, attribute ``n_phases``; the root
     attributes ``coating_<event>_distance`` (m), ``..._distance_s_star``
     (1) and ``..._reason`` (text, "" when reached) for each event of
     :data:`transient.run_in_distance.COATING_EVENTS` (NaN with the reason
-    when there is no coating or the event did not happen).
+    when there is no coating or the event did not happen).  A checkpoint
+    has the attributes but not the group (compressed, it would cost more
+    than the rest of the file; the resumed run's problem has the columns).
     """
     columns = result.columns
-    g = f.create_group("columns")
-    g.attrs["description"] = ("the phase below every face pixel as a function of the worn depth "
-                              "(steady.depth.DepthColumns)")
-    _attribute(g.attrs, "n_phases", columns.n_phases, "1")
-    _put(g, "interfaces", columns.interfaces, "m", "depths of the phase changes below each "
-         "pixel, ascending, inf beyond the pixel's last", dims=(None, *grid_scales))
-    _put(g, "phases", columns.phases.astype(_section_dtype(columns)), "1",
-         "phase index of each segment between interfaces, -1 off the face",
-         dims=(None, *grid_scales))
     for event in COATING_EVENTS:
         found = coating_distance(result, event)
         _attribute(f.attrs, f"coating_{event}_distance", found.distance_m, "m")
         _attribute(f.attrs, f"coating_{event}_distance_s_star", found.distance_s_star, "1")
         f.attrs[f"coating_{event}_reason"] = found.reason
+    if result.status == "running":
+        return  # a checkpoint is rewritten every few seconds; the scene rebuilds the columns
+    g = f.create_group("columns")
+    g.attrs["description"] = ("the phase below every face pixel as a function of the worn depth "
+                              "(steady.depth.DepthColumns)")
+    _attribute(g.attrs, "n_phases", columns.n_phases, "1")
+    _put(g, "interfaces", columns.interfaces, "m", "depths of the phase changes below each "
+         "pixel, ascending, inf beyond the pixel's last", dims=(None, *grid_scales),
+         **_SNAPSHOT_FILTERS)
+    _put(g, "phases", columns.phases.astype(_section_dtype(columns)), "1",
+         "phase index of each segment between interfaces, -1 off the face",
+         dims=(None, *grid_scales), **_SNAPSHOT_FILTERS)
 
 
 def _read_columns(path, datasets, groups):
