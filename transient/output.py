@@ -41,10 +41,20 @@ Layout (root group)::
                   pressure_history, pressure_history_displacement
     history/      one dataset per :data:`transient.runin.HISTORY_UNITS` name,
                   along the dimension scale ``distance`` (m); attribute
-                  distance_scale (s*, m)
+                  distance_scale (s*, m); a depth run's also
+                  :data:`transient.runin.DEPTH_HISTORY_UNITS` (phase_fraction
+                  also along ``phase_name``) and, under a coating,
+                  :data:`transient.runin.COATING_HISTORY_UNITS`
     snapshots/    distance (k,) m (a dimension scale), height (k, nx, ny) m,
                   pressure (k, nx, ny) Pa (byte shuffle and deflate, except
-                  in a checkpoint)
+                  in a checkpoint); for a depth run section (k, nx, ny)
+                  int8, the phase map of the section at the worn depth
+    columns/      a depth run only, not in a checkpoint (the problem's
+                  :class:`steady.depth.DepthColumns`): interfaces
+                  (S, nx, ny) m, phases (S + 1, nx, ny) int8, attribute
+                  n_phases; with the root attributes
+                  coating_worn_through_distance, coating_gone_distance (m),
+                  their ..._s_star (1) and ..._reason (text)
     comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
     run_in_distance/  the run-in distances within 1 % and 0.1 % (dimension ``within``):
                   distance, distance_s_star, uncertainty, low, high, mean_worn_depth,
@@ -105,6 +115,7 @@ import types
 import h5py
 import numpy as np
 
+from steady.depth import DepthColumns
 from steady.load_programme import LoadProgramme
 from steady.outline import Circle
 from steady.output import (
@@ -119,8 +130,15 @@ from steady.output import (
     write_phase_names,
 )
 
-from .run_in_distance import distance_table
-from .runin import HISTORY_UNITS, PROGRAMME_HISTORY_UNITS, RunResult, RunState
+from .run_in_distance import COATING_EVENTS, coating_distance, distance_table
+from .runin import (
+    COATING_HISTORY_UNITS,
+    DEPTH_HISTORY_UNITS,
+    HISTORY_UNITS,
+    PROGRAMME_HISTORY_UNITS,
+    RunResult,
+    RunState,
+)
 
 try:
     import fcntl
@@ -308,7 +326,9 @@ def history_cf(name):
     Parameters
     ----------
     name : str
-        A key of :data:`transient.runin.HISTORY_UNITS` or
+        A key of :data:`transient.runin.HISTORY_UNITS`,
+        :data:`transient.runin.DEPTH_HISTORY_UNITS`,
+        :data:`transient.runin.COATING_HISTORY_UNITS` or
         :data:`transient.runin.PROGRAMME_HISTORY_UNITS`.
 
     Returns
@@ -323,7 +343,8 @@ def history_cf(name):
     >>> history_cf("distance")
     ('m', 'sliding distance')
     """
-    text = HISTORY_UNITS.get(name) or PROGRAMME_HISTORY_UNITS[name]
+    text = (HISTORY_UNITS.get(name) or DEPTH_HISTORY_UNITS.get(name)
+            or COATING_HISTORY_UNITS.get(name) or PROGRAMME_HISTORY_UNITS[name])
     unit, _, meaning = text.partition(" (")
     meaning = meaning[:-1] if meaning.endswith(")") else meaning
     if not meaning:
@@ -443,8 +464,10 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
         for name, value in {**input_arrays, **(arrays or {})}.items():
             _put(f, name, value, "1", _ARRAY_NAMES.get(name), dims=scales[:2])
         _write_state(f, result, scales[:2])
-        _write_history(f, result)
+        _write_history(f, result, scales[2])
         _write_snapshots(f, result, scales[:2])
+        if result.columns is not None:
+            _write_columns(f, result, scales[:2])
         _write_run_in_distances(f, result)
         if comparison is not None:
             _write_comparison(f, comparison, scales[2])
@@ -496,8 +519,12 @@ def _write_state(f, result, grid_scales):
             _put(st, name, value, unit, _STATE_NAMES[name], dims=dims)
 
 
-def _write_history(f, result):
-    """The group ``history``: one dataset per recorded quantity along ``distance``."""
+def _write_history(f, result, phase_scale=None):
+    """The group ``history``: one dataset per recorded quantity along ``distance``.
+
+    A quantity per phase (``phase_fraction``, shape (K, P)) is also along
+    ``phase_scale``, the root's ``phase_name``.
+    """
     hist = f.create_group("history")
     _attribute(hist.attrs, "distance_scale", result.distance_scale, "m")
     distance = None
@@ -507,7 +534,8 @@ def _write_history(f, result):
     for name, value in result.history.items():
         if name == "distance":
             continue
-        ds = _put(hist, name, value, *history_cf(name), dims=(distance,))
+        dims = (distance,) if np.ndim(value) < 2 else (distance, phase_scale)
+        ds = _put(hist, name, value, *history_cf(name), dims=dims)
         if np.ndim(value) == 1 and (distance is None or len(value) != len(distance)):
             ds.make_scale(name)  # e.g. an empty spatial error: a dimension of its own
     _write_load_programme(hist.attrs, result.load_programme)
@@ -543,12 +571,66 @@ def _write_snapshots(f, result, grid_scales):
          "NaN off the face", dims=(distance, *grid_scales), **packed)
     _put(snaps, "pressure", result.snapshot_pressure, "Pa", "contact pressure",
          dims=(distance, *grid_scales), **packed)
+    sections = result.snapshot_sections
+    if sections is not None:
+        _put(snaps, "section", sections.astype(_section_dtype(result.columns)), "1",
+             "phase index of the section at the worn depth, -1 off the face",
+             dims=(distance, *grid_scales), **packed)
     programme = result.load_programme
     if programme is not None:
         _put(snaps, "force", np.array([programme.force_at(s) for s in result.snapshot_distance],
                                       dtype=float),
              "N", "normal force of the load programme at the snapshot", dims=(distance,))
         _write_load_programme(snaps.attrs, programme)
+
+
+def _section_dtype(columns):
+    """The smallest signed integer type of the phase indices: int8, or int16 beyond 127 phases."""
+    return np.int8 if columns.n_phases <= np.iinfo(np.int8).max else np.int16
+
+
+def _write_columns(f, result, grid_scales):
+    """The group ``columns`` of a depth run (not of a checkpoint) and its coating distances.
+
+    ``interfaces`` (S, nx, ny) m and ``phases`` (S + 1, nx, ny) of
+    :class:`steady.depth.DepthColumns`, attribute ``n_phases``; the root
+    attributes ``coating_<event>_distance`` (m), ``..._distance_s_star``
+    (1) and ``..._reason`` (text, "" when reached) for each event of
+    :data:`transient.run_in_distance.COATING_EVENTS` (NaN with the reason
+    when there is no coating or the event did not happen).  A checkpoint
+    has the attributes but not the group (compressed, it would cost more
+    than the rest of the file; the resumed run's problem has the columns).
+    """
+    columns = result.columns
+    for event in COATING_EVENTS:
+        found = coating_distance(result, event)
+        _attribute(f.attrs, f"coating_{event}_distance", found.distance_m, "m")
+        _attribute(f.attrs, f"coating_{event}_distance_s_star", found.distance_s_star, "1")
+        f.attrs[f"coating_{event}_reason"] = found.reason
+    if result.status == "running":
+        return  # a checkpoint is rewritten every few seconds; the scene rebuilds the columns
+    g = f.create_group("columns")
+    g.attrs["description"] = ("the phase below every face pixel as a function of the worn depth "
+                              "(steady.depth.DepthColumns)")
+    _attribute(g.attrs, "n_phases", columns.n_phases, "1")
+    _put(g, "interfaces", columns.interfaces, "m", "depths of the phase changes below each "
+         "pixel, ascending, inf beyond the pixel's last", dims=(None, *grid_scales),
+         **_SNAPSHOT_FILTERS)
+    _put(g, "phases", columns.phases.astype(_section_dtype(columns)), "1",
+         "phase index of each segment between interfaces, -1 off the face",
+         dims=(None, *grid_scales), **_SNAPSHOT_FILTERS)
+
+
+def _read_columns(path, datasets, groups):
+    """The :class:`steady.depth.DepthColumns` of the group ``columns``, or None without it."""
+    if "columns/interfaces" not in datasets:
+        return None
+    try:
+        return DepthColumns(datasets["columns/interfaces"][0],
+                            datasets["columns/phases"][0].astype(np.int64),
+                            int(groups["columns"]["n_phases"]))
+    except (KeyError, TypeError, ValueError) as err:
+        raise DamagedRunFileError(path, f"its columns are malformed ({err})") from None
 
 
 # The comparison's arrays (Pa, one value per phase) and its lengths; the rest is 1 or a flag.
@@ -839,7 +921,8 @@ def _result(path, datasets, groups):
         snapshot_pressure=datasets["snapshots/pressure"][0],
         outline=outline, reference_slope_error=ref_error,
         reference_slope_source=str(source),
-        load_programme=_read_load_programme(groups.get("history", {})))
+        load_programme=_read_load_programme(groups.get("history", {})),
+        columns=_read_columns(path, datasets, groups))
     arrays = {name: value for name, (value, _) in datasets.items()
               if "/" not in name and name not in ("worn_depth", "pressure", "x", "y")}
     return result, attrs, arrays

@@ -227,6 +227,7 @@ class _Run:
     attrs: dict
     comparison: dict
     run_in: dict
+    phase_names: tuple = ()
 
     @property
     def distance_scale(self):
@@ -249,8 +250,10 @@ def _run(source):
     if isinstance(source, _Run):
         return source
     if isinstance(source, (str, os.PathLike)):
-        result, attrs, _ = read_run(source)
-        return _Run(result, dict(attrs), *_groups(source))
+        result, attrs, arrays = read_run(source)
+        names = tuple(n.decode() if isinstance(n, bytes) else str(n)
+                      for n in np.atleast_1d(arrays.get("phase_name", ())))
+        return _Run(result, dict(attrs), *_groups(source), phase_names=names)
     if hasattr(source, "history") and hasattr(source, "depth_scale"):
         return _Run(source, {}, {}, {})
     raise ValueError(f"expected a run file or a RunResult, got {type(source).__name__}")
@@ -326,6 +329,12 @@ def _draw_slope(ax, run, units, normalised):
     g0 = result.reference_slope if normalised else 1.0
     draw_rms_slope_history(ax, result.history, run.distance_scale, g0,
                            steady=_steady_slope(run.attrs, run.comparison), units=units)
+    quasi = result.history.get("quasi_steady_rms_slope")
+    if quasi is not None:
+        x, pos = _distance(run, units)
+        # plot, not semilogx: the axis is logarithmic already, and its ticks are set
+        ax.plot(x[pos], np.asarray(quasi, dtype=float)[pos] / g0, "-", color="C3", lw=1.0,
+                drawstyle="steps-post", label="quasi-steady face of the section")
     ax.set_ylabel(r"rms slope / $\nabla f^0_\infty$" if normalised else "rms slope")
     mark = run_in_distance_of(run)
     if mark is not None:
@@ -365,9 +374,63 @@ def _draw_convergence(ax, run, units, normalised):
     ax.set_xlabel("sliding distance (m)" if units == "m" else "sliding distance / s*")
 
 
+def _phase_names(run, n_phases):
+    """The run's phase names: its file's, its problem's, or ``phase i``."""
+    names = run.phase_names
+    problem = getattr(run.result, "problem", None)
+    if len(names) != n_phases and problem is not None:
+        names = tuple(problem.phase_names)
+    if len(names) != n_phases:
+        names = tuple(f"phase {i}" for i in range(n_phases))
+    return names
+
+
+def _draw_depth(ax, run, units, normalised):
+    """Worn depth (mean, rim, largest; µm, logarithmic) and, right, the section's fractions."""
+    del normalised  # depths in µm, fractions in 1
+    result = run.result
+    h = result.history
+    if "phase_fraction" not in h:
+        raise ValueError("the run has no depth history (its phase map does not change with "
+                         "depth): no depth panel")
+    x, pos = _distance(run, units)
+    for name, style, label in (("worn_depth_mean", "-", "mean worn depth"),
+                               ("worn_depth_rim", "--", "rim"),
+                               ("worn_depth_max", ":", "largest")):
+        depth = np.asarray(h[name], dtype=float)[pos] * 1e6
+        ax.loglog(x[pos], np.where(depth > 0, depth, np.nan), style, color="k", lw=1.2,
+                  label=label)
+    mean = np.asarray(h["worn_depth_mean"], dtype=float)[pos] * 1e6
+    low = float(np.min(mean[mean > 0], initial=math.inf))
+    high = float(np.max(np.asarray(h["worn_depth_max"], dtype=float)[pos] * 1e6, initial=0.0))
+    if math.isfinite(low) and high > low:  # the depths in the lower part, under the legend
+        ax.set_ylim(low / 2, high * (2 * high / low) ** 0.7)
+    ax.set_ylabel("worn depth (µm)")
+    scale = 1.0 if units == "m" else 1.0 / run.distance_scale
+    for found, ls in ((result.coating_worn_through, "-."), (result.coating_gone, (0, (1, 3)))):
+        if found.reached and found.distance_m > 0:
+            ax.axvline(found.distance_m * scale, color="0.4", ls=ls, lw=1.0,
+                       label=found.summary().split(" at s")[0])
+    fractions = np.atleast_2d(np.asarray(h["phase_fraction"], dtype=float))
+    right = ax.twinx()
+    for i, name in enumerate(_phase_names(run, fractions.shape[1])):
+        right.semilogx(x[pos], fractions[pos, i], "-", color=f"C{i}", lw=1.2,
+                       drawstyle="steps-post", label=f"{name} (fraction)")
+    # Fractions in the lower part, the legend of both axes above them (drawn on top).
+    right.set_ylim(-0.02, 1.7)
+    right.set_yticks([0.0, 0.25, 0.5, 0.75, 1.0])
+    right.set_ylabel("phase fraction of the section")
+    handles, labels = ax.get_legend_handles_labels()
+    more = right.get_legend_handles_labels()
+    right.legend(handles + more[0], labels + more[1], loc="upper left", ncol=2,
+                 fontsize=FONT_SIZES["legend"])
+    set_fonts(right)
+    ax.set_xlabel("sliding distance (m)" if units == "m" else "sliding distance / s*")
+
+
 #: The panels of :func:`plot_history` by quantity: ``draw(ax, run, units, normalised)``.
 _PANELS = {"rms_slope": _draw_slope, "rms_height": _draw_height,
-           "convergence": _draw_convergence}
+           "convergence": _draw_convergence, "depth": _draw_depth}
 
 
 def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",), ax=None,
@@ -388,7 +451,8 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
         Panels, one each, top to bottom: ``"rms_slope"`` (with its error
         band, the plain pixel value, the steady face's value and the run-in
         distance when the file has them), ``"rms_height"`` (about the best
-        plane), ``"convergence"`` (the stop test's measures).
+        plane), ``"convergence"`` (the stop test's measures), ``"depth"``
+        (a depth run's worn depth and its section's phase fractions).
     ax : matplotlib.axes.Axes or sequence of them, optional
         Axes to draw into, one per quantity (default: a new figure a
         column wide).
@@ -436,7 +500,7 @@ def plot_history(source, *, units="m", normalised=True, quantities=("rms_slope",
         fig = root_figure(axes[0])
     for a, quantity in zip(axes, quantities, strict=True):
         _PANELS[quantity](a, run, units, normalised)
-        if legend:
+        if legend and quantity != "depth":  # the depth panel's legend covers both its axes
             a.legend(loc="best", fontsize=FONT_SIZES["legend"])
         set_fonts(a)
     if ax is None:
@@ -604,10 +668,13 @@ def run_figure(result, attrs=None, comparison=None, run_in=None, *, units="m",
     matplotlib.figure.Figure
         A page wide.  Top: the rms slope (continuum estimate with its
         error band, plain pixel value faint, the steady face's value as
-        the asymptote); middle: rms height and the convergence measures;
-        bottom: the final face as relief about its plane (µm) and the
-        final pressure (kPa or MPa), axes in mm (pixels when the outline
-        is unknown), x horizontal and y up.
+        the asymptote; for a depth run the quasi-steady face's of the
+        current section); middle: rms height and the convergence measures,
+        and for a depth run the worn depth and the section's phase
+        fractions (the coating's distances marked); bottom: the final face
+        as relief about its plane (µm) and the final pressure (kPa or
+        MPa), axes in mm (pixels when the outline is unknown), x
+        horizontal and y up.
     """
     if isinstance(result, (str, os.PathLike)):
         source = _run(result)
@@ -615,14 +682,20 @@ def run_figure(result, attrs=None, comparison=None, run_in=None, *, units="m",
         source = _Run(result, dict(attrs or {}), dict(comparison or {}), dict(run_in or {}))
     result, attrs = source.result, source.attrs
     maps = map_height(result.shape, 0.5 * PAGE_WIDTH)
-    fig = new_figure(PAGE_WIDTH, 2.6 + 2.3 + maps + 0.5)
-    grid = fig.add_gridspec(3, 2, height_ratios=(2.6, 2.3, maps))
+    depth = "phase_fraction" in result.history
+    rows = (2.6, 2.3) + ((2.3,) if depth else ()) + (maps,)
+    fig = new_figure(PAGE_WIDTH, sum(rows) + 0.5)
+    grid = fig.add_gridspec(len(rows), 2, height_ratios=rows)
     ax_slope = fig.add_subplot(grid[0, :])
     ax_height = fig.add_subplot(grid[1, 0])
     ax_conv = fig.add_subplot(grid[1, 1], sharex=ax_height)
-    ax_face = fig.add_subplot(grid[2, 0])
-    ax_pressure = fig.add_subplot(grid[2, 1], sharex=ax_face, sharey=ax_face)
+    ax_face = fig.add_subplot(grid[-1, 0])
+    ax_pressure = fig.add_subplot(grid[-1, 1], sharex=ax_face, sharey=ax_face)
     plot_history(source, units=units, normalised=normalised, ax=ax_slope)
+    if depth:
+        ax_depth = fig.add_subplot(grid[2, :])
+        plot_history(source, units=units, ax=ax_depth, quantities="depth", secondary=False)
+        ax_depth.set_title("worn depth and the section")
     has_height = "rms_height" in result.history and "normalised_rms_height" in result.history
     if has_height:
         plot_history(source, units=units, normalised=normalised, ax=ax_height,

@@ -43,8 +43,8 @@ import math
 
 import numpy as np
 
-__all__ = ["TOLERANCES", "RunInDistance", "deviations", "distance_table", "entry",
-           "run_in_distance"]
+__all__ = ["COATING_EVENTS", "TOLERANCES", "CoatingDistance", "RunInDistance",
+           "coating_distance", "deviations", "distance_table", "entry", "run_in_distance"]
 
 #: The tolerances a run file and the summary of ``runin-transient`` give the run-in distance for.
 TOLERANCES = (0.01, 0.001)
@@ -239,8 +239,16 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
         raise ValueError(f"sliding_speed must be a finite number > 0 (m/s), got {speed!r}")
     h = result.history
     s = np.asarray(h["distance"], dtype=float)
-    deviation, low, high = deviations(result)
     s_star = result.distance_scale
+    unsteady = _without_steady_state(result)
+    if unsteady:
+        nan = math.nan
+        return RunInDistance(
+            within=within, reached=False, distance_m=nan, distance_s_star=nan,
+            uncertainty_m=nan, low_m=nan, high_m=nan, mean_worn_depth_m=nan,
+            rim_worn_depth_m=nan, time_s=None, time_uncertainty_s=None, end_m=float(s[-1]),
+            distance_scale=float(s_star), message=unsteady)
+    deviation, low, high = deviations(result)
     nan = math.nan
     spatial = _dataset(h, "face_deviation_spatial_error").any() or \
         _dataset(h, "rms_slope_deviation_spatial_error").any()
@@ -273,6 +281,127 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
         uncertainty_m=uncertainty, low_m=lo, high_m=hi, mean_worn_depth_m=mean_depth,
         rim_worn_depth_m=rim_depth, time_s=None if speed is None else found / speed,
         time_uncertainty_s=None if speed is None else uncertainty / speed, **common)
+
+
+def _without_steady_state(result):
+    """Why a depth run that ended without a steady state has no run-in distance, or "".
+
+    A run whose phase map changes with depth (``result.columns``) and that
+    ended at its ``end_depth`` or ``max_distance`` (status ``"depth"`` or
+    ``"distance"``) approached no steady state: the one of the initial
+    section is not its limit.  A columnar run's status does not matter here.
+    """
+    columns = getattr(result, "columns", None)
+    if columns is None or columns.columnar or result.status not in ("depth", "distance"):
+        return ""
+    s = float(np.asarray(result.history["distance"], dtype=float)[-1])
+    end = "depth" if result.status == "depth" else "distance"
+    return (f"the run ended at its {end} (s = {s:.4g} m = {s / result.distance_scale:.4g} s*) "
+            f"before its section was columnar: no steady state to approach")
+
+
+#: The coating events :func:`coating_distance` finds, and what each one is.
+COATING_EVENTS = {
+    "worn_through": "the coating is first worn through anywhere (a pixel past its first "
+                    "interface)",
+    "gone": "the coating is gone from the contact (no contact pixel left in the coating phase)",
+}
+
+# The history dataset whose sign change marks each event, and the sign after it.
+_COATING_MARKS = {"worn_through": ("coating_overshoot", 1.0),
+                  "gone": ("coating_contact_remaining", -1.0)}
+
+
+@dataclasses.dataclass(frozen=True)
+class CoatingDistance:
+    """Where a coating event happened along a run (:data:`COATING_EVENTS`).
+
+    Attributes
+    ----------
+    event : str
+        ``"worn_through"`` or ``"gone"``.
+    distance_m : float, m
+        Sliding distance of the event, interpolated between the recorded
+        points (NaN when not reached).
+    distance_s_star : float
+        The same in units of ``s*``.
+    reason : str
+        Why it is NaN ("" when reached).
+    """
+
+    event: str
+    distance_m: float
+    distance_s_star: float
+    reason: str = ""
+
+    @property
+    def reached(self):
+        """Whether the event happened within the run."""
+        return math.isfinite(self.distance_m)
+
+    def summary(self):
+        """One line for the terminal."""
+        what = {"worn_through": "coating worn through", "gone": "coating gone from the contact"}
+        if not self.reached:
+            return f"{what[self.event]}: not reached ({self.reason})"
+        return (f"{what[self.event]} at s = {self.distance_m:.5g} m = "
+                f"{self.distance_s_star:.4g} s*")
+
+
+def coating_distance(result, event):
+    """Distance at which a coating event happened in ``result``, from its history.
+
+    The event marks are the history's ``coating_overshoot`` (the largest
+    depth worn past the coating: the coating is worn through once it is
+    ``>= 0``, a depth at an interface being in the segment below) and
+    ``coating_contact_remaining`` (the largest coating thickness left under
+    a contact pixel: gone once ``<= 0``).  The distance is the first
+    recorded point where the mark has changed sign, interpolated linearly
+    in the mark between it and the point before.
+
+    Parameters
+    ----------
+    result : transient.runin.RunResult
+    event : str
+        A key of :data:`COATING_EVENTS`.
+
+    Returns
+    -------
+    CoatingDistance
+        NaN distances with the reason when the run has no coating or the
+        event did not happen before the run's end.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``event``.
+    """
+    if event not in COATING_EVENTS:
+        raise ValueError(f"coating event must be one of {', '.join(COATING_EVENTS)}, "
+                         f"got {event!r}")
+    name, sign = _COATING_MARKS[event]
+    h = result.history
+    s_star = result.distance_scale
+
+    def missing(reason):
+        return CoatingDistance(event, math.nan, math.nan, reason)
+
+    if name not in h:
+        return missing("the run has no coating: its surface section is not one layer of one "
+                       "phase over the whole face")
+    s = np.asarray(h["distance"], dtype=float)
+    mark = sign * np.asarray(h[name], dtype=float)
+    past = np.flatnonzero(mark >= 0.0)
+    if past.size == 0:
+        return missing(f"not by the end of the run at s = {s[-1]:.4g} m = "
+                       f"{s[-1] / s_star:.4g} s*")
+    i = int(past[0])
+    found = float(s[i])
+    before = mark[i - 1] if i > 0 else math.nan
+    if math.isfinite(before) and before < 0.0:
+        t = -before / (mark[i] - before)
+        found = float(s[i - 1] + t * (s[i] - s[i - 1]))
+    return CoatingDistance(event, found, found / s_star)
 
 
 def distance_table(result, tolerances=TOLERANCES):

@@ -81,12 +81,13 @@ import numpy as np
 
 from .control import DIVERGENCE_RELIEF, StepController, StopTests, checkpoint_due, contact_tolerance
 from .diagnostics import masked_gradient, shape_rms, wear_rate_spread
-from .history import FaceEstimator
+from .history import DepthRecorder, FaceEstimator
 from .options import RunOptions
 from .problem import StepFailure, WarmStart
 from .stepping import StepState, get_scheme
 
-__all__ = ["HISTORY_UNITS", "PROGRAMME_HISTORY_UNITS", "RunResult", "RunState", "run_in"]
+__all__ = ["COATING_HISTORY_UNITS", "DEPTH_HISTORY_UNITS", "HISTORY_UNITS",
+           "PROGRAMME_HISTORY_UNITS", "RunResult", "RunState", "run_in"]
 
 logger = logging.getLogger(__name__)
 
@@ -136,6 +137,29 @@ HISTORY_UNITS = {
 
 #: History datasets of a run under a ``[load] programme`` only, and their units.
 PROGRAMME_HISTORY_UNITS = {"force": "N (normal force of the load programme at the point)"}
+
+#: History datasets of a run whose phase map changes with depth only (the problem has
+#: ``columns``), and their units; ``phase_fraction`` has shape (K, P).
+DEPTH_HISTORY_UNITS = {
+    "worn_depth_mean": "m (worn depth below the initial surface, mean over the face)",
+    "worn_depth_rim": "m (worn depth below the initial surface, mean over the rim pixels)",
+    "worn_depth_max": "m (worn depth below the initial surface, largest over the face)",
+    "phase_fraction": "1 (area fraction of each phase in the section at the worn depth, along "
+                      "phase_name)",
+    "crossings": "1 (face pixels that crossed an interface in the step to this point)",
+    "quasi_steady_rms_slope": "1 (rms slope of the steady face of the current section, eq. 9, "
+                              "by the estimator of rms_slope with the rim layer fully worn)",
+    "normalised_quasi_steady_rms_slope": "1 (quasi_steady_rms_slope / grad_f0)",
+}
+
+#: History datasets of a depth run under a coating (a layer of one phase over the whole face,
+#: :class:`transient.history.Coating`), and their units.
+COATING_HISTORY_UNITS = {
+    "coating_overshoot": "m (largest depth worn past the coating over the face: positive once "
+                         "it is worn through somewhere)",
+    "coating_contact_remaining": "m (largest coating thickness left under a contact pixel: "
+                                 "negative once the coating is gone from the contact)",
+}
 
 # History datasets that files written before them lack (read as NaN when resumed).
 _LATER_HISTORY = ("face_deviation", "face_deviation_step_error", "rms_slope_step_error",
@@ -276,6 +300,11 @@ class RunResult:
         The scene's ``[load] programme`` (None: a constant load).  With one,
         the history holds the ``force`` of every point, steps land on its
         breakpoints and the steady state is the one under its last force.
+    columns : steady.depth.DepthColumns or None
+        The phase below every face pixel as a function of depth, for a
+        problem whose phase map changes with depth (None: columnar).  Its
+        history then holds :data:`DEPTH_HISTORY_UNITS` (and, under a
+        coating, :data:`COATING_HISTORY_UNITS`).
     """
 
     status: str
@@ -306,6 +335,7 @@ class RunResult:
     steady_rms_slope_error: float = math.nan
     sliding_speed: float | None = None
     load_programme: object = None
+    columns: object = None
 
     def run_in_distance(self, within=0.01, *, sliding_speed=None):
         """The sliding distance after which the run stays within ``within`` of the steady state.
@@ -342,6 +372,53 @@ class RunResult:
         from .run_in_distance import run_in_distance
 
         return run_in_distance(self, within, sliding_speed=sliding_speed)
+
+    @property
+    def coating_worn_through(self):
+        """Where the coating was first worn through anywhere (first pixel past its interface).
+
+        A :class:`transient.run_in_distance.CoatingDistance` (m and ``s*``),
+        NaN with the reason without a coating or before it happened.
+        """
+        from .run_in_distance import coating_distance
+
+        return coating_distance(self, "worn_through")
+
+    @property
+    def coating_gone(self):
+        """Where the coating was gone from the contact (no contact pixel left in its phase).
+
+        A :class:`transient.run_in_distance.CoatingDistance`, as
+        :attr:`coating_worn_through`.
+        """
+        from .run_in_distance import coating_distance
+
+        return coating_distance(self, "gone")
+
+    @property
+    def mean_worn_depth(self):
+        """Depth worn off since the start, mean over the face, m."""
+        worn = self.worn_depth
+        return float(np.mean(worn[np.isfinite(worn)]))
+
+    @property
+    def section(self):
+        """Phase map of the section at the current worn depth, shape (nx, ny), -1 off the face.
+
+        None for a columnar run (:attr:`columns` None).
+        """
+        if self.columns is None:
+            return None
+        return self.columns.phase_at(np.nan_to_num(self.worn_depth, nan=0.0))
+
+    @property
+    def snapshot_sections(self):
+        """Phase maps of the sections at the snapshots, shape (k, nx, ny); None when columnar."""
+        if self.columns is None:
+            return None
+        worn = np.nan_to_num(self.snapshot_height - self.initial_height[None], nan=0.0)
+        return np.stack([self.columns.phase_at(w) for w in worn]) if len(worn) else \
+            np.empty((0, *self.shape), dtype=self.columns.phases.dtype)
 
     @property
     def height(self):
@@ -616,10 +693,17 @@ class _Run:
             self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
             self.estimator.threaded = True
         index = len(hist["distance"])
+        worn = self.height + self.offset - self.initial_height
+        depth = self._record_depth(worn, index)
         # Not copied: the run replaces its face and pressure, never writes into them.
-        self._pending.append((index, self._worker.submit(
-            self.estimator.figures, self.s, self.height, face_state[1], face_state[2],
-            rim_layers=face_state[0])))
+        if depth is None:
+            self._pending.append((index, self._worker.submit(
+                self.estimator.figures, self.s, self.height, face_state[1], face_state[2],
+                rim_layers=face_state[0])))
+        else:
+            self._pending.append((index, self._worker.submit(
+                _depth_figures, self.estimator, depth, worn, self.s, self.height,
+                face_state)))
         hist["distance"].append(self.s)
         hist["step"].append(step)
         for name in _FACE_FIGURES:
@@ -629,7 +713,6 @@ class _Run:
         hist["peak_pressure"].append(float(self.pressure.max()))
         hist["contact_fraction"].append(float(np.mean(self.pressure[face_mask] > 0)))
         hist["approach"].append(self.approach + self.offset)
-        worn = self.height + self.offset - self.initial_height
         hist["worn_volume"].append(float(np.sum(worn[face_mask])) * p.halfspace.h ** 2)
         hist["solves"].append(p.solves)
         hist["rim_worn_depth"].append(float(worn[self.estimator.rim].mean()))
@@ -647,6 +730,35 @@ class _Run:
             hist["force"].append(p.applied_force)
         self.latest = (hist["spread"][-1], shape_rate)
         self.collect(wait=False)
+
+    def _record_depth(self, worn, index):
+        """Append the depth figures of a run with columns; returns the section's map, or None.
+
+        The recorder (:class:`transient.history.DepthRecorder`) is built at
+        the first point recorded; after a resume it takes the crossings of
+        the first step from the previous face.  A columnar problem records
+        nothing here.  The quasi-steady figures are filled by
+        :meth:`collect`.
+        """
+        columns = getattr(self.problem, "columns", None)
+        if columns is None:
+            return None
+        recorder = getattr(self, "_depth", None)
+        if recorder is None:
+            recorder = self._depth = DepthRecorder(self.problem, columns, self.estimator,
+                                                   self.estimator.rim)
+        previous = (None if self.prev_height is None or index == 0
+                    else self.prev_height + self.offset - self.initial_height)
+        figures, labels = recorder.figures(worn, self.pressure, previous)
+        figures.update(quasi_steady_rms_slope=math.nan,
+                       normalised_quasi_steady_rms_slope=math.nan)
+        hist = self.history
+        for name, value in figures.items():
+            if name not in hist:  # a file written before them: NaN before the resume
+                hist[name] = [np.full_like(np.asarray(value, dtype=float), np.nan).tolist()
+                              for _ in range(index)]
+            hist[name].append(value.tolist() if isinstance(value, np.ndarray) else value)
+        return recorder, labels
 
     def collect(self, wait=True):
         """Put the face's figures into the history, waiting for those still being computed.
@@ -669,6 +781,10 @@ class _Run:
             hist["normalised_rms_slope"][index] = figures["rms_slope"] / self.grad_f0
             hist["normalised_rms_height"][index] = figures["rms_height"] / (
                 self.grad_f0 * self.problem.scale)
+            if "quasi_steady_rms_slope" in figures:
+                value = figures["quasi_steady_rms_slope"]
+                hist["quasi_steady_rms_slope"][index] = value
+                hist["normalised_quasi_steady_rms_slope"][index] = value / self.grad_f0
 
     def close(self):
         """Stop the worker thread (figures not collected are dropped)."""
@@ -729,7 +845,8 @@ class _Run:
             outline=self.problem.outline, reference_slope_error=self.reference.error,
             reference_slope_source=self.reference.source, problem=self.problem.problem,
             steady_rms_slope=self.steady_slope[0], steady_rms_slope_error=self.steady_slope[1],
-            sliding_speed=self.problem.sliding_speed, load_programme=self.programme)
+            sliding_speed=self.problem.sliding_speed, load_programme=self.programme,
+            columns=getattr(self.problem, "columns", None))
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
@@ -925,6 +1042,18 @@ class _Run:
                 on_checkpoint(self.result("running", "in progress"))
                 last_checkpoint = time.monotonic()
                 checkpoint_cost = last_checkpoint - started
+
+
+def _depth_figures(estimator, depth, worn, distance, height, face_state):
+    """The face's figures and the rms slope of the section's quasi-steady face (history thread).
+
+    ``depth`` is ``(recorder, labels)`` of :meth:`_Run._record_depth`.
+    """
+    rim_layers, pressure, approach = face_state
+    figures = estimator.figures(distance, height, pressure, approach, rim_layers=rim_layers)
+    recorder, labels = depth
+    figures["quasi_steady_rms_slope"] = recorder.quasi_steady(worn, labels)
+    return figures
 
 
 def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,

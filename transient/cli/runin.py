@@ -196,6 +196,7 @@ def _report(result, comparison):
               f"{result.distance_scale:.4g} m, fastest relaxation h/(k_max E*) = "
               f"{result.fast_distance:.4g} m"]
     lines += _distance_lines(result)
+    lines += _end_lines(result)
     if comparison is not None:
         lines += ["agreement with the steady face (eq. 9):", comparison.summary()]
     return lines
@@ -217,6 +218,26 @@ def _distance_lines(result):
         lines += [result.run_in_distance(x).summary() for x in TOLERANCES]
     except ValueError as err:
         lines.append(f"run-in distance: {err}")
+    return lines
+
+
+def _end_lines(result):
+    """Why a depth run ended, its worn depth there and its coating's distances.
+
+    Printed for a run whose phase map changes with depth, and for any run
+    that ended at its depth or distance; nothing for another columnar run.
+    """
+    if result.columns is None and result.status not in ("depth", "distance"):
+        return []
+    s_end = float(result.history["distance"][-1])
+    at = f"s = {s_end:.4g} m = {s_end / result.distance_scale:.4g} s*"
+    why = {"steady": f"the steady state (every face pixel below its last interface), {at}",
+           "depth": f"the end depth, mean worn depth reached at {at}",
+           "distance": f"the end distance, {at}"}.get(result.status,
+                                                        f"{result.status} at {at}")
+    lines = [f"run ended at {why}; mean worn depth at the end {result.mean_worn_depth:.4g} m"]
+    if result.columns is not None and "coating_overshoot" in result.history:
+        lines += [result.coating_worn_through.summary(), result.coating_gone.summary()]
     return lines
 
 
