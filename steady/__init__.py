@@ -14,8 +14,6 @@ bottom floor up:
 - :mod:`steady.outline` -- face outlines (disk, rectangle, ellipse, annulus,
   pixel mask) and the grid over each one's bounding box;
 - :mod:`steady.labels` -- rasterised phase maps: checks, fill factors;
-- :mod:`steady.depth` -- phase maps that change with depth below the
-  surface, as columns of segments below each pixel;
 - :mod:`steady.phases`, :mod:`steady.inclusions`, :mod:`steady.micrograph`
   -- phase geometries rasterised at any grid size (micrographs need the
   extra ``runin[micrograph]``);
