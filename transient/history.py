@@ -73,6 +73,7 @@ import weakref
 
 import numpy as np
 
+from steady.problem import FacePhases
 from steady.relief import PlaneFit, rms_height
 from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope, estimate_rms_slope
 
@@ -617,17 +618,14 @@ class DepthRecorder:
     def section_problem(self, worn, labels):
         """The steady problem of the section at the worn depth ``worn`` (m), phase map ``labels``.
 
-        ``Problem.section(worn)`` where the steady problem has it; else the
-        problem with the phase map ``labels`` (which then needs every phase
-        on the face).
+        The run's steady problem with the phases of the section (the run's
+        columns at ``worn``): the quasi-steady problem, as
+        :meth:`steady.problem.Problem.section` gives it.
         """
-        from steady.problem import FacePhases, Problem
-
         base = self.problem.problem
-        if hasattr(base, "section"):
-            return base.section(worn)
-        phases = FacePhases(base.grid, labels, base.n_phases, names=base.phase_names)
-        return Problem(phases, base.wear, base.normal_force, base.E_star, base.sliding)
+        phases = FacePhases(base.grid, labels, base.n_phases, base.phase_names,
+                            self.problem.columns, worn)
+        return dataclasses.replace(base, phases=phases)
 
     def quasi_steady(self, worn, labels):
         """Rms slope of the steady face of the section ``labels`` (eq. 7, 9): the quasi-steady face.
