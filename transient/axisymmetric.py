@@ -1,4 +1,4 @@
-"""Axisymmetric run-in of the homogeneous cylinder: the reference of the run-in history.
+"""Axisymmetric run-in of the cylinder, homogeneous or coated: the run-in history's reference.
 
 A homogeneous flat punch stays axisymmetric while it wears, so its run-in is
 a one-dimensional problem in the radius.  This module solves it to a
@@ -38,6 +38,16 @@ Method
   at ``s = 1e-3 s*`` for N = 150 -> 300 -> 600 -> 1200, beta = 4), so
   :func:`reference_history` extrapolates ``N/2, N`` (Richardson, order 2)
   and reports the extrapolation's size as its error.
+
+Coating
+-------
+:class:`CoatedAxisymmetricRunIn` gives a coating of thickness ``t`` and
+coefficient ``k_c`` on a substrate ``k_s``: a ring wears with ``k_c`` until
+its worn depth reaches ``t``.  Between two crossings ``dw/ds = D (c - B w)``
+is linear and propagated exactly as above with ``-D B``; each crossing is
+the root, by Brent's method, of the largest coated depth minus ``t`` on the
+exact solution.  :func:`coated_reference_history` extrapolates it in the
+rings (docs/model.md, "The coated reference").
 
 At ``s = 0`` the face is flat (rms slope 0); for any ``s > 0`` the rim layer
 carries a mean-square slope that does not vanish with its width (slope of
