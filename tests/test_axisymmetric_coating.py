@@ -101,6 +101,18 @@ def test_rim_wears_through_first(ratio):
         "half-way between the crossings the coating is partly gone"
 
 
+def test_crossing_distance_between_rings(coating):
+    """At the ring centres the crossings; in between, between its neighbours'."""
+    coating.wear_through_distances()
+    at_centres = coating.crossing_distance(coating.centres)
+    assert np.array_equal(at_centres, coating.crossings), "crossings at the ring centres"
+    mid = coating.crossing_distance(0.5 * (coating.centres[1:] + coating.centres[:-1]))
+    assert np.all((mid <= coating.crossings[:-1]) & (mid >= coating.crossings[1:])), \
+        "interpolated crossings out of order"
+    with pytest.raises(ValueError, match="radius must lie in"):
+        coating.crossing_distance(1.5)
+
+
 @pytest.mark.parametrize("ratio", (10.0, 1000.0))
 def test_softer_substrate_unloads_the_rim_but_keeps_contact(ratio):
     """Through at steady state (t = 3): the rim's pressure falls towards pbar k_c / k_s, not 0.
@@ -166,3 +178,19 @@ def test_bad_input_is_named():
         CoatedAxisymmetricRunIn(20, thickness=1.0, substrate_coefficient=float("nan"))
     with pytest.raises(ValueError, match="distance must be"):
         CoatedAxisymmetricRunIn(20, thickness=1.0, substrate_coefficient=2.0).state(-1.0)
+
+
+@pytest.mark.slow
+def test_reference_history_160_rings():
+    """The figures docs/model.md quotes (t = 0.1, k_s/k_c = 10, 160 rings); 56 s on 2 cores."""
+    ref = coated_reference_history([1e-3, 0.05, 0.2, 0.5], thickness=0.1, ratio=10.0,
+                                   rings=160)
+    assert ref.first_through == pytest.approx(0.009839, abs=1e-6), ref.first_through
+    assert ref.last_through == pytest.approx(0.14561, abs=1e-5), ref.last_through
+    assert ref.first_through_error < 5e-6 and ref.last_through_error < 2e-5, \
+        (ref.first_through_error, ref.last_through_error)
+    assert ref.rms_slope == pytest.approx([0.84909, 1.27774, 1.02085, 1.00004], abs=2e-5), \
+        ref.rms_slope
+    assert ref.rms_slope_error[1] == pytest.approx(0.017, abs=1e-3), "front: |S_N - S_N/2|"
+    assert ref.substrate_decay_distance * ref.ratio == pytest.approx(0.4853, abs=1e-4), \
+        ref.substrate_decay_distance

@@ -623,6 +623,29 @@ class CoatedAxisymmetricRunIn(AxisymmetricRunIn):
         self._advance_all()
         return float(self.crossings.min()), float(self.crossings.max())
 
+    def crossing_distance(self, radius):
+        """Distance (m) at which the coating wears through at ``radius`` (m).
+
+        Linear in ``r`` between the ring centres' crossings, constant beyond
+        the outermost and innermost centres: the figure to compare a pixel's
+        wear-through with (the rim's crossing differs from that of a pixel
+        half a pixel inside it).
+
+        Parameters
+        ----------
+        radius : array_like, m
+            Radii in ``[0, a]``.
+
+        Returns
+        -------
+        ndarray, shape of ``radius``, m
+        """
+        r = np.asarray(radius, dtype=float)
+        if not np.all(np.isfinite(r) & (r >= 0) & (r <= self.radius)):
+            raise ValueError(f"radius must lie in [0, {self.radius!r}] m, got {radius!r}")
+        self._advance_all()
+        return np.interp(r, self.centres, self.crossings)
+
     @property
     def substrate_decay_distance(self):
         """Distance (m) over which the last deviation from the steady face decays by ``e``.
