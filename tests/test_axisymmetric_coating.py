@@ -129,13 +129,17 @@ def test_softer_substrate_unloads_the_rim_but_keeps_contact(ratio):
 
 
 def test_approach_to_the_substrate_steady_state(coating):
-    """After the last crossing the face tends to eq. 10 at the slowest mode of -k_s B."""
+    """After the last crossing the face tends to eq. 10 at the slowest mode of -k_s B.
+
+    Measured rate over 2 to 4 decay distances: 1.00027 of the slowest mode's
+    (faster modes not quite gone), bound 2e-3.
+    """
     _, last = coating.wear_through_distances()
     decay = coating.substrate_decay_distance
     s1, s2 = last + 2 * decay, last + 4 * decay
     d1, d2 = coating.state(s1).face_deviation, coating.state(s2).face_deviation
     rate = math.log(d1 / d2) / (s2 - s1)
-    assert rate * decay == pytest.approx(1.0, rel=0.05), \
+    assert rate * decay == pytest.approx(1.0, rel=2e-3), \
         f"deviation decays at {rate * decay:.3f} of the slowest substrate mode"
     final = coating.state(last + 40 * decay)
     assert final.rms_slope / coating.reference_slope == pytest.approx(
