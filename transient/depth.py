@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["WorkDepth", "check_depth_end"]
+__all__ = ["WorkDepth"]
 
 
 class WorkDepth:
@@ -102,26 +102,3 @@ class WorkDepth:
         inverse = np.take_along_axis(self._inverse, j[None], axis=0)[0]
         return np.where(self.columns.face_mask, origin + (depth - start) * inverse, 0.0)
 
-
-def check_depth_end(options):
-    """Refuse a depth-varying run that could never end.
-
-    It ends at the steady state (reachable once the face is below every
-    interface, with positive ``spread_tol`` and ``shape_tol``), at
-    ``end_depth`` or at a finite ``max_distance``.
-
-    Parameters
-    ----------
-    options : transient.options.RunOptions
-
-    Raises
-    ------
-    ValueError
-        Neither a reachable steady state nor an end, naming the options.
-    """
-    steady = options.spread_tol > 0 and options.shape_tol > 0
-    if not steady and options.end_depth is None and not np.isfinite(options.max_distance):
-        raise ValueError(f"[transient] a depth-varying run with spread_tol = "
-                         f"{options.spread_tol!r} and shape_tol = {options.shape_tol!r} never "
-                         f"reaches the steady state: give end_depth or a finite max_distance "
-                         f"(max_distance = {options.max_distance!r})")

@@ -79,8 +79,14 @@ import types
 
 import numpy as np
 
-from .control import DIVERGENCE_RELIEF, StepController, StopTests, checkpoint_due, contact_tolerance
-from .depth import check_depth_end
+from .control import (
+    DEPTH_SLACK,
+    DIVERGENCE_RELIEF,
+    StepController,
+    StopTests,
+    checkpoint_due,
+    contact_tolerance,
+)
 from .diagnostics import masked_gradient, shape_rms, wear_rate_spread
 from .history import FaceEstimator
 from .options import RunOptions
@@ -518,10 +524,10 @@ class _Run:
         # Across interfaces: the segment of every pixel at the current point (the section
         # whose coefficients the problem holds), and the pixels that changed segment over
         # the last accepted step (``crossings``, for the history).
-        if problem.work_depth is not None:
-            check_depth_end(options)
         self.segments = problem.at_depth(self.worn_depth())
         self.crossings = 0
+        # Distance of the next attempt after one that went past end_depth (None: none).
+        self.depth_landing = None
 
         if resume is None:
             self.s, self.steps, self.rejected, self.failures = 0.0, 0, 0, 0
@@ -839,7 +845,9 @@ class _Run:
         depth = self.mean_depth()
         if depth is not None:
             rate = float(p.rate(self.pressure)[p.face_mask].mean())
-            at_depth = self.stop.depth_target(self.s, depth, rate)
+            at_depth = self.depth_landing
+            if at_depth is None:
+                at_depth = self.stop.depth_target(self.s, depth, rate)
             if at_depth is not None:
                 target = at_depth if target is None else min(target, at_depth)
         return self.scheme, self.controller.land(ds, self.s, target, self.stop.end())
@@ -871,6 +879,23 @@ class _Run:
         if shape_rms(trial.height, face_mask) > DIVERGENCE_RELIEF * self.f_star:
             raise StepFailure(f"face relief above {DIVERGENCE_RELIEF:g} f*: divergence")
         return trial, err
+
+    def past_end_depth(self, trial, ds):
+        """Where to land instead of a trial that went past ``end_depth`` (m), or None.
+
+        The secant of the mean worn depth between the current point and the
+        trial: the rate at the start misses the crossings of the step.
+        """
+        end = self.options.end_depth
+        if end is None:
+            return None
+        face_mask = self.problem.face_mask
+        before = self.mean_depth()
+        after = float(self.problem.worn_depth(trial.height, self.offset,
+                                              self.initial_height)[face_mask].mean())
+        if after <= end * (1 + DEPTH_SLACK):
+            return None
+        return self.s + ds * (end - before) / (after - before)
 
     def accept(self, trial, ds, jump=False):
         """Move to the trial point; the rigid part of the wear goes into ``offset``.
@@ -964,6 +989,12 @@ class _Run:
                 self.next_step = controller.after_failure(ds)
                 continue
             consecutive = 0
+            landing = None if jump else self.past_end_depth(trial, ds)
+            if landing is not None:
+                self.rejected += 1
+                self.depth_landing = landing
+                logger.debug("past end_depth: landing at %.6g s*", landing / self.s_star)
+                continue
             if controller.rejects(err, jump):
                 self.rejected += 1
                 self.next_step = controller.after_reject(ds, err, scheme)
@@ -971,6 +1002,7 @@ class _Run:
                 continue
             if not jump:
                 self.next_step = controller.after_accept(ds, err, scheme)
+            self.depth_landing = None
             self.accept(trial, ds, jump)
             if on_step is not None:
                 on_step(self)
