@@ -200,8 +200,10 @@ class StopTests:
     """When the run ends, and when it jumps to the steady state.
 
     The run is steady when the wear-rate spread is below ``spread_tol`` and
-    the shape changes by less than ``shape_tol`` f* per s*; it stops
-    (resumable) at ``max_distance`` or ``max_steps``.  Once the spread is
+    the shape changes by less than ``shape_tol`` f* per s* (across
+    interfaces: once the face is below every interface); it ends
+    (resumable) at ``end_depth`` of mean worn depth (status ``"depth"``),
+    ``max_distance`` or ``max_steps``.  Once the spread is
     below ``jump_spread`` and no snapshot is pending it jumps; after
     ``MAX_JUMPS`` jumps without reaching the steady state it stops as
     stagnating.  ``max_failures`` failed attempts in a row (one at a fixed

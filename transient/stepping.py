@@ -49,6 +49,14 @@ keeps its classical order on the index-1 DAE; where the contact set
 changes during a step the solution is only Lipschitz in ``s`` and every
 scheme drops to first order locally.
 
+Across interfaces (phases that change with depth below the face) the
+schemes integrate the wear work ``R`` of the face instead of its height,
+``dR/ds = P(w)^m`` with ``w = w0 + D(R)`` (docs/model.md, "Wear across
+interfaces"), through the problem's hooks
+:meth:`~transient.problem.WearProblem.variable`, ``face``,
+``variable_rate`` and ``depth_error``, which are the identity for a
+columnar problem; the state's ``origin`` is the height of zero worn depth.
+
 Power-law wear (``m != 1``) is treated in every implicit stage by Newton's
 method on ``w = w0 + c k P(w)^m``: ``k p^m`` is linearised about the last
 pressure iterate ``p0``, ``k p^m ~ k p0^m + k m p0^(m-1) (p - p0)``, which is
