@@ -127,6 +127,12 @@ def test_coating_wears_through_rim_first_with_bounded_newton(n, scheme):
     crossings = sum(c for *_, c, _ in points)
     assert crossings == face.sum(), f"{crossings} crossings for {face.sum()} pixels"
     assert problem_.columns.columnar_below(result.worn_depth), "steady above an interface"
+    # The steady state is the substrate's (homogeneous): the uniform pressure (measured 0).
+    uniform = FORCE / (face.sum() * h2)
+    steady = np.max(np.abs(result.pressure[face] / uniform - 1.0))
+    assert steady < 1e-9, f"final pressure off the substrate's steady one by {steady:.3g}"
+    assert np.allclose(problem_.steady_pressure()[face], uniform, rtol=1e-14), \
+        "steady_pressure is not the substrate's"
     # Newton ends in a few iterations per stage, through the wear-through (measured: 3).
     assert problem_.most_stage_solves <= 4, \
         f"{problem_.most_stage_solves} Newton iterations in one stage"

@@ -377,8 +377,15 @@ class WearProblem:
         """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (nx, ny).
 
         The limit of an implicit Euler step as ``ds -> infinity``: the warm
-        start of a jump.
+        start of a jump.  Across interfaces, of the section below every
+        interface (where a run jumps): ``p`` proportional to ``k^(-1/m)``
+        pixel by pixel, carrying the load.
         """
+        if self.work_depth is not None:
+            k = self.work_depth.slope(self.columns.segment_at(self.columns.bottom))
+            p = np.where(self.face_mask, np.where(self.face_mask, k, 1.0)
+                         ** (-1.0 / self.exponent), 0.0)
+            return p * (self.normal_force / (float(p.sum()) * self.halfspace.h ** 2))
         if self.problem.sliding is not None:  # pixel-wise, k_i v p^m / v_ref = C
             return self.problem.steady_pressure()
         p_phase = self.wear.phase_pressures(self.counts, self.normal_force,
@@ -388,12 +395,18 @@ class WearProblem:
     def solve_steady(self):
         """The closed-form steady state of this problem (eq. 7, 9), for comparison.
 
+        Across interfaces, of the section below every interface
+        (``problem.section(columns.bottom)``, where the phase map provides
+        sections).
+
         Returns
         -------
         steady.solution.SteadyResult
             With the corrected rms slope and the error bar of this map
             resampled (:func:`steady.rms_slope.estimate_map_rms_slope`).
         """
+        if self.work_depth is not None and hasattr(self.problem, "section"):
+            return solve(self.problem.section(self.columns.bottom))
         return solve(self.problem)
 
     # -- the right-hand side -------------------------------------------
