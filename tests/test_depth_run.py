@@ -100,9 +100,12 @@ def test_columns_that_repeat_the_map_give_the_columnar_run(geometry, ratios, exp
 
 
 # -- a coating --------------------------------------------------------------------
-@pytest.mark.parametrize("n, scheme", [(16, "esdirk3"), (17, "bdf2")])
-def test_coating_wears_through_rim_first_with_bounded_newton(n, scheme):
-    problem_ = coating(n, 0.3)
+@pytest.mark.parametrize("n, scheme, exponent, most", [
+    (16, "esdirk3", 1.0, 4), (17, "bdf2", 1.0, 4),
+    # Measured: 6 Newton iterations in a stage at most (about 15 s).
+    pytest.param(16, "esdirk3", 2.0, 8, marks=pytest.mark.slow)])
+def test_coating_wears_through_rim_first_with_bounded_newton(n, scheme, exponent, most):
+    problem_ = coating(n, 0.3, exponent=exponent)
     face = problem_.face_mask
     h2 = problem_.halfspace.h ** 2
     points = []
@@ -133,8 +136,9 @@ def test_coating_wears_through_rim_first_with_bounded_newton(n, scheme):
     assert steady < 1e-9, f"final pressure off the substrate's steady one by {steady:.3g}"
     assert np.allclose(problem_.steady_pressure()[face], uniform, rtol=1e-14), \
         "steady_pressure is not the substrate's"
-    # Newton ends in a few iterations per stage, through the wear-through (measured: 3).
-    assert problem_.most_stage_solves <= 4, \
+    # Newton ends in a few iterations per stage, through the wear-through (measured: 3
+    # for m = 1).
+    assert problem_.most_stage_solves <= most, \
         f"{problem_.most_stage_solves} Newton iterations in one stage"
     # The rim (the flat punch's pressure singularity) wears through first.
     s = np.array([p[0] for p in points])
