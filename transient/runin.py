@@ -453,6 +453,12 @@ class _Run:
       snapshot: every result shares them, none copies them) and
       ``snap_index`` (the next requested one), ``latest`` (the current
       point's spread and shape change, which the stop tests judge);
+    - across interfaces (:attr:`WearProblem.work_depth`): ``segments``, the
+      segment of every pixel at the current point, ``crossings``, the face
+      pixels whose segment the last accepted step changed (what the history
+      records as ``crossings``; 0 for a columnar run), and
+      ``depth_landing``, the distance a retry aims at after a trial went
+      past ``end_depth`` (None otherwise); all three follow from the state;
     - the steady state the history measures against: ``steady_face``,
       ``steady_relief``, ``steady_slope`` (:meth:`_steady_reference`);
     - the history's worker thread: ``_worker``, ``_estimator_workers``,
