@@ -11,6 +11,8 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 - :mod:`transient.initial_face` -- registered initial face shapes;
 - :mod:`transient.problem` -- the discretised wear problem and its factory
   from a scene;
+- :mod:`transient.depth` -- the worn depth as a function of the wear work,
+  across the interfaces of phases that change with depth;
 - :mod:`transient.stepping` -- the registered time integrators;
 - :mod:`transient.control` -- step control and stop tests;
 - :mod:`transient.diagnostics` -- what the history records of the face;

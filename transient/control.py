@@ -18,6 +18,7 @@ import math
 
 __all__ = [
     "CHECKPOINT_SHARE",
+    "DEPTH_SLACK",
     "DIVERGENCE_RELIEF",
     "EXPLICIT_SAFETY",
     "FAILURE_FACTOR",
@@ -56,6 +57,8 @@ MAX_JUMPS = 5
 LANDING_SLACK = 1e-9
 #: Relative slack of the distance limit (round-off of the summed steps).
 _DISTANCE_SLACK = 1e-12
+#: Relative slack of ``end_depth``: a run that lands within it has reached it.
+DEPTH_SLACK = 1e-9
 #: Most of a run's wall time its checkpoints may take (see :func:`checkpoint_due`).
 CHECKPOINT_SHARE = 0.05
 #: Share of a step's error tolerance ``tol f*`` left to its contact solves.
@@ -197,8 +200,10 @@ class StopTests:
     """When the run ends, and when it jumps to the steady state.
 
     The run is steady when the wear-rate spread is below ``spread_tol`` and
-    the shape changes by less than ``shape_tol`` f* per s*; it stops
-    (resumable) at ``max_distance`` or ``max_steps``.  Once the spread is
+    the shape changes by less than ``shape_tol`` f* per s* (across
+    interfaces: once the face is below every interface); it ends
+    (resumable) at ``end_depth`` of mean worn depth (status ``"depth"``),
+    ``max_distance`` or ``max_steps``.  Once the spread is
     below ``jump_spread`` and no snapshot is pending it jumps; after
     ``MAX_JUMPS`` jumps without reaching the steady state it stops as
     stagnating.  ``max_failures`` failed attempts in a row (one at a fixed
@@ -218,7 +223,8 @@ class StopTests:
         self.options = options
         self.s_star = s_star
 
-    def check(self, spread, shape_rate, distance, steps, *, held=False):
+    def check(self, spread, shape_rate, distance, steps, *, held=False, depth=None,
+              columnar=True):
         """``(status, message)`` if the run is over at its current point, else None.
 
         Parameters
@@ -235,12 +241,23 @@ class StopTests:
         held : bool, optional
             A breakpoint of the load programme lies ahead: not steady yet
             (default False).
+        depth : float or None, optional
+            Mean worn depth over the face, m, which ``end_depth`` ends.
+        columnar : bool, optional
+            Whether the phases no longer change below the face (default
+            True); until then the run is not steady.
         """
         o, s_star = self.options, self.s_star
-        if not held and spread < o.spread_tol and shape_rate < o.shape_tol:
+        if (columnar and not held and spread < o.spread_tol
+                and shape_rate < o.shape_tol):
             return "steady", (f"steady state at s = {distance:.6g} m "
                               f"({distance / s_star:.6g} s*): wear-rate spread "
                               f"{spread:.3g}, shape change {shape_rate:.3g} f*/s*")
+        if (o.end_depth is not None and depth is not None
+                and depth >= o.end_depth * (1 - DEPTH_SLACK)):
+            return "depth", (f"reached end_depth {o.end_depth:.6g} m (mean worn depth "
+                             f"{depth:.6g} m) at s = {distance:.6g} m "
+                             f"({distance / s_star:.6g} s*)")
         if distance >= o.max_distance * s_star * (1 - _DISTANCE_SLACK):
             return "stopped", (f"reached max_distance {o.max_distance:.6g} s* before the "
                                f"steady state (spread {spread:.3g}); resume with a "
@@ -251,7 +268,7 @@ class StopTests:
                                f"{spread:.3g}); resume with a larger max_steps")
         return None
 
-    def jump_due(self, spread, target, fixed):
+    def jump_due(self, spread, target, fixed, columnar=True):
         """Whether the next attempt is a jump.
 
         Parameters
@@ -262,8 +279,11 @@ class StopTests:
             Distance of the next pending snapshot (None: none pending).
         fixed : bool
             Fixed steps (never a jump).
+        columnar : bool, optional
+            Whether the phases no longer change below the face: only then
+            is the steady state the limit of a long step (default True).
         """
-        return not fixed and target is None and spread < self.options.jump_spread
+        return columnar and not fixed and target is None and spread < self.options.jump_spread
 
     def stagnation(self, jumps, spread):
         """``(status, message)`` if ``jumps`` jumps have not reached the steady state, else None.
@@ -310,3 +330,16 @@ class StopTests:
     def end(self):
         """The distance limit, m."""
         return self.options.max_distance * self.s_star
+
+    def depth_target(self, distance, depth, rate):
+        """Distance (m) at which the mean worn depth reaches ``end_depth``, or None.
+
+        Linear from the mean worn depth ``depth`` (m) and its rate ``rate``
+        (m/m) at ``distance`` (m): a landing target the steps aim at, which
+        they approach as the rate settles (None without ``end_depth`` or
+        a positive rate).
+        """
+        end = self.options.end_depth
+        if end is None or not rate > 0:
+            return None
+        return distance + max(end - depth, 0.0) / rate

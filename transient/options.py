@@ -72,6 +72,9 @@ class RunOptions:
         (default 1e12) (flag).
     max_steps : int
         Stop after this many accepted steps (default 100000) (flag).
+    end_depth : float or None
+        End the run (status ``"depth"``) once the mean worn depth over the
+        face reaches this, in m (not s*); steps land on it.  Default None.
     snapshots : tuple of float
         Distances in s* at which the face and the pressure are stored; steps
         land on them exactly.
@@ -114,6 +117,9 @@ class RunOptions:
     max_steps: int = _option(100000, Key(
         "max_steps", "integer", low=1, low_open=False, doc="stop after this many steps"),
         flag=True)
+    end_depth: float | None = _option(None, Key(
+        "end_depth", "number", unit="m", low=0.0,
+        doc="end once the mean worn depth over the face reaches this"))
     snapshots: tuple = _option((), Key(
         "snapshots", "numbers", unit="s*", low=0.0, low_open=False,
         doc="distances at which face and pressure are stored"))

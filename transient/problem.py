@@ -20,8 +20,10 @@ import numpy as np
 from steady.normalisation import reference_slope
 from steady.problem import Problem, check_scale, input_names
 from steady.solution import solve
+from steady.wear import PowerLaw
 
 from .contact import solve_trusted_contact
+from .depth import WorkDepth
 from .preconditioners import ScaledShift
 
 __all__ = ["PEAK_RATE_LIMIT", "WarmStart", "StepFailure", "WearProblem", "check_run_in_scales"]
@@ -120,6 +122,10 @@ class WearProblem:
     pressure_floor : float, optional
         Floor of the linearisation pressure for ``m < 1``, in units of the mean
         pressure (default 1e-6).
+    columns : steady.depth.DepthColumns, optional
+        The phases below the face (default: the phase map's ``columns``, if
+        it has them; None: columnar).  Its surface section must be the
+        problem's phase map and the wear law a power law.
 
     Attributes
     ----------
@@ -146,6 +152,16 @@ class WearProblem:
         Contact solves done so far (counter, for work accounting).
     iterations : int
         Contact-solver iterations done so far.
+    columns : steady.depth.DepthColumns or None
+        The phases below the face; None for a columnar problem.
+    work_depth : transient.depth.WorkDepth or None
+        Its wear-work map, None unless ``columns`` has an interface: the run
+        then integrates the wear work (docs/model.md, "Wear across
+        interfaces") and ``coefficient_field`` is that of the current
+        section (:meth:`at_depth`).
+    stage_solves, most_stage_solves : int
+        Newton iterations (contact solves) of the stages across interfaces:
+        their sum and the most in one stage.
 
     Examples
     --------
@@ -158,7 +174,7 @@ class WearProblem:
     """
 
     def __init__(self, problem, *, contact_rtol=1e-10, contact_maxiter=None, newton_rtol=1e-9,
-                 newton_maxiter=30, pressure_floor=1e-6):
+                 newton_maxiter=30, pressure_floor=1e-6, columns=None):
         if not isinstance(problem, Problem):
             raise ValueError(f"WearProblem takes a steady.problem.Problem, got "
                              f"{type(problem).__name__}")
@@ -199,6 +215,33 @@ class WearProblem:
         #: The scene's phase geometry (None: built from a label map), for the error bar of the
         #: rms slope from the geometry's own grid ladder, as ``runin-steady`` gives it.
         self.geometry = None
+        self.columns = getattr(problem.phases, "columns", None) if columns is None else columns
+        self.work_depth = None
+        self.stage_solves = self.most_stage_solves = 0
+        if self.columns is not None:
+            self._check_columns(problem)
+            if not self.columns.columnar:
+                factor = problem.speed_ratio if problem.sliding is not None else None
+                self.work_depth = WorkDepth(self.columns, self.wear.coefficients, factor)
+                # p^m on the face: the rate of the wear work.
+                self._unit_field = np.where(self.face_mask, 1.0, 0.0)
+
+    def _check_columns(self, problem):
+        """Refuse columns that do not fit the problem (shape, surface section, wear law)."""
+        columns = self.columns
+        if columns.shape != tuple(self.shape):
+            raise ValueError(f"columns of shape {columns.shape} do not fit the grid "
+                             f"{tuple(self.shape)}")
+        if columns.n_phases != problem.n_phases:
+            raise ValueError(f"columns have {columns.n_phases} phases, the wear law "
+                             f"{problem.n_phases}")
+        bad = np.argwhere(columns.phases[0] != np.where(self.face_mask, self.labels, -1))
+        if bad.size:
+            raise ValueError(f"columns: the surface section differs from the phase map at "
+                             f"pixel {tuple(int(i) for i in bad[0])}")
+        if not isinstance(self.wear, PowerLaw):
+            raise ValueError(f"depth-varying phases need a power law (archard or power), got "
+                             f"{type(self.wear).__name__}")
 
     @classmethod
     def from_scene(cls, scene, *, n=None, **options):
@@ -334,8 +377,15 @@ class WearProblem:
         """Closed-form steady pressure ``k_i p_i^m = C`` under the load (eq. 7), Pa, shape (nx, ny).
 
         The limit of an implicit Euler step as ``ds -> infinity``: the warm
-        start of a jump.
+        start of a jump.  Across interfaces, of the section below every
+        interface (where a run jumps): ``p`` proportional to ``k^(-1/m)``
+        pixel by pixel, carrying the load.
         """
+        if self.work_depth is not None:
+            k = self.work_depth.slope(self.columns.segment_at(self.columns.bottom))
+            p = np.where(self.face_mask, np.where(self.face_mask, k, 1.0)
+                         ** (-1.0 / self.exponent), 0.0)
+            return p * (self.normal_force / (float(p.sum()) * self.halfspace.h ** 2))
         if self.problem.sliding is not None:  # pixel-wise, k_i v p^m / v_ref = C
             return self.problem.steady_pressure()
         p_phase = self.wear.phase_pressures(self.counts, self.normal_force,
@@ -345,18 +395,77 @@ class WearProblem:
     def solve_steady(self):
         """The closed-form steady state of this problem (eq. 7, 9), for comparison.
 
+        Across interfaces, of the section below every interface
+        (``problem.section(columns.bottom)``, where the phase map provides
+        sections).
+
         Returns
         -------
         steady.solution.SteadyResult
             With the corrected rms slope and the error bar of this map
             resampled (:func:`steady.rms_slope.estimate_map_rms_slope`).
         """
+        if self.work_depth is not None and hasattr(self.problem, "section"):
+            return solve(self.problem.section(self.columns.bottom))
         return solve(self.problem)
 
     # -- the right-hand side -------------------------------------------
     def rate(self, pressure):
         """Wear rate of the law, m/m (dimensionless), shape (nx, ny); zero off the face."""
         return self.wear.rate(pressure, self.coefficient_field)
+
+    # -- the integration variable (docs/model.md, "Wear across interfaces") --
+    # A columnar problem integrates the height itself, and every hook below is
+    # the identity; across interfaces the run integrates the wear work R.
+    @staticmethod
+    def worn_depth(height, offset, initial_height):
+        """Worn depth of a run state, ``height + offset - initial_height``, m, shape (nx, ny)."""
+        return height + offset - initial_height
+
+    def variable(self, height, origin):
+        """The integration variable of the face ``height`` (m): the height, or its wear work.
+
+        ``origin`` (m, shape (nx, ny)) is the height of zero worn depth,
+        ``initial_height - offset``; unused for a columnar problem.
+        """
+        if self.work_depth is None:
+            return height
+        return self.work_depth.work(np.where(self.face_mask, height - origin, 0.0))
+
+    def face(self, variable, origin):
+        """The face height (m) of an integration variable; see :meth:`variable`."""
+        if self.work_depth is None:
+            return variable
+        return origin + self.work_depth.depth(variable)
+
+    def variable_rate(self, pressure):
+        """Rate of the integration variable: ``k p^m`` (m/m), or ``p^m`` for the wear work."""
+        if self.work_depth is None:
+            return self.rate(pressure)
+        return self.wear.rate(pressure, self._unit_field)
+
+    def depth_error(self, error, variable):
+        """An error of the integration variable in metres: times the local ``k`` at ``variable``."""
+        if self.work_depth is None:
+            return error
+        work = self.work_depth
+        return error * work.slope(work.segment(variable))
+
+    def at_depth(self, worn_depth):
+        """Set :attr:`coefficient_field` to the section at ``worn_depth`` (m); its segments.
+
+        Returns
+        -------
+        ndarray of int, shape (nx, ny)
+            The segment of every pixel (:meth:`steady.depth.DepthColumns.segment_at`);
+            None for a columnar problem, whose field never changes.
+        """
+        if self.work_depth is None:
+            return None
+        segments = self.columns.segment_at(np.where(self.face_mask, worn_depth, 0.0))
+        self.coefficient_field = self.work_depth.slope(segments)
+        self._stage_shift = None
+        return segments
 
     @functools.cached_property
     def compliance_floor(self):
@@ -425,7 +534,7 @@ class WearProblem:
             raise StepFailure("contact solve returned non-finite pressure")
         return res
 
-    def _rebuild(self, height, c, res):
+    def _rebuild(self, height, c, res, coefficients=None):
         """Face and contact of an implicit stage ``w = height + c k P(w)^m``.
 
         On the contact the face is rebuilt as ``d - K p``, with the solver's
@@ -438,7 +547,10 @@ class WearProblem:
         """
         p = res.pressure
         contact = self.face_mask & (p > 0)
-        w = height + c * self.rate(p)
+        if coefficients is None:
+            w = height + c * self.rate(p)
+        else:
+            w = height + c * self.wear.rate(p, coefficients)
         kp = res.elastic_displacement
         if not contact.any():
             return w, res
@@ -451,8 +563,12 @@ class WearProblem:
         return self.wear.linearisation(height, c, p0, self.coefficient_field, self.face_mask,
                                        self.pressure_floor * self.pixel_mean_pressure)
 
-    def implicit(self, height, c, x0, *, history=None, atol=0.0):
+    def implicit(self, height, c, x0, *, history=None, atol=0.0, origin=None):
         """Solve ``w = height + c k P(w)^m`` for ``w``.
+
+        Across interfaces (:attr:`work_depth`) ``height`` and ``w`` are wear
+        works and the stage is ``R = height + c P(origin + D(R))^m``
+        (:meth:`_implicit_work`).
 
         Parameters
         ----------
@@ -471,6 +587,9 @@ class WearProblem:
             :meth:`contact`).  Each solve of a power-law Newton iteration
             takes it too: its test compares successive pressures to
             ``newton_rtol``, so the caller keeps it 0 there.
+        origin : ndarray, shape (nx, ny), m, optional
+            The height of zero worn depth (:meth:`variable`); needed across
+            interfaces only.
 
         Returns
         -------
@@ -479,6 +598,8 @@ class WearProblem:
             The contact of the face ``w`` (its pressure is ``P(w)``).
 
         """
+        if self.work_depth is not None:
+            return self._implicit_work(height, c, x0, history, atol, origin)
         if self.wear.linear:
             shift = c * self.coefficient_field
             if history is not None and len(history):
@@ -513,6 +634,56 @@ class WearProblem:
         if history is not None:
             history.push(res.pressure, res.elastic_displacement)
         return w, res
+
+
+    def _implicit_work(self, known, c, x0, history, atol, origin):
+        """The stage ``R = known + c P(origin + D(R))^m`` in the wear work, by Newton's method.
+
+        ``D`` is linearised about the iterate, the line of its segment
+        (slope ``k``), and ``p^m`` about the last pressure: each iteration
+        is the shifted contact problem of a columnar stage with the
+        coefficients ``k`` of the iterate's segments.  Semismooth Newton on
+        the piecewise-linear ``D``: it ends once no pixel changes segment
+        (then the linearisation is exact for ``m = 1``) and, for ``m != 1``,
+        the pressure changes by less than ``newton_rtol``; at most
+        ``newton_maxiter`` iterations, else :class:`StepFailure`.
+        """
+        work, face = self.work_depth, self.face_mask
+        floor = self.pressure_floor * self.pixel_mean_pressure
+        p0 = history.newest() if history is not None and len(history) else np.asarray(x0, float)
+        guess = known + c * self.variable_rate(p0)
+        segments = work.segment(guess)
+        start = p0
+        for iteration in range(1, self.newton_maxiter + 1):
+            k = work.slope(segments)
+            # origin + D(R_i) + k (R - R_i) with R = known + c p^m:
+            base = origin + work.depth(guess, segments) + k * (known - guess)
+            shift, h_lin = self.wear.linearisation(base, c, p0, k, face, floor)
+            if iteration == 1 and history is not None and len(history):
+                start, kx0 = history.predict(h_lin, shift)
+                self._predicted = (start, kx0)
+                if not self.wear.linear:
+                    p0 = start
+                    shift, h_lin = self.wear.linearisation(base, c, p0, k, face, floor)
+            res = self.contact(h_lin, shift=shift, x0=start, atol=atol)
+            change = float(np.max(np.abs(res.pressure - p0))) / self.pixel_mean_pressure
+            p0 = start = res.pressure
+            guess = known + c * self.variable_rate(p0)
+            moved = work.segment(guess)
+            changing = int(np.count_nonzero(moved != segments))
+            segments = moved
+            if changing == 0 and (self.wear.linear or change <= self.newton_rtol):
+                break
+        else:
+            raise StepFailure(f"Newton iteration across interfaces did not converge in "
+                              f"{self.newton_maxiter} iterations ({changing} pixels changing "
+                              f"segment, last change {change:.3g} pbar)")
+        self.stage_solves += iteration
+        self.most_stage_solves = max(self.most_stage_solves, iteration)
+        w, res = self._rebuild(base, c, res, k)
+        if history is not None:
+            history.push(res.pressure, res.elastic_displacement)
+        return work.work(np.where(face, w - origin, 0.0)), res
 
 
 def _row_products(row, vector, rows):

@@ -79,7 +79,14 @@ import types
 
 import numpy as np
 
-from .control import DIVERGENCE_RELIEF, StepController, StopTests, checkpoint_due, contact_tolerance
+from .control import (
+    DEPTH_SLACK,
+    DIVERGENCE_RELIEF,
+    StepController,
+    StopTests,
+    checkpoint_due,
+    contact_tolerance,
+)
 from .diagnostics import masked_gradient, shape_rms, wear_rate_spread
 from .history import DepthRecorder, FaceEstimator
 from .options import RunOptions
@@ -192,8 +199,9 @@ class RunState:
         ``height`` at the previous accepted point, in the frame of the
         current ``offset`` (BDF2's second point); None before the first step.
     previous_rate : ndarray, shape (nx, ny), 1, or None
-        Wear rate ``k p^m`` at the previous accepted point; None before the
-        first step.
+        Rate of the integration variable at the previous accepted point,
+        the wear rate ``k p^m`` (``p^m``, Pa^m, across interfaces, where
+        the run integrates the wear work); None before the first step.
     previous_step : float or None, m
         Length of the last accepted step; None before the first.
     next_step : float or None, m
@@ -237,7 +245,8 @@ class RunResult:
     Attributes
     ----------
     status : str
-        ``"running"``, ``"steady"`` (converged), ``"stopped"`` (limit reached)
+        ``"running"``, ``"steady"`` (converged), ``"depth"`` (the mean worn
+        depth reached ``end_depth``), ``"stopped"`` (limit reached)
         or ``"failed"`` (a step could not be completed).
     message : str
     scheme : str
@@ -521,6 +530,12 @@ class _Run:
       snapshot: every result shares them, none copies them) and
       ``snap_index`` (the next requested one), ``latest`` (the current
       point's spread and shape change, which the stop tests judge);
+    - across interfaces (:attr:`WearProblem.work_depth`): ``segments``, the
+      segment of every pixel at the current point, ``crossings``, the face
+      pixels whose segment the last accepted step changed (what the history
+      records as ``crossings``; 0 for a columnar run), and
+      ``depth_landing``, the distance a retry aims at after a trial went
+      past ``end_depth`` (None otherwise); all three follow from the state;
     - the steady state the history measures against: ``steady_face``,
       ``steady_relief``, ``steady_slope`` (:meth:`_steady_reference`);
     - the history's worker thread: ``_worker``, ``_estimator_workers``,
@@ -589,6 +604,13 @@ class _Run:
                 problem, pressures=state.pressure_history,
                 displacements=state.pressure_history_displacement)
         self.jumps = int(state.jumps)
+        # Across interfaces: the segment of every pixel at the current point (the section
+        # whose coefficients the problem holds), and the pixels that changed segment over
+        # the last accepted step (``crossings``, for the history).
+        self.segments = problem.at_depth(self.worn_depth())
+        self.crossings = 0
+        # Distance of the next attempt after one that went past end_depth (None: none).
+        self.depth_landing = None
 
         if resume is None:
             self.s, self.steps, self.rejected, self.failures = 0.0, 0, 0, 0
@@ -623,6 +645,21 @@ class _Run:
         self._worker = None
         self._estimator_workers = None
         self._pending = []
+
+    def worn_depth(self):
+        """Worn depth at the current point, m, shape (nx, ny) (:meth:`WearProblem.worn_depth`)."""
+        return self.problem.worn_depth(self.height, self.offset, self.initial_height)
+
+    def mean_depth(self):
+        """Mean worn depth over the face, m (None unless the run ends at a depth)."""
+        if self.options.end_depth is None:
+            return None
+        return float(self.worn_depth()[self.problem.face_mask].mean())
+
+    def below_interfaces(self):
+        """Whether the phases no longer change below the face (always, for a columnar run)."""
+        p = self.problem
+        return p.work_depth is None or p.columns.columnar_below(self.worn_depth())
 
     def _first_state(self, h0):
         """The state at ``s = 0`` from the checked initial face ``h0`` (m): first contact solve."""
@@ -916,13 +953,26 @@ class _Run:
         return before
 
     def plan(self, jump, target):
-        """Scheme and length (m) of the next attempt."""
+        """Scheme and length (m) of the next attempt.
+
+        A regular step lands on ``target`` or on the distance where the
+        mean worn depth reaches ``end_depth`` at the current wear rate,
+        whichever comes first.
+        """
         p = self.problem
         if jump:
             return get_scheme("implicit_euler"), self.options.jump_step * self.s_star
         ds = self.next_step
         if self.scheme.explicit:
             ds = self.controller.explicit_limit(ds, p.stable_step(self.pressure))
+        depth = self.mean_depth()
+        if depth is not None:
+            rate = float(p.rate(self.pressure)[p.face_mask].mean())
+            at_depth = self.depth_landing
+            if at_depth is None:
+                at_depth = self.stop.depth_target(self.s, depth, rate)
+            if at_depth is not None:
+                target = at_depth if target is None else min(target, at_depth)
         return self.scheme, self.controller.land(ds, self.s, target, self.stop.end())
 
     def attempt(self, scheme, ds, jump):
@@ -938,9 +988,13 @@ class _Run:
         if not (jump or self.controller.fixed) and p.wear.linear:
             atol = contact_tolerance(self.options.tol, self.f_star, self.latest[0],
                                      p.compliance_floor, p.applied_force / p.area)
+        origin = None
+        if p.work_depth is not None:
+            origin = self.initial_height - self.offset
         state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
                           self.approach, self.prev_height, self.prev_rate, self.prev_step,
-                          history=None if jump else self.pressures, contact_atol=atol)
+                          history=None if jump else self.pressures, contact_atol=atol,
+                          origin=origin)
         trial = scheme.step(p, state, ds)
         err = shape_rms(trial.error, face_mask) / (self.options.tol * self.f_star)
         if not (math.isfinite(err) and np.all(np.isfinite(trial.height[face_mask]))):
@@ -949,27 +1003,59 @@ class _Run:
             raise StepFailure(f"face relief above {DIVERGENCE_RELIEF:g} f*: divergence")
         return trial, err
 
+    def past_end_depth(self, trial, ds):
+        """Where to land instead of a trial that went past ``end_depth`` (m), or None.
+
+        The secant of the mean worn depth between the current point and the
+        trial: the rate at the start misses the crossings of the step.
+        """
+        end = self.options.end_depth
+        if end is None:
+            return None
+        face_mask = self.problem.face_mask
+        before = self.mean_depth()
+        after = float(self.problem.worn_depth(trial.height, self.offset,
+                                              self.initial_height)[face_mask].mean())
+        if after <= end * (1 + DEPTH_SLACK):
+            return None
+        return self.s + ds * (end - before) / (after - before)
+
     def accept(self, trial, ds, jump=False):
         """Move to the trial point; the rigid part of the wear goes into ``offset``.
 
         A jump's state is the steady face at no particular distance: it
         advances neither the distance nor the rigid wear, and stays out of
-        the history (its figures go to ``latest``).
+        the history (its figures go to ``latest``).  Across interfaces the
+        height is not re-centred (``offset`` stays): the worn depth, which
+        sets the phases, is then the height minus one fixed origin, free of
+        the round-off a moving offset would add at every step; a jump there
+        (below every interface) drops its least increment.
         """
         p = self.problem
         face_mask = p.face_mask
         new_height = np.where(face_mask, trial.height, 0.0)
-        c = float(new_height[face_mask].mean())
-        new_height = np.where(face_mask, new_height - c, 0.0)
+        c = 0.0
+        if p.work_depth is None:
+            c = float(new_height[face_mask].mean())
+        elif jump:
+            # The jump's wear less its least increment: no pixel rises above the
+            # depth it had reached (below every interface).
+            c = float(np.min((new_height - self.height)[face_mask]))
+        if c:
+            new_height = np.where(face_mask, new_height - c, 0.0)
         change = shape_rms(new_height - self.height, face_mask)
         shape_rate = change / self.f_star / (ds / self.s_star)
         self.prev_height = np.where(face_mask, self.height - c, 0.0)
-        self.prev_rate = p.rate(self.pressure)
+        self.prev_rate = p.variable_rate(self.pressure)
         self.prev_step = ds
         self.height = new_height
         self.pressure = trial.pressure
         self.approach = trial.approach - c
         self.steps += 1
+        if p.work_depth is not None:
+            segments = p.at_depth(self.worn_depth())
+            self.crossings = int(np.count_nonzero((segments != self.segments) & face_mask))
+            self.segments = segments
         if jump:
             self.latest = self._jump_point()
             return
@@ -999,12 +1085,14 @@ class _Run:
         consecutive = 0
         while True:
             spread, shape_rate = self.latest
+            columnar = self.below_interfaces()
             ended = stop.check(spread, shape_rate, self.s, self.steps,
-                               held=self.next_breakpoint() is not None)
+                               held=self.next_breakpoint() is not None,
+                               depth=self.mean_depth(), columnar=columnar)
             if ended is not None:
                 return ended
             target = self.pending_target()
-            jump = stop.jump_due(spread, target, fixed)
+            jump = stop.jump_due(spread, target, fixed, columnar)
             if jump:
                 ended = stop.stagnation(self.jumps, spread)
                 if ended is not None:
@@ -1024,6 +1112,12 @@ class _Run:
                 self.next_step = controller.after_failure(ds)
                 continue
             consecutive = 0
+            landing = None if jump else self.past_end_depth(trial, ds)
+            if landing is not None:
+                self.rejected += 1
+                self.depth_landing = landing
+                logger.debug("past end_depth: landing at %.6g s*", landing / self.s_star)
+                continue
             if controller.rejects(err, jump):
                 self.rejected += 1
                 self.next_step = controller.after_reject(ds, err, scheme)
@@ -1031,6 +1125,7 @@ class _Run:
                 continue
             if not jump:
                 self.next_step = controller.after_accept(ds, err, scheme)
+            self.depth_landing = None
             self.accept(trial, ds, jump)
             if on_step is not None:
                 on_step(self)

@@ -49,6 +49,14 @@ keeps its classical order on the index-1 DAE; where the contact set
 changes during a step the solution is only Lipschitz in ``s`` and every
 scheme drops to first order locally.
 
+Across interfaces (phases that change with depth below the face) the
+schemes integrate the wear work ``R`` of the face instead of its height,
+``dR/ds = P(w)^m`` with ``w = w0 + D(R)`` (docs/model.md, "Wear across
+interfaces"), through the problem's hooks
+:meth:`~transient.problem.WearProblem.variable`, ``face``,
+``variable_rate`` and ``depth_error``, which are the identity for a
+columnar problem; the state's ``origin`` is the height of zero worn depth.
+
 Power-law wear (``m != 1``) is treated in every implicit stage by Newton's
 method on ``w = w0 + c k P(w)^m``: ``k p^m`` is linearised about the last
 pressure iterate ``p0``, ``k p^m ~ k p0^m + k m p0^(m-1) (p - p0)``, which is
@@ -138,6 +146,11 @@ class StepState:
         the wear-rate spread leave to the solves
         (:func:`transient.control.contact_tolerance`).  Default 0: every
         solve to ``contact_rtol``.
+    origin : ndarray, shape (nx, ny), m, or None
+        Height of zero worn depth (``initial_height - offset``), in the frame
+        of ``height`` and ``previous_height``: across interfaces the scheme
+        integrates the wear work of the face
+        (:meth:`transient.problem.WearProblem.variable`); None: columnar.
     """
 
     height: np.ndarray
@@ -148,6 +161,7 @@ class StepState:
     previous_step: float | None = None
     history: object = None
     contact_atol: float = 0.0
+    origin: np.ndarray | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -224,9 +238,17 @@ class Scheme:
         return f"<{type(self).__name__} {self.name!r}, order {self.order}>"
 
 
-def _trial(height, res, error):
-    return Trial(height=height, pressure=res.pressure, approach=float(res.approach),
-                 contact_fraction=float(res.contact_fraction), error=error)
+def _trial(problem, state, variable, res, error):
+    """The trial of a step that ended at ``variable`` with local error ``error`` of it."""
+    return Trial(height=problem.face(variable, state.origin), pressure=res.pressure,
+                 approach=float(res.approach), contact_fraction=float(res.contact_fraction),
+                 error=problem.depth_error(error, variable))
+
+
+def _implicit(problem, state, base, c, x0):
+    """One implicit stage ``y = base + c f(y)`` of a step from ``state``: ``(y, contact)``."""
+    return problem.implicit(base, c, x0, history=state.history, atol=state.contact_atol,
+                            origin=state.origin)
 
 
 @register_scheme
@@ -249,11 +271,12 @@ class ExplicitEuler(Scheme):
         if ds > limit * (1.0 + 1e-12):
             raise ValueError(f"explicit Euler step {ds!r} m exceeds its stability limit "
                              f"{limit:.6g} m (2 lambda_min(K) / max k m p^(m-1))")
-        f0 = problem.rate(state.pressure)
-        height = state.height + ds * f0
-        res = problem.contact(height, x0=state.pressure, atol=state.contact_atol)
-        error = 0.5 * ds * (problem.rate(res.pressure) - f0)
-        return _trial(height, res, error)
+        f0 = problem.variable_rate(state.pressure)
+        y = problem.variable(state.height, state.origin) + ds * f0
+        res = problem.contact(problem.face(y, state.origin), x0=state.pressure,
+                              atol=state.contact_atol)
+        error = 0.5 * ds * (problem.variable_rate(res.pressure) - f0)
+        return _trial(problem, state, y, res, error)
 
 
 @register_scheme
@@ -269,11 +292,11 @@ class ImplicitEuler(Scheme):
 
         The error estimate is ``ds/2`` times the change of the rate over the step.
         """
-        f0 = problem.rate(state.pressure)
-        height, res = problem.implicit(state.height, ds, state.pressure, history=state.history,
-                                       atol=state.contact_atol)
-        error = 0.5 * ds * (problem.rate(res.pressure) - f0)
-        return _trial(height, res, error)
+        f0 = problem.variable_rate(state.pressure)
+        y, res = _implicit(problem, state, problem.variable(state.height, state.origin), ds,
+                           state.pressure)
+        error = 0.5 * ds * (problem.variable_rate(res.pressure) - f0)
+        return _trial(problem, state, y, res, error)
 
 
 @register_scheme
@@ -297,19 +320,19 @@ class BDF2(Scheme):
 
     def step(self, problem, state, ds):
         """One BDF2 step, or implicit Euler without a previous point (see :meth:`Scheme.step`)."""
-        f0 = problem.rate(state.pressure)
+        f0 = problem.variable_rate(state.pressure)
         if state.previous_height is None:
             return SCHEMES["implicit_euler"].step(problem, state, ds)
         omega = ds / state.previous_step
-        base = ((1 + omega) ** 2 * state.height
-                - omega ** 2 * state.previous_height) / (1 + 2 * omega)
+        y0 = problem.variable(state.height, state.origin)
+        base = ((1 + omega) ** 2 * y0
+                - omega ** 2 * problem.variable(state.previous_height, state.origin)
+                ) / (1 + 2 * omega)
         beta = (1 + omega) / (1 + 2 * omega)
-        height, res = problem.implicit(base, beta * ds, state.pressure, history=state.history,
-                                       atol=state.contact_atol)
-        predictor = state.height + ds * ((1 + 0.5 * omega) * f0
-                                         - 0.5 * omega * state.previous_rate)
-        error = (8.0 / 23.0) * (height - predictor)
-        return _trial(height, res, error)
+        y, res = _implicit(problem, state, base, beta * ds, state.pressure)
+        predictor = y0 + ds * ((1 + 0.5 * omega) * f0 - 0.5 * omega * state.previous_rate)
+        error = (8.0 / 23.0) * (y - predictor)
+        return _trial(problem, state, y, res, error)
 
 
 @register_scheme
@@ -329,14 +352,13 @@ class SDIRK2(Scheme):
     def step(self, problem, state, ds):
         """One SDIRK2 step, two shifted contact solves (see :meth:`Scheme.step`)."""
         g = self.gamma
-        _, res1 = problem.implicit(state.height, g * ds, state.pressure, history=state.history,
-                                   atol=state.contact_atol)
-        f1 = problem.rate(res1.pressure)
-        base = state.height + (1 - g) * ds * f1
-        height, res2 = problem.implicit(base, g * ds, res1.pressure, history=state.history,
-                                        atol=state.contact_atol)
-        error = g * ds * (problem.rate(res2.pressure) - f1)
-        return _trial(height, res2, error)
+        y0 = problem.variable(state.height, state.origin)
+        _, res1 = _implicit(problem, state, y0, g * ds, state.pressure)
+        f1 = problem.variable_rate(res1.pressure)
+        base = y0 + (1 - g) * ds * f1
+        y, res2 = _implicit(problem, state, base, g * ds, res1.pressure)
+        error = g * ds * (problem.variable_rate(res2.pressure) - f1)
+        return _trial(problem, state, y, res2, error)
 
 
 def _esdirk3_tableau():
@@ -385,14 +407,14 @@ class ESDIRK3(Scheme):
 
     def step(self, problem, state, ds):
         """One ESDIRK3 step, three shifted contact solves (see :meth:`Scheme.step`)."""
-        rates = [problem.rate(state.pressure)]
+        rates = [problem.variable_rate(state.pressure)]
+        y0 = problem.variable(state.height, state.origin)
         x0 = state.pressure
         for i in range(1, 4):
-            base = state.height + ds * sum(self.a[i, j] * rates[j] for j in range(i))
-            height, res = problem.implicit(base, self.gamma * ds, x0, history=state.history,
-                                           atol=state.contact_atol)
-            rates.append(problem.rate(res.pressure))
+            base = y0 + ds * sum(self.a[i, j] * rates[j] for j in range(i))
+            y, res = _implicit(problem, state, base, self.gamma * ds, x0)
+            rates.append(problem.variable_rate(res.pressure))
             x0 = res.pressure
         weights = self.b - self.b_hat
         error = ds * sum(weights[j] * rates[j] for j in range(4))
-        return _trial(height, res, error)
+        return _trial(problem, state, y, res, error)

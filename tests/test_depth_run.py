@@ -1,0 +1,265 @@
+"""The run-in across interfaces: wear coefficients at the current worn depth.
+
+The run integrates the wear work ``R = int p^m ds`` and the worn depth is
+``D(R)`` (transient.depth; docs/model.md, "Wear across interfaces").
+Checked here: columns that repeat the face's map at every depth (or a
+layer of the substrate's own phase) give the columnar run; a hard coating
+on a soft substrate conserves the load, wears monotonically, wears through
+at the rim first, with bounded Newton iterations and every pixel crossing
+once; the error still follows the tolerance across the first crossings;
+``end_depth`` ends a run on its depth; an interrupted run resumes bit for
+bit; bad columns and a bad end_depth are refused.
+"""
+
+import numpy as np
+import pytest
+from conftest import FORCE, K1, problem, wear_problem
+
+from steady.depth import DepthColumns
+from steady.phases import Homogeneous
+from steady.problem import FacePhases, Problem
+from steady.wear import PowerLaw, ThresholdLaw
+from transient.control import DEPTH_SLACK, SOLVE_ERROR_SHARE
+from transient.depth import WorkDepth
+from transient.options import RunOptions
+from transient.output import read_run, write_run
+from transient.problem import WearProblem
+from transient.runin import HISTORY_UNITS, run_in
+
+
+def repeated(wear, depths):
+    """Columns that repeat ``wear``'s phase map below interfaces at ``depths`` (m)."""
+    face = wear.face_mask
+    interfaces = np.stack([np.where(face, d, np.inf) for d in depths])
+    phases = np.stack([np.where(face, wear.labels, -1)] * (len(depths) + 1))
+    return DepthColumns(interfaces, phases, wear.n_phases)
+
+
+def coating(n, thickness, ratio=10.0, exponent=1.0, **options):
+    """A flat disk with a hard coating (phase 1, ``k = K1``) over a soft substrate (phase 0).
+
+    ``thickness`` is in units of ``f*``; the centre pixel is phase 0 at the
+    surface too (every phase has a face pixel there), over phase 0.
+    """
+    base = problem(Homogeneous(), PowerLaw([K1]), n=n)
+    face = base.face_mask
+    labels = np.where(face, 1, -1)
+    labels[n // 2, n // 2] = 0
+    wear = PowerLaw([ratio * K1, K1], exponent=exponent)
+    phases = Problem(FacePhases(base.grid, labels, 2), wear, base.normal_force, base.E_star)
+    f_star = WearProblem(phases).depth_scale
+    columns = DepthColumns(np.where(face, thickness * f_star, np.inf)[None],
+                           np.stack([labels, np.where(face, 0, -1)]), 2)
+    return WearProblem(phases, columns=columns, **options)
+
+
+# -- the wear-work map ------------------------------------------------------------
+def test_work_depth_is_the_inverse_of_the_work_of_a_depth():
+    rng = np.random.default_rng(3917)
+    interfaces = np.sort(rng.uniform(1e-7, 1e-5, (3, 5, 4)), axis=0)
+    interfaces[2, 0, 0] = np.inf  # a pixel with two interfaces only
+    phases = rng.integers(0, 3, (4, 5, 4))
+    phases[3, 0, 0] = phases[2, 0, 0]
+    columns = DepthColumns(interfaces, phases, 3)
+    work = WorkDepth(columns, (1e-13, 4e-13, 2e-12))
+    depth = rng.uniform(0.0, 2e-5, (5, 4))
+    back = work.depth(work.work(depth))
+    assert np.allclose(back, depth, rtol=1e-14, atol=0), \
+        f"D(R(d)) - d up to {np.max(np.abs(back - depth)):.3g} m"
+    # dD/dR is the coefficient of the phase at that depth.
+    k = np.asarray((1e-13, 4e-13, 2e-12))[columns.phase_at(depth)]
+    slope = work.slope(work.segment(work.work(depth)))
+    assert np.allclose(slope, k, rtol=1e-15), "slope of D is not the local coefficient"
+
+
+# -- the columnar limit ------------------------------------------------------------
+@pytest.mark.parametrize("geometry, ratios, exponent, depths", [
+    ("voronoi", (1.0, 10.0), 2.0, (0.05, 0.2, 0.6)),
+    ("homogeneous", (1.0,), 1.0, (0.1,)),
+])
+def test_columns_that_repeat_the_map_give_the_columnar_run(geometry, ratios, exponent, depths):
+    columnar = wear_problem(geometry, ratios, n=24, exponent=exponent)
+    f_star = columnar.depth_scale
+    layered = wear_problem(geometry, ratios, n=24, exponent=exponent,
+                           columns=repeated(columnar, [d * f_star for d in depths]))
+    assert layered.work_depth is not None, "the repeated columns have interfaces"
+    options = RunOptions(tol=1e-4, max_distance=0.3)
+    a = run_in(columnar, np.zeros(columnar.shape), options)
+    b = run_in(layered, np.zeros(layered.shape), options)
+    face = columnar.face_mask
+    assert (a.steps, a.distance) == (b.steps, b.distance), \
+        f"steps {a.steps} / {b.steps}, distance {a.distance} / {b.distance}"
+    assert np.max(b.worn_depth[face]) > max(depths) * f_star, "no interface crossed"
+    error = np.max(np.abs(a.worn_depth - b.worn_depth)[face]) / f_star
+    # The power law solves every stage to contact_rtol (measured 4e-14 f*); Archard's
+    # leaves a step's solves SOLVE_ERROR_SHARE tol f* (measured 7e-8 f* over 10 steps).
+    bound = 1e-12 if exponent != 1.0 else 10 * SOLVE_ERROR_SHARE * options.tol
+    assert error < bound, f"worn depth differs by {error:.3g} f* (bound {bound:.3g})"
+    pressure = np.max(np.abs(a.pressure - b.pressure)) / a.pressure.max()
+    assert pressure < 100 * bound, f"pressure differs by {pressure:.3g} of its peak"
+
+
+# -- a coating --------------------------------------------------------------------
+@pytest.mark.parametrize("n, scheme, exponent, most", [
+    (16, "esdirk3", 1.0, 4), (17, "bdf2", 1.0, 4),
+    # Measured: 6 Newton iterations in a stage at most (about 15 s).
+    pytest.param(16, "esdirk3", 2.0, 8, marks=pytest.mark.slow)])
+def test_coating_wears_through_rim_first_with_bounded_newton(n, scheme, exponent, most):
+    problem_ = coating(n, 0.3, exponent=exponent)
+    face = problem_.face_mask
+    h2 = problem_.halfspace.h ** 2
+    points = []
+
+    def on_step(run):
+        points.append((run.s, float(run.pressure[face].sum()) * h2, run.worn_depth()[face],
+                       run.crossings, run.segments.copy()))
+
+    options = RunOptions(tol=1e-4, scheme=scheme)
+    result = run_in(problem_, np.zeros(problem_.shape), options, on_step=on_step)
+    assert result.status == "steady", result.message
+    assert result.failures == 0, f"{result.failures} failed attempts"
+    load = max(abs(force / FORCE - 1.0) for _, force, *_ in points)
+    assert load < 1e-13, f"load off by {load:.3g}"
+    depths = np.array([d for _, _, d, *_ in points])
+    assert np.all(np.isfinite(depths)), "non-finite worn depth"
+    # Worn depth never decreases by more than the step tolerance (the schemes' stage
+    # weights may be negative where a pixel leaves the contact; measured -6e-8 f*).
+    rise = np.min(np.diff(depths, axis=0)) / problem_.depth_scale
+    assert rise > -options.tol, f"worn depth fell by {-rise:.3g} f* in a step"
+    # Every pixel crosses its one interface once, and the run is below all of them.
+    crossings = sum(c for *_, c, _ in points)
+    assert crossings == face.sum(), f"{crossings} crossings for {face.sum()} pixels"
+    assert problem_.columns.columnar_below(result.worn_depth), "steady above an interface"
+    # The steady state is the substrate's (homogeneous): the uniform pressure (measured 0).
+    uniform = FORCE / (face.sum() * h2)
+    steady = np.max(np.abs(result.pressure[face] / uniform - 1.0))
+    assert steady < 1e-9, f"final pressure off the substrate's steady one by {steady:.3g}"
+    assert np.allclose(problem_.steady_pressure()[face], uniform, rtol=1e-14), \
+        "steady_pressure is not the substrate's"
+    # Newton ends in a few iterations per stage, through the wear-through (measured: 3
+    # for m = 1).
+    assert problem_.most_stage_solves <= most, \
+        f"{problem_.most_stage_solves} Newton iterations in one stage"
+    # The rim (the flat punch's pressure singularity) wears through first.
+    s = np.array([p[0] for p in points])
+    segments = np.array([p[4] for p in points])
+    through = np.where(segments.any(axis=0), s[np.argmax(segments, axis=0)], np.inf)
+    rim = face & ~np.pad(face, 1)[2:, 1:-1] | face & ~np.pad(face, 1)[:-2, 1:-1] \
+        | face & ~np.pad(face, 1)[1:-1, 2:] | face & ~np.pad(face, 1)[1:-1, :-2]
+    inner = face.copy()
+    inner[n // 2, n // 2] = False  # soft at the surface
+    inner &= np.hypot(*np.meshgrid(*(np.arange(m) - (m - 1) / 2 for m in face.shape),
+                                   indexing="ij")) < n / 8
+    assert through[rim].max() < through[inner].min(), \
+        (f"rim through by {through[rim].max() / result.distance_scale:.3g} s*, centre from "
+         f"{through[inner].min() / result.distance_scale:.3g} s*")
+
+
+@pytest.mark.slow
+def test_error_follows_the_tolerance_across_the_first_crossings():
+    # Up to s = 0.17 s* twenty rim pixels wear through (n = 16).  Measured slope of the
+    # largest worn-depth error against tol (reference tol 1e-8): 0.70 across them, 0.69
+    # before any (s = 0.1 s*): ESDIRK3's tolerance proportionality is kept.
+    tols = np.array([1e-3, 1e-4, 1e-5, 1e-6, 1e-7])
+    depths = []
+    for tol in (*tols, 1e-8):
+        problem_ = coating(16, 0.3)
+        result = run_in(problem_, np.zeros(problem_.shape),
+                        RunOptions(tol=tol, max_distance=0.17))
+        face = problem_.face_mask
+        depths.append(result.worn_depth[face] / problem_.depth_scale)
+    crossed = int(problem_.columns.segment_at(np.where(face, result.worn_depth, 0.0)).sum())
+    assert crossed >= 10, f"only {crossed} pixels crossed"
+    errors = [np.max(np.abs(d - depths[-1])) for d in depths[:-1]]
+    slope = np.polyfit(np.log(tols), np.log(errors), 1)[0]
+    assert 0.55 < slope < 0.85, f"error ~ tol^{slope:.2f} across interfaces"
+
+
+def test_a_ragged_multilayer_crosses_thousands_of_interfaces_without_failure():
+    # Six interfaces of random depth below every pixel, phases alternating from the
+    # Voronoi surface down (k ratio 10), n = 32: measured 3496 crossings in 132 steps,
+    # 17 rejected, none failed, at most 3 Newton iterations in a stage (the columnar
+    # run to the same distance takes 18 steps).
+    columnar = wear_problem("voronoi", (1.0, 10.0), 32)
+    f_star, face = columnar.depth_scale, columnar.face_mask
+    rng = np.random.default_rng(8821)
+    interfaces = np.cumsum(rng.uniform(0.05, 0.3, (6, 32, 32)), axis=0) * f_star
+    phases = (columnar.labels[None] + np.arange(7)[:, None, None]) % 2
+    columns = DepthColumns(np.where(face, interfaces, np.inf), np.where(face, phases, -1), 2)
+    problem_ = wear_problem("voronoi", (1.0, 10.0), 32, columns=columns)
+    end = 0.8 * float(np.median(interfaces[-1][face]))
+    crossings = []
+    result = run_in(problem_, np.zeros(problem_.shape), RunOptions(tol=1e-4, end_depth=end),
+                    on_step=lambda run: crossings.append(run.crossings))
+    assert result.status == "depth" and result.failures == 0, \
+        f"{result.status} with {result.failures} failures: {result.message}"
+    # A pixel that crosses two interfaces in one step counts once.
+    advanced = int(columns.segment_at(np.where(face, result.worn_depth, 0.0))[face].sum())
+    assert 1000 < sum(crossings) <= advanced, f"{sum(crossings)} crossings, {advanced} made"
+    assert problem_.most_stage_solves <= 4, \
+        f"{problem_.most_stage_solves} Newton iterations in one stage"
+
+
+# -- ends and resumes ---------------------------------------------------------------
+def test_end_depth_lands_on_the_mean_worn_depth():
+    problem_ = coating(16, 0.3)
+    end = 0.5 * problem_.depth_scale
+    result = run_in(problem_, np.zeros(problem_.shape), RunOptions(tol=1e-4, end_depth=end))
+    assert result.status == "depth", result.message
+    mean = float(result.worn_depth[problem_.face_mask].mean())
+    assert abs(mean / end - 1.0) < 10 * DEPTH_SLACK, f"mean worn depth {mean / end} end_depth"
+
+
+def test_end_depth_ends_a_columnar_run_too():
+    problem_ = wear_problem("voronoi", (1.0, 10.0), 24)
+    end = 0.2 * problem_.depth_scale
+    result = run_in(problem_, np.zeros(problem_.shape), RunOptions(tol=1e-4, end_depth=end))
+    assert result.status == "depth", result.message
+    mean = float(result.worn_depth[problem_.face_mask].mean())
+    assert abs(mean / end - 1.0) < 10 * DEPTH_SLACK, f"mean worn depth {mean / end} end_depth"
+
+
+def test_an_interrupted_coating_run_resumes_bit_for_bit(tmp_path):
+    options = RunOptions(tol=1e-4, checkpoint_interval=0.0)
+    checkpoints = []
+    full = run_in(coating(16, 0.3), np.zeros((16, 16)), options,
+                  on_checkpoint=checkpoints.append)
+    assert full.status == "steady", full.message
+    # Mid-way through the wear-through, and the last regular step.
+    for index in (len(checkpoints) // 3, len(checkpoints) // 2, len(checkpoints) - 2):
+        path = tmp_path / f"checkpoint{index}.h5"
+        write_run(path, checkpoints[index])
+        saved, _, _ = read_run(path)
+        resumed = run_in(coating(16, 0.3), None, options, resume=saved)
+        assert (resumed.status, resumed.steps) == (full.status, full.steps), \
+            f"resumed from {index}: {resumed.status} after {resumed.steps} steps"
+        assert np.array_equal(full.height, resumed.height, equal_nan=True), \
+            f"face differs after resuming from checkpoint {index}"
+        assert np.array_equal(full.pressure, resumed.pressure), "pressure differs"
+        for name in HISTORY_UNITS:
+            assert np.array_equal(full.history[name], resumed.history[name], equal_nan=True), \
+                f"history {name} differs after resuming from checkpoint {index}"
+
+
+# -- refusals ------------------------------------------------------------------------
+def test_bad_columns_are_refused_naming_the_fault():
+    columnar = wear_problem("voronoi", (1.0, 10.0), 24)
+    columns = repeated(columnar, [1e-6])
+    with pytest.raises(ValueError, match=r"columns of shape \(24, 24\) do not fit the grid "
+                                         r"\(32, 32\)"):
+        wear_problem("voronoi", (1.0, 10.0), 32, columns=columns)
+    phases = np.array(columns.phases)
+    face = columnar.face_mask
+    phases[0][face] = 1 - phases[0][face]
+    flipped = DepthColumns(columns.interfaces, phases, 2)
+    with pytest.raises(ValueError, match="surface section differs from the phase map"):
+        wear_problem("voronoi", (1.0, 10.0), 24, columns=flipped)
+    threshold = Problem(columnar.problem.phases, ThresholdLaw([K1, 10 * K1], [0.0, 0.0]),
+                        FORCE, columnar.problem.E_star)
+    with pytest.raises(ValueError, match="need a power law .* got ThresholdLaw"):
+        WearProblem(threshold, columns=columns)
+
+
+def test_end_depth_must_be_positive():
+    with pytest.raises(ValueError, match=r"end_depth must be a number > 0 \(m\), got 0.0"):
+        RunOptions(end_depth=0.0)
