@@ -42,7 +42,7 @@ from .outline import FaceGrid
 from .schema import SCALE_RANGE as _SCALE_RANGE
 from .sliding import steady_pressure as sliding_pressure
 from .text import shorten
-from .wear import PowerLaw, as_wear_law
+from .wear import PowerLaw, as_wear_law, restrict_phases
 
 __all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_phase_names", "check_scale",
            "check_scales", "default_phase_names", "input_names"]
@@ -533,6 +533,21 @@ class Problem:
             not finite or of another shape.
         """
         return dataclasses.replace(self, phases=self.phases.section(depth))
+
+    def present_phases(self):
+        """The labels and the wear law of the phases with a face pixel, renumbered from 0.
+
+        A section of a depth-varying map may lack a phase; the estimators
+        of the rms slope take only phases that are on the face.  A map with
+        every phase returns its own labels and law.
+        """
+        counts = self.phases.counts
+        if np.all(counts > 0):
+            return self.labels, self.wear
+        present = np.flatnonzero(counts > 0)
+        renumber = np.full(self.n_phases + 1, -1)
+        renumber[present] = np.arange(present.size)
+        return renumber[self.labels], restrict_phases(self.wear, present)
 
     # -- the grid --------------------------------------------------------
     @property

@@ -38,7 +38,6 @@ from .problem import Problem
 from .relief import rms_height
 from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
 from .validity import check_rms_slope
-from .wear import restrict_phases
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
 
@@ -255,7 +254,7 @@ def _solve(problem, geometry, face_only):
     if face_only:
         return dataclasses.replace(result, rms_slope=math.nan)
     if geometry is None:
-        labels, wear = _present_phases(problem)
+        labels, wear = problem.present_phases()
         estimate = estimate_map_rms_slope(labels, wear, problem.normal_force,
                                           problem.outline, problem.E_star,
                                           sliding=problem.sliding)
@@ -278,17 +277,6 @@ def _log_section(problem):
              else "the surface section" if np.ndim(depth) == 0
              else "the section at the given depth map")
     logger.info("the phase map changes with depth: solving the quasi-steady face of %s", where)
-
-
-def _present_phases(problem):
-    """The labels and the law of the phases with a pixel, renumbered (a section may lack one)."""
-    counts = problem.phases.counts
-    if np.all(counts > 0):
-        return problem.labels, problem.wear
-    present = np.flatnonzero(counts > 0)
-    renumber = np.full(problem.n_phases + 1, -1)
-    renumber[present] = np.arange(present.size)
-    return renumber[problem.labels], restrict_phases(problem.wear, present)
 
 
 def _limiting_face(problem):

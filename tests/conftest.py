@@ -16,6 +16,7 @@ Tests draw their scenes from here rather than carrying inline copies:
   run in-process, its one ``error:`` line, the temporary files it left.
 """
 
+import dataclasses
 import math
 import pathlib
 
@@ -97,17 +98,29 @@ def problem(labels_or_geometry, wear, *, n=None, outline=RADIUS, force=FORCE, E_
     return Problem(FacePhases(grid, labels, n_phases), wear, force, E_star)
 
 
-def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, *, exponent=1.0, **options):
+def wear_problem(geometry="voronoi", ratios=(1.0, 10.0), n=32, *, exponent=1.0, columns=None,
+                 **options):
     """Wear problem of a gallery geometry (a name, or a geometry object).
 
     ``ratios`` are the wear coefficients in units of :data:`K1`, of the
-    power law of ``exponent`` (default 1, Archard); ``options`` go to the
+    power law of ``exponent`` (default 1, Archard); ``columns`` (a
+    :class:`steady.depth.DepthColumns` whose surface section is the map) the
+    phases below the face; ``options`` go to the
     :class:`~transient.problem.WearProblem` constructor.
     """
     if isinstance(geometry, str):
         geometry = GEOMETRIES[geometry]
     wear = PowerLaw([K1 * r for r in ratios], exponent=exponent)
-    return WearProblem(problem(geometry, wear, n=n), **options)
+    return WearProblem(with_columns(problem(geometry, wear, n=n), columns), **options)
+
+
+def with_columns(problem, columns):
+    """``problem`` (a :class:`steady.problem.Problem`) on ``columns``: their surface section."""
+    if columns is None:
+        return problem
+    phases = FacePhases(problem.grid, columns.phase_at(0.0), problem.n_phases,
+                        problem.phase_names, columns)
+    return dataclasses.replace(problem, phases=phases)
 
 
 _MAPS = {

@@ -13,7 +13,7 @@ bit; bad columns and a bad end_depth are refused.
 
 import numpy as np
 import pytest
-from conftest import FORCE, K1, problem, wear_problem
+from conftest import FORCE, K1, problem, wear_problem, with_columns
 
 from steady.depth import DepthColumns
 from steady.phases import Homogeneous
@@ -50,7 +50,7 @@ def coating(n, thickness, ratio=10.0, exponent=1.0, **options):
     f_star = WearProblem(phases).depth_scale
     columns = DepthColumns(np.where(face, thickness * f_star, np.inf)[None],
                            np.stack([labels, np.where(face, 0, -1)]), 2)
-    return WearProblem(phases, columns=columns, **options)
+    return WearProblem(with_columns(phases, columns), **options)
 
 
 # -- the wear-work map ------------------------------------------------------------
@@ -245,19 +245,21 @@ def test_an_interrupted_coating_run_resumes_bit_for_bit(tmp_path):
 def test_bad_columns_are_refused_naming_the_fault():
     columnar = wear_problem("voronoi", (1.0, 10.0), 24)
     columns = repeated(columnar, [1e-6])
-    with pytest.raises(ValueError, match=r"columns of shape \(24, 24\) do not fit the grid "
-                                         r"\(32, 32\)"):
-        wear_problem("voronoi", (1.0, 10.0), 32, columns=columns)
+    with pytest.raises(ValueError, match=r"the columns \(24 x 24 pixels\) are not on the face "
+                                         r"of the circle face \(radius 4 mm\) at n = 32"):
+        fine = wear_problem("voronoi", (1.0, 10.0), 32).problem
+        FacePhases(fine.grid, fine.labels, 2, columns=columns)
     phases = np.array(columns.phases)
     face = columnar.face_mask
     phases[0][face] = 1 - phases[0][face]
     flipped = DepthColumns(columns.interfaces, phases, 2)
-    with pytest.raises(ValueError, match="surface section differs from the phase map"):
-        wear_problem("voronoi", (1.0, 10.0), 24, columns=flipped)
+    with pytest.raises(ValueError, match="labels are not the columns' section at the given "
+                                         r"depth: pixel \(\d+, \d+\)"):
+        FacePhases(columnar.problem.grid, columnar.labels, 2, columns=flipped)
     threshold = Problem(columnar.problem.phases, ThresholdLaw([K1, 10 * K1], [0.0, 0.0]),
                         FORCE, columnar.problem.E_star)
     with pytest.raises(ValueError, match="need a power law .* got ThresholdLaw"):
-        WearProblem(threshold, columns=columns)
+        WearProblem(with_columns(threshold, columns))
 
 
 def test_end_depth_must_be_positive():

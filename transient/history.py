@@ -298,16 +298,17 @@ class FaceEstimator:
         # Layer width per unit sliding distance, in pixels.
         self._rim_growth = rate * hs.E_star / hs.h
         self._rim_weight = self._rim_weights(h0)
-        geometry = getattr(problem, "geometry", None)
-        if geometry is not None:
+        geometry = problem.geometry
+        if geometry is not None and problem.columns is None:
             # The ladder of the geometry rasterised on coarser grids, as the steady
             # command's error bar (steady.solution.solve_scene): one bar for one value.
             estimate = estimate_rms_slope(geometry, problem.wear, problem.normal_force,
                                           problem.outline, hs.E_star, problem.n)
         else:
-            estimate = estimate_map_rms_slope(problem.labels, problem.wear,
-                                              problem.normal_force, problem.outline,
-                                              hs.E_star, energy=self.energy)
+            # A depth-varying map: its surface section, of the phases on the face.
+            labels, wear = problem.problem.present_phases()
+            estimate = estimate_map_rms_slope(labels, wear, problem.normal_force,
+                                              problem.outline, hs.E_star, energy=self.energy)
         self.map_error = (estimate.error / estimate.rms_slope
                           if math.isfinite(estimate.error) and estimate.rms_slope > 0
                           else math.inf)

@@ -122,10 +122,6 @@ class WearProblem:
     pressure_floor : float, optional
         Floor of the linearisation pressure for ``m < 1``, in units of the mean
         pressure (default 1e-6).
-    columns : steady.depth.DepthColumns, optional
-        The phases below the face (default: the phase map's ``columns``, if
-        it has them; None: columnar).  Its surface section must be the
-        problem's phase map and the wear law a power law.
 
     Attributes
     ----------
@@ -153,7 +149,8 @@ class WearProblem:
     iterations : int
         Contact-solver iterations done so far.
     columns : steady.depth.DepthColumns or None
-        The phases below the face; None for a columnar problem.
+        The phases below the face (``problem.phases.columns``); None for a
+        columnar problem.  With interfaces the wear law must be a power law.
     work_depth : transient.depth.WorkDepth or None
         Its wear-work map, None unless ``columns`` has an interface: the run
         then integrates the wear work (docs/model.md, "Wear across
@@ -174,7 +171,7 @@ class WearProblem:
     """
 
     def __init__(self, problem, *, contact_rtol=1e-10, contact_maxiter=None, newton_rtol=1e-9,
-                 newton_maxiter=30, pressure_floor=1e-6, columns=None):
+                 newton_maxiter=30, pressure_floor=1e-6):
         if not isinstance(problem, Problem):
             raise ValueError(f"WearProblem takes a steady.problem.Problem, got "
                              f"{type(problem).__name__}")
@@ -215,7 +212,7 @@ class WearProblem:
         #: The scene's phase geometry (None: built from a label map), for the error bar of the
         #: rms slope from the geometry's own grid ladder, as ``runin-steady`` gives it.
         self.geometry = None
-        self.columns = getattr(problem.phases, "columns", None) if columns is None else columns
+        self.columns = problem.phases.columns
         self.work_depth = None
         self.stage_solves = self.most_stage_solves = 0
         if self.columns is not None:
@@ -227,18 +224,7 @@ class WearProblem:
                 self._unit_field = np.where(self.face_mask, 1.0, 0.0)
 
     def _check_columns(self, problem):
-        """Refuse columns that do not fit the problem (shape, surface section, wear law)."""
-        columns = self.columns
-        if columns.shape != tuple(self.shape):
-            raise ValueError(f"columns of shape {columns.shape} do not fit the grid "
-                             f"{tuple(self.shape)}")
-        if columns.n_phases != problem.n_phases:
-            raise ValueError(f"columns have {columns.n_phases} phases, the wear law "
-                             f"{problem.n_phases}")
-        bad = np.argwhere(columns.phases[0] != np.where(self.face_mask, self.labels, -1))
-        if bad.size:
-            raise ValueError(f"columns: the surface section differs from the phase map at "
-                             f"pixel {tuple(int(i) for i in bad[0])}")
+        """Refuse a wear law the run across interfaces does not take (the phases checked them)."""
         if not isinstance(self.wear, PowerLaw):
             raise ValueError(f"depth-varying phases need a power law (archard or power), got "
                              f"{type(self.wear).__name__}")
@@ -405,7 +391,7 @@ class WearProblem:
             With the corrected rms slope and the error bar of this map
             resampled (:func:`steady.rms_slope.estimate_map_rms_slope`).
         """
-        if self.work_depth is not None and hasattr(self.problem, "section"):
+        if self.work_depth is not None:
             return solve(self.problem.section(self.columns.bottom))
         return solve(self.problem)
 

@@ -609,6 +609,7 @@ class _Run:
         # the last accepted step (``crossings``, for the history).
         self.segments = problem.at_depth(self.worn_depth())
         self.crossings = 0
+        self._depth = None  # the depth figures' recorder, built at the first point recorded
         # Distance of the next attempt after one that went past end_depth (None: none).
         self.depth_landing = None
 
@@ -777,16 +778,18 @@ class _Run:
         nothing here.  The quasi-steady figures are filled by
         :meth:`collect`.
         """
-        columns = getattr(self.problem, "columns", None)
+        columns = self.problem.columns
         if columns is None:
             return None
-        recorder = getattr(self, "_depth", None)
+        recorder = self._depth
         if recorder is None:
             recorder = self._depth = DepthRecorder(self.problem, columns, self.estimator,
                                                    self.estimator.rim)
         previous = (None if self.prev_height is None or index == 0
                     else self.prev_height + self.offset - self.initial_height)
-        figures, labels = recorder.figures(worn, self.pressure, previous)
+        # The stepping counted the last step's crossings (none before the first step).
+        figures, labels = recorder.figures(worn, self.pressure, previous,
+                                           crossed=self.crossings if index else None)
         figures.update(quasi_steady_rms_slope=math.nan,
                        normalised_quasi_steady_rms_slope=math.nan)
         hist = self.history
@@ -883,7 +886,7 @@ class _Run:
             reference_slope_source=self.reference.source, problem=self.problem.problem,
             steady_rms_slope=self.steady_slope[0], steady_rms_slope_error=self.steady_slope[1],
             sliding_speed=self.problem.sliding_speed, load_programme=self.programme,
-            columns=getattr(self.problem, "columns", None))
+            columns=self.problem.columns)
 
     def _take_due_snapshots(self):
         snaps = self.options.snapshots
