@@ -155,3 +155,14 @@ def test_operator_with_own_buffers_shares_spectra_and_gives_the_same_products():
     assert own._work is not hs._work and own._rows is not hs._rows and own.workers == 1
     p = np.random.default_rng(3).random((24, 17))
     assert np.array_equal(own.displacement(p), hs.displacement(p))
+
+
+@pytest.mark.parametrize("shape", [(40, 54), (257, 300)])
+def test_threaded_transforms_are_those_of_one_thread(shape):
+    # Each thread transforms a block of whole lines, so the split changes no bit; at
+    # (257, 300) the padded arrays are large enough to be split, into unequal blocks.
+    p = np.random.default_rng(2713).random(shape)
+    one, two = HalfSpace(shape, 1e-5, 1e6, workers=1), HalfSpace(shape, 1e-5, 1e6, workers=2)
+    assert np.array_equal(one.displacement(p), two.displacement(p)), "displacement"
+    for a, b in zip(one.gradient(p), two.gradient(p), strict=True):
+        assert np.array_equal(a, b), "gradient"
