@@ -52,6 +52,8 @@ _THREADED_SIZE = 1 << 16
 _SPLIT_ROWS = 2048
 _POOL_LOCK = threading.Lock()
 _POOL = []
+# A forked child has none of the parent's pool threads: it makes its own.
+os.register_at_fork(after_in_child=_POOL.clear)
 
 
 def _thread_count(workers):

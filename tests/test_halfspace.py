@@ -183,3 +183,26 @@ def test_split_column_product_matches_dense_sums(n, monkeypatch):
     assert err < 1e-13, f"n={n}: split product differs from the dense sum by {err:.1e}"
     hs.displacement(rng.random(hs.shape))
     assert np.array_equal(first, hs.displacement(p)), "work buffers leak between products"
+
+
+def _child_product(n, queue):
+    queue.put(HalfSpace(n, 1e-5, 1e6, workers=2).displacement(np.ones((n, n))))
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # fork of a threaded process
+def test_threaded_product_in_a_forked_child():
+    # The parent's transform threads do not survive a fork: the child makes its own
+    # (without them, its first split transform would wait for ever).
+    import multiprocessing
+
+    if "fork" not in multiprocessing.get_all_start_methods():
+        pytest.skip("no fork on this platform")
+    n = 260  # padded arrays above the size that is split among threads
+    want = HalfSpace(n, 1e-5, 1e6, workers=2).displacement(np.ones((n, n)))
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_child_product, args=(n, queue), daemon=True)
+    child.start()
+    got = queue.get(timeout=60)
+    child.join(timeout=60)
+    assert np.array_equal(got, want), "the child's product differs"
