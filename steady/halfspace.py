@@ -252,8 +252,10 @@ class HalfSpace:
     E_star : float, Pa
         Effective modulus ``E / (1 - nu^2)`` of the half-space.
     workers : int, optional
-        Threads for :mod:`scipy.fft` (default: all cores, at every size:
-        docs/benchmarks.md, "Contact solve on run-in problems").
+        Threads of the transforms, as :mod:`scipy.fft` counts them (-1, the
+        default: all cores, at every size: docs/benchmarks.md, "Contact solve
+        on run-in problems"); the product's transforms share their lines among
+        them from 65536 elements up.
 
     Notes
     -----
