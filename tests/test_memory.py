@@ -26,7 +26,7 @@ def test_estimates_grow_as_the_pixel_count():
 def test_refusal_names_both_numbers_and_the_override():
     with pytest.raises(ValueError) as err:
         check_memory(steady_memory(12000), "a steady solve at n = 12000", 16)
-    assert str(err.value) == ("a steady solve at n = 12000 needs about 59.1 GiB of memory; "
+    assert str(err.value) == ("a steady solve at n = 12000 needs about 51 GiB of memory; "
                               "16 GiB may be used (--memory-limit) (a larger --memory-limit GIB "
                               "overrides this check)"), f"{err.value}"
     check_memory(steady_memory(12000), "a steady solve", float("inf"))  # no check
