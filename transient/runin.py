@@ -460,6 +460,11 @@ class RunResult:
         return self.status == "steady"
 
     @property
+    def finished(self):
+        """Whether the run ended as asked: at the steady state or at its ``end_depth``."""
+        return self.status in ("steady", "depth")
+
+    @property
     def shape(self):
         """``(nx, ny)`` of the grid."""
         return self.height.shape
