@@ -19,7 +19,13 @@ from steady.depth import DepthColumns
 from steady.phases import Homogeneous
 from steady.problem import FacePhases, Problem
 from steady.wear import PowerLaw, ThresholdLaw
-from transient.control import DEPTH_SLACK, SOLVE_ERROR_SHARE
+from transient.control import (
+    CROSSING_CUT,
+    CROSSING_MARGIN,
+    DEPTH_SLACK,
+    SOLVE_ERROR_SHARE,
+    StepController,
+)
 from transient.depth import WorkDepth
 from transient.options import RunOptions
 from transient.output import read_run, write_run
@@ -176,6 +182,41 @@ def test_recent_pressures_keep_their_true_displacements_across_interfaces():
                     on_step=on_step)
     assert result.status == "steady", result.message
     assert max(worst) < 1e-12, f"stored K p off by {max(worst):.3g} of it"
+
+
+def test_a_step_ends_just_past_the_first_crossing_ahead():
+    controller = StepController(RunOptions(), 1.0)
+    assert controller.before_crossing(1.0, np.inf) == 1.0, "cut without a crossing"
+    assert controller.before_crossing(1.0, 1.0) == 1.0, "cut with the crossing at its end"
+    assert controller.before_crossing(1.0, 0.7) == 0.7 * (1 + CROSSING_MARGIN), \
+        "not just past the crossing"
+    assert controller.before_crossing(1.0, 0.1) == CROSSING_CUT, "cut below CROSSING_CUT"
+    fixed = StepController(RunOptions(step=1e-3), 1.0)
+    assert fixed.before_crossing(1.0, 0.7) == 1.0, "a fixed step was cut"
+
+
+def test_the_first_crossing_is_where_the_rates_take_the_first_pixel():
+    # On the coating every coated pixel's wear work runs at p (m = 1) towards the
+    # coating's thickness over its k: the first crossing is min((R_1 - R) / p) over
+    # them.  The centre pixel, soft above and below, has no kink to cross.
+    problem_ = coating(16, 0.3)
+    face = problem_.face_mask
+    distances = []
+
+    def on_step(run):
+        if not distances:
+            distances.append((run.s, run.first_crossing(), run.worn_depth().copy(),
+                              run.pressure.copy()))
+
+    run = run_in(problem_, np.zeros(problem_.shape), RunOptions(tol=1e-4, max_steps=1),
+                 on_step=on_step)
+    _, first, depth, pressure = distances[0]
+    k = problem_.work_depth.slopes[0]
+    thickness = 0.3 * problem_.depth_scale
+    coated = face & (problem_.columns.phases[0] == 1)
+    expected = np.min((thickness - depth[coated]) / k[coated] / pressure[coated])
+    assert first == pytest.approx(expected, rel=1e-12), f"{first} m, expected {expected} m"
+    assert run.steps == 1
 
 
 @pytest.mark.slow

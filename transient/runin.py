@@ -965,7 +965,9 @@ class _Run:
 
         A regular step lands on ``target`` or on the distance where the
         mean worn depth reaches ``end_depth`` at the current wear rate,
-        whichever comes first.
+        whichever comes first; across interfaces it ends just past the
+        first crossing ahead
+        (:meth:`transient.control.StepController.before_crossing`).
         """
         p = self.problem
         if jump:
@@ -973,6 +975,8 @@ class _Run:
         ds = self.next_step
         if self.scheme.explicit:
             ds = self.controller.explicit_limit(ds, p.stable_step(self.pressure))
+        if p.work_depth is not None:
+            ds = self.controller.before_crossing(ds, self.first_crossing())
         depth = self.mean_depth()
         if depth is not None:
             rate = float(p.rate(self.pressure)[p.face_mask].mean())
@@ -982,6 +986,19 @@ class _Run:
             if at_depth is not None:
                 target = at_depth if target is None else min(target, at_depth)
         return self.scheme, self.controller.land(ds, self.s, target, self.stop.end())
+
+    def first_crossing(self):
+        """Distance (m) in which the first face pixel reaches an interface at the current rates.
+
+        ``inf`` once every pixel is below its last interface.
+        """
+        p = self.problem
+        work = p.variable(self.height, self.initial_height - self.offset)
+        rate = p.variable_rate(self.pressure)
+        left = p.work_depth.remaining(work)[p.face_mask]
+        rate = rate[p.face_mask]
+        moving = rate > 0
+        return float(np.min(left[moving] / rate[moving], initial=np.inf))
 
     def attempt(self, scheme, ds, jump):
         """One trial step and its scaled error; raises :class:`StepFailure`."""
