@@ -184,39 +184,41 @@ def test_recent_pressures_keep_their_true_displacements_across_interfaces():
     assert max(worst) < 1e-12, f"stored K p off by {max(worst):.3g} of it"
 
 
-def test_a_step_ends_just_past_the_first_crossing_ahead():
+def test_a_step_ends_just_past_the_last_crossing_in_it():
     controller = StepController(RunOptions(), 1.0)
-    assert controller.before_crossing(1.0, np.inf) == 1.0, "cut without a crossing"
+    assert controller.before_crossing(1.0, -np.inf) == 1.0, "cut without a crossing"
     assert controller.before_crossing(1.0, 1.0) == 1.0, "cut with the crossing at its end"
     assert controller.before_crossing(1.0, 0.7) == 0.7 * (1 + CROSSING_MARGIN), \
         "not just past the crossing"
+    assert controller.before_crossing(1.0, 0.99) == 1.0, "stretched past its length"
     assert controller.before_crossing(1.0, 0.1) == CROSSING_CUT, "cut below CROSSING_CUT"
     fixed = StepController(RunOptions(step=1e-3), 1.0)
     assert fixed.before_crossing(1.0, 0.7) == 1.0, "a fixed step was cut"
 
 
-def test_the_first_crossing_is_where_the_rates_take_the_first_pixel():
+def test_the_last_crossing_is_where_the_rates_take_the_pixels():
     # On the coating every coated pixel's wear work runs at p (m = 1) towards the
-    # coating's thickness over its k: the first crossing is min((R_1 - R) / p) over
-    # them.  The centre pixel, soft above and below, has no kink to cross.
+    # coating's thickness over its k: it crosses in (R_1 - R) / p.  The centre pixel,
+    # soft above and below, has no kink to cross.
     problem_ = coating(16, 0.3)
     face = problem_.face_mask
-    distances = []
-
-    def on_step(run):
-        if not distances:
-            distances.append((run.s, run.first_crossing(), run.worn_depth().copy(),
-                              run.pressure.copy()))
-
-    run = run_in(problem_, np.zeros(problem_.shape), RunOptions(tol=1e-4, max_steps=1),
-                 on_step=on_step)
-    _, first, depth, pressure = distances[0]
     k = problem_.work_depth.slopes[0]
     thickness = 0.3 * problem_.depth_scale
     coated = face & (problem_.columns.phases[0] == 1)
-    expected = np.min((thickness - depth[coated]) / k[coated] / pressure[coated])
-    assert first == pytest.approx(expected, rel=1e-12), f"{first} m, expected {expected} m"
-    assert run.steps == 1
+    seen = []
+
+    def on_step(run):
+        depth, p = run.worn_depth()[coated], run.pressure[coated]
+        expected = np.sort((thickness - depth) / k[coated] / p)
+        seen.append((expected, [run.last_crossing(d) for d in
+                                (np.inf, expected[0] * (1 + 1e-9), expected[0] * (1 - 1e-9))]))
+
+    run_in(problem_, np.zeros(problem_.shape), RunOptions(tol=1e-4, max_steps=1),
+           on_step=on_step)
+    expected, (every, first, none) = seen[0]
+    assert every == pytest.approx(expected[-1], rel=1e-12), f"{every} m, not {expected[-1]} m"
+    assert first == pytest.approx(expected[0], rel=1e-12), f"{first} m, not {expected[0]} m"
+    assert none == -np.inf, f"a crossing at {none} m before the first"
 
 
 @pytest.mark.slow

@@ -976,7 +976,7 @@ class _Run:
         if self.scheme.explicit:
             ds = self.controller.explicit_limit(ds, p.stable_step(self.pressure))
         if p.work_depth is not None:
-            ds = self.controller.before_crossing(ds, self.first_crossing())
+            ds = self.controller.before_crossing(ds, self.last_crossing(ds))
         depth = self.mean_depth()
         if depth is not None:
             rate = float(p.rate(self.pressure)[p.face_mask].mean())
@@ -987,18 +987,19 @@ class _Run:
                 target = at_depth if target is None else min(target, at_depth)
         return self.scheme, self.controller.land(ds, self.s, target, self.stop.end())
 
-    def first_crossing(self):
-        """Distance (m) in which the first face pixel reaches an interface at the current rates.
+    def last_crossing(self, ds):
+        """Distance (m) in which the last face pixel to reach a kink within ``ds`` reaches it.
 
-        ``inf`` once every pixel is below its last interface.
+        At the current rates; ``-inf`` when no pixel reaches one within
+        ``ds`` (m).
         """
         p = self.problem
         work = p.variable(self.height, self.initial_height - self.offset)
-        rate = p.variable_rate(self.pressure)
+        rate = p.variable_rate(self.pressure)[p.face_mask]
         left = p.work_depth.remaining(work)[p.face_mask]
-        rate = rate[p.face_mask]
         moving = rate > 0
-        return float(np.min(left[moving] / rate[moving], initial=np.inf))
+        distance = left[moving] / rate[moving]
+        return float(np.max(distance[distance < ds], initial=-np.inf))
 
     def attempt(self, scheme, ds, jump):
         """One trial step and its scaled error; raises :class:`StepFailure`."""
