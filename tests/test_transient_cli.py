@@ -11,7 +11,7 @@ import h5py
 import numpy as np
 import pytest
 
-from transient.output import history_cf, read_run
+from transient.output import backup_path, history_cf, read_run
 from transient.runin import HISTORY_UNITS
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -272,3 +272,17 @@ def test_spatial_error_flag_refuses_a_map_without_a_coarser_grid(tmp_path, write
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr and "no grid coarser" in proc.stderr, proc.stderr
     assert not (tmp_path / "run.h5").exists(), "nothing may be written for refused input"
+
+
+def test_run_that_reaches_end_depth_exits_0(tmp_path):
+    text = (ROOT / "steady" / "examples" / "coating_transient.toml").read_text()
+    text = text.replace("n = 64", "n = 16").replace("end_depth = 1.2e-3", "end_depth = 1.0e-4")
+    scene = tmp_path / "coating.toml"
+    scene.write_text(text)
+    out = tmp_path / "run.h5"
+    proc = cli(scene, "-o", out, cwd=tmp_path)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr}"
+    assert "error" not in proc.stderr, proc.stderr
+    assert proc.stdout.startswith("depth: reached end_depth 0.0001 m"), proc.stdout[:200]
+    assert read_run(out)[0].status == "depth", "the run file's status is not 'depth'"
+    assert not backup_path(out).exists(), "the finished run kept its previous checkpoint"

@@ -18,6 +18,8 @@ import math
 
 __all__ = [
     "CHECKPOINT_SHARE",
+    "CROSSING_CUT",
+    "CROSSING_MARGIN",
     "DEPTH_SLACK",
     "DIVERGENCE_RELIEF",
     "EXPLICIT_SAFETY",
@@ -49,6 +51,12 @@ EXPLICIT_SAFETY = 0.9
 #: First adaptive step, ``INITIAL_STEP_FACTOR sqrt(tol) (h / L) s*``: the fast
 #: scale on which the flat punch's edge relaxes (``L`` the outline's scale).
 INITIAL_STEP_FACTOR = 0.01
+#: Across interfaces a step that the current rates say pixels cross in is cut to end
+#: this fraction past the last of those crossings (docs/model.md, "Wear across
+#: interfaces") ...
+CROSSING_MARGIN = 0.02
+#: ... but to no less than this fraction of its length.
+CROSSING_CUT = 0.5
 #: A face relief (shape rms) above this many ``f*`` is a divergence.
 DIVERGENCE_RELIEF = 1e6
 #: Jumps to the steady state tried before the run stops as stagnating.
@@ -179,6 +187,21 @@ class StepController:
         growth = min(scheme.max_growth,
                      SAFETY * err ** (-1.0 / (q + 1)) if err > 0 else scheme.max_growth)
         return ds * max(MIN_ACCEPT_FACTOR, growth)
+
+    def before_crossing(self, ds, crossing):
+        """Cut ``ds`` (m) to end just past the last crossing within it, ``crossing`` m ahead.
+
+        A crossing within a step puts a kink of the wear rate in it, whose
+        error the estimate of the step before did not foresee; one near the
+        step's end costs little, one near its middle most.  A step that the
+        current rates say pixels cross in ends ``CROSSING_MARGIN`` past the
+        last of them (``-inf``: none), but is cut to no less than
+        ``CROSSING_CUT`` of its length: dense crossings leave it as it is.
+        Fixed steps are not cut.
+        """
+        if self.fixed or not 0.0 <= crossing < ds:
+            return ds
+        return min(ds, max(crossing * (1.0 + CROSSING_MARGIN), CROSSING_CUT * ds))
 
     def rejects(self, err, jump):
         """Whether an attempt of scaled error ``err`` is rejected (never a jump or a fixed step)."""

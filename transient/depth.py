@@ -94,6 +94,21 @@ class WorkDepth:
         origin = np.take_along_axis(self.works, j[None], axis=0)[0]
         return start + self.slope(j) * (work - origin)
 
+    def remaining(self, work):
+        """Wear work (shape (nx, ny)) left before each pixel reaches its next kink.
+
+        A kink is an interface where the coefficient changes (one between
+        layers of equal ``k`` is none); ``inf`` past a pixel's last one and
+        off the face.
+        """
+        j = self.segment(work)
+        k = self.slope(j)
+        left = np.full(work.shape, np.inf)
+        for i in range(1, self.works.shape[0]):
+            kink = (i > j) & (self.slopes[i] != k) & np.isinf(left)
+            left = np.where(kink, self.works[i] - work, left)
+        return left
+
     def work(self, depth):
         """Wear work ``R(d)`` at worn depth ``depth`` (m, shape (nx, ny)); 0 off the face."""
         j = self.columns.segment_at(depth)

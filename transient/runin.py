@@ -460,6 +460,11 @@ class RunResult:
         return self.status == "steady"
 
     @property
+    def finished(self):
+        """Whether the run ended as asked: at the steady state or at its ``end_depth``."""
+        return self.status in ("steady", "depth")
+
+    @property
     def shape(self):
         """``(nx, ny)`` of the grid."""
         return self.height.shape
@@ -960,7 +965,9 @@ class _Run:
 
         A regular step lands on ``target`` or on the distance where the
         mean worn depth reaches ``end_depth`` at the current wear rate,
-        whichever comes first.
+        whichever comes first; across interfaces it ends just past the
+        first crossing ahead
+        (:meth:`transient.control.StepController.before_crossing`).
         """
         p = self.problem
         if jump:
@@ -968,6 +975,8 @@ class _Run:
         ds = self.next_step
         if self.scheme.explicit:
             ds = self.controller.explicit_limit(ds, p.stable_step(self.pressure))
+        if p.work_depth is not None:
+            ds = self.controller.before_crossing(ds, self.last_crossing(ds))
         depth = self.mean_depth()
         if depth is not None:
             rate = float(p.rate(self.pressure)[p.face_mask].mean())
@@ -977,6 +986,20 @@ class _Run:
             if at_depth is not None:
                 target = at_depth if target is None else min(target, at_depth)
         return self.scheme, self.controller.land(ds, self.s, target, self.stop.end())
+
+    def last_crossing(self, ds):
+        """Distance (m) in which the last face pixel to reach a kink within ``ds`` reaches it.
+
+        At the current rates; ``-inf`` when no pixel reaches one within
+        ``ds`` (m).
+        """
+        p = self.problem
+        work = p.variable(self.height, self.initial_height - self.offset)
+        rate = p.variable_rate(self.pressure)[p.face_mask]
+        left = p.work_depth.remaining(work)[p.face_mask]
+        moving = rate > 0
+        distance = left[moving] / rate[moving]
+        return float(np.max(distance[distance < ds], initial=-np.inf))
 
     def attempt(self, scheme, ds, jump):
         """One trial step and its scaled error; raises :class:`StepFailure`."""

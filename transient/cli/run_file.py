@@ -261,7 +261,7 @@ class RunFile:
             self.ours = True
             previous, self.saved = self.saved, (result.steps,
                                                 result.distance / result.distance_scale)
-            if result.success:
+            if result.finished:
                 self._drop_backup(previous)
 
     def _drop_backup(self, previous):

@@ -45,7 +45,7 @@ and on stderr.  ``--force`` starts over.  ``--resume --spatial-error`` on a
 finished run that lacks its spatial error runs the companion and stores it;
 one that holds it is left untouched.
 
-Exit status: 0 steady state reached; 1 run stopped or failed (resumable),
+Exit status: 0 steady state or ``end_depth`` reached; 1 run stopped or failed (resumable),
 an operating-system error (the message names the last checkpoint), a
 companion run of ``--spatial-error`` that failed or a figure that could not
 be drawn (the run is saved); 2 bad input (``error: ...`` on stderr, nothing
@@ -380,7 +380,7 @@ def run(args):
             raise CommandError(f"{err}; {job.run_file.saved_text()}",
                                EXIT_FAILED if saved else EXIT_BAD_INPUT) from None
         print("\n".join(_report(result, comparison)))
-        status = EXIT_OK if result.success else EXIT_FAILED
+        status = EXIT_OK if result.finished else EXIT_FAILED
         at = at_text(result.steps, result.distance / result.distance_scale)
         stop = f"run {result.status} at {at}: {result.message}; continue with --resume"
         if job.companion_failure is not None:
@@ -494,7 +494,7 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0 steady state reached, 1 run stopped or failed
+        Exit status: 0 steady state or end depth reached, 1 run stopped or failed
         (resumable), an operating-system error or a failed companion run or
         figure (the run is saved), 2 bad input, 130 interrupted.
     """
