@@ -12,7 +12,8 @@ pixel wears through at the reference's ``crossing_distance`` of its radius,
 (c) after the coating is gone the rms slope and the face's deviation from
 eq. 10 match the reference within the grid's error bars, (d) the face decays
 to the substrate's steady state at the reference's rate.  The grid's error is
-measured between n = 64 and 128 (n = 128 is marked slow).
+measured between n = 64 and 128 (n = 128 is marked slow); (c) and (d) are
+followed further down at a tighter tolerance (marked slow).
 """
 
 import dataclasses
@@ -32,6 +33,8 @@ EXAMPLE = "steady/examples/coating_transient.toml"
 THICKNESS, RATIO = 0.5, 4.0
 RINGS = 80
 TOL = 1e-4
+#: The tighter tolerance of the slow checks that follow the face further down.
+FINE_TOL = 1e-5
 
 
 def coated_scene():
@@ -73,18 +76,18 @@ def reference():
 
 @pytest.fixture(scope="module")
 def runs():
-    """The 2-d runs by grid size, each run once."""
+    """The 2-d runs by grid size (and tolerance), each run once."""
     done = {}
 
-    def get(n):
-        if n not in done:
-            done[n] = coated_run(n)
-        return done[n]
+    def get(n, tol=TOL):
+        if (n, tol) not in done:
+            done[n, tol] = coated_run(n, tol)
+        return done[n, tol]
 
     return get
 
 
-def coated_run(n):
+def coated_run(n, tol=TOL):
     """Run the coated scene on ``n`` pixels to its steady state, recording the wear-through.
 
     A pixel's wear-through lies in the accepted step in which its worn depth
@@ -104,7 +107,7 @@ def coated_run(n):
             crossing[new] = last["s"] + (t - w0) / (w[new] - w0) * (run.s - last["s"])
         last.update(s=run.s, w=w.copy())
 
-    result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=TOL), on_step=on_step)
+    result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=tol), on_step=on_step)
     assert result.status == "steady", result.message
     return CoatedRun(result, problem, crossing, problem.grid.radii)
 
@@ -121,7 +124,8 @@ def _crossing_errors(run, reference):
 
 
 # Measured at tol 1e-4, in s*_c (the front sweeps the face over 0.44 s*_c): largest
-# |error| 0.0184 (n = 64), 0.0076 (128); rms 0.0029, 0.00105 (first order in h).
+# |error| 0.0184 (n = 64), 0.0076 (128); rms 0.0029, 0.00105 (first order in h or
+# better).  Bounds: the measured errors with a margin of 1.3 to 1.4.
 CROSSING_BOUNDS = {64: (0.025, 0.004), 128: (0.010, 0.0015)}
 
 
@@ -145,7 +149,7 @@ def test_every_pixel_wears_through_where_the_reference_does(runs, reference, n):
 def test_the_wear_through_converges_with_the_grid(runs, reference):
     coarse, fine = (np.sqrt(np.mean(_crossing_errors(runs(n), reference) ** 2))
                     for n in (64, 128))
-    # Measured ratio 0.36: first order in h, or better.
+    # Measured ratio 0.36: first order in h, or better; bound 0.55 (1.5 times it).
     assert fine < 0.55 * coarse, f"rms error {coarse:.3g} (n = 64) -> {fine:.3g} (n = 128)"
 
 
@@ -153,8 +157,8 @@ def test_mean_worn_depth_follows_the_worn_volume(runs, reference):
     """``k_c pbar s`` before the first crossing, ``k_s pbar s - t (k_s/k_c - 1)`` after the last.
 
     ``pbar`` is the run's: the force over the face's pixels.  Before any
-    crossing the identity is exact (measured 3e-16 f*); after the last the
-    contact solves leave 6e-8 f* at tol 1e-4.
+    crossing the identity is exact (measured 2.3e-16 f*); after the last the
+    contact solves leave 2.4e-7 f* at tol 1e-4 (bound 1e-6).
     """
     run = runs(64)
     result, scene = run.result, coated_scene()
@@ -184,10 +188,14 @@ def _after_the_coating(run, reference):
             _history(run, "face_deviation")[keep], slope, deviation)
 
 
-# Above this face deviation the history's decay is the grid's, not the step's: at
-# tol 1e-4 the steps past it are several e-foldings long (n = 64: 0.28 s*_c at
-# D = 2e-3) and damp the deviation (0.51 of the reference's at D = 2e-5).
+# Above this face deviation the history's decay is the grid's, not the step's.  At
+# tol 1e-4 the steps grow to several e-foldings of the substrate (0.12 s*_c): n = 64
+# keeps D / D_ref - 1 at the grid's 0.044 down to D = 1e-2, then 0.030 at 4.3e-3,
+# 0.002 at 1.4e-3, -0.11 at 2.4e-4 (a step of 0.33 s*_c) and -0.94 at 1e-6.  At
+# tol 1e-5 (2.7 times the steps) it keeps 0.036-0.046 down to D = 6.5e-4, then 0.019
+# at 2.4e-4 and -0.04 at 5.6e-5: FINE_RESOLVED.
 RESOLVED = 3e-3
+FINE_RESOLVED = 3e-4
 
 
 def test_after_the_coating_slope_and_face_match_the_reference(runs, reference):
@@ -198,14 +206,19 @@ def test_after_the_coating_slope_and_face_match_the_reference(runs, reference):
     off = np.abs(slope - ref_slope) / slope_error
     assert off.max() < 0.5, f"rms slope off by {off.max():.3g} of its error bar"
     resolved = deviation > RESOLVED
-    # Measured: D / D_ref - 1 = 0.033-0.044 (the relief of eq. 10 on the pixel centres).
+    # Measured: D / D_ref - 1 = 0.030-0.044 (the relief of eq. 10 on the pixel centres).
     ratio = deviation[resolved] / ref_deviation[resolved] - 1
     assert np.all(np.abs(ratio) < 0.06), f"face deviation off by {ratio.max():.3g}"
 
 
 @pytest.mark.slow
 def test_after_the_coating_the_grid_error_bars_hold(runs, reference):
-    """Within twice the n = 64 to 128 difference (measured: the n = 128 error is 1.1 times it)."""
+    """Within twice the n = 64 to 128 difference.
+
+    Measured: the n = 128 error is 1.12 times the difference for the rms slope
+    (0.0018 against 0.0016) and 1.23 times it for the face deviation (0.025
+    against 0.020).
+    """
     coarse, fine = runs(64), runs(128)
     s, slope, _, deviation, ref_slope, ref_deviation = _after_the_coating(fine, reference)
     later = s >= s[0] + 0.1 * reference.distance_scale  # the coarse history's points are sparse
@@ -229,5 +242,21 @@ def test_the_face_decays_to_the_substrate_steady_state_at_the_reference_rate(run
     assert window.sum() >= 3, f"{window.sum()} points to fit"
     slope = np.polyfit(s[window], np.log(deviation[window]), 1)[0]
     decay = -1.0 / slope / reference.substrate_decay_distance - 1
-    # Measured: -0.64 % (n = 64), -0.81 % (n = 128) against 0.4853 a / (k_s E*).
+    # Measured: -0.79 % (n = 64), -0.81 % (n = 128) against 0.4853 a / (k_s E*).
     assert abs(decay) < 0.015, f"n = {n}: decay distance {decay:+.3%} off the reference's"
+
+
+@pytest.mark.slow
+def test_at_a_tighter_tolerance_the_face_follows_the_reference_further(runs, reference):
+    """At ``FINE_TOL`` the deviation matches down to ``FINE_RESOLVED``, the rate within 0.5 %."""
+    s, _, _, deviation, _, ref_deviation = _after_the_coating(runs(64, FINE_TOL), reference)
+    resolved = deviation > FINE_RESOLVED
+    assert resolved.sum() >= 15, f"{resolved.sum()} points above {FINE_RESOLVED}"
+    # Measured (n = 64): D / D_ref - 1 = 0.036-0.046 on 19 points, as at tol 1e-4 above 1e-2.
+    ratio = deviation[resolved] / ref_deviation[resolved] - 1
+    assert np.all(np.abs(ratio) < 0.06), f"face deviation off by {ratio.max():.3g}"
+    window = resolved & (deviation < 3e-2)
+    slope = np.polyfit(s[window], np.log(deviation[window]), 1)[0]
+    decay = -1.0 / slope / reference.substrate_decay_distance - 1
+    # Measured: -0.21 % (n = 64) over 3e-4 < D < 3e-2; -0.79 % at tol 1e-4 above 3e-3.
+    assert abs(decay) < 0.005, f"decay distance {decay:+.3%} off the reference's"
