@@ -34,7 +34,9 @@ def test_basis_matches_direct_solves(n):
         on = labels >= 0
         err = np.max(np.abs(face[on] - direct.face[on])) / np.max(np.abs(direct.face[on]))
         assert err < 1e-13, f"row {row}: face differs by {err:.1e}"
-        assert sweep.rms_slope_plain[row] == pytest.approx(direct.rms_slope_plain, rel=1e-12), \
+        # The solve's plain value comes from the estimator's single-precision kernel
+        # spectra: measured 2.2e-10 to 1.9e-9 of it at n = 95 and 96.
+        assert sweep.rms_slope_plain[row] == pytest.approx(direct.rms_slope_plain, rel=5e-9), \
             f"row {row}: plain rms slope"
         corrected = energy(direct.pressure, on).rms_slope
         assert sweep.rms_slope[row] == pytest.approx(corrected, rel=1e-12), \
