@@ -1243,7 +1243,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
         elif resume.status == "steady":
             return run.result("steady", resume.message)
         status, message = run.loop(on_step, on_checkpoint)
-        log = logger.info if status == "steady" else logger.warning
+        log = logger.info if status in ("steady", "depth") else logger.warning
         log("%s: %s", status, message)
         if status == "steady":
             run.pressures = None  # freed before the result is built: not state any more
