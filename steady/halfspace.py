@@ -18,13 +18,20 @@ The inverse transform keeps only the ``nx`` rows of the grid after its
 column pass, and the padded input and the product's spectrum live in work
 buffers allocated once, so that one product costs less than a plain padded
 FFT pair.  The buffers make an instance unsafe to share between threads.
+The product's transforms write into those buffers (``numpy.fft``'s ``out``,
+NumPy 2; :mod:`scipy.fft` has none and returns fresh arrays of the padded
+spectrum's size, which cost a copy and, at n = 1024, 17 MB of fresh pages per
+transform), their lines shared among the ``workers`` threads.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
 import copy
 import functools
 import logging
+import os
+import threading
 
 import numpy as np
 import scipy.fft
@@ -32,6 +39,65 @@ import scipy.fft
 __all__ = ["HalfSpace", "grid_shape", "pixel_integral", "pixel_integral_gradient"]
 
 logger = logging.getLogger(__name__)
+
+# Whether numpy.fft writes into a given array (NumPy 2); else the product's
+# transforms are scipy.fft's, into fresh arrays.
+_FFT_OUT = np.lib.NumpyVersion(np.__version__) >= "2.0.0"
+# Arrays of fewer elements are transformed on the calling thread alone.
+_THREADED_SIZE = 1 << 16
+# Grids of at least this many rows take the padded product's column transforms as two
+# transforms of half the length (:meth:`HalfSpace._split_product`): 0.63 to 0.76 of the
+# product's CPU time at n = 2048, 0.99 at 512, 1.02 to 1.04 at 1024 (docs/benchmarks.md,
+# "Contact solve on run-in problems").
+_SPLIT_ROWS = 2048
+_POOL_LOCK = threading.Lock()
+_POOL = []
+# A forked child has none of the parent's pool threads: it makes its own.
+os.register_at_fork(after_in_child=_POOL.clear)
+
+
+def _thread_count(workers):
+    """Threads meant by ``workers`` (:mod:`scipy.fft`'s convention: -1 is every core)."""
+    cores = os.cpu_count() or 1
+    return max(1, cores + 1 + workers if workers < 0 else workers)
+
+
+def _pool():
+    """The process's thread pool for the transforms' lines, made on first use."""
+    with _POOL_LOCK:
+        if not _POOL:
+            _POOL.append(concurrent.futures.ThreadPoolExecutor(
+                max(1, (os.cpu_count() or 1) - 1), thread_name_prefix="halfspace-fft"))
+        return _POOL[0]
+
+
+def _transform(name, a, out, axis, workers, **kwargs):
+    """``numpy.fft.<name>(a, axis=axis, out=out, **kwargs)`` on ``workers`` threads.
+
+    The lines along ``axis`` are independent: each thread takes a block of
+    them (a slice of the other axis of the 2-d arrays ``a`` and ``out``).
+    ``out`` may be ``a`` for a complex transform (in place).  Without
+    NumPy 2's ``out``, :mod:`scipy.fft`'s transform is copied into ``out``.
+    """
+    if not _FFT_OUT:
+        out[...] = getattr(scipy.fft, name)(a, axis=axis, workers=workers, **kwargs)
+        return out
+    function = getattr(np.fft, name)
+    threads = _thread_count(workers) if a.size >= _THREADED_SIZE else 1
+    other = 1 - axis
+    edges = np.linspace(0, a.shape[other], threads + 1).astype(int)
+    if threads == 1:
+        return function(a, axis=axis, out=out, **kwargs)
+
+    def block(i):
+        part = (slice(None),) * other + (slice(edges[i], edges[i + 1]),)
+        function(a[part], axis=axis, out=out[part], **kwargs)
+
+    futures = [_pool().submit(block, i) for i in range(1, threads)]
+    block(0)
+    for future in futures:
+        future.result()
+    return out
 
 
 def _corner_sum(values):
@@ -186,8 +252,10 @@ class HalfSpace:
     E_star : float, Pa
         Effective modulus ``E / (1 - nu^2)`` of the half-space.
     workers : int, optional
-        Threads for :mod:`scipy.fft` (default: all cores, at every size:
-        docs/benchmarks.md, "Contact solve on run-in problems").
+        Threads of the transforms, as :mod:`scipy.fft` counts them (-1, the
+        default: all cores, at every size: docs/benchmarks.md, "Contact solve
+        on run-in problems"); the product's transforms share their lines among
+        them from 65536 elements up.
 
     Notes
     -----
@@ -233,6 +301,8 @@ class HalfSpace:
         # would map and fault in page by page at every call).
         self._rows = np.zeros((nx, 2 * ny))
         self._work = np.empty((2 * nx, ny + 1), dtype=complex)
+        # exp(-i pi j / nx): the odd wavenumbers' shift of the split column transforms.
+        self._twiddle = np.exp(-1j * np.pi * np.arange(nx) / nx)[:, None]
 
     def with_own_buffers(self, *, workers=None):
         """The same operator, sharing its spectra (read-only), with work buffers of its own.
@@ -337,16 +407,9 @@ class HalfSpace:
             raise ValueError(f"field must have shape {self.shape}, got {field_r.shape}")
         nx, ny = self.shape
         self._rows[:, :ny] = field_r
-        out[:nx] = scipy.fft.rfft(self._rows, axis=1, workers=self.workers)
+        _transform("rfft", self._rows, out[:nx], 1, self.workers)
         out[nx:] = 0.0
-        # A complex, contiguous input with overwrite_x is transformed in place.
-        result = scipy.fft.fft(out, axis=0, workers=self.workers, overwrite_x=True)
-        if not (result.ctypes.data == out.ctypes.data and result.strides == out.strides):
-            out[...] = result
-        # ``out`` itself rather than the view scipy returns: numpy cannot tell that a view
-        # of a ufunc's output buffer is that buffer and would copy it first (a third of a
-        # product at n = 1024).
-        return out
+        return _transform("fft", out, out, 0, self.workers)
 
     def inverse(self, spectrum_q, *, overwrite=False):
         """Real field on the grid from a padded half spectrum.
@@ -362,10 +425,12 @@ class HalfSpace:
         ndarray, shape (nx, ny)
         """
         nx, ny = self.shape
+        if not overwrite:
+            spectrum_q = spectrum_q.copy()
         # Only the grid's nx rows are kept after the column transform.
-        cols = scipy.fft.ifft(spectrum_q, axis=0, workers=self.workers,
-                              overwrite_x=overwrite)[:nx]
-        return scipy.fft.irfft(cols, n=2 * ny, axis=1, workers=self.workers)[:, :ny]
+        cols = _transform("ifft", spectrum_q, spectrum_q, 0, self.workers)[:nx]
+        field = _transform("irfft", cols, np.empty((nx, 2 * ny)), 1, self.workers, n=2 * ny)
+        return field[:, :ny]
 
     def _product(self, pressure_q, kernel_q):
         """Field on the face of ``kernel_q * pressure_q``, through the work buffer."""
@@ -384,7 +449,38 @@ class HalfSpace:
         -------
         ndarray, shape (nx, ny), m
         """
+        if self.shape[0] >= _SPLIT_ROWS:
+            return self._split_product(pressure_r)
         return self._product(self._padded_spectrum(pressure_r, self._work), self._influence_q)
+
+    def _split_product(self, pressure_r):
+        """:meth:`displacement` with column transforms of length ``nx``, not ``2 nx``.
+
+        The padded column transform of a column zero on its last ``nx``
+        entries is, at its even wavenumbers, the length-``nx`` transform of
+        the column and, at its odd ones, that of the column times
+        ``exp(-i pi j / nx)``; of the inverse only the grid's ``nx`` rows are
+        kept, the even wavenumbers' inverse plus ``exp(i pi j / nx)`` times the
+        odd ones'.  The two halves live in the work buffer; no zero padding is
+        written.  The same product to round-off.
+        """
+        pressure_r = np.asarray(pressure_r)
+        if pressure_r.shape != self.shape:
+            raise ValueError(f"field must have shape {self.shape}, got {pressure_r.shape}")
+        (nx, ny), w = self.shape, self.workers
+        even, odd = self._work.reshape(2, nx, ny + 1)
+        # The inverse's 1/(2 nx) over the half-length transforms' 1/nx, exact in binary.
+        np.multiply(pressure_r, 0.5, out=self._rows[:, :ny])
+        _transform("rfft", self._rows, even, 1, w)
+        np.multiply(even, self._twiddle, out=odd)
+        for half, kernel in ((even, self._influence_q[0::2]), (odd, self._influence_q[1::2])):
+            _transform("fft", half, half, 0, w)
+            half *= kernel
+            _transform("ifft", half, half, 0, w)
+        odd *= self._twiddle.conj()
+        even += odd
+        field = _transform("irfft", even, np.empty((nx, 2 * ny)), 1, w, n=2 * ny)
+        return field[:, :ny]
 
     def displacement_q(self, pressure_q):
         """Displacement from an already transformed pressure (see :meth:`forward`)."""

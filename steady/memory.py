@@ -178,8 +178,8 @@ def slope_estimator_memory(n):
     kept : int
         Two gradient spectra on the fine box and five on the coarse one
         (the gradient's and the three second derivatives' that carry the
-        blocks' first moments), complex ``S x (S/2+1)``:
-        ``16 S^2 + 40 S_c^2`` bytes, about 130 per pixel.
+        blocks' first moments), single-precision complex ``S x (S/2+1)``:
+        ``8 S^2 + 20 S_c^2`` bytes, about 65 per pixel.
     applied : int
         The transforms of one application on the fine box (source
         spectrum, product, column and row passes): ``32 S^2`` bytes, about
@@ -193,7 +193,7 @@ def slope_estimator_memory(n):
     coarse_out = nc + 2 * extra
     size = scipy.fft.next_fast_len(n + fine - 1, real=True)
     coarse = scipy.fft.next_fast_len(nc + coarse_out - 1, real=True)
-    return 16 * size ** 2 + 40 * coarse ** 2, 32 * size ** 2
+    return 8 * size ** 2 + 20 * coarse ** 2, 32 * size ** 2
 
 
 def steady_memory(n, *, slope_error=True):
@@ -212,7 +212,7 @@ def steady_memory(n, *, slope_error=True):
     - with ``slope_error`` (the default of the command), then: the
       pressure and face mask of the finest grid of the ladder (17 bytes per
       pixel) and the slope estimator of :mod:`steady.rms_slope`, kept and
-      applied (:func:`slope_estimator_memory`, about 250 bytes per pixel).
+      applied (:func:`slope_estimator_memory`, about 210 bytes per pixel).
 
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
@@ -238,7 +238,7 @@ def steady_memory(n, *, slope_error=True):
     Examples
     --------
     >>> print(format_bytes(steady_memory(1024)), format_bytes(steady_memory(12000)))
-    460 MiB 59.1 GiB
+    396 MiB 51 GiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     peak = halfspace_memory(n, gradient=True) + product_memory(n)

@@ -527,11 +527,13 @@ def atomic_h5(path, *, format, version, force=False, backup=None, replaces=None,
 
     Notes
     -----
-    The file is built in memory (HDF5's ``core`` driver) and written to
-    the temporary file ``.<name>.<host>.<pid>.<random>.tmp`` in the
-    directory of ``path`` (a rename across file systems is not atomic) with
-    ordinary writes, so that an operating-system error is an
-    :class:`OSError` and never a truncated file.  Temporary files that
+    The file is written to the temporary file
+    ``.<name>.<host>.<pid>.<random>.tmp`` in the directory of ``path`` (a
+    rename across file systems is not atomic) through a Python file object
+    (h5py's ``fileobj`` driver), as HDF5 writes it (not built whole in
+    memory), so that an operating-system error is an :class:`OSError`,
+    recorded even where HDF5 would not report it, and never a truncated
+    file.  Temporary files that
     killed writers of ``path`` on this host left are removed first.
 
     Publishing: without ``force`` and with nothing to replace, the new file
@@ -594,6 +596,67 @@ def _publish(tmp, path, *, force, replaces, backup):
     tmp.unlink()
 
 
+class _RecordingFile:
+    """A binary file for h5py's ``fileobj`` driver that keeps the first OSError it raised.
+
+    HDF5 turns a failed write into an error of its own, or into none at all
+    (a failure while a file is closed is reported in a destructor); the
+    recorded error is what :func:`atomic_h5` reports.  Once one call failed,
+    every later call raises the same error, so that nothing more is written.
+
+    Parameters
+    ----------
+    raw : io.BufferedRandom
+        The temporary file, open for reading and writing.
+    """
+
+    def __init__(self, raw):
+        self._raw = raw
+        self.error = None
+
+    def _call(self, name, *args):
+        if self.error is not None:
+            raise self.error
+        try:
+            return getattr(self._raw, name)(*args)
+        except OSError as err:
+            self.error = err
+            raise
+
+    def seek(self, *args):
+        """Seek, see :meth:`io.IOBase.seek`."""
+        return self._call("seek", *args)
+
+    def tell(self):
+        """The current position, see :meth:`io.IOBase.tell`."""
+        return self._call("tell")
+
+    def read(self, *args):
+        """Read, see :meth:`io.BufferedIOBase.read`."""
+        return self._call("read", *args)
+
+    def readinto(self, buffer):
+        """Read into ``buffer``, see :meth:`io.BufferedIOBase.readinto`."""
+        return self._call("readinto", buffer)
+
+    def write(self, data):
+        """Write all of ``data`` (a buffered write: all or an OSError)."""
+        return self._call("write", data)
+
+    def truncate(self, *args):
+        """Truncate, see :meth:`io.IOBase.truncate`."""
+        return self._call("truncate", *args)
+
+    def flush(self):
+        """Flush the buffer to the operating system."""
+        return self._call("flush")
+
+    def raise_recorded(self):
+        """Raise the recorded error, if a call failed (HDF5 may not have)."""
+        if self.error is not None:
+            raise self.error
+
+
 @contextlib.contextmanager
 def _write_atomically(receipt, path, *, format, version, force, backup, replaces, checked):
     """The work of :func:`atomic_h5`; the identity written goes to ``receipt.identity``."""
@@ -609,25 +672,23 @@ def _write_atomically(receipt, path, *, format, version, force, backup, replaces
         fd, tmp = _temporary(path)
     except OSError as err:
         raise _write_error(err, None, path) from None
-    in_caller = False
+    in_caller, sink = False, None
     try:
-        with open(fd, "wb") as out:
+        with open(fd, "w+b") as out:
             os.chmod(tmp, 0o666 & ~_umask())
-            # HDF5 builds the file in memory; its bytes then go to disk through
-            # plain system calls, which report a refused write (a full disk, a
-            # quota, a size limit) as an OSError.  Writing to disk itself, HDF5
-            # reports such errors only in destructors, leaves a truncated file
-            # behind and can crash in its next flush.
-            with h5py.File(tmp.name, "w", driver="core", backing_store=False) as f:
+            # HDF5 writes through a Python file object (h5py's ``fileobj``
+            # driver), so that a refused write (a full disk, a quota, a size
+            # limit) is an OSError of a buffered write, recorded where HDF5
+            # may hide it (a close reports failures only in destructors) and
+            # raised again after it; the file is never built whole in memory.
+            sink = _RecordingFile(out)
+            with h5py.File(sink, "w") as f:
                 f.attrs["format"] = format
                 f.attrs["format_version"] = version
                 in_caller = True
                 yield f
                 in_caller = False
-                f.flush()
-                image = f.id.get_file_image()
-            out.write(image)
-            del image
+            sink.raise_recorded()
             out.flush()
             os.fsync(out.fileno())
             # A link or a rename keeps the inode, size and time: this is what
@@ -637,6 +698,8 @@ def _write_atomically(receipt, path, *, format, version, force, backup, replaces
     except BaseException as err:
         tmp.unlink(missing_ok=True)
         # The caller's own OSErrors pass unchanged; those of this file name it.
+        if isinstance(err, Exception) and sink is not None and sink.error is not None:
+            raise _write_error(sink.error, tmp, path) from None
         if isinstance(err, OSError) and (not in_caller or tmp.name in str(err)):
             raise _write_error(err, tmp, path) from None
         raise

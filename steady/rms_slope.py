@@ -284,6 +284,17 @@ def _wrap_into(kernel, values, x0, y0, scale):
             np.multiply(values[vx, vy], scale, out=kernel[kx, ky])
 
 
+def _stored(spectrum_q):
+    """A kernel spectrum as it is kept: single precision, half the memory.
+
+    Its rounding (6e-8 of each entry) changed the run-in history's rms
+    slope by at most 5e-9 of itself, 3e-6 of its error bar (the shipped
+    Voronoi scene at n = 512, docs/benchmarks.md, "Run-in memory"); the
+    products with it are formed in double precision.
+    """
+    return spectrum_q.astype(np.complex64)
+
+
 class _BoxGradient:
     """Gradient on an output box from sources on a (coarser) pixel grid.
 
@@ -302,18 +313,20 @@ class _BoxGradient:
                      for a, b in zip(ns, m, strict=True))
         self.size = size
         ox, oy = (np.arange(l0 - a + 1, l0 + b) for a, l0, b in zip(ns, lo, m, strict=True))
-        scale = 1.0 / (np.pi * E_star)
+        # The spectra are kept without the factor 1 / (pi E*), applied to the
+        # output, so that their single-precision rounding does not depend on E*.
+        self.scale = 1.0 / (np.pi * E_star)
         kernel = np.zeros(size)
         # The gradient kernels of steady.halfspace.pixel_integral_gradient, from
         # the corner lattice; the y-kernel is the x-kernel with the axes swapped.
         gx = _corner_sum(ox, oy, H, _asinh_yx)
-        _wrap_into(kernel, gx, ox[0], oy[0], scale)
-        self.gx_q = scipy.fft.rfft2(kernel, workers=workers)
+        _wrap_into(kernel, gx, ox[0], oy[0], 1.0)
+        self.gx_q = _stored(scipy.fft.rfft2(kernel, workers=workers))
         gy = gx.T if np.array_equal(ox, oy) else _corner_sum(oy, ox, H, _asinh_yx).T
         del gx
-        _wrap_into(kernel, gy, ox[0], oy[0], scale)
+        _wrap_into(kernel, gy, ox[0], oy[0], 1.0)
         del gy
-        self.gy_q = scipy.fft.rfft2(kernel, workers=workers)
+        self.gy_q = _stored(scipy.fft.rfft2(kernel, workers=workers))
         self.dipoles = dipoles
         if dipoles:
             # Minus the derivatives of the gradient kernels with respect to the
@@ -324,8 +337,8 @@ class _BoxGradient:
                        lambda X, Y: X / (Y * np.hypot(X, Y))]
             self.hessian_q = []
             for antiderivative in hessian:
-                _wrap_into(kernel, _corner_sum(ox, oy, H, antiderivative), ox[0], oy[0], scale)
-                self.hessian_q.append(scipy.fft.rfft2(kernel, workers=workers))
+                _wrap_into(kernel, _corner_sum(ox, oy, H, antiderivative), ox[0], oy[0], 1.0)
+                self.hessian_q.append(_stored(scipy.fft.rfft2(kernel, workers=workers)))
         self.rows = np.mod(np.arange(lo[0], lo[0] + m[0]), size[0])
         self.cols = np.mod(np.arange(lo[1], lo[1] + m[1]), size[1])
 
@@ -358,7 +371,9 @@ class _BoxGradient:
             # Column pass, then the row pass on the output rows only.
             cols = scipy.fft.ifft(product, axis=0, workers=w, overwrite_x=True)[self.rows]
             del product
-            out.append(scipy.fft.irfft(cols, n=size[1], axis=1, workers=w)[:, self.cols])
+            gradient = scipy.fft.irfft(cols, n=size[1], axis=1, workers=w)[:, self.cols]
+            gradient *= self.scale
+            out.append(gradient)
         return tuple(out)
 
 

@@ -4,6 +4,7 @@ import importlib.util
 import pathlib
 
 import h5py
+import pytest
 
 BENCHMARKS = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
 
@@ -29,6 +30,22 @@ def test_bench_runin_smoke(tmp_path):
     with h5py.File(out) as f:
         assert f.attrs["format"] == "runin.bench_runin", "layout attribute"
         assert len(f["schemes"]) == len(groups["schemes"]), "one group per row"
+
+
+def test_bench_runin_memory_smoke(tmp_path):
+    out = tmp_path / "bench.h5"
+    bench = load("bench_runin")
+    (row,) = bench.main(["--memory", "--sizes", "40", "--out", str(out)])["memory"]
+    assert row["steps"] > 10 and row["snapshots"] == 3, f"memory table row {row}"
+    # The interpreter with NumPy, SciPy and h5py alone takes about 95 MiB.
+    assert 50 * 2 ** 20 < row["peak_rss"] < 400 * 2 ** 20, f"peak {row['peak_rss']} bytes"
+    with h5py.File(out) as f:
+        assert f["memory/000"].attrs["n"] == 40, "one group per row"
+    text = "[grid]\nn = 64               # pixels\n\n[wear]\nn = 3\n"
+    assert bench.scene_at(text, 1024) == text.replace("n = 64", "n = 1024", 1), \
+        "only [grid] n changes"
+    with pytest.raises(ValueError, match=r"no '\[grid\] n = <int>' line"):
+        bench.scene_at("[wear]\nn = 3\n", 1024)
 
 
 def test_profile_runin_smoke(tmp_path):

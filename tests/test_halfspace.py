@@ -155,3 +155,54 @@ def test_operator_with_own_buffers_shares_spectra_and_gives_the_same_products():
     assert own._work is not hs._work and own._rows is not hs._rows and own.workers == 1
     p = np.random.default_rng(3).random((24, 17))
     assert np.array_equal(own.displacement(p), hs.displacement(p))
+
+
+@pytest.mark.parametrize("shape", [(40, 54), (257, 300)])
+def test_threaded_transforms_are_those_of_one_thread(shape):
+    # Each thread transforms a block of whole lines, so the split changes no bit; at
+    # (257, 300) the padded arrays are large enough to be split, into unequal blocks.
+    p = np.random.default_rng(2713).random(shape)
+    one, two = HalfSpace(shape, 1e-5, 1e6, workers=1), HalfSpace(shape, 1e-5, 1e6, workers=2)
+    assert np.array_equal(one.displacement(p), two.displacement(p)), "displacement"
+    for a, b in zip(one.gradient(p), two.gradient(p), strict=True):
+        assert np.array_equal(a, b), "gradient"
+
+
+@pytest.mark.parametrize("n", [7, 8, 13, (7, 12), (12, 5), (2, 9)])
+def test_split_column_product_matches_dense_sums(n, monkeypatch):
+    """The product with half-length column transforms (large grids) equals the dense sums."""
+    from steady import halfspace
+
+    monkeypatch.setattr(halfspace, "_SPLIT_ROWS", 2)
+    rng = np.random.default_rng(2741)
+    hs = HalfSpace(n, 0.1, 2.0)
+    p = rng.random(hs.shape)
+    u = _direct(p, 0.1, 2.0)[0]
+    first = hs.displacement(p)
+    err = np.max(np.abs(first - u)) / np.max(np.abs(u))
+    assert err < 1e-13, f"n={n}: split product differs from the dense sum by {err:.1e}"
+    hs.displacement(rng.random(hs.shape))
+    assert np.array_equal(first, hs.displacement(p)), "work buffers leak between products"
+
+
+def _child_product(n, queue):
+    queue.put(HalfSpace(n, 1e-5, 1e6, workers=2).displacement(np.ones((n, n))))
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # fork of a threaded process
+def test_threaded_product_in_a_forked_child():
+    # The parent's transform threads do not survive a fork: the child makes its own
+    # (without them, its first split transform would wait for ever).
+    import multiprocessing
+
+    if "fork" not in multiprocessing.get_all_start_methods():
+        pytest.skip("no fork on this platform")
+    n = 260  # padded arrays above the size that is split among threads
+    want = HalfSpace(n, 1e-5, 1e6, workers=2).displacement(np.ones((n, n)))
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_child_product, args=(n, queue), daemon=True)
+    child.start()
+    got = queue.get(timeout=60)
+    child.join(timeout=60)
+    assert np.array_equal(got, want), "the child's product differs"

@@ -16,8 +16,8 @@ def test_estimates_grow_as_the_pixel_count():
         small, large = estimate(1024), estimate(2048)
         ratio = (large - 16 * 2 ** 20) / (small - 16 * 2 ** 20)
         assert 3.6 < ratio < 4.4, f"{estimate.__name__}: doubling n multiplies by {ratio:.2f}"
-    assert run_in_memory(256, 10) - run_in_memory(256, 0) == int(1.25 * 48 * 256 ** 2 * 10), \
-        "each snapshot costs 48 bytes per pixel, with the margin"
+    assert run_in_memory(256, 10) - run_in_memory(256, 0) == int(1.25 * 16 * 256 ** 2 * 10), \
+        "each snapshot costs 16 bytes per pixel, with the margin"
     spectrum = 200 * 101 * 8  # real, 2n x (n + 1)
     assert halfspace_memory(100) == spectrum + 200 ** 2 * 8 + 2 * spectrum + 2 * 102 ** 2 * 8, \
         "half-space inventory: spectrum, padded buffer, complex work buffer, corner lattices"
@@ -26,7 +26,7 @@ def test_estimates_grow_as_the_pixel_count():
 def test_refusal_names_both_numbers_and_the_override():
     with pytest.raises(ValueError) as err:
         check_memory(steady_memory(12000), "a steady solve at n = 12000", 16)
-    assert str(err.value) == ("a steady solve at n = 12000 needs about 59.1 GiB of memory; "
+    assert str(err.value) == ("a steady solve at n = 12000 needs about 51 GiB of memory; "
                               "16 GiB may be used (--memory-limit) (a larger --memory-limit GIB "
                               "overrides this check)"), f"{err.value}"
     check_memory(steady_memory(12000), "a steady solve", float("inf"))  # no check

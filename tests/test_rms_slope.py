@@ -231,15 +231,19 @@ def test_map_ladder_without_geometry():
 def test_box_gradient_kernels_are_the_pixel_integral_gradient(shape):
     # The kernels come from one lattice of pixel corners; the closed form of
     # steady.halfspace evaluates four corners per offset.  Same sums, other
-    # rounding (and an FFT round trip here): measured 8e-16 of the largest entry.
+    # rounding (and an FFT round trip here): measured 8e-16 of the largest entry
+    # in double precision; the spectra are kept in single precision, which
+    # leaves 1.2e-7 and 9.2e-8 (float32's epsilon is 6e-8 of each spectral entry).
     energy = SlopeEnergy(shape, 2e-4, 1.3e6)
     box = energy._fine
-    h, scale = energy.h, 1.0 / (np.pi * energy.E_star)
+    h = energy.h
+    assert box.scale == 1.0 / (np.pi * energy.E_star), "the factor applied to the output"
     ox, oy = (np.arange(l0 - a + 1, l0 + b) for a, l0, b in zip(box.ns, box.lo, box.m,
                                                               strict=True))
     ix, iy = np.mod(ox, box.size[0]), np.mod(oy, box.size[1])
     for spectrum, kernel in ((box.gx_q, pixel_integral_gradient(ox * h, oy * h, h)),
                              (box.gy_q, pixel_integral_gradient(oy * h, ox * h, h).T)):
-        got = scipy.fft.irfft2(spectrum, s=box.size)[np.ix_(ix, iy)] / scale
+        got = scipy.fft.irfft2(spectrum, s=box.size)[np.ix_(ix, iy)]
         error = np.max(np.abs(got - kernel)) / np.max(np.abs(kernel))
-        assert error < 1e-14, f"{shape}: kernel differs by {error:.2g} of its largest entry"
+        assert spectrum.dtype == np.complex64, f"{shape}: spectrum kept as {spectrum.dtype}"
+        assert error < 3e-7, f"{shape}: kernel differs by {error:.2g} of its largest entry"

@@ -17,7 +17,7 @@ STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
 SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways",
           "three_phases", "wear_exponent", "random_inclusions", "runin_distance",
-          "face_outlines", "pin_on_disk", "particles_3d"]
+          "face_outlines", "pin_on_disk", "coating_wear_through", "particles_3d"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
             "design_table", "runin_history", "runin_convergence"]
 

@@ -112,6 +112,49 @@ def test_temporary_files_of_dead_writers_are_removed(tmp_path):
     assert live.exists() and foreign.exists(), "a live writer's file must be left alone"
 
 
+
+_LIMITED_WRITE = """
+import resource, signal, sys
+import numpy as np
+from steady.output import atomic_h5
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))
+try:
+    with atomic_h5(sys.argv[1], format="runin.test", version=1) as f:
+        f["values"] = np.arange({count}, dtype=float)
+        f["values"].attrs["units"] = "m"
+        f.create_group("group").attrs["name"] = "after the array"
+except OSError as err:
+    print(err)
+"""
+
+
+@pytest.mark.parametrize("count", [2, 90_000, 99_000, 99_500, 99_900, 100_000, 400_000])
+def test_a_refused_write_is_an_error_and_never_a_truncated_file(tmp_path, count):
+    """A file-size limit of 800,000 bytes: files below and around it, written or refused whole.
+
+    The kernel refuses the write that passes the limit (EFBIG), wherever HDF5
+    makes it: the array's data, or the metadata it writes when the file is
+    closed (``count`` near 100,000 floats).
+    """
+    import subprocess
+
+    path = tmp_path / "x.h5"
+    proc = subprocess.run([sys.executable, "-c", _LIMITED_WRITE.format(limit=800_000,
+                                                                       count=count),
+                           str(path)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-2000:]
+    assert temporaries(tmp_path) == [], f"left behind: {temporaries(tmp_path)}"
+    if proc.stdout:
+        assert proc.stdout.strip() == f"[Errno 27] cannot write {str(path)!r}: File too large", \
+            proc.stdout
+        assert not path.exists(), "a refused write left a file"
+        assert count >= 99_000, f"{count} floats (8 bytes each) were refused under the limit"
+        return
+    with h5py.File(path, "r") as f:
+        assert np.array_equal(f["values"][...], np.arange(count, dtype=float)), "values"
+        assert f["group"].attrs["name"] == "after the array", "metadata written at the close"
+
 # -- runin-steady and runin-fit ------------------------------------------------------
 def _write_other_after(monkeypatch, module, name, out):
     """Make ``module.name`` write the other writer's file at ``out`` once it is done."""

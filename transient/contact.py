@@ -129,10 +129,16 @@ class _Operator:
         self._aranges = tuple(np.arange(m) for m in halfspace.shape)
         self.products = 0
 
-    def __call__(self, p):
-        """``K p`` by one padded FFT product."""
+    def __call__(self, p, *, contiguous=True):
+        """``K p`` by one padded FFT product.
+
+        ``contiguous=False`` returns the product as the half-space leaves it, a strided view
+        of its inverse transform's rows, without the copy into an array of its own (for the
+        conjugate direction's product, which is read twice and dropped).
+        """
         self.products += 1
-        return np.ascontiguousarray(self.halfspace.displacement(p))
+        u = self.halfspace.displacement(p)
+        return np.ascontiguousarray(u) if contiguous else u
 
     def columns(self, ii, jj, values):
         """``K`` applied to a pressure that is ``values`` on pixels ``(ii, jj)``, else 0."""
@@ -596,8 +602,9 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
         if state.set_changed:
             active = _ActiveSet(state.p, problem.face, problem.n_face)
         d = _gap(problem, state, active, u, g, r)
-        residual = _residual(g, r, active, problem.n_face)
         tolerance = _tolerance(u, active, rtol, atol)
+        # ``u`` is not read again: it takes the penetration of the pixels out of the set.
+        residual = _residual(g, r, active, problem.n_face, penetration=u)
         if not np.isfinite(residual):
             message = f"non-finite residual at iteration {it}"
             history.append(residual)
@@ -621,14 +628,14 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
         it += 1
         _update_direction(problem, state, r, active, work,
                           accurate=tolerance < _SINGLE_REDUCTION * history[0])
-        q = problem.operator(state.t)
+        q = problem.operator(state.t, contiguous=False)
         tq = _curvature(problem, state.t, q)
         if not tq > 0:
             message = f"breakdown at iteration {it}: non-positive curvature {tq!r}"
             break
         tau = _dot(r, state.t) / tq
         _take_step(state, q, tau, work)
-        if (_update_active_set(problem, state, active, g, r, tau)
+        if (_update_active_set(problem, state, active, g, r, u, tau)
                 and not _rescale_to_load(problem, state)):
             message = f"all pressure lost at iteration {it}"
             break
@@ -658,7 +665,7 @@ def _gap(problem, state, active, u, g, r):
     return d
 
 
-def _residual(g, r, active, n_face):
+def _residual(g, r, active, n_face, penetration):
     """Rms violation (m) of the contact conditions over the face (:func:`solve_contact`, Notes).
 
     Parameters
@@ -667,12 +674,16 @@ def _residual(g, r, active, n_face):
         The gap, and the gap on the active set (:func:`_gap`).
     active : _ActiveSet
     n_face : int
+    penetration : ndarray, shape (nx, ny), m
+        Filled with ``min(g, 0)`` on the face pixels out of the set, 0 elsewhere (where it
+        is negative, pixels enter the set: :func:`_update_active_set`), unless the set is
+        the whole face.
     """
     violation = _dot(r, r)
     if not active.full:
-        open_violation = np.minimum(g, 0.0)
-        open_violation *= active.off
-        violation += _dot(open_violation, open_violation)
+        np.minimum(g, 0.0, out=penetration)
+        penetration *= active.off
+        violation += _dot(penetration, penetration)
     return float(np.sqrt(violation / n_face))
 
 
@@ -705,14 +716,21 @@ def _update_direction(problem, state, r, active, work, accurate=False):
     in double precision (its ``accurate`` method, where it has one).
     """
     precondition = problem.precondition
-    if precondition is None:
-        z = r.copy()
-    elif accurate and hasattr(precondition, "accurate"):
-        z = precondition.accurate(r, active.mask)
+    if hasattr(precondition, "unrestricted"):
+        # Restricted to the set and with zero mean on it (so that a step along it keeps the
+        # load) in two passes over the transform's output, which is not restricted first.
+        z = precondition.unrestricted(r, accurate=accurate)
+        z = np.subtract(z, np.float64(_dot(z, active.weight) / active.count), dtype=float)
+        z *= active.weight
     else:
-        z = precondition(r, active.mask)
-    # Zero mean on the active set, so that a step along it keeps the load.
-    z -= np.multiply(active.weight, _dot(z, active.weight) / active.count, out=work)
+        if precondition is None:
+            z = r.copy()
+        elif accurate and hasattr(precondition, "accurate"):
+            z = precondition.accurate(r, active.mask)
+        else:
+            z = precondition(r, active.mask)
+        # Zero mean on the active set, so that a step along it keeps the load.
+        z -= np.multiply(active.weight, _dot(z, active.weight) / active.count, out=work)
     gz = _dot(r, z)
     if state.restart or state.gz_old == 0:
         state.t = z
@@ -742,7 +760,7 @@ def _take_step(state, q, tau, work):
     state.since_full += 1
 
 
-def _update_active_set(problem, state, active, g, r, tau):
+def _update_active_set(problem, state, active, g, r, penetration, tau):
     """Moves the pixels leaving the active set and those entering it; whether any did.
 
     Pixels with negative pressure leave with zero pressure; face pixels out of the
@@ -757,6 +775,8 @@ def _update_active_set(problem, state, active, g, r, tau):
         The set of this iteration.
     g, r : ndarray, shape (nx, ny), m
         The gap before the step, and its part on the set.
+    penetration : ndarray, shape (nx, ny), m
+        ``min(g, 0)`` on the face pixels out of the set, 0 elsewhere (:func:`_residual`).
     tau : float
         The step length along ``state.t``: dimensionless, or Pa/m without a preconditioner
         (``t`` then being a gap).
@@ -766,7 +786,7 @@ def _update_active_set(problem, state, active, g, r, tau):
     any_leaving = bool(leaving.any())
     entering = None
     if not active.full:
-        entering = (g < 0) & (active.off > 0)
+        entering = penetration < 0
     state.restart = entering is not None and bool(entering.any())
     state.set_changed = any_leaving or state.restart
     if state.set_changed:

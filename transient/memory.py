@@ -28,8 +28,8 @@ def run_in_memory(n, snapshots=0):
     - the run state: face, initial face, pressure, previous face and rate
       (40);
     - the history's slope estimator (:class:`transient.history.FaceEstimator`:
-      :class:`steady.rms_slope.SlopeEnergy`), kept (about 100,
-      :func:`steady.memory.slope_estimator_memory`);
+      :class:`steady.rms_slope.SlopeEnergy`), kept (its spectra in single
+      precision, about 65, :func:`steady.memory.slope_estimator_memory`);
     - the pressure history of the warm starts
       (:class:`transient.problem.WarmStart`: six pressures and their
       products; their differences are formed one at a time): 96;
@@ -45,11 +45,10 @@ def run_in_memory(n, snapshots=0):
       (on the run's face and pressure, not copied): the estimator applied;
     - every checkpoint's pressure history (six pressures and their
       displacements, handed to the result without a copy, but the warm
-      start's next push writes them anew, 96; and the file image, built
-      in memory and copied to disk, :func:`steady.output.atomic_h5`, 96):
-      192;
+      start's next push writes them anew): 96; the file is written as
+      HDF5 writes it, not built in memory (:func:`steady.output.atomic_h5`);
     - each snapshot: face and pressure kept (16, shared by every
-      checkpoint's result) and the checkpoint's file image (32): 48.
+      checkpoint's result).
 
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
@@ -73,11 +72,11 @@ def run_in_memory(n, snapshots=0):
     --------
     >>> from steady.text import format_bytes
     >>> print(format_bytes(run_in_memory(512, 3)), format_bytes(run_in_memory(12000)))
-    410 MiB 185 GiB
+    329 MiB 158 GiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
     pixels = n * n
     kept, applied = slope_estimator_memory(n)
-    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 96 + 192) * pixels + kept
-            + max(352 * pixels, applied) + applied + 48 * pixels * int(snapshots))
+    peak = (halfspace_memory(n, gradient=True) + (4 + 17 + 40 + 96 + 96) * pixels + kept
+            + max(352 * pixels, applied) + applied + 16 * pixels * int(snapshots))
     return int(1.25 * peak) + 16 * 2 ** 20

@@ -23,6 +23,14 @@ What it reproduces
     face error: rms of the shape difference at ``3 s*`` (best constant
     removed) over the reference's relief.
 
+    ``--memory``: the command line, ``python -m transient SCENE -o RUN.h5``
+    (checkpoints every ``--checkpoint-interval`` seconds of wall time,
+    default the scene's 10 s), on the scene with only ``[grid] n`` changed,
+    one fresh process per grid: its peak resident memory (the maximum
+    resident set of the child, imports included, about 100 MiB), per pixel,
+    and :func:`transient.memory.run_in_memory` over it.  Each scene and run
+    file goes to a temporary directory, removed afterwards.
+
     Wall times here are in-process and single; the side-by-side timing of
     two versions of the code is done on whole processes (docs/benchmarks.md
     gives the command).
@@ -32,8 +40,11 @@ How to run
     python studies/benchmarks/bench_runin.py --table --sizes 2048   # manual, not CI: ~5 min
     python studies/benchmarks/bench_runin.py --schemes --n 256          # ~15 min on 2 cores
     python studies/benchmarks/bench_runin.py --schemes --n 256 --ratio 1000
+    python studies/benchmarks/bench_runin.py --memory --sizes 512 1024   # ~5 min
+    python studies/benchmarks/bench_runin.py --memory --sizes 2048   # manual, not CI: ~7 min, 4 GiB
     python studies/benchmarks/bench_runin.py --table --schemes --sizes 40 --n 40 --quick
                                                         # smoke test, seconds
+    python studies/benchmarks/bench_runin.py --memory --sizes 40   # smoke test, seconds
 
 Writes ``--out`` (HDF5: one group per table row) and prints the tables in
 Markdown.
@@ -45,10 +56,14 @@ import argparse
 import contextlib
 import dataclasses
 import logging
+import os
 import pathlib
 import platform
+import re
 import resource
+import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -56,7 +71,9 @@ import numpy as np
 from steady.halfspace import HalfSpace
 from steady.output import atomic_h5
 from transient.diagnostics import face_rms_slope, shape_rms
+from transient.memory import run_in_memory
 from transient.options import RunOptions
+from transient.output import read_run
 from transient.preconditioners import FourierPreconditioner
 from transient.problem import WearProblem
 from transient.runin import run_in
@@ -155,6 +172,60 @@ def grid_table(scene_path, sizes, tol):
     return rows
 
 
+def scene_at(text, n):
+    """The scene's TOML text with its ``[grid] n`` set to ``n``."""
+    grid = re.search(r"(?ms)^\[grid\]$(.*?)(?=^\[|\Z)", text)
+    if grid is None or not re.search(r"(?m)^n = \d+", grid.group(1)):
+        raise ValueError("the scene has no '[grid] n = <int>' line to change")
+    body = re.sub(r"(?m)^n = \d+", f"n = {int(n)}", grid.group(1), count=1)
+    return text[:grid.start(1)] + body + text[grid.end(1):]
+
+
+def command_peak(argv):
+    """Run ``argv`` in a child process: ``(wall s, peak resident memory, bytes)``.
+
+    The peak is the child's own maximum resident set (:func:`os.wait4`); a
+    child that fails raises :class:`RuntimeError` with the end of its stderr.
+    """
+    # The child imports the packages of this tree, as this process does.
+    root = str(pathlib.Path(__file__).resolve().parents[2])
+    path = os.environ.get("PYTHONPATH")
+    env = dict(os.environ, PYTHONPATH=root if not path else root + os.pathsep + path)
+    t = time.perf_counter()
+    with subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                          env=env) as proc:
+        stderr = proc.stderr.read()
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = code = os.waitstatus_to_exitcode(status)  # reaped here
+    if code != 0:
+        raise RuntimeError(f"{' '.join(argv)} failed ({code}): "
+                           f"{stderr.decode(errors='replace')[-2000:]}")
+    return time.perf_counter() - t, usage.ru_maxrss * 1024
+
+
+def memory_table(scene_path, sizes, checkpoint_interval=None):
+    """Rows of the memory table: the command line on the scene at each grid size."""
+    text = pathlib.Path(scene_path).read_text()
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench_runin.") as tmp:
+        for n in sizes:
+            scene = pathlib.Path(tmp) / f"scene_{n}.toml"
+            scene.write_text(scene_at(text, n))
+            out = pathlib.Path(tmp) / f"run_{n}.h5"
+            argv = [sys.executable, "-m", "transient", str(scene), "-o", str(out), "--force"]
+            if checkpoint_interval is not None:
+                argv += ["--checkpoint-interval", repr(float(checkpoint_interval))]
+            wall, peak = command_peak(argv)
+            result = read_run(out)[0]
+            snapshots = int(result.snapshot_height.shape[0])
+            out.unlink()
+            estimate = run_in_memory(n, snapshots)
+            rows.append(dict(n=n, steps=result.steps, snapshots=snapshots, wall=wall,
+                             peak_rss=peak, estimate=estimate, ratio=estimate / peak))
+            logger.info("n = %d: %s", n, rows[-1])
+    return rows
+
+
 def history(result, problem):
     """Plain pixel rms slope of the face at the snapshots, and the last face (m)."""
     hs, face = problem.halfspace, problem.face_mask
@@ -212,6 +283,18 @@ def markdown_table(rows):
     return "\n".join(lines)
 
 
+def markdown_memory(rows):
+    """The memory table in Markdown."""
+    lines = ["| n | steps | snapshots | wall (s) | peak memory (MiB) | bytes / pixel "
+             "| `run_in_memory` (MiB) | estimate / peak |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['n']} | {r['steps']} | {r['snapshots']} | {r['wall']:.1f} | "
+                     f"{r['peak_rss'] / 2 ** 20:.0f} | {r['peak_rss'] / r['n'] ** 2:.0f} | "
+                     f"{r['estimate'] / 2 ** 20:.0f} | {r['ratio']:.2f} |")
+    return "\n".join(lines)
+
+
 def markdown_schemes(rows):
     """The integrator table in Markdown."""
     lines = ["| integrator | tol | steps | contact solves | iterations | padded products "
@@ -254,6 +337,10 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--table", action="store_true", help="work per solve against n")
     parser.add_argument("--schemes", action="store_true", help="integrators at equal error")
+    parser.add_argument("--memory", action="store_true",
+                        help="peak memory of the command line against n")
+    parser.add_argument("--checkpoint-interval", type=float,
+                        help="checkpoint interval of --memory, s (default: the scene's)")
     parser.add_argument("--scene", type=pathlib.Path, default=SCENE)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
     parser.add_argument("--tol", type=float, help="tol of --table (default: the scene's)")
@@ -262,13 +349,16 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="smoke test: short ladders")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("bench_runin.h5"))
     args = parser.parse_args(argv)
-    if not (args.table or args.schemes):
-        parser.error("choose --table and/or --schemes")
+    if not (args.table or args.schemes or args.memory):
+        parser.error("choose --table, --schemes and/or --memory")
     logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
     groups = {}
     if args.table:
         groups["grids"] = grid_table(args.scene, args.sizes, args.tol)
         print(markdown_table(groups["grids"]))
+    if args.memory:
+        groups["memory"] = memory_table(args.scene, args.sizes, args.checkpoint_interval)
+        print(markdown_memory(groups["memory"]))
     if args.schemes:
         implicit = [name for name, s in sorted(SCHEMES.items()) if not s.explicit]
         ladders = {name: QUICK_LADDER if args.quick else LADDERS.get(name, (1e-3, 1e-4))
