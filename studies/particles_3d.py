@@ -39,7 +39,7 @@ sampled uniformly in depth:
 
 Run::
 
-    python studies/particles_3d.py            # n = 64, six ratios, 12 min (one core)
+    python studies/particles_3d.py            # n = 64, six ratios, 5.5 min (one core)
     python studies/particles_3d.py --quick    # n = 32, two ratios, 7 s of CPU
 
 Writes ``OUT/particles_3d.h5`` and ``OUT/particles_3d.png``.

@@ -181,8 +181,9 @@ def test_particles_3d_quick(runs):
     """Particles larger than f* (4 f* against 0.5 f*) keep the face closer to its sections."""
     with h5py.File(runs["particles_3d"][1], "r") as f:
         tracking, ratio = f["tracking"][()], f["mean_ratio"][()]
-    # Measured at n = 32: 2.4 % and 0.44 %; the mean slopes 0.978 and 1.0005 of the sections'.
-    assert tracking[1] < 0.5 * tracking[0], f"tracking {tracking}"
+    # Measured at n = 32: 2.4 % and 0.44 % (a ratio of 0.18); the mean slopes 0.978 and 1.0006 of
+    # the sections'.  Bounds: about twice the measured ratio and departure from 1.
+    assert tracking[1] < 0.4 * tracking[0], f"tracking {tracking}"
     assert np.all(np.abs(ratio - 1) < 0.05), f"mean rms slope over the sections' {ratio}"
 
 
