@@ -79,22 +79,13 @@ def run_2d(scene, n, tol, within):
     """
     from transient.options import RunOptions
     from transient.problem import WearProblem
+    from transient.run_in_distance import WearThroughMap
     from transient.runin import run_in
 
     problem = WearProblem.from_scene(scene, n=n)
     face, t = problem.face_mask, scene.depth.thicknesses[0]
-    crossing = np.full(problem.shape, np.nan)
-    last = {"s": 0.0, "w": np.zeros(problem.shape)}
-
-    def on_step(run):
-        w = run.worn_depth()
-        new = face & np.isnan(crossing) & (w >= t)
-        if new.any():
-            w0 = last["w"][new]
-            crossing[new] = last["s"] + (t - w0) / (w[new] - w0) * (run.s - last["s"])
-        last.update(s=run.s, w=w.copy())
-
-    result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=tol), on_step=on_step)
+    crossing = WearThroughMap(face, t)
+    result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=tol), on_step=crossing)
     if result.status != "steady":
         raise ValueError(f"run-in ended {result.status}: {result.message}")
     s_star = result.distance_scale
@@ -103,7 +94,8 @@ def run_2d(scene, n, tol, within):
     hist["worn_depth_mean"] = hist["worn_depth_mean"] / f_star
     hist["distance"] = np.asarray(result.history["distance"], dtype=float) / s_star
     found = result.run_in_distance(within)
-    return {"crossing": crossing / s_star, "radius": problem.grid.radii / scene.outline.scale,
+    return {"crossing": crossing.distance / s_star,
+            "radius": problem.grid.radii / scene.outline.scale,
             "history": hist, "settled": found.distance_s_star if found.reached else math.nan,
             "steps": result.steps, "rejected": result.rejected, "wall_time": result.wall_time}
 

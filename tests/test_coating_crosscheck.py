@@ -25,6 +25,7 @@ import pytest
 from transient.axisymmetric import CoatedAxisymmetricRunIn
 from transient.options import RunOptions
 from transient.problem import WearProblem
+from transient.run_in_distance import WearThroughMap
 from transient.runin import run_in
 from transient.scene import load_transient_scene
 
@@ -96,20 +97,10 @@ def coated_run(n, tol=TOL):
     scene = coated_scene()
     problem = WearProblem.from_scene(scene, n=n)
     face, t = problem.face_mask, scene.depth.thicknesses[0]
-    crossing = np.full(problem.shape, np.nan)
-    last = {"s": 0.0, "w": np.zeros(problem.shape)}
-
-    def on_step(run):
-        w = run.worn_depth()
-        new = face & np.isnan(crossing) & (w >= t)
-        if new.any():
-            w0 = last["w"][new]
-            crossing[new] = last["s"] + (t - w0) / (w[new] - w0) * (run.s - last["s"])
-        last.update(s=run.s, w=w.copy())
-
-    result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=tol), on_step=on_step)
+    crossing = WearThroughMap(face, t)
+    result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=tol), on_step=crossing)
     assert result.status == "steady", result.message
-    return CoatedRun(result, problem, crossing, problem.grid.radii)
+    return CoatedRun(result, problem, crossing.distance, problem.grid.radii)
 
 
 def _history(run, name):

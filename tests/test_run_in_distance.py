@@ -11,6 +11,7 @@ give 1.5583, 1.5374, 1.5320 s* within 1 % on n = 32, 64, 128 and 2.6744,
 """
 
 import math
+import types
 
 import h5py
 import numpy as np
@@ -26,7 +27,7 @@ from transient.initial_face import flat
 from transient.options import RunOptions
 from transient.output import read_run, write_run
 from transient.problem import WearProblem
-from transient.run_in_distance import TOLERANCES, RunInDistance
+from transient.run_in_distance import TOLERANCES, RunInDistance, WearThroughMap
 from transient.runin import run_in
 from transient.spatial_error import spatial_error
 
@@ -316,3 +317,15 @@ def test_scene_sliding_speed_is_read_and_checked(tmp_path):
                                              r"\(m/s\), got "):
             parse_scene(with_speed.replace("sliding_speed = 0.5", f"sliding_speed = {bad}"),
                         tmp_path)
+
+
+def test_wear_through_map_interpolates_within_the_step():
+    """Depths growing linearly in s: each pixel's distance to the depth is exact."""
+    face = np.array([[True, True, False]])
+    rate = np.array([[1.0, 0.25, 1.0]])  # m of depth per m of sliding
+    marks = WearThroughMap(face, 0.3)
+    for s in (0.2, 0.5, 1.0, 1.5):
+        marks(types.SimpleNamespace(s=s, worn_depth=lambda s=s: rate * s))
+    assert marks.distance[0, 0] == pytest.approx(0.3, rel=1e-14)
+    assert marks.distance[0, 1] == pytest.approx(1.2, rel=1e-14)
+    assert np.isnan(marks.distance[0, 2]), "off the face"

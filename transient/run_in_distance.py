@@ -43,7 +43,7 @@ import math
 
 import numpy as np
 
-__all__ = ["COATING_EVENTS", "TOLERANCES", "CoatingDistance", "RunInDistance",
+__all__ = ["COATING_EVENTS", "TOLERANCES", "CoatingDistance", "RunInDistance", "WearThroughMap",
            "coating_distance", "deviations", "distance_table", "entry", "run_in_distance"]
 
 #: The tolerances a run file and the summary of ``runin-transient`` give the run-in distance for.
@@ -452,3 +452,43 @@ def distance_table(result, tolerances=TOLERANCES):
         "time_uncertainty": (column("time_uncertainty_s"), "s",
                              "uncertainty of the time (NaN: no sliding speed)"),
     }
+
+
+class WearThroughMap:
+    """The sliding distance at which each face pixel's worn depth first reaches a depth.
+
+    An ``on_step`` callback of :func:`transient.runin.run_in`: after every
+    accepted step it marks the pixels whose worn depth passed ``depth``
+    during the step, at the distance interpolated linearly within it.  With
+    a coating's thickness it maps where and when the coating wears through.
+
+    Parameters
+    ----------
+    face_mask : ndarray of bool, shape (nx, ny)
+    depth : float or ndarray, shape (nx, ny), m
+        The depth below the initial surface to reach (e.g. a coating's
+        thickness).
+
+    Attributes
+    ----------
+    distance : ndarray, shape (nx, ny), m
+        Sliding distance at which each pixel reached ``depth``; NaN off the
+        face and where it has not (yet).
+    """
+
+    def __init__(self, face_mask, depth):
+        self.face_mask = np.asarray(face_mask, dtype=bool)
+        self.depth = np.broadcast_to(np.asarray(depth, dtype=float), self.face_mask.shape)
+        self.distance = np.full(self.face_mask.shape, np.nan)
+        self._last = (0.0, np.zeros(self.face_mask.shape))
+
+    def __call__(self, run):
+        """Mark the pixels that reached the depth in the step that ended at ``run.s``."""
+        worn = run.worn_depth()
+        s0, w0 = self._last
+        new = self.face_mask & np.isnan(self.distance) & (worn >= self.depth)
+        if new.any():
+            before = w0[new]
+            self.distance[new] = s0 + ((self.depth[new] - before) / (worn[new] - before)
+                                       * (run.s - s0))
+        self._last = (run.s, worn.copy())
