@@ -41,7 +41,7 @@ from .array_files import npy_header
 from .depth import DepthColumns
 from .labels import extend_off_face
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid
-from .phases import PHASE_MAPS, check_resolution
+from .phases import PHASE_MAPS, check_refinement, check_resolution
 from .schema import Key
 
 __all__ = ["MAX_SPHERES", "MAX_VOLUME_FRACTION", "DepthLayers", "Spheres", "Voxels",
@@ -234,16 +234,8 @@ class Voxels:
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` unless a multiple of the stack's size ``n0``."""
-        n0 = self.size
         mx, my = self.voxels.shape[1:]
-        what = f"voxel map {self.source} of {mx} x {my} pixels"
-        n = check_resolution(grid, n0, what)
-        if n % n0:
-            raise ValueError(f"grid size n = {n} is not a multiple of the size {n0} of {what}")
-        if isinstance(grid, FaceGrid) and grid.shape != (n // n0 * mx, n // n0 * my):
-            raise ValueError(f"{what} does not fit the {grid.shape[0]} x {grid.shape[1]} grid "
-                             f"of the {grid.outline.describe()}")
-        return n
+        return check_refinement(grid, (mx, my), f"voxel map {self.source} of {mx} x {my} pixels")
 
     def _slices(self, grid):
         """The slices on ``grid``, shape (nz, nx, ny), -1 off the face."""

@@ -68,6 +68,7 @@ __all__ = [
     "Homogeneous",
     "Rods",
     "Voronoi",
+    "check_refinement",
     "check_resolution",
     "load_phase_map",
 ]
@@ -94,6 +95,26 @@ def check_resolution(grid, minimum, what):
     if n < minimum:
         raise ValueError(f"grid too coarse for {what}: n = {n}, the minimum is n = "
                          f"{grid_size_text(minimum)}")
+    return n
+
+
+def check_refinement(grid, shape, what, name=None):
+    """``n`` of a grid that refines a pixel map of ``shape`` by an integer factor, as an int.
+
+    ``what`` names the map in messages (``name``, default ``what``, in the
+    one about the multiple); ``ValueError`` for a grid coarser than the map,
+    a size that is not a multiple of the map's longer side, or a grid of
+    another shape than the map's refined one.
+    """
+    n0 = max(shape)
+    n = check_resolution(grid, n0, what)
+    if n % n0:
+        raise ValueError(f"grid size n = {n} is not a multiple of the size {n0} of "
+                         f"{what if name is None else name}")
+    k = n // n0
+    if isinstance(grid, FaceGrid) and grid.shape != (k * shape[0], k * shape[1]):
+        raise ValueError(f"{what} does not fit the {grid.shape[0]} x {grid.shape[1]} grid of "
+                         f"the {grid.outline.describe()}")
     return n
 
 
@@ -498,19 +519,9 @@ class ArrayMap:
 
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` unless a multiple of the map size on the map's face."""
-        n0 = self.size
         mx, my = self.labels_array.shape
-        n = check_resolution(grid, n0, f"phase map {self.source} of {mx} x {my} pixels")
-        if n % n0:
-            raise ValueError(f"grid size n = {n} is not a multiple of the size {n0} of phase "
-                             f"map {self.source}")
-        if isinstance(grid, FaceGrid):
-            k = n // n0
-            if grid.shape != (k * mx, k * my):
-                raise ValueError(f"phase map {self.source} of {mx} x {my} pixels does not fit "
-                                 f"the {grid.shape[0]} x {grid.shape[1]} grid of the "
-                                 f"{grid.outline.describe()}")
-        return n
+        return check_refinement(grid, (mx, my), f"phase map {self.source} of {mx} x {my} pixels",
+                                f"phase map {self.source}")
 
     def labels(self, grid):
         """Labels on a grid of ``n = k n0`` pixels along the longer side."""
