@@ -367,21 +367,13 @@ _MAX_DOUBLINGS = 200
 
 
 @dataclasses.dataclass(frozen=True)
-class CoatedAxisymmetricState:
+class CoatedAxisymmetricState(AxisymmetricState):
     """The coated axisymmetric run-in at one sliding distance.
+
+    The fields of :class:`AxisymmetricState`, and:
 
     Attributes
     ----------
-    distance : float, m
-    pressure : ndarray, shape (N,), Pa
-    approach : float, m
-        Rigid approach ``d``.
-    face : ndarray, shape (N,), m
-        Face ``f = d - w`` at the ring centres.
-    rms_slope : float
-        Rms of ``df/dr`` over the disk.
-    rms_height : float, m
-        Rms of ``f`` about its mean over the disk.
     worn_depth : ndarray, shape (N,), m
         Depth ``w`` worn off each ring from the flat face (not up to a constant).
     mean_worn_depth : float, m
@@ -395,12 +387,6 @@ class CoatedAxisymmetricState:
         ``f_inf``, the eq. 10 face that coating and substrate both tend to.
     """
 
-    distance: float
-    pressure: np.ndarray
-    approach: float
-    face: np.ndarray
-    rms_slope: float
-    rms_height: float
     worn_depth: np.ndarray
     mean_worn_depth: float
     rim_worn_depth: float
