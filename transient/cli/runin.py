@@ -417,10 +417,12 @@ def _run(job):
         bar.close()
     comparison = None
     if result.success:
-        # The steady result of runin-steady (solve_scene), its error bar included.
+        # The steady result of runin-steady (solve_scene), its error bar included, on the
+        # run's own map and operator: neither rasterised nor built a second time.
         from steady.solution import solve_scene
 
-        comparison = compare_with_steady(result, solve_scene(job.scene), problem)
+        comparison = compare_with_steady(result, solve_scene(job.scene, problem=problem.problem),
+                                         problem)
         if job.companion_grid is not None and not finished:
             result = _companion(job, result)
     if not finished:
