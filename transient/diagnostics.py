@@ -38,23 +38,24 @@ def masked_gradient(field, face_mask, h):
         Central differences where both neighbours are on the face, one-sided
         where one is, zero where none is and off the face.
     """
+    f = np.where(face_mask, field, 0.0)
+    # Neighbours along each axis through a border of zeros (off the face): views, no copies.
+    f_pad = np.pad(f, 1)
+    on_pad = np.pad(face_mask, 1)
+    inner = (slice(1, -1), slice(1, -1))
     out = []
     for axis in (0, 1):
-        f = np.where(face_mask, field, 0.0)
-        fp = np.roll(f, -1, axis)
-        fm = np.roll(f, 1, axis)
-        mp = np.roll(face_mask, -1, axis)
-        mm = np.roll(face_mask, 1, axis)
-        idx = np.arange(face_mask.shape[axis])
-        edge_p = (idx == face_mask.shape[axis] - 1)
-        edge_m = (idx == 0)
-        shape = [1, 1]
-        shape[axis] = -1
-        mp = mp & ~edge_p.reshape(shape)
-        mm = mm & ~edge_m.reshape(shape)
-        g = np.where(mp & mm, (fp - fm) / (2 * h),
-                     np.where(mp, (fp - f) / h, np.where(mm, (f - fm) / h, 0.0)))
-        out.append(np.where(face_mask, g, 0.0))
+        ahead, behind = list(inner), list(inner)
+        ahead[axis], behind[axis] = slice(2, None), slice(None, -2)
+        fp, fm = f_pad[tuple(ahead)], f_pad[tuple(behind)]
+        mp, mm = on_pad[tuple(ahead)] & face_mask, on_pad[tuple(behind)] & face_mask
+        g = np.zeros(f.shape)
+        both = mp & mm
+        for where, a, b, step in ((both, fp, fm, 2 * h), (mp & ~mm, fp, f, h),
+                                  (mm & ~mp, f, fm, h)):
+            np.subtract(a, b, out=g, where=where)
+            np.divide(g, step, out=g, where=where)
+        out.append(g)
     return out
 
 
