@@ -485,7 +485,10 @@ def _start(problem, on_face, x0, x0_displacement):
     shape = tuple(operator.halfspace.shape)
     p = np.zeros(shape)
     if x0 is not None:
-        p = np.where(on_face & (x0 > 0), x0, 0.0)
+        # One pass and a minimum where the warm start is non-negative, as a run's is.
+        p = np.where(on_face, x0, 0.0)
+        if p.min() < 0:
+            np.maximum(p, 0.0, out=p)
     if p.sum() <= 0:
         p = _initial_pressure(problem.height, on_face, problem.force, operator.halfspace)
         x0_displacement = None
