@@ -46,6 +46,7 @@ import logging
 import numbers
 
 import numpy as np
+import scipy.linalg
 
 from .preconditioners import PRECONDITIONERS, make_preconditioner
 
@@ -73,6 +74,12 @@ _ROUNDING_PER_ITERATION = 8.0
 # (10 to 14 on a 1:2 rectangle at n = 48); a run-in's warm-started solves start 2 to 20
 # tolerances away and lose none (docs/benchmarks.md, "Contact solve on run-in problems").
 _SINGLE_REDUCTION = 1e-4
+# Elements per call of the BLAS axpy behind :func:`_axpy`: OpenBLAS runs a call of at most
+# 10000 on the calling thread; one over a whole 1024 x 1024 array ran threaded and took 4 to
+# 6 ms, against 0.7 ms in blocks and 1.2 ms for numpy's two passes (docs/benchmarks.md,
+# "Contact solve on run-in problems").
+_AXPY_BLOCK = 8192
+_daxpy = scipy.linalg.blas.get_blas_funcs("axpy", dtype=np.float64)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -478,13 +485,18 @@ def _start(problem, on_face, x0, x0_displacement):
     shape = tuple(operator.halfspace.shape)
     p = np.zeros(shape)
     if x0 is not None:
-        p = np.where(on_face & (x0 > 0), x0, 0.0)
+        # One pass and a minimum where the warm start is non-negative, as a run's is.
+        p = np.where(on_face, x0, 0.0)
+        if p.min() < 0:
+            np.maximum(p, 0.0, out=p)
     if p.sum() <= 0:
         p = _initial_pressure(problem.height, on_face, problem.force, operator.halfspace)
         x0_displacement = None
     c = problem.force / (problem.area * p.sum())
+    # (compared before the scaling: the same test as ``c p == c x0`` without its product)
+    known = x0_displacement is not None and np.array_equal(p, x0)
     p *= c
-    if x0_displacement is not None and np.array_equal(p, c * x0):
+    if known:
         v = c * _check_field("x0_displacement", x0_displacement, shape)
     else:
         v = operator(p)
@@ -529,7 +541,7 @@ class _State:
     def __init__(self, p, v):
         self.p = p
         self.v = v
-        self.v_max = float(np.abs(v).max())
+        self.v_max = _largest_magnitude(v)
         self.since_full = 0
         self.verified = False
         self.t = np.zeros(p.shape)
@@ -540,7 +552,7 @@ class _State:
     def recompute_displacement(self, operator):
         """``v = K p`` afresh by FFT, dropping the round-off of the incremental updates."""
         self.v = operator(self.p)
-        self.v_max = float(np.abs(self.v).max())
+        self.v_max = _largest_magnitude(self.v)
         self.since_full = 0
 
 
@@ -554,8 +566,8 @@ class _ActiveSet:
         ``mask`` as 1.0 / 0.0.
     count : float
         Pixels in the set.
-    off : ndarray, shape (nx, ny)
-        1.0 on the face pixels out of the set, else 0.0.
+    off : ndarray, shape (nx, ny), or None
+        1.0 on the face pixels out of the set, else 0.0; None when the set is the whole face.
     full : bool
         Whether the set is the whole face.
     """
@@ -565,9 +577,9 @@ class _ActiveSet:
     def __init__(self, p, face, n_face):
         self.mask = p > 0
         self.weight = self.mask.astype(float)
-        self.count = float(self.mask.sum())
-        self.off = face - self.weight
+        self.count = float(np.count_nonzero(self.mask))
         self.full = self.count == n_face
+        self.off = None if self.full else face - self.weight
 
 
 def _iterate(problem, state, rtol, atol, maxiter, callback):
@@ -593,7 +605,7 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
     -------
     ContactResult
     """
-    u, g, r, work = (np.empty(state.p.shape) for _ in range(4))
+    u, g, r, penetration, work = (np.empty(state.p.shape) for _ in range(5))
     history = []
     success = False
     message = ""
@@ -601,10 +613,9 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
     while True:
         if state.set_changed:
             active = _ActiveSet(state.p, problem.face, problem.n_face)
-        d = _gap(problem, state, active, u, g, r)
-        tolerance = _tolerance(u, active, rtol, atol)
-        # ``u`` is not read again: it takes the penetration of the pixels out of the set.
-        residual = _residual(g, r, active, problem.n_face, penetration=u)
+        d, u_now = _gap(problem, state, active, u, g, r)
+        tolerance = _tolerance(u_now, active, rtol, atol)
+        residual = _residual(g, r, active, problem.n_face, penetration=penetration)
         if not np.isfinite(residual):
             message = f"non-finite residual at iteration {it}"
             history.append(residual)
@@ -626,16 +637,16 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
                        f"> {tolerance:.3e} m")
             break
         it += 1
-        _update_direction(problem, state, r, active, work,
-                          accurate=tolerance < _SINGLE_REDUCTION * history[0])
+        rt = _update_direction(problem, state, r, active, work,
+                               accurate=tolerance < _SINGLE_REDUCTION * history[0])
         q = problem.operator(state.t, contiguous=False)
         tq = _curvature(problem, state.t, q)
         if not tq > 0:
             message = f"breakdown at iteration {it}: non-positive curvature {tq!r}"
             break
-        tau = _dot(r, state.t) / tq
+        tau = rt / tq
         _take_step(state, q, tau, work)
-        if (_update_active_set(problem, state, active, g, r, u, tau)
+        if (_update_active_set(problem, state, active, g, r, penetration, tau)
                 and not _rescale_to_load(problem, state)):
             message = f"all pressure lost at iteration {it}"
             break
@@ -647,14 +658,15 @@ def _iterate(problem, state, rtol, atol, maxiter, callback):
 
 
 def _gap(problem, state, active, u, g, r):
-    """The rigid approach ``d`` (m), the mean of ``u + h`` over the active set.
+    """The rigid approach ``d`` (m), the mean of ``u + h`` over the active set, and ``u``.
 
-    Fills the work arrays (m, shape (nx, ny)) ``u = (K + diag(shift)) p``, the gap
-    ``g = u + h - d`` (meaningful on the face) and its restriction ``r`` to the active set.
+    Fills the work arrays (m, shape (nx, ny)) the gap ``g = u + h - d`` (meaningful on the
+    face) and its restriction ``r`` to the active set, and ``u = (K + diag(shift)) p`` unless
+    there is no shift (``u`` is then ``state.v``, returned as it is, not copied).
     """
     shift = problem.operator.shift
     if shift is None:
-        u[...] = state.v
+        u = state.v
     else:
         np.multiply(shift, state.p, out=u)
         u += state.v
@@ -662,7 +674,7 @@ def _gap(problem, state, active, u, g, r):
     d = _dot(g, active.weight) / active.count
     g -= d
     np.multiply(g, active.weight, out=r)
-    return d
+    return d, u
 
 
 def _residual(g, r, active, n_face, penetration):
@@ -713,7 +725,8 @@ def _update_direction(problem, state, r, active, work, accurate=False):
     """The next conjugate direction ``state.t`` from the residual ``r`` (m, shape (nx, ny)).
 
     ``work`` (shape (nx, ny)) is scratch.  ``accurate``: apply the preconditioner
-    in double precision (its ``accurate`` method, where it has one).
+    in double precision (its ``accurate`` method, where it has one).  Returns ``r . t``:
+    for a new direction ``t = z`` that is ``r . z``, already at hand.
     """
     precondition = problem.precondition
     if hasattr(precondition, "unrestricted"):
@@ -734,15 +747,16 @@ def _update_direction(problem, state, r, active, work, accurate=False):
     gz = _dot(r, z)
     if state.restart or state.gz_old == 0:
         state.t = z
-    else:
-        t = state.t
-        t *= gz / state.gz_old
-        t += z
-        if state.set_changed:
-            # Pixels left the set: the old direction must neither move them nor the load.
-            t *= active.weight
-            t -= (_dot(t, active.weight) / active.count) * active.weight
+        state.gz_old = gz
+        return gz
+    # t = z + beta t in one pass, into z (a fresh array).
+    t = state.t = _axpy(gz / state.gz_old, state.t, z)
+    if state.set_changed:
+        # Pixels left the set: the old direction must neither move them nor the load.
+        t *= active.weight
+        t -= (_dot(t, active.weight) / active.count) * active.weight
     state.gz_old = gz
+    return _dot(r, state.t)
 
 
 def _curvature(problem, t, q):
@@ -754,8 +768,12 @@ def _curvature(problem, t, q):
 
 
 def _take_step(state, q, tau, work):
-    """``p -= tau t`` and ``v -= tau q`` with ``q = K t`` (m); ``work`` is scratch."""
-    state.p -= np.multiply(state.t, tau, out=work)
+    """``p -= tau t`` and ``v -= tau q`` with ``q = K t`` (m); ``work`` is scratch.
+
+    ``q``, a strided view of the product's buffer, takes numpy's two passes: BLAS
+    axpy wants a contiguous vector.
+    """
+    _axpy(-tau, state.t, state.p)
     state.v -= np.multiply(q, tau, out=work)
     state.since_full += 1
 
@@ -782,14 +800,13 @@ def _update_active_set(problem, state, active, g, r, penetration, tau):
         (``t`` then being a gap).
     """
     p = state.p
-    leaving = p < 0
-    any_leaving = bool(leaving.any())
-    entering = None
-    if not active.full:
-        entering = penetration < 0
-    state.restart = entering is not None and bool(entering.any())
+    # A minimum first (one reduction, no temporary): the masks only when pixels move.
+    any_leaving = bool(p.min() < 0)
+    state.restart = not active.full and bool(penetration.min() < 0)
     state.set_changed = any_leaving or state.restart
     if state.set_changed:
+        leaving = p < 0
+        entering = penetration < 0 if state.restart else None
         dp = np.zeros(p.shape)
         dp[leaving] = -p[leaving]
         if state.restart:
@@ -851,7 +868,7 @@ def _result(problem, state, d, nit, residual, history, success, message):
         approach=float(d),
         displacement=v if shift is None else v + shift * p,
         elastic_displacement=v,
-        contact_fraction=float((p > 0).sum() / problem.n_face),
+        contact_fraction=float(np.count_nonzero(p > 0) / problem.n_face),
         nit=nit,
         residual=residual,
         residual_history=np.asarray(history),
@@ -861,6 +878,28 @@ def _result(problem, state, d, nit, residual, history, success, message):
 
 
 # -- products ----------------------------------------------------------------------------------
+
+def _axpy(alpha, x, y):
+    """``y += alpha x`` in one pass over C-contiguous float arrays of one shape; ``y``.
+
+    BLAS axpy in blocks of ``_AXPY_BLOCK`` elements, each run on the calling thread;
+    numpy's two passes for arrays of another layout or type (a caller's preconditioner
+    may return one).
+    """
+    if not (y.flags.c_contiguous and y.dtype == np.float64 and x.dtype == np.float64
+            and x.flags.c_contiguous and x.shape == y.shape):
+        y += alpha * x
+        return y
+    xf, yf = x.reshape(-1), y.reshape(-1)
+    for start in range(0, yf.size, _AXPY_BLOCK):
+        _daxpy(xf, yf, n=min(_AXPY_BLOCK, yf.size - start), a=alpha, offx=start, offy=start)
+    return y
+
+
+def _largest_magnitude(a):
+    """``max |a|`` of an array, from its extremes (no temporary)."""
+    return float(max(a.max(), -a.min()))
+
 
 def _dot3(a, b, c):
     """Sum of the elementwise product of three arrays of the same shape (no temporary)."""

