@@ -676,16 +676,20 @@ class WearProblem:
         return work.work(np.where(face, w - origin, 0.0)), res
 
 
-def _row_products(row, vector, rows):
-    """``<row, vector>``, summed as :func:`numpy.einsum` sums each of ``rows`` stacked rows.
+#: Columns of the history a block: the warm start forms its differences and
+#: sums their products a block at a time, so that the differences of a block
+#: (a few rows of it, 512 KiB each) are summed while still in cache.
+_BLOCK = 1 << 16
 
-    The product of one row of a stack of ``rows`` (its summation order
-    depends on whether the stack has one row or more): the history's
-    differences, formed one at a time, give the numbers the stack of them
-    would.
-    """
-    stack = row[None] if rows == 1 else np.broadcast_to(row, (2, row.size))
-    return float(np.einsum("ij,j->i", stack, vector)[0])
+
+def _blocks(size):
+    """Slices of ``range(size)`` of :data:`_BLOCK` columns, in order."""
+    return [slice(start, min(start + _BLOCK, size)) for start in range(0, size, _BLOCK)]
+
+
+def _dot(a, b):
+    """``<a, b>`` for two rows (einsum: a threaded BLAS call can be erratic on a loaded machine)."""
+    return float(np.einsum("j,j->", a, b))
 
 
 class WarmStart:
@@ -740,6 +744,7 @@ class WarmStart:
         # they would double the memory of the history.
         self._gram = np.zeros((self.size - 1, self.size - 1))
         self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
+        self._sums = np.zeros(self.size - 1)  # sum of each difference (a load change)
         if pressures is not None:
             pressures = np.asarray(pressures, dtype=float)
             if displacements is None:
@@ -777,14 +782,8 @@ class WarmStart:
             k = min(len(self), self.size - 1)  # differences held after this one
             for gram in (self._gram, self._gram_k):
                 gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
-            d = np.subtract(value, self._values[0])
-            work = np.subtract(product, self._products[0])
-            # One product per pair, newest with older: the same numbers whatever
-            # the order of the pushes and predictions that led here.
-            row = [float(np.einsum("j,j->", d, work))]
-            for j in range(1, k):  # K d_j of the older ones, their index after this push
-                row.append(float(np.einsum("j,j->", d, self._difference(
-                    self._products, j - 1, out=work))))
+            self._sums[1:k] = self._sums[:k - 1].copy()
+            row, self._sums[0] = self._new_gram_row(value, product, k)
             self._gram[0, :k] = self._gram[:k, 0] = row
             self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
         kept = min(len(self), self.size - 1)
@@ -793,10 +792,12 @@ class WarmStart:
             self._stack[:, 1:kept + 1] = old[:, :kept]
             del old
         else:
-            # Row by row, oldest first: an overlapping slice assignment would
-            # go through a temporary copy of the whole stack.
+            # Row by row, oldest first, the pressures apart from the
+            # displacements: a slice spanning both (or several rows) overlaps
+            # its destination and would go through a temporary copy.
             for i in range(kept, 0, -1):
-                self._stack[:, i] = self._stack[:, i - 1]
+                for which in (0, 1):
+                    self._stack[which, i] = self._stack[which, i - 1]
         self._stack[0, 0], self._stack[1, 0] = value, product
         self._count = kept + 1
 
@@ -821,24 +822,86 @@ class WarmStart:
         out.flags.writeable = False
         return out
 
-    @staticmethod
-    def _difference(stack, i, out=None):
-        """``stack[i] - stack[i + 1]``: a consecutive difference of a list, newest first."""
-        return np.subtract(stack[i], stack[i + 1], out=out)
+    def _new_gram_row(self, value, product, k):
+        """``<d_0, K d_j>`` (j < k) and the sum of ``d_0``, the difference ``value`` adds.
 
-    def _coefficient_gram(self, k):
-        """``<d_i, k d_j>`` for the ``k`` differences held, the missing entries filled."""
-        gram = self._gram_k
-        coefficients = self.problem.coefficient_field.ravel()  # zero off the face
-        work = None
-        for i in range(k):
-            missing = np.isnan(gram[i, i:k])
-            if missing.any():
-                weighted = coefficients * self._difference(self._values, i)
-                for j in np.flatnonzero(missing) + i:
-                    work = self._difference(self._values, j, out=work)
-                    gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
-        return gram[:k, :k]
+        One product per pair, newest with older, each summed block by block
+        (:func:`_blocks`) from differences formed exactly: the same numbers
+        whatever the order of the pushes and predictions that led here.
+        """
+        values, products = self._values, self._products
+        row = np.zeros(k)
+        total = 0.0
+        d = np.empty(min(_BLOCK, value.size))
+        kd = np.empty((k, d.size))
+        for block in _blocks(value.size):
+            m = block.stop - block.start
+            np.subtract(value[block], values[0, block], out=d[:m])
+            total += float(np.add.reduce(d[:m]))
+            np.subtract(product[block], products[0, block], out=kd[0, :m])
+            # K d_j of the older ones, j their index after this push.
+            np.subtract(products[:k - 1, block], products[1:k, block], out=kd[1:k, :m])
+            for j in range(k):
+                row[j] += _dot(d[:m], kd[j, :m])
+        return row, total
+
+    def _stage_products(self, height, weight, scale, k, pairs):
+        """The sums :meth:`predict` needs, in one pass over the pressures, block by block.
+
+        Parameters
+        ----------
+        height : ndarray, shape (nx ny,), m
+        weight : ndarray, shape (nx ny,), m/Pa, or None
+            The shift (zero off the face) divided by ``scale``.
+        scale : float
+        k : int
+            Differences held.
+        pairs : list of (int, int)
+            The ``(i, j)`` of the products ``<d_i, diag(weight) d_j>`` wanted.
+
+        Returns
+        -------
+        gradient : ndarray, shape (k,)
+            ``<d_i, g>``, ``g = K v_0 + scale weight v_0 + height`` less its
+            mean over the face (the load's multiplier; taken off at the end,
+            times the sum of each difference).
+        weighted : ndarray, shape (len(pairs),)
+            ``<d_i, diag(weight) d_j>`` for the pairs: each from the
+            differences formed exactly and summed over the blocks in order, a
+            pair's number does not depend on the other pairs asked for.
+
+        The differences are formed in each block (the differences of sums
+        ``<v_i, g> - <v_(i+1), g>`` would lose as many digits as consecutive
+        pressures share).
+        """
+        values, products = self._values, self._products
+        face = self.problem.face_mask.ravel()
+        rows = sorted({i for i, _ in pairs})
+        gradient, weighted = np.zeros(k), np.zeros(len(pairs))
+        face_sum = 0.0
+        g = np.empty(min(_BLOCK, height.size))
+        d = np.empty((k, g.size))
+        w = np.empty((len(rows), g.size))
+        for block in _blocks(height.size):
+            m = block.stop - block.start
+            gb = g[:m]
+            if weight is None:
+                np.add(products[0, block], height[block], out=gb)
+            else:
+                np.multiply(weight[block], scale, out=gb)
+                gb *= values[0, block]
+                gb += products[0, block]
+                gb += height[block]
+            face_sum += float(np.add.reduce(gb, where=face[block]))
+            np.subtract(values[:k, block], values[1:k + 1, block], out=d[:, :m])
+            for i in range(k):
+                gradient[i] += _dot(d[i, :m], gb)
+            for r, i in enumerate(rows):
+                np.multiply(weight[block], d[i, :m], out=w[r, :m])
+            for p, (i, j) in enumerate(pairs):
+                weighted[p] += _dot(w[rows.index(i), :m], d[j, :m])
+        gradient -= face_sum / np.count_nonzero(face) * self._sums[:k]
+        return gradient, weighted
 
     def predict(self, height, shift=None, *, shift_scale=None):
         """Warm start of the contact problem ``(K + diag(shift)) p = d - height``.
@@ -866,58 +929,39 @@ class WarmStart:
         if shift is not None and shift_scale is not None:
             raise ValueError("give the shift either as an array or as shift_scale, not both")
         shape = self.problem.shape
-        v0, kv0 = self._values[0], self._products[0]
-        beta = None
         k = len(self) - 1
+        beta = None
         if k:
-            face = self.problem.face_mask.ravel()
             # x = v0 + D^T beta keeps the load, with the consecutive differences
             # D (a small Gram matrix free of cancellation); the pressures
             # vanish off the face, so the sums run over the face.
-            gram = self._gram[:k, :k].copy()
-            if shift_scale is not None:
-                s = shift_scale * self.problem.coefficient_field.ravel()
-                gram += shift_scale * self._coefficient_gram(k)
+            everything = [(i, j) for i in range(k) for j in range(i, k)]
+            if shift_scale is not None:  # the kept Gram matrix, its missing entries
+                weight, scale, gram_k = (self.problem.coefficient_field.ravel(), shift_scale,
+                                         self._gram_k)
+                pairs = [(i, j) for i, j in everything if np.isnan(gram_k[i, j])]
             elif shift is not None:
-                s = np.where(face, shift.ravel(), 0.0)
-                gram += self._shift_gram(k, s)
+                weight, scale, gram_k = (np.where(self.problem.face_mask, shift, 0.0).ravel(),
+                                         1.0, np.empty((k, k)))
+                pairs = everything
             else:
-                s = 0.0
-            gradient = kv0 + s * v0 + height.ravel()
-            gradient -= gradient[face].mean()
-            work = np.empty_like(gradient)
-            # einsum rather than BLAS: a threaded BLAS call on a loaded
-            # machine can cost more than an FFT pair.
-            rhs = np.array([_row_products(self._difference(self._values, i, out=work),
-                                          gradient, k) for i in range(k)])
+                weight, scale, pairs = None, 1.0, []
+            rhs, sums = self._stage_products(np.ravel(height), weight, scale, k, pairs)
+            gram = self._gram[:k, :k].copy()
+            if weight is not None:
+                for (i, j), value in zip(pairs, sums, strict=True):
+                    gram_k[i, j] = gram_k[j, i] = value
+                gram += scale * gram_k[:k, :k]
             w, q = np.linalg.eigh(0.5 * (gram + gram.T))
             keep = w > _GRAM_CUTOFF * max(float(w[-1]), 0.0)
             if keep.any():
                 beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
         if beta is None:
-            return v0.reshape(shape).copy(), kv0.reshape(shape).copy()
-        return (self._combination(self._values, beta, work).reshape(shape),
-                self._combination(self._products, beta, work).reshape(shape))
-
-    def _shift_gram(self, k, shift):
-        """``<d_i, diag(shift) d_j>`` for the ``k`` newest differences."""
-        gram = np.empty((k, k))
-        work = None
-        for i in range(k):
-            weighted = shift * self._difference(self._values, i)
-            for j in range(i, k):
-                work = self._difference(self._values, j, out=work)
-                gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
-        return gram
-
-    def _combination(self, stack, beta, work):
-        """``stack[0] + sum_i beta_i (stack[i] - stack[i + 1])``, one difference at a time.
-
-        The sum is accumulated first, in the order of the differences, and
-        then added to the newest.
-        """
-        out = None
-        for i, b in enumerate(beta):
-            term = np.multiply(self._difference(stack, i, out=work), b, out=work)
-            out = term.copy() if out is None else np.add(out, term, out=out)
-        return np.add(stack[0], out, out=out)
+            return self.newest(), self._products[0].reshape(shape).copy()
+        # v0 + sum_i beta_i (v_i - v_(i+1)) = sum_j alpha_j v_j, one pass a stack.
+        alpha = np.zeros(k + 1)
+        alpha[0] = 1.0
+        alpha[:k] += beta
+        alpha[1:] -= beta
+        return (np.einsum("i,ij->j", alpha, self._values).reshape(shape),
+                np.einsum("i,ij->j", alpha, self._products).reshape(shape))
