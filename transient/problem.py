@@ -744,7 +744,6 @@ class WarmStart:
         # they would double the memory of the history.
         self._gram = np.zeros((self.size - 1, self.size - 1))
         self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
-        self._sums = np.zeros(self.size - 1)  # sum of each difference (a load change)
         if pressures is not None:
             pressures = np.asarray(pressures, dtype=float)
             if displacements is None:
@@ -782,9 +781,7 @@ class WarmStart:
             k = min(len(self), self.size - 1)  # differences held after this one
             for gram in (self._gram, self._gram_k):
                 gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
-            self._sums[1:k] = self._sums[:k - 1].copy()
-            row, self._sums[0] = self._new_gram_row(value, product, k)
-            self._gram[0, :k] = self._gram[:k, 0] = row
+            self._gram[0, :k] = self._gram[:k, 0] = self._new_gram_row(value, product, k)
             self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
         kept = min(len(self), self.size - 1)
         if self._shared:  # the rows handed out stay as they are
@@ -823,7 +820,7 @@ class WarmStart:
         return out
 
     def _new_gram_row(self, value, product, k):
-        """``<d_0, K d_j>`` (j < k) and the sum of ``d_0``, the difference ``value`` adds.
+        """``<d_0, K d_j>`` (j < k), ``d_0`` the difference that pushing ``value`` adds.
 
         One product per pair, newest with older, each summed block by block
         (:func:`_blocks`) from differences formed exactly: the same numbers
@@ -831,19 +828,17 @@ class WarmStart:
         """
         values, products = self._values, self._products
         row = np.zeros(k)
-        total = 0.0
         d = np.empty(min(_BLOCK, value.size))
         kd = np.empty((k, d.size))
         for block in _blocks(value.size):
             m = block.stop - block.start
             np.subtract(value[block], values[0, block], out=d[:m])
-            total += float(np.add.reduce(d[:m]))
             np.subtract(product[block], products[0, block], out=kd[0, :m])
             # K d_j of the older ones, j their index after this push.
             np.subtract(products[:k - 1, block], products[1:k, block], out=kd[1:k, :m])
             for j in range(k):
                 row[j] += _dot(d[:m], kd[j, :m])
-        return row, total
+        return row
 
     def _stage_products(self, height, weight, scale, k, pairs):
         """The sums :meth:`predict` needs, in one pass over the pressures, block by block.
@@ -863,8 +858,9 @@ class WarmStart:
         -------
         gradient : ndarray, shape (k,)
             ``<d_i, g>``, ``g = K v_0 + scale weight v_0 + height`` less its
-            mean over the face (the load's multiplier; taken off at the end,
-            times the sum of each difference).
+            mean over the face (the load's multiplier, summed first from its
+            three terms: it is most of ``g``, which is nearly uniform on the
+            contact, and taken off after the products it would cancel in them).
         weighted : ndarray, shape (len(pairs),)
             ``<d_i, diag(weight) d_j>`` for the pairs: each from the
             differences formed exactly and summed over the blocks in order, a
@@ -876,9 +872,12 @@ class WarmStart:
         """
         values, products = self._values, self._products
         face = self.problem.face_mask.ravel()
+        mean = float(np.add.reduce(products[0], where=face) + np.add.reduce(height, where=face))
+        if weight is not None:
+            mean += scale * _dot(weight, values[0])  # the pressures vanish off the face
+        mean /= np.count_nonzero(face)
         rows = sorted({i for i, _ in pairs})
         gradient, weighted = np.zeros(k), np.zeros(len(pairs))
-        face_sum = 0.0
         g = np.empty(min(_BLOCK, height.size))
         d = np.empty((k, g.size))
         w = np.empty((len(rows), g.size))
@@ -892,7 +891,7 @@ class WarmStart:
                 gb *= values[0, block]
                 gb += products[0, block]
                 gb += height[block]
-            face_sum += float(np.add.reduce(gb, where=face[block]))
+            gb -= mean
             np.subtract(values[:k, block], values[1:k + 1, block], out=d[:, :m])
             for i in range(k):
                 gradient[i] += _dot(d[i, :m], gb)
@@ -900,7 +899,6 @@ class WarmStart:
                 np.multiply(weight[block], d[i, :m], out=w[r, :m])
             for p, (i, j) in enumerate(pairs):
                 weighted[p] += _dot(w[rows.index(i), :m], d[j, :m])
-        gradient -= face_sum / np.count_nonzero(face) * self._sums[:k]
         return gradient, weighted
 
     def predict(self, height, shift=None, *, shift_scale=None):
