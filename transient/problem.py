@@ -727,11 +727,15 @@ class WarmStart:
             raise ValueError(f"size must be a positive integer, got {size!r}")
         self.problem = problem
         self.size = int(size)
-        # The pressures [0] and their displacements [1], newest first, in rows
-        # of one array, which :meth:`pressures` and :meth:`displacements`
-        # hand out without a copy: the next push after that writes a new one.
+        # The pressures [0] and their displacements [1] in rows of one array,
+        # a ring: ``_order`` lists the rows held, newest first, and a push
+        # writes over the oldest instead of moving the others.  Every sum runs
+        # over the rows in that order, so that where they lie changes no
+        # number.  :meth:`pressures` and :meth:`displacements` put them in
+        # order and hand them out without a copy: the next push after that
+        # writes a new array.
         self._stack = None
-        self._count = 0
+        self._order = []
         self._shared = False
         # Differences of consecutive pressures d_i = v_i - v_(i+1) and their
         # products, newest first (i = 0 .. len - 2): they span the same affine
@@ -756,17 +760,17 @@ class WarmStart:
 
     def __len__(self):
         """Number of pressures held."""
-        return self._count
+        return len(self._order)
 
     @property
     def _values(self):
-        """The pressures held, newest first, shape (k, nx ny) (a view)."""
-        return self._stack[0, :self._count]
+        """The pressures held, newest first: a list of views, shape (nx ny,)."""
+        return [self._stack[0, slot] for slot in self._order]
 
     @property
     def _products(self):
-        """Their displacements, newest first, shape (k, nx ny) (a view)."""
-        return self._stack[1, :self._count]
+        """Their displacements, newest first: a list of views, shape (nx ny,)."""
+        return [self._stack[1, slot] for slot in self._order]
 
     def push(self, pressure, displacement=None):
         """Add a pressure (Pa, shape (nx, ny)) and its ``K p`` (m; computed if None)."""
@@ -783,24 +787,19 @@ class WarmStart:
                 gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
             self._gram[0, :k] = self._gram[:k, 0] = self._new_gram_row(value, product, k)
             self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
-        kept = min(len(self), self.size - 1)
+        kept = self._order[:self.size - 1]
         if self._shared:  # the rows handed out stay as they are
             old, self._stack, self._shared = self._stack, np.empty_like(self._stack), False
-            self._stack[:, 1:kept + 1] = old[:, :kept]
+            for slot in kept:
+                self._stack[:, slot] = old[:, slot]
             del old
-        else:
-            # Row by row, oldest first, the pressures apart from the
-            # displacements: a slice spanning both (or several rows) overlaps
-            # its destination and would go through a temporary copy.
-            for i in range(kept, 0, -1):
-                for which in (0, 1):
-                    self._stack[which, i] = self._stack[which, i - 1]
-        self._stack[0, 0], self._stack[1, 0] = value, product
-        self._count = kept + 1
+        slot = min(set(range(self.size)) - set(kept))  # the oldest's, or a free one
+        self._stack[0, slot], self._stack[1, slot] = value, product
+        self._order = [slot, *kept]
 
     def newest(self):
         """The newest pressure, Pa, shape (nx, ny)."""
-        return self._values[0].reshape(self.problem.shape).copy()
+        return self._stack[0, self._order[0]].reshape(self.problem.shape).copy()
 
     def pressures(self):
         """The pressures held, newest first, Pa, shape (k, nx, ny) (read-only, not a copy)."""
@@ -814,10 +813,31 @@ class WarmStart:
         """Pressures (0) or displacements (1), read-only, which later pushes leave as they are."""
         if self._stack is None:
             return np.empty((0, *self.problem.shape))
+        self._in_order()
         self._shared = True
-        out = self._stack[which, :self._count].reshape(-1, *self.problem.shape)
+        out = self._stack[which, :len(self)].reshape(-1, *self.problem.shape)
         out.flags.writeable = False
         return out
+
+    def _in_order(self):
+        """Move the rows held to the first ones, newest first (in place, one row spare)."""
+        moves = {target: source for target, source in enumerate(self._order) if target != source}
+        if not moves:
+            return
+        spare = np.empty(self._stack.shape[2])
+        for which in (0, 1):
+            stack, pending = self._stack[which], dict(moves)
+            while pending:
+                sources = set(pending.values())
+                target = next((t for t in pending if t not in sources), None)
+                if target is None:  # a cycle: its first row to the spare
+                    target = next(iter(pending))
+                    spare[:] = stack[target]
+                    pending = {t: (-1 if s == target else s) for t, s in pending.items()}
+                    continue
+                source = pending.pop(target)
+                stack[target] = spare if source == -1 else stack[source]
+        self._order = list(range(len(self)))
 
     def _new_gram_row(self, value, product, k):
         """``<d_0, K d_j>`` (j < k), ``d_0`` the difference that pushing ``value`` adds.
@@ -832,10 +852,10 @@ class WarmStart:
         kd = np.empty((k, d.size))
         for block in _blocks(value.size):
             m = block.stop - block.start
-            np.subtract(value[block], values[0, block], out=d[:m])
-            np.subtract(product[block], products[0, block], out=kd[0, :m])
-            # K d_j of the older ones, j their index after this push.
-            np.subtract(products[:k - 1, block], products[1:k, block], out=kd[1:k, :m])
+            np.subtract(value[block], values[0][block], out=d[:m])
+            np.subtract(product[block], products[0][block], out=kd[0, :m])
+            for j in range(1, k):  # K d_j of the older ones, j their index after this push
+                np.subtract(products[j - 1][block], products[j][block], out=kd[j, :m])
             for j in range(k):
                 row[j] += _dot(d[:m], kd[j, :m])
         return row
@@ -885,14 +905,15 @@ class WarmStart:
             m = block.stop - block.start
             gb = g[:m]
             if weight is None:
-                np.add(products[0, block], height[block], out=gb)
+                np.add(products[0][block], height[block], out=gb)
             else:
                 np.multiply(weight[block], scale, out=gb)
-                gb *= values[0, block]
-                gb += products[0, block]
+                gb *= values[0][block]
+                gb += products[0][block]
                 gb += height[block]
             gb -= mean
-            np.subtract(values[:k, block], values[1:k + 1, block], out=d[:, :m])
+            for i in range(k):
+                np.subtract(values[i][block], values[i + 1][block], out=d[i, :m])
             for i in range(k):
                 gradient[i] += _dot(d[i, :m], gb)
             for r, i in enumerate(rows):
@@ -956,10 +977,23 @@ class WarmStart:
                 beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
         if beta is None:
             return self.newest(), self._products[0].reshape(shape).copy()
-        # v0 + sum_i beta_i (v_i - v_(i+1)) = sum_j alpha_j v_j, one pass a stack.
+        return self._combination(beta, self._values), self._combination(beta, self._products)
+
+    def _combination(self, beta, rows):
+        """``v_0 + sum_i beta_i (v_i - v_(i+1)) = sum_j alpha_j v_j`` of ``rows``, newest first.
+
+        Summed row by row in that order, a block at a time.
+        """
+        k = len(beta)
         alpha = np.zeros(k + 1)
         alpha[0] = 1.0
         alpha[:k] += beta
         alpha[1:] -= beta
-        return (np.einsum("i,ij->j", alpha, self._values).reshape(shape),
-                np.einsum("i,ij->j", alpha, self._products).reshape(shape))
+        out = np.empty(rows[0].size)
+        term = np.empty(min(_BLOCK, out.size))
+        for block in _blocks(out.size):
+            part, t = out[block], term[:block.stop - block.start]
+            np.multiply(rows[0][block], alpha[0], out=part)
+            for a, row in zip(alpha[1:], rows[1:k + 1], strict=True):
+                part += np.multiply(row[block], a, out=t)
+        return out.reshape(self.problem.shape)
