@@ -743,9 +743,9 @@ class WarmStart:
         # pressure is added, and so do their Gram matrices, which are kept:
         # <d_i, K d_j> (exact K symmetric: computed once per pair) and
         # <d_i, k d_j> with the wear coefficients k (filled when first asked).
-        # The differences themselves are not kept but formed when needed, one
-        # at a time (a subtraction, bit for bit the same each time): kept,
-        # they would double the memory of the history.
+        # The differences themselves are not kept but formed when needed, a
+        # block of pixels at a time (a subtraction, bit for bit the same each
+        # time): kept, they would double the memory of the history.
         self._gram = np.zeros((self.size - 1, self.size - 1))
         self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
         if pressures is not None:
