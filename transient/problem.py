@@ -676,16 +676,20 @@ class WearProblem:
         return work.work(np.where(face, w - origin, 0.0)), res
 
 
-def _row_products(row, vector, rows):
-    """``<row, vector>``, summed as :func:`numpy.einsum` sums each of ``rows`` stacked rows.
+#: Columns of the history a block: the warm start forms its differences and
+#: sums their products a block at a time, so that the differences of a block
+#: (a few rows of it, 512 KiB each) are summed while still in cache.
+_BLOCK = 1 << 16
 
-    The product of one row of a stack of ``rows`` (its summation order
-    depends on whether the stack has one row or more): the history's
-    differences, formed one at a time, give the numbers the stack of them
-    would.
-    """
-    stack = row[None] if rows == 1 else np.broadcast_to(row, (2, row.size))
-    return float(np.einsum("ij,j->i", stack, vector)[0])
+
+def _blocks(size):
+    """Slices of ``range(size)`` of :data:`_BLOCK` columns, in order."""
+    return [slice(start, min(start + _BLOCK, size)) for start in range(0, size, _BLOCK)]
+
+
+def _dot(a, b):
+    """``<a, b>`` for two rows (einsum: a threaded BLAS call can be erratic on a loaded machine)."""
+    return float(np.einsum("j,j->", a, b))
 
 
 class WarmStart:
@@ -723,11 +727,15 @@ class WarmStart:
             raise ValueError(f"size must be a positive integer, got {size!r}")
         self.problem = problem
         self.size = int(size)
-        # The pressures [0] and their displacements [1], newest first, in rows
-        # of one array, which :meth:`pressures` and :meth:`displacements`
-        # hand out without a copy: the next push after that writes a new one.
+        # The pressures [0] and their displacements [1] in rows of one array,
+        # a ring: ``_order`` lists the rows held, newest first, and a push
+        # writes over the oldest instead of moving the others.  Every sum runs
+        # over the rows in that order, so that where they lie changes no
+        # number.  :meth:`pressures` and :meth:`displacements` put them in
+        # order and hand them out without a copy: the next push after that
+        # writes a new array.
         self._stack = None
-        self._count = 0
+        self._order = []
         self._shared = False
         # Differences of consecutive pressures d_i = v_i - v_(i+1) and their
         # products, newest first (i = 0 .. len - 2): they span the same affine
@@ -735,9 +743,9 @@ class WarmStart:
         # pressure is added, and so do their Gram matrices, which are kept:
         # <d_i, K d_j> (exact K symmetric: computed once per pair) and
         # <d_i, k d_j> with the wear coefficients k (filled when first asked).
-        # The differences themselves are not kept but formed when needed, one
-        # at a time (a subtraction, bit for bit the same each time): kept,
-        # they would double the memory of the history.
+        # The differences themselves are not kept but formed when needed, a
+        # block of pixels at a time (a subtraction, bit for bit the same each
+        # time): kept, they would double the memory of the history.
         self._gram = np.zeros((self.size - 1, self.size - 1))
         self._gram_k = np.full((self.size - 1, self.size - 1), np.nan)
         if pressures is not None:
@@ -752,17 +760,17 @@ class WarmStart:
 
     def __len__(self):
         """Number of pressures held."""
-        return self._count
+        return len(self._order)
 
     @property
     def _values(self):
-        """The pressures held, newest first, shape (k, nx ny) (a view)."""
-        return self._stack[0, :self._count]
+        """The pressures held, newest first: a list of views, shape (nx ny,)."""
+        return [self._stack[0, slot] for slot in self._order]
 
     @property
     def _products(self):
-        """Their displacements, newest first, shape (k, nx ny) (a view)."""
-        return self._stack[1, :self._count]
+        """Their displacements, newest first: a list of views, shape (nx ny,)."""
+        return [self._stack[1, slot] for slot in self._order]
 
     def push(self, pressure, displacement=None):
         """Add a pressure (Pa, shape (nx, ny)) and its ``K p`` (m; computed if None)."""
@@ -777,32 +785,21 @@ class WarmStart:
             k = min(len(self), self.size - 1)  # differences held after this one
             for gram in (self._gram, self._gram_k):
                 gram[1:k, 1:k] = gram[:k - 1, :k - 1].copy()
-            d = np.subtract(value, self._values[0])
-            work = np.subtract(product, self._products[0])
-            # One product per pair, newest with older: the same numbers whatever
-            # the order of the pushes and predictions that led here.
-            row = [float(np.einsum("j,j->", d, work))]
-            for j in range(1, k):  # K d_j of the older ones, their index after this push
-                row.append(float(np.einsum("j,j->", d, self._difference(
-                    self._products, j - 1, out=work))))
-            self._gram[0, :k] = self._gram[:k, 0] = row
+            self._gram[0, :k] = self._gram[:k, 0] = self._new_gram_row(value, product, k)
             self._gram_k[0, :k] = self._gram_k[:k, 0] = np.nan
-        kept = min(len(self), self.size - 1)
+        kept = self._order[:self.size - 1]
         if self._shared:  # the rows handed out stay as they are
             old, self._stack, self._shared = self._stack, np.empty_like(self._stack), False
-            self._stack[:, 1:kept + 1] = old[:, :kept]
+            for slot in kept:
+                self._stack[:, slot] = old[:, slot]
             del old
-        else:
-            # Row by row, oldest first: an overlapping slice assignment would
-            # go through a temporary copy of the whole stack.
-            for i in range(kept, 0, -1):
-                self._stack[:, i] = self._stack[:, i - 1]
-        self._stack[0, 0], self._stack[1, 0] = value, product
-        self._count = kept + 1
+        slot = min(set(range(self.size)) - set(kept))  # the oldest's, or a free one
+        self._stack[0, slot], self._stack[1, slot] = value, product
+        self._order = [slot, *kept]
 
     def newest(self):
         """The newest pressure, Pa, shape (nx, ny)."""
-        return self._values[0].reshape(self.problem.shape).copy()
+        return self._stack[0, self._order[0]].reshape(self.problem.shape).copy()
 
     def pressures(self):
         """The pressures held, newest first, Pa, shape (k, nx, ny) (read-only, not a copy)."""
@@ -816,29 +813,114 @@ class WarmStart:
         """Pressures (0) or displacements (1), read-only, which later pushes leave as they are."""
         if self._stack is None:
             return np.empty((0, *self.problem.shape))
+        self._in_order()
         self._shared = True
-        out = self._stack[which, :self._count].reshape(-1, *self.problem.shape)
+        out = self._stack[which, :len(self)].reshape(-1, *self.problem.shape)
         out.flags.writeable = False
         return out
 
-    @staticmethod
-    def _difference(stack, i, out=None):
-        """``stack[i] - stack[i + 1]``: a consecutive difference of a list, newest first."""
-        return np.subtract(stack[i], stack[i + 1], out=out)
+    def _in_order(self):
+        """Move the rows held to the first ones, newest first (in place, one row spare)."""
+        moves = {target: source for target, source in enumerate(self._order) if target != source}
+        if not moves:
+            return
+        spare = np.empty(self._stack.shape[2])
+        for which in (0, 1):
+            stack, pending = self._stack[which], dict(moves)
+            while pending:
+                sources = set(pending.values())
+                target = next((t for t in pending if t not in sources), None)
+                if target is None:  # a cycle: its first row to the spare
+                    target = next(iter(pending))
+                    spare[:] = stack[target]
+                    pending = {t: (-1 if s == target else s) for t, s in pending.items()}
+                    continue
+                source = pending.pop(target)
+                stack[target] = spare if source == -1 else stack[source]
+        self._order = list(range(len(self)))
 
-    def _coefficient_gram(self, k):
-        """``<d_i, k d_j>`` for the ``k`` differences held, the missing entries filled."""
-        gram = self._gram_k
-        coefficients = self.problem.coefficient_field.ravel()  # zero off the face
-        work = None
-        for i in range(k):
-            missing = np.isnan(gram[i, i:k])
-            if missing.any():
-                weighted = coefficients * self._difference(self._values, i)
-                for j in np.flatnonzero(missing) + i:
-                    work = self._difference(self._values, j, out=work)
-                    gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
-        return gram[:k, :k]
+    def _new_gram_row(self, value, product, k):
+        """``<d_0, K d_j>`` (j < k), ``d_0`` the difference that pushing ``value`` adds.
+
+        One product per pair, newest with older, each summed block by block
+        (:func:`_blocks`) from differences formed exactly: the same numbers
+        whatever the order of the pushes and predictions that led here.
+        """
+        values, products = self._values, self._products
+        row = np.zeros(k)
+        d = np.empty(min(_BLOCK, value.size))
+        kd = np.empty((k, d.size))
+        for block in _blocks(value.size):
+            m = block.stop - block.start
+            np.subtract(value[block], values[0][block], out=d[:m])
+            np.subtract(product[block], products[0][block], out=kd[0, :m])
+            for j in range(1, k):  # K d_j of the older ones, j their index after this push
+                np.subtract(products[j - 1][block], products[j][block], out=kd[j, :m])
+            for j in range(k):
+                row[j] += _dot(d[:m], kd[j, :m])
+        return row
+
+    def _stage_products(self, height, weight, scale, k, pairs):
+        """The sums :meth:`predict` needs, in one pass over the pressures, block by block.
+
+        Parameters
+        ----------
+        height : ndarray, shape (nx ny,), m
+        weight : ndarray, shape (nx ny,), m/Pa, or None
+            The shift (zero off the face) divided by ``scale``.
+        scale : float
+        k : int
+            Differences held.
+        pairs : list of (int, int)
+            The ``(i, j)`` of the products ``<d_i, diag(weight) d_j>`` wanted.
+
+        Returns
+        -------
+        gradient : ndarray, shape (k,)
+            ``<d_i, g>``, ``g = K v_0 + scale weight v_0 + height`` less its
+            mean over the face (the load's multiplier, summed first from its
+            three terms: it is most of ``g``, which is nearly uniform on the
+            contact, and taken off after the products it would cancel in them).
+        weighted : ndarray, shape (len(pairs),)
+            ``<d_i, diag(weight) d_j>`` for the pairs: each from the
+            differences formed exactly and summed over the blocks in order, a
+            pair's number does not depend on the other pairs asked for.
+
+        The differences are formed in each block (the differences of sums
+        ``<v_i, g> - <v_(i+1), g>`` would lose as many digits as consecutive
+        pressures share).
+        """
+        values, products = self._values, self._products
+        face = self.problem.face_mask.ravel()
+        mean = float(np.add.reduce(products[0], where=face) + np.add.reduce(height, where=face))
+        if weight is not None:
+            mean += scale * _dot(weight, values[0])  # the pressures vanish off the face
+        mean /= np.count_nonzero(face)
+        rows = sorted({i for i, _ in pairs})
+        gradient, weighted = np.zeros(k), np.zeros(len(pairs))
+        g = np.empty(min(_BLOCK, height.size))
+        d = np.empty((k, g.size))
+        w = np.empty((len(rows), g.size))
+        for block in _blocks(height.size):
+            m = block.stop - block.start
+            gb = g[:m]
+            if weight is None:
+                np.add(products[0][block], height[block], out=gb)
+            else:
+                np.multiply(weight[block], scale, out=gb)
+                gb *= values[0][block]
+                gb += products[0][block]
+                gb += height[block]
+            gb -= mean
+            for i in range(k):
+                np.subtract(values[i][block], values[i + 1][block], out=d[i, :m])
+            for i in range(k):
+                gradient[i] += _dot(d[i, :m], gb)
+            for r, i in enumerate(rows):
+                np.multiply(weight[block], d[i, :m], out=w[r, :m])
+            for p, (i, j) in enumerate(pairs):
+                weighted[p] += _dot(w[rows.index(i), :m], d[j, :m])
+        return gradient, weighted
 
     def predict(self, height, shift=None, *, shift_scale=None):
         """Warm start of the contact problem ``(K + diag(shift)) p = d - height``.
@@ -866,58 +948,52 @@ class WarmStart:
         if shift is not None and shift_scale is not None:
             raise ValueError("give the shift either as an array or as shift_scale, not both")
         shape = self.problem.shape
-        v0, kv0 = self._values[0], self._products[0]
-        beta = None
         k = len(self) - 1
+        beta = None
         if k:
-            face = self.problem.face_mask.ravel()
             # x = v0 + D^T beta keeps the load, with the consecutive differences
             # D (a small Gram matrix free of cancellation); the pressures
             # vanish off the face, so the sums run over the face.
-            gram = self._gram[:k, :k].copy()
-            if shift_scale is not None:
-                s = shift_scale * self.problem.coefficient_field.ravel()
-                gram += shift_scale * self._coefficient_gram(k)
+            everything = [(i, j) for i in range(k) for j in range(i, k)]
+            if shift_scale is not None:  # the kept Gram matrix, its missing entries
+                weight, scale, gram_k = (self.problem.coefficient_field.ravel(), shift_scale,
+                                         self._gram_k)
+                pairs = [(i, j) for i, j in everything if np.isnan(gram_k[i, j])]
             elif shift is not None:
-                s = np.where(face, shift.ravel(), 0.0)
-                gram += self._shift_gram(k, s)
+                weight, scale, gram_k = (np.where(self.problem.face_mask, shift, 0.0).ravel(),
+                                         1.0, np.empty((k, k)))
+                pairs = everything
             else:
-                s = 0.0
-            gradient = kv0 + s * v0 + height.ravel()
-            gradient -= gradient[face].mean()
-            work = np.empty_like(gradient)
-            # einsum rather than BLAS: a threaded BLAS call on a loaded
-            # machine can cost more than an FFT pair.
-            rhs = np.array([_row_products(self._difference(self._values, i, out=work),
-                                          gradient, k) for i in range(k)])
+                weight, scale, pairs = None, 1.0, []
+            rhs, sums = self._stage_products(np.ravel(height), weight, scale, k, pairs)
+            gram = self._gram[:k, :k].copy()
+            if weight is not None:
+                for (i, j), value in zip(pairs, sums, strict=True):
+                    gram_k[i, j] = gram_k[j, i] = value
+                gram += scale * gram_k[:k, :k]
             w, q = np.linalg.eigh(0.5 * (gram + gram.T))
             keep = w > _GRAM_CUTOFF * max(float(w[-1]), 0.0)
             if keep.any():
                 beta = -(q[:, keep] @ ((q[:, keep].T @ rhs) / w[keep]))
         if beta is None:
-            return v0.reshape(shape).copy(), kv0.reshape(shape).copy()
-        return (self._combination(self._values, beta, work).reshape(shape),
-                self._combination(self._products, beta, work).reshape(shape))
+            return self.newest(), self._products[0].reshape(shape).copy()
+        return self._combination(beta, self._values), self._combination(beta, self._products)
 
-    def _shift_gram(self, k, shift):
-        """``<d_i, diag(shift) d_j>`` for the ``k`` newest differences."""
-        gram = np.empty((k, k))
-        work = None
-        for i in range(k):
-            weighted = shift * self._difference(self._values, i)
-            for j in range(i, k):
-                work = self._difference(self._values, j, out=work)
-                gram[i, j] = gram[j, i] = float(np.einsum("j,j->", weighted, work))
-        return gram
+    def _combination(self, beta, rows):
+        """``v_0 + sum_i beta_i (v_i - v_(i+1)) = sum_j alpha_j v_j`` of ``rows``, newest first.
 
-    def _combination(self, stack, beta, work):
-        """``stack[0] + sum_i beta_i (stack[i] - stack[i + 1])``, one difference at a time.
-
-        The sum is accumulated first, in the order of the differences, and
-        then added to the newest.
+        Summed row by row in that order, a block at a time.
         """
-        out = None
-        for i, b in enumerate(beta):
-            term = np.multiply(self._difference(stack, i, out=work), b, out=work)
-            out = term.copy() if out is None else np.add(out, term, out=out)
-        return np.add(stack[0], out, out=out)
+        k = len(beta)
+        alpha = np.zeros(k + 1)
+        alpha[0] = 1.0
+        alpha[:k] += beta
+        alpha[1:] -= beta
+        out = np.empty(rows[0].size)
+        term = np.empty(min(_BLOCK, out.size))
+        for block in _blocks(out.size):
+            part, t = out[block], term[:block.stop - block.start]
+            np.multiply(rows[0][block], alpha[0], out=part)
+            for a, row in zip(alpha[1:], rows[1:k + 1], strict=True):
+                part += np.multiply(row[block], a, out=t)
+        return out.reshape(self.problem.shape)
