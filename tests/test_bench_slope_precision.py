@@ -15,5 +15,6 @@ def test_bench_slope_precision_smoke(capsys):
     assert "| 40 | " in out, out
     assert max(row["errors"].values()) < 1e-6, f"single against double: {row['errors']}"
     assert row["errors"]["total"] < 1e-15, "the exact total involves no transform"
+    assert row["relative"] < 1e-6, f"history rms slope moved {row['relative']:.1e}"
     assert row["in_bar"] < 1e-4, f"history's rms slope moved {row['in_bar']:.1e} of its bar"
     assert all(t > 0 for t in row["call"] + row["figures"]), "times"

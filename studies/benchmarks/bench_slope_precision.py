@@ -10,7 +10,8 @@ difference of ``rms_slope`` and of each integral (``total``, ``face_sum``,
 (:meth:`transient.history.FaceEstimator.figures`) in units of its error
 bar.  Then the time of one call of each, side by side in turn (medians),
 with one FFT thread as the run-in's history thread has: the estimator's
-``__call__`` and the whole ``figures``.
+``__call__`` (and its parts: the fine box's gradient, the coarse box's,
+the squared pressure jumps) and the whole ``figures``.
 
 Run::
 
@@ -18,10 +19,11 @@ Run::
     python studies/benchmarks/bench_slope_precision.py --n 512  # one grid
     python studies/benchmarks/bench_slope_precision.py --n 64 --repeats 3  # seconds
 
-Prints two Markdown tables.
+Prints three Markdown tables.
 """
 
 import argparse
+import functools
 import pathlib
 import platform
 import sys
@@ -79,7 +81,7 @@ def measure(n, repeats):
     single = FaceEstimator(problem, h0, precision="single")
     double.workers = single.workers = 1
     errors = dict.fromkeys(INTEGRALS, 0.0)
-    in_bar = 0.0
+    in_bar = relative = 0.0
     for distance, height, pressure in states:
         a = double.energy.in_precision("double")(pressure, mask)
         b = double.energy.in_precision("single")(pressure, mask)
@@ -90,7 +92,9 @@ def measure(n, repeats):
             # The approach only offsets the face (full contact here): 0.
             fa = double.figures(distance, height, pressure, 0.0)
             fb = single.figures(distance, height, pressure, 0.0)
-            in_bar = max(in_bar, abs(fb["rms_slope"] - fa["rms_slope"]) / fa["rms_slope_error"])
+            change = abs(fb["rms_slope"] - fa["rms_slope"])
+            relative = max(relative, change / fa["rms_slope"])
+            in_bar = max(in_bar, change / fa["rms_slope_error"])
     distance, height, pressure = states[2]
     energy_double = double.energy.in_precision("double")
     energy_single = double.energy.in_precision("single")
@@ -98,8 +102,24 @@ def measure(n, repeats):
         [lambda: energy_double(pressure, mask), lambda: energy_single(pressure, mask),
          lambda: double.figures(distance, height, pressure, 0.0),
          lambda: single.figures(distance, height, pressure, 0.0)], repeats)
-    return dict(n=n, errors=errors, in_bar=in_bar, call=(call_double, call_single),
-                figures=(figures_double, figures_single))
+    return dict(n=n, errors=errors, relative=relative, in_bar=in_bar,
+                call=(call_double, call_single), figures=(figures_double, figures_single),
+                parts=_parts(double.energy, pressure, mask, repeats))
+
+
+def _parts(energy, pressure, mask, repeats):
+    """Median times (s) of the parts of one call, double then single: {part: (d, s)}."""
+    from steady.rms_slope import _jump_sums, edge_jumps
+
+    field = np.where(mask, pressure, 0.0)
+    calls = {"fine box (transforms and products)": lambda t: energy._fine(field, t),
+             "coarse box (block moments, transforms)":
+                 lambda t: energy._coarse(energy._coarse_sources(field), t),
+             "squared pressure jumps":
+                 lambda t: (edge_jumps if t is np.float64 else _jump_sums)(field, mask)}
+    times = _alternating([functools.partial(fn, t) for fn in calls.values()
+                          for t in (np.float64, np.float32)], repeats)
+    return {name: tuple(times[2 * i:2 * i + 2]) for i, name in enumerate(calls)}
 
 
 def main(argv=None):
@@ -115,11 +135,11 @@ def main(argv=None):
     rows = [measure(n, args.repeats) for n in args.n]
     print(f"\nsingle against double precision, largest relative difference over s = 0 and "
           f"{', '.join(map(str, SNAPSHOTS))} s*\n")
-    print("| n | " + " | ".join(INTEGRALS) + " | history rms slope / its error bar |")
-    print("|---" * (len(INTEGRALS) + 2) + "|")
+    print("| n | " + " | ".join(INTEGRALS) + " | history rms slope | the same / its error bar |")
+    print("|---" * (len(INTEGRALS) + 3) + "|")
     for r in rows:
         print(f"| {r['n']} | " + " | ".join(f"{r['errors'][k]:.1e}" for k in INTEGRALS)
-              + f" | {r['in_bar']:.1e} |")
+              + f" | {r['relative']:.1e} | {r['in_bar']:.1e} |")
     print(f"\none FFT thread, medians of {args.repeats} calls made in turn, s = 0.1 s*\n")
     print("| n | SlopeEnergy double (ms) | single (ms) | single / double | figures double (ms) "
           "| single (ms) | single / double |")
@@ -128,6 +148,16 @@ def main(argv=None):
         (cd, cs), (fd, fs) = r["call"], r["figures"]
         print(f"| {r['n']} | {1e3 * cd:.1f} | {1e3 * cs:.1f} | {cs / cd:.2f} | {1e3 * fd:.1f} | "
               f"{1e3 * fs:.1f} | {fs / fd:.2f} |")
+    print("\nparts of one SlopeEnergy call (ms), double / single; the rest: the squares, sums "
+          "and the far tail\n")
+    print("| part | " + " | ".join(f"n = {r['n']}" for r in rows) + " |")
+    print("|---" * (len(rows) + 1) + "|")
+    for name in rows[0]["parts"]:
+        print(f"| {name} | " + " | ".join(
+            "{:.1f} / {:.1f}".format(*(1e3 * t for t in r["parts"][name])) for r in rows) + " |")
+    rest = [tuple(c - sum(p[i] for p in r["parts"].values()) for i, c in enumerate(r["call"]))
+            for r in rows]
+    print("| the rest | " + " | ".join(f"{1e3 * d:.1f} / {1e3 * s:.1f}" for d, s in rest) + " |")
     return rows
 
 
