@@ -8,8 +8,8 @@ with ``precision="double"`` and ``"single"``: the largest relative
 difference of ``rms_slope`` and of each integral (``total``, ``face_sum``,
 ``exterior``, ``corrected``), and of the history's ``rms_slope``
 (:meth:`transient.history.FaceEstimator.figures`) in units of its error
-bar.  Then the time of one call of each, side by side in turn (medians),
-with one FFT thread as the run-in's history thread has: the estimator's
+bar.  Then the CPU time of one call of each, side by side in turn
+(medians), with one FFT thread as the run-in's history thread has: the estimator's
 ``__call__`` (and its parts: the fine box's gradient, the coarse box's,
 the squared pressure jumps) and the whole ``figures``.
 
@@ -61,13 +61,18 @@ def run_states(n):
 
 
 def _alternating(calls, repeats):
-    """Median time (s) of each call, the calls made in turn ``repeats`` times."""
+    """Median CPU time (s) of each call, the calls made in turn ``repeats`` times.
+
+    The calling thread's CPU time: with one FFT thread all the work is
+    done on it, and on a machine shared with other jobs it does not count
+    the time the thread waits for a core.
+    """
     times = [[] for _ in calls]
     for _ in range(repeats):
         for fn, spent in zip(calls, times, strict=True):
-            t = time.perf_counter()
+            t = time.thread_time()
             fn()
-            spent.append(time.perf_counter() - t)
+            spent.append(time.thread_time() - t)
     return [float(np.median(t)) for t in times]
 
 
@@ -98,28 +103,28 @@ def measure(n, repeats):
     distance, height, pressure = states[2]
     energy_double = double.energy.in_precision("double")
     energy_single = double.energy.in_precision("single")
-    call_double, call_single, figures_double, figures_single = _alternating(
-        [lambda: energy_double(pressure, mask), lambda: energy_single(pressure, mask),
-         lambda: double.figures(distance, height, pressure, 0.0),
-         lambda: single.figures(distance, height, pressure, 0.0)], repeats)
+    parts = _parts(double.energy, pressure, mask)
+    times = _alternating([lambda: double.figures(distance, height, pressure, 0.0),
+                          lambda: single.figures(distance, height, pressure, 0.0),
+                          lambda: energy_double(pressure, mask),
+                          lambda: energy_single(pressure, mask)]
+                         + [functools.partial(fn, t) for fn in parts.values()
+                            for t in (np.float64, np.float32)], repeats)
     return dict(n=n, errors=errors, relative=relative, in_bar=in_bar,
-                call=(call_double, call_single), figures=(figures_double, figures_single),
-                parts=_parts(double.energy, pressure, mask, repeats))
+                figures=tuple(times[0:2]), call=tuple(times[2:4]),
+                parts={name: tuple(times[4 + 2 * i:6 + 2 * i]) for i, name in enumerate(parts)})
 
 
-def _parts(energy, pressure, mask, repeats):
-    """Median times (s) of the parts of one call, double then single: {part: (d, s)}."""
+def _parts(energy, pressure, mask):
+    """The parts of one call, each a function of the transforms' dtype: {part: function}."""
     from steady.rms_slope import _jump_sums, edge_jumps
 
     field = np.where(mask, pressure, 0.0)
-    calls = {"fine box (transforms and products)": lambda t: energy._fine(field, t),
-             "coarse box (block moments, transforms)":
-                 lambda t: energy._coarse(energy._coarse_sources(field), t),
-             "squared pressure jumps":
-                 lambda t: (edge_jumps if t is np.float64 else _jump_sums)(field, mask)}
-    times = _alternating([functools.partial(fn, t) for fn in calls.values()
-                          for t in (np.float64, np.float32)], repeats)
-    return {name: tuple(times[2 * i:2 * i + 2]) for i, name in enumerate(calls)}
+    return {"fine box (transforms and products)": lambda t: energy._fine(field, t),
+            "coarse box (block moments, transforms)":
+                lambda t: energy._coarse(energy._coarse_sources(field), t),
+            "squared pressure jumps":
+                lambda t: (edge_jumps if t is np.float64 else _jump_sums)(field, mask)}
 
 
 def main(argv=None):
@@ -140,7 +145,8 @@ def main(argv=None):
     for r in rows:
         print(f"| {r['n']} | " + " | ".join(f"{r['errors'][k]:.1e}" for k in INTEGRALS)
               + f" | {r['relative']:.1e} | {r['in_bar']:.1e} |")
-    print(f"\none FFT thread, medians of {args.repeats} calls made in turn, s = 0.1 s*\n")
+    print(f"\nCPU time, one FFT thread, medians of {args.repeats} calls made in turn, "
+          f"s = 0.1 s*\n")
     print("| n | SlopeEnergy double (ms) | single (ms) | single / double | figures double (ms) "
           "| single (ms) | single / double |")
     print("|---|---|---|---|---|---|---|")
