@@ -247,3 +247,81 @@ def test_box_gradient_kernels_are_the_pixel_integral_gradient(shape):
         error = np.max(np.abs(got - kernel)) / np.max(np.abs(kernel))
         assert spectrum.dtype == np.complex64, f"{shape}: spectrum kept as {spectrum.dtype}"
         assert error < 3e-7, f"{shape}: kernel differs by {error:.2g} of its largest entry"
+
+
+def _disk_pressures(n):
+    """Flat punch, Hertz and a two-phase Voronoi pressure on the unit disk's grid n."""
+    grid = UNIT_DISK.grid(n)
+    r, _ = grid.polar()
+    voronoi, _, _ = pressure_field(Voronoi(100, (0.7, 0.3), 2718).labels(n), [1.0, 10.0],
+                                   np.pi, grid.h**2)
+    fields = {"flat punch": reference.flat_punch_pressure(r, 1.0, 1.0),
+              "Hertz": np.sqrt(np.clip(1.0 - r**2, 0.0, None)), "Voronoi": voronoi}
+    return grid, {k: np.where(grid.mask, p, 0.0) for k, p in fields.items()}
+
+
+@pytest.mark.parametrize("n", [127, 128])
+def test_single_precision_is_double_to_a_few_1e7(n):
+    """Transforms in single precision: every integral within a few 1e-7 of double precision.
+
+    Measured at n = 63 .. 256 (flat punch, Hertz, Voronoi): at most 1.9e-7
+    (face_sum), 9.7e-8 (exterior and corrected), 4.9e-8 (rms_slope); on
+    run-in pressures of the shipped Voronoi scene up to n = 1024, up to
+    3.4e-7 (corrected, the flat punch at s = 0) and 1.7e-7 (rms_slope;
+    docs/benchmarks.md).  ``total`` and the jump sums involve no transform:
+    equal to round-off.
+    """
+    grid, fields = _disk_pressures(n)
+    double = SlopeEnergy(n, grid.h, 1.0)
+    single = double.in_precision("single")
+    assert single._fine is double._fine, "the two share their spectra"
+    for name, p in fields.items():
+        a, b = double(p, grid.mask), single(p, grid.mask)
+        for key, tol in (("face_sum", 5e-7), ("exterior", 3e-7), ("corrected", 3e-7),
+                         ("rms_slope", 1.5e-7), ("total", 1e-15), ("rim_share", 1e-14)):
+            x, y = float(getattr(a, key)), float(getattr(b, key))
+            assert abs(y / x - 1) < tol, f"n={n} {name}: {key} {y} vs {x} ({y / x - 1:.1e})"
+        assert b.face_sum != a.face_sum, f"n={n} {name}: the single path was not taken"
+
+
+@pytest.mark.parametrize("n", [255, 256])
+def test_single_precision_homogeneous_face_matches_continuum(n):
+    """Eq. 10 face in single precision: the closed form as closely as double (within 1e-3)."""
+    labels = Homogeneous().labels(n)
+    h = Circle(1.0).grid(n).h
+    pressure, _, _ = pressure_field(labels, [1.0], np.pi, h * h)
+    energy = SlopeEnergy(n, h, 1.0, precision="single")
+    double = float(energy.in_precision("double")(pressure, labels >= 0).rms_slope)
+    single = float(energy(pressure, labels >= 0).rms_slope)
+    exact = reference.disk_normalised_rms_slope()
+    assert abs(single / G0 - exact) < 1e-3, f"n={n}: single {single / G0} vs {exact}"
+    assert abs(single / double - 1) < 1e-7, f"n={n}: single {single} vs double {double}"
+
+
+def test_double_precision_is_the_default_path():
+    """Default and explicit double precision give the same numbers, bit for bit."""
+    grid, fields = _disk_pressures(64)
+    p = fields["Voronoi"]
+    default = SlopeEnergy(64, grid.h, 1.0)(p, grid.mask)
+    double = SlopeEnergy(64, grid.h, 1.0, precision="single").in_precision("double")(p, grid.mask)
+    assert default == double, f"{default} vs {double}"
+
+
+def test_bad_precision_is_refused():
+    with pytest.raises(ValueError, match="precision must be one of 'double', 'single', got 'half'"):
+        SlopeEnergy(16, 0.1, 1.0, precision="half")
+    energy = SlopeEnergy(16, 0.1, 1.0)
+    with pytest.raises(ValueError, match="got 'float32'"):
+        energy.in_precision("float32")
+    assert energy.precision == "double", "a refused precision leaves it as it was"
+
+
+@pytest.mark.parametrize("n", [40, 41])
+def test_jump_sums_are_the_edge_jumps(n):
+    """The single path's sums of squared jumps are edge_jumps' in another order (measured 2e-15)."""
+    from steady.rms_slope import _jump_sums
+
+    grid, fields = _disk_pressures(n)
+    for name, p in fields.items():
+        want, got = edge_jumps(p, grid.mask), _jump_sums(p, grid.mask)
+        assert got == pytest.approx(want, rel=1e-13), f"n={n} {name}: {got} vs {want}"
