@@ -378,22 +378,29 @@ class WearProblem:
                                             self.halfspace.h ** 2)
         return np.append(p_phase, 0.0)[self.labels]
 
-    def solve_steady(self):
+    def solve_steady(self, *, face_only=False):
         """The closed-form steady state of this problem (eq. 7, 9), for comparison.
 
         Across interfaces, of the section below every interface
         (``problem.section(columns.bottom)``, where the phase map provides
         sections).
 
+        Parameters
+        ----------
+        face_only : bool, optional
+            Skip the rms slope estimate (:func:`steady.solution.solve`'s
+            ``face_only``; default False).
+
         Returns
         -------
         steady.solution.SteadyResult
             With the corrected rms slope and the error bar of this map
-            resampled (:func:`steady.rms_slope.estimate_map_rms_slope`).
+            resampled (:func:`steady.rms_slope.estimate_map_rms_slope`),
+            unless ``face_only``.
         """
         if self.work_depth is not None:
-            return solve(self.problem.section(self.columns.bottom))
-        return solve(self.problem)
+            return solve(self.problem.section(self.columns.bottom), face_only=face_only)
+        return solve(self.problem, face_only=face_only)
 
     # -- the right-hand side -------------------------------------------
     def rate(self, pressure):

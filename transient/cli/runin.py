@@ -401,7 +401,7 @@ class _StepFailureAtStart(Exception):
 
 def _run(job):
     """Run (or continue), checkpointing; compare and write the result; return both."""
-    from ..comparison import compare_with_steady
+    from ..comparison import compare_with_steady, steady_of_run
     from ..problem import StepFailure
     from ..runin import run_in
 
@@ -418,10 +418,9 @@ def _run(job):
     comparison = None
     if result.success:
         # The steady result of runin-steady (solve_scene), its error bar included, on the
-        # run's own map and operator: neither rasterised nor built a second time.
-        from steady.solution import solve_scene
-
-        comparison = compare_with_steady(result, solve_scene(job.scene, problem=problem.problem),
+        # run's own map, operator and ladder: none of them computed a second time.
+        initial = np.where(problem.face_mask, result.initial_height, 0.0)
+        comparison = compare_with_steady(result, steady_of_run(job.scene, problem, initial),
                                          problem)
         if job.companion_grid is not None and not finished:
             result = _companion(job, result)
