@@ -309,7 +309,7 @@ class FaceEstimator:
             # command's error bar (steady.solution.solve_scene): one bar for one value.
             estimate = self.geometry_estimate = estimate_rms_slope(
                 geometry, problem.wear, problem.normal_force, problem.outline, hs.E_star,
-                problem.n, labels=problem.labels)
+                problem.n, labels=problem.labels, energy=self.energy)
         else:
             # A depth-varying map: its surface section, of the phases on the face.
             labels, wear = problem.problem.present_phases()
