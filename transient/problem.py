@@ -230,7 +230,7 @@ class WearProblem:
                              f"{type(self.wear).__name__}")
 
     @classmethod
-    def from_scene(cls, scene, *, n=None, **options):
+    def from_scene(cls, scene, *, n=None, problem=None, **options):
         """The wear problem of a scene file, the one factory every caller uses.
 
         Parameters
@@ -243,6 +243,10 @@ class WearProblem:
         n : int, optional
             Grid size; default ``scene.n``.  The phase geometry is rasterised
             at this size.
+        problem : steady.problem.Problem, optional
+            ``Problem.from_scene(scene, n=n)``, if the caller has built it
+            (a command that checks the scene's map before the run): the map
+            is then not rasterised again.
         **options
             Keyword arguments of the constructor (``contact_rtol``,
             ``contact_maxiter``, ``newton_rtol``, ...), overriding the scene.
@@ -269,7 +273,8 @@ class WearProblem:
         >>> problem.n, problem.n_phases
         (40, 2)
         """
-        problem = Problem.from_scene(scene, n=n)
+        if problem is None:
+            problem = Problem.from_scene(scene, n=n)
         programme = getattr(scene, "load_programme", None)
         try:
             if programme is None:
