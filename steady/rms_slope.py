@@ -894,7 +894,7 @@ def _steady_pressure(labels, wear, normal_force, grid, sliding):
 
 
 def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, sliding=None,
-                       labels=None):
+                       labels=None, energy=None):
     """Energy-corrected rms slope of the limiting face, with an error estimate.
 
     Parameters
@@ -920,6 +920,10 @@ def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, slid
         ``geometry``'s map at ``n``, if the caller has it (a problem's
         ``labels``): the ladder then does not rasterise ``n`` again, a
         large share of the cost at ``n = 4096``.  Not checked.
+    energy : SlopeEnergy, optional
+        A :class:`SlopeEnergy` of the grid ``n`` (its shape, pixel size and
+        ``E_star``), if the caller has one: used there instead of building
+        another.
 
     Returns
     -------
@@ -938,7 +942,10 @@ def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, slid
         given = labels is not None and m == n and labels.shape == grid.shape
         lab = labels if given else geometry.labels(grid)
         pressure = _steady_pressure(lab, wear, normal_force, grid, sliding)
-        integrals = SlopeEnergy(grid.shape, grid.h, E_star)(pressure, lab >= 0)
+        reuse = (energy is not None and m == n and energy.shape == grid.shape
+                 and energy.h == grid.h and energy.E_star == float(E_star))
+        own = energy if reuse else SlopeEnergy(grid.shape, grid.h, E_star)
+        integrals = own(pressure, lab >= 0)
         del lab, pressure
         values.append(float(integrals.rms_slope))
         plain = float(integrals.rms_slope_plain)

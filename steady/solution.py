@@ -248,8 +248,12 @@ def solve(problem, *, geometry=None, face_only=False):
     return _solve(problem, geometry, face_only)
 
 
-def _solve(problem, geometry, face_only):
-    """:func:`solve` of a problem whose map is ``geometry``'s at ``problem.n`` (or None)."""
+def _solve(problem, geometry, face_only, estimate=None):
+    """:func:`solve` of a problem whose map is ``geometry``'s at ``problem.n`` (or None).
+
+    ``estimate``: the ladder of ``geometry`` (:func:`estimate_rms_slope`), if
+    the caller has it; used only with ``geometry``.
+    """
     result = _limiting_face(problem)
     if face_only:
         return dataclasses.replace(result, rms_slope=math.nan)
@@ -258,7 +262,7 @@ def _solve(problem, geometry, face_only):
         estimate = estimate_map_rms_slope(labels, wear, problem.normal_force,
                                           problem.outline, problem.E_star,
                                           sliding=problem.sliding)
-    else:
+    elif estimate is None:
         estimate = estimate_rms_slope(geometry, problem.wear, problem.normal_force,
                                       problem.outline, problem.E_star, problem.n,
                                       sliding=problem.sliding, labels=problem.labels)
@@ -328,7 +332,7 @@ def _limiting_face(problem):
     )
 
 
-def solve_scene(scene, *, n=None, face_only=False, problem=None):
+def solve_scene(scene, *, n=None, face_only=False, problem=None, estimate=None):
     """Solve the steady state of a :class:`steady.scene.Scene`: :func:`solve` of its problem.
 
     Parameters
@@ -345,6 +349,13 @@ def solve_scene(scene, *, n=None, face_only=False, problem=None):
         ``Problem.from_scene(scene, n=n)``, if the caller has built it (a
         command that checks the scene's map before the solve): the map is
         then not rasterised again.  Default: built here.
+    estimate : steady.rms_slope.SlopeEstimate, optional
+        ``estimate_rms_slope(scene.geometry, problem.wear,
+        problem.normal_force, problem.outline, problem.E_star, n,
+        sliding=problem.sliding)``, if the caller has computed it: the
+        ladder (the bulk of the cost) is then not computed again.  Not
+        checked; ignored for a depth-varying scene (its map has no
+        geometry ladder).  Default: computed here.
 
     Returns
     -------
@@ -386,7 +397,7 @@ def solve_scene(scene, *, n=None, face_only=False, problem=None):
     if problem.phases.columns is not None:
         geometry = None  # a depth-varying scene: the section is the map
         _log_section(problem)
-    result = _solve(problem, geometry, face_only)
+    result = _solve(problem, geometry, face_only, estimate)
     where = "the scene" if scene.source_path is None else str(scene.source_path)
     check_rms_slope(result.rms_slope if math.isfinite(result.rms_slope)
                     else result.rms_slope_plain, f"the steady face of {where}")

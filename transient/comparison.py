@@ -16,11 +16,12 @@ import math
 import numpy as np
 
 from steady.rms_slope import estimate_map_rms_slope
+from steady.solution import solve_scene
 
 from .diagnostics import face_rms_slope
 from .history import FaceEstimator
 
-__all__ = ["SteadyComparison", "compare_with_steady"]
+__all__ = ["SteadyComparison", "compare_with_steady", "steady_of_run"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -172,3 +173,33 @@ def compare_with_steady(result, steady, problem):
         rms_height=final["rms_height"], steady_rms_height=float(steady.rms_height),
         phase_pressures=pp, steady_phase_pressures=np.asarray(steady.phase_pressures),
         phase_pressure_error=float(np.max(np.abs(pp / steady.phase_pressures - 1.0))))
+
+
+def steady_of_run(scene, problem, initial_height):
+    """The steady result of ``runin-steady`` for a run's scene, on the run's own problem.
+
+    :func:`steady.solution.solve_scene` with its error bar, on the run's
+    phase map and operator (neither rasterised nor built a second time)
+    and, for a columnar map under uniform sliding, with the ladder of the
+    phase geometry that the run's :class:`transient.history.FaceEstimator`
+    computed for its ``map_error``
+    (:attr:`~transient.history.FaceEstimator.geometry_estimate`): the same
+    ladder, so the same result as ``solve_scene`` computing it again.
+
+    Parameters
+    ----------
+    scene : steady.scene.Scene
+        The scene the problem was built from
+        (:meth:`transient.problem.WearProblem.from_scene`, its grid).
+    problem : transient.problem.WearProblem
+    initial_height : ndarray, shape (nx, ny), m
+        The run's initial face (its estimator is shared, see
+        :meth:`transient.history.FaceEstimator.of`).
+
+    Returns
+    -------
+    steady.solution.SteadyResult
+    """
+    estimator = FaceEstimator.of(problem, initial_height)
+    shared = estimator.geometry_estimate if problem.problem.sliding is None else None
+    return solve_scene(scene, problem=problem.problem, estimate=shared)

@@ -253,6 +253,10 @@ class FaceEstimator:
         pixel and is larger; infinite where no error can be estimated,
         and then the history's ``rms_slope_error`` is infinite too (no
         bound: never NaN).
+    geometry_estimate : steady.rms_slope.SlopeEstimate or None
+        The ladder of the scene's phase geometry behind ``map_error``
+        (under uniform sliding), which :func:`steady.solution.solve_scene`
+        may take instead of computing it again; None for a bare label map.
 
     Examples
     --------
@@ -311,11 +315,13 @@ class FaceEstimator:
         self._rim_growth = rate * hs.E_star / hs.h
         self._rim_weight = self._rim_weights(h0)
         geometry = problem.geometry
+        self.geometry_estimate = None
         if geometry is not None and problem.columns is None:
             # The ladder of the geometry rasterised on coarser grids, as the steady
             # command's error bar (steady.solution.solve_scene): one bar for one value.
-            estimate = estimate_rms_slope(geometry, problem.wear, problem.normal_force,
-                                          problem.outline, hs.E_star, problem.n)
+            estimate = self.geometry_estimate = estimate_rms_slope(
+                geometry, problem.wear, problem.normal_force, problem.outline, hs.E_star,
+                problem.n, labels=problem.labels, energy=self.energy)
         else:
             # A depth-varying map: its surface section, of the phases on the face.
             labels, wear = problem.problem.present_phases()

@@ -230,7 +230,7 @@ class WearProblem:
                              f"{type(self.wear).__name__}")
 
     @classmethod
-    def from_scene(cls, scene, *, n=None, **options):
+    def from_scene(cls, scene, *, n=None, problem=None, **options):
         """The wear problem of a scene file, the one factory every caller uses.
 
         Parameters
@@ -243,6 +243,10 @@ class WearProblem:
         n : int, optional
             Grid size; default ``scene.n``.  The phase geometry is rasterised
             at this size.
+        problem : steady.problem.Problem, optional
+            ``Problem.from_scene(scene, n=n)``, if the caller has built it
+            (a command that checks the scene's map before the run): the map
+            is then not rasterised again.
         **options
             Keyword arguments of the constructor (``contact_rtol``,
             ``contact_maxiter``, ``newton_rtol``, ...), overriding the scene.
@@ -269,7 +273,8 @@ class WearProblem:
         >>> problem.n, problem.n_phases
         (40, 2)
         """
-        problem = Problem.from_scene(scene, n=n)
+        if problem is None:
+            problem = Problem.from_scene(scene, n=n)
         programme = getattr(scene, "load_programme", None)
         try:
             if programme is None:
@@ -378,22 +383,29 @@ class WearProblem:
                                             self.halfspace.h ** 2)
         return np.append(p_phase, 0.0)[self.labels]
 
-    def solve_steady(self):
+    def solve_steady(self, *, face_only=False):
         """The closed-form steady state of this problem (eq. 7, 9), for comparison.
 
         Across interfaces, of the section below every interface
         (``problem.section(columns.bottom)``, where the phase map provides
         sections).
 
+        Parameters
+        ----------
+        face_only : bool, optional
+            Skip the rms slope estimate (:func:`steady.solution.solve`'s
+            ``face_only``; default False).
+
         Returns
         -------
         steady.solution.SteadyResult
             With the corrected rms slope and the error bar of this map
-            resampled (:func:`steady.rms_slope.estimate_map_rms_slope`).
+            resampled (:func:`steady.rms_slope.estimate_map_rms_slope`),
+            unless ``face_only``.
         """
         if self.work_depth is not None:
-            return solve(self.problem.section(self.columns.bottom))
-        return solve(self.problem)
+            return solve(self.problem.section(self.columns.bottom), face_only=face_only)
+        return solve(self.problem, face_only=face_only)
 
     # -- the right-hand side -------------------------------------------
     def rate(self, pressure):

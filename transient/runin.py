@@ -688,7 +688,9 @@ class _Run:
         """
         p = self.problem
         face_mask = p.face_mask
-        steady = p.solve_steady()
+        # The face and its pressure only: the rms slope of f_inf is the estimator's below
+        # (the steady solve's own estimate, a ladder of coarser maps, would go unused).
+        steady = p.solve_steady(face_only=True)
         self.steady_face = np.where(face_mask, steady.face, 0.0)
         self.steady_relief = float(np.ptp(steady.face[face_mask]))
         figures = self.estimator.figures(math.inf, -self.steady_face,

@@ -260,8 +260,12 @@ class _Job:
     verbose: int = 0  # -v: progress lines outside a terminal
 
 
-def _prepare(args, lock, scene, initial, options):
-    """Check the run file under its lock, build the problem, read what is resumed."""
+def _prepare(args, lock, scene, initial, options, checked):
+    """Check the run file under its lock, build the problem, read what is resumed.
+
+    ``checked`` is the scene's steady problem, built (its map rasterised and
+    checked) before the lock was taken.
+    """
     from ..output import backup_path, remove_temporaries
     from ..problem import WearProblem
 
@@ -278,7 +282,7 @@ def _prepare(args, lock, scene, initial, options):
         raise ValueError(f"{str(out)!r} does not exist but its backup "
                          f"{str(backup_path(out))!r} does: rename it to {str(out)!r} to "
                          f"continue from it, or use --force to start over")
-    problem = WearProblem.from_scene(scene)
+    problem = WearProblem.from_scene(scene, problem=checked)
     try:
         h0 = initial.height(problem.grid)
     except ValueError as err:  # "[initial_face]: ...": the scene file first, as when loading
@@ -341,6 +345,8 @@ def _companion_grid(scene_path, scene, initial, n):
 
 def run(args):
     """Do the work for parsed arguments; return the exit status."""
+    from steady.problem import Problem
+
     from ..output import RunLock
     from ..scene import load_transient_scene
 
@@ -353,13 +359,15 @@ def run(args):
         grid = scene.grid()  # load_scene has checked n against the outline
         check_memory(run_in_memory(grid.shape, len(options.snapshots)),
                      _run_in_text(grid, len(options.snapshots)), args.memory_limit)
-        scene.phase_labels()  # names a phase without a face pixel before the run
+        # Names a phase without a face pixel, or a scale out of range, before the run; the
+        # run's problem takes its map (rasterised once).
+        checked = Problem.from_scene(scene)
     except KeyboardInterrupt:
         raise CommandError(not_started, EXIT_INTERRUPTED) from None
 
     with RunLock(out) as lock:
         try:
-            job = _prepare(args, lock, scene, initial, options)
+            job = _prepare(args, lock, scene, initial, options, checked)
         except KeyboardInterrupt:
             raise CommandError(not_started, EXIT_INTERRUPTED) from None
         try:
@@ -401,7 +409,7 @@ class _StepFailureAtStart(Exception):
 
 def _run(job):
     """Run (or continue), checkpointing; compare and write the result; return both."""
-    from ..comparison import compare_with_steady
+    from ..comparison import compare_with_steady, steady_of_run
     from ..problem import StepFailure
     from ..runin import run_in
 
@@ -418,10 +426,9 @@ def _run(job):
     comparison = None
     if result.success:
         # The steady result of runin-steady (solve_scene), its error bar included, on the
-        # run's own map and operator: neither rasterised nor built a second time.
-        from steady.solution import solve_scene
-
-        comparison = compare_with_steady(result, solve_scene(job.scene, problem=problem.problem),
+        # run's own map, operator and ladder: none of them computed a second time.
+        initial = np.where(problem.face_mask, result.initial_height, 0.0)
+        comparison = compare_with_steady(result, steady_of_run(job.scene, problem, initial),
                                          problem)
         if job.companion_grid is not None and not finished:
             result = _companion(job, result)

@@ -1,0 +1,31 @@
+"""Smoke test of studies/benchmarks/profile_fixed_costs.py at a small size."""
+
+import importlib.util
+import pathlib
+
+import h5py
+
+SCRIPT = (pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
+          / "profile_fixed_costs.py")
+
+
+def test_profile_fixed_costs_smoke(tmp_path):
+    spec = importlib.util.spec_from_file_location("profile_fixed_costs", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    out = tmp_path / "fixed.h5"
+    rows = module.main(["--n", "40", "--quick", "--out", str(out)])
+    by_part = {r["part"]: r for r in rows}
+    whole = by_part["whole run"]
+    assert not whole["missing"], f"parts absent in this version: {whole['missing']}"
+    total = sum(r["seconds"] for r in rows[:-1])
+    assert abs(total - whole["seconds"]) < 1e-6 * whole["seconds"] + 1e-9, \
+        f"parts sum to {total} s, the run took {whole['seconds']} s"
+    for part, calls in (("first contact solve", 1), ("final run file", 1),
+                        ("final file's read-back check", 1),
+                        ("closing steady solve (solve_scene)", 1)):
+        assert by_part[part]["calls"] == calls, f"{part}: {by_part[part]}"
+    assert by_part["checkpoints"]["calls"] >= 1, "the first checkpoint follows the first step"
+    with h5py.File(out) as f:
+        assert f.attrs["format"] == "runin.profile_fixed_costs", "layout attribute"
+        assert len(f) == len(rows), "one group per row"
