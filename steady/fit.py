@@ -66,7 +66,6 @@ from .halfspace import HalfSpace
 from .labels import extend_off_face
 from .outline import Annulus, Circle, Rectangle
 from .problem import Problem, default_phase_names
-from .wear import PowerLaw
 
 __all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceModel", "FitResult", "fit_face", "fit_scene"]
 
@@ -530,7 +529,9 @@ class FaceModel:
         if not isinstance(problem, Problem):
             raise ValueError(f"FaceModel takes a steady.problem.Problem, got "
                              f"{type(problem).__name__}")
-        if not isinstance(problem.wear, PowerLaw):
+        factor = problem.wear.factor
+        if factor is None or factor.exponent is None:
+            # Its model relates ratios and pressures through k_i p_i^m = C.
             raise ValueError(f"the fit supports the power law k p^m, not the "
                              f"{problem.wear.describe()}")
         if problem.sliding is not None:
@@ -543,7 +544,7 @@ class FaceModel:
         self.outline = grid.outline
         self.E_star = problem.E_star
         self.normal_force = problem.normal_force
-        self.exponent = problem.wear.exponent
+        self.exponent = factor.exponent
         self.grid = grid
         self.n = grid.n
         self.h = grid.h
@@ -551,7 +552,7 @@ class FaceModel:
         self.counts = problem.phases.counts
         self.labels = labels
         self.areas = self.counts * self.h**2
-        self.wear_coefficients = np.asarray(problem.wear.coefficients, dtype=float)
+        self.wear_coefficients = np.asarray(factor.coefficients, dtype=float)
         pad = _MODEL_PAD
         padded = np.pad(labels, pad, constant_values=-1)
         hs = HalfSpace(padded.shape, self.h, self.E_star)

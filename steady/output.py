@@ -24,8 +24,10 @@ for every dataset and attribute with its unit and meaning.  In short::
         format "runin.steady", format_version 2, rms_slope, rms_slope_error,
         rms_slope_plain, rms_slope_ref (grad_f0), rms_slope_ref_error,
         rms_slope_ref_source (text), mean_pressure (Pa), rms_height (m),
-        fill_factors, phase_pressures (Pa), wear_coefficients (Pa-m),
-        exponent, wear_law (in words), normal_force (N), E_star (Pa),
+        fill_factors, phase_pressures (Pa), the wear law (wear_law_kind, its
+        ``[wear] law``; wear_law, in words; and its own attributes, for the
+        power law wear_coefficients (Pa-m) and exponent), normal_force (N),
+        E_star (Pa),
         pixel_size (m), radius (m, disks only), scale (m), n (pixels along
         the longer side)
     group ``outline``: the face's outline (:func:`write_outline`)
@@ -54,12 +56,12 @@ from .micrograph import Micrograph
 from .outline import OUTLINES, Circle, MaskOutline
 from .problem import check_phase_names, default_phase_names
 from .solution import SteadyResult
-from .wear import PowerLaw
+from .wear import wear_file_attributes, wear_law_from_file
 
 __all__ = ["DIMENSION_SCALE_ATTRIBUTES", "FORMAT", "FORMAT_VERSION", "AtomicH5", "FileIdentity",
            "OutputAppearedError", "OutputExistsError", "StoredResult", "atomic_h5",
            "attach_scales", "describe", "file_identity", "read_outline", "read_phase_names",
-           "read_result", "wear_coefficient_units", "write_grid_coordinates", "write_outline",
+           "read_result", "write_grid_coordinates", "write_outline",
            "write_phase_names", "write_result"]
 
 FORMAT = "runin.steady"
@@ -83,8 +85,6 @@ _ATTRIBUTES = {
     "rms_slope_ref": "1",
     "fill_factors": "1",
     "phase_pressures": "Pa",
-    "wear_coefficients": None,
-    "exponent": "1",
     "normal_force": "N",
     "E_star": "Pa",
     "pixel_size": "m",
@@ -99,29 +99,6 @@ _OPTIONAL_ATTRIBUTES = {"rms_height": "m", "rms_slope_ref_error": "1", "mean_pre
 #: the file's structure, not its values.
 DIMENSION_SCALE_ATTRIBUTES = frozenset({"CLASS", "NAME", "DIMENSION_LIST", "REFERENCE_LIST",
                                         "_Netcdf4Dimid", "_Netcdf4Coordinates"})
-
-
-def wear_coefficient_units(exponent):
-    """The udunits unit of the coefficients ``k`` of the wear law ``dw/ds = k p^m``: ``Pa-m``.
-
-    Parameters
-    ----------
-    exponent : float
-        ``m``.
-
-    Returns
-    -------
-    str
-        ``"Pa-1"`` for Archard's law; udunits has integer powers only, so
-        a fractional exponent gives ``"Pa^-1.5"``, which it cannot parse.
-
-    Examples
-    --------
-    >>> wear_coefficient_units(1.0), wear_coefficient_units(2), wear_coefficient_units(1.5)
-    ('Pa-1', 'Pa-2', 'Pa^-1.5')
-    """
-    m = float(exponent)
-    return f"Pa-{m:.0f}" if m == round(m) else f"Pa^-{m:g}"
 
 
 def describe(obj, units, long_name):
@@ -783,8 +760,6 @@ def _write(f, result, scene, phase_names):
         "rms_slope_ref": result.reference_slope,
         "fill_factors": np.asarray(result.fill_factors),
         "phase_pressures": np.asarray(result.phase_pressures),
-        "wear_coefficients": np.asarray(result.wear_coefficients),
-        "exponent": result.exponent,
         "normal_force": result.normal_force,
         "E_star": result.E_star,
         "pixel_size": result.pixel_size,
@@ -794,12 +769,16 @@ def _write(f, result, scene, phase_names):
         "mean_pressure": result.mean_pressure,
         "scale": result.scale,
     }
-    for name, unit in {**_ATTRIBUTES, **_OPTIONAL_ATTRIBUTES}.items():
+    units = {**_ATTRIBUTES, **_OPTIONAL_ATTRIBUTES}
+    if result.wear is not None:
+        for name, (value, unit) in wear_file_attributes(result.wear).items():
+            values[name] = value
+            units[name] = unit
+    for name, unit in units.items():
         f.attrs[name] = values[name]
-        f.attrs[f"{name}_units"] = unit or wear_coefficient_units(result.exponent)
+        if unit is not None:
+            f.attrs[f"{name}_units"] = unit
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
-    f.attrs["wear_law"] = result.wear_law or PowerLaw(result.wear_coefficients,
-                                                      exponent=result.exponent).describe()
     if isinstance(result.outline, Circle):
         f.attrs["radius"] = result.outline.radius
         f.attrs["radius_units"] = "m"
@@ -996,6 +975,10 @@ def _read(f, path):
     scene_text = f["scene"][()]
     if isinstance(scene_text, bytes):
         scene_text = scene_text.decode("utf-8")
+    try:
+        wear = wear_law_from_file(f.attrs)
+    except ValueError as err:
+        raise ValueError(f"result file {str(path)!r}: bad wear law: {err}") from None
     result = SteadyResult(
         labels=arrays["phase"].astype(np.int64),
         pressure=arrays["pressure"],
@@ -1005,8 +988,7 @@ def _read(f, path):
         rms_slope=float(a["rms_slope"]),
         reference_slope=float(a["rms_slope_ref"]),
         fill_factors=np.atleast_1d(a["fill_factors"]).astype(float),
-        wear_coefficients=np.atleast_1d(a["wear_coefficients"]).astype(float),
-        exponent=float(a["exponent"]),
+        wear=wear,
         normal_force=float(a["normal_force"]),
         E_star=float(a["E_star"]),
         rms_slope_plain=float(a["rms_slope_plain"]),
@@ -1016,6 +998,5 @@ def _read(f, path):
         reference_slope_error=float(f.attrs.get("rms_slope_ref_error", 0.0)),
         reference_slope_source=_text(f.attrs.get("rms_slope_ref_source",
                                                  "disk: 4 pbar / (pi E*) (eq. 12)")),
-        wear_law=_text(f.attrs.get("wear_law", "")),
     )
     return result, scene_text

@@ -344,9 +344,15 @@ def plot_phases(source, *, ax=None, names=None, details=True):
     labels = list(names)
     if details:
         factor, unit = pressure_unit(res.phase_pressures)
-        labels = [f"{name}: k = {k:.3g} 1/Pa, {100 * rho:.1f} %, p = {p / factor:.3g} {unit}"
-                  for name, k, rho, p in zip(names, res.wear_coefficients, res.fill_factors,
-                                             res.phase_pressures, strict=True)]
+        law = None if res.wear is None else res.wear.factor
+        # A law k_i g(p) has a coefficient per phase; m is in its unit when g = p^m.
+        m = None if law is None else law.exponent
+        k_unit = "" if m is None else " 1/Pa" if m == 1 else f" Pa$^{{-{m:g}}}$"
+        k = [""] * res.n_phases if law is None else [
+            f"k = {v:.3g}{k_unit}, " for v in law.coefficients]
+        labels = [f"{name}: {k_i}{100 * rho:.1f} %, p = {p / factor:.3g} {unit}"
+                  for name, k_i, rho, p in zip(names, k, res.fill_factors, res.phase_pressures,
+                                               strict=True)]
     handles = [Patch(facecolor=c, edgecolor="0.4", lw=0.5, label=label)
                for c, label in zip(colours, labels, strict=True)]
     # Below the axes, clear of the x tick labels and label whatever the axes' height.

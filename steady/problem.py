@@ -40,9 +40,8 @@ from .halfspace import HalfSpace
 from .labels import validate_labels
 from .outline import FaceGrid
 from .schema import SCALE_RANGE as _SCALE_RANGE
-from .sliding import steady_pressure as sliding_pressure
 from .text import shorten
-from .wear import PowerLaw, as_wear_law, restrict_phases
+from .wear import as_wear_law
 
 __all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_phase_names", "check_scale",
            "check_scales", "default_phase_names", "input_names"]
@@ -402,7 +401,8 @@ class Problem:
         :class:`~steady.sliding.Translation` also becomes.  Another kind
         multiplies the coefficient field by ``v / v_ref``
         (:meth:`coefficient_field`) and makes the steady pressure vary
-        within each phase (:meth:`steady_pressure`); it needs the power law.
+        within each phase (:meth:`steady_pressure`); it needs a wear law with
+        a factorisation ``k_i g(p)`` (:attr:`steady.wear.WearLaw.factor`).
 
     Raises
     ------
@@ -448,9 +448,10 @@ class Problem:
             object.__setattr__(self, "sliding", None)
             return
         sliding.check_outline(self.outline, "sliding")
-        if not isinstance(wear, PowerLaw):
-            raise ValueError(f"sliding {sliding.describe()} needs the power law k p^m, not the "
-                             f"{wear.describe()}")
+        if wear.factor is None:
+            raise ValueError(f"sliding {sliding.describe()} needs a wear law k_i g(p) whose "
+                             f"coefficients the sliding speed multiplies (the power law k p^m), "
+                             f"not the {wear.describe()}")
         pressure = self.steady_pressure()[self.face_mask]
         names = input_names(self.outline, self.normal_force, self.E_star, self.n, wear)
         for p, what in ((pressure.max(), "largest"), (pressure.min(), "smallest")):
@@ -547,7 +548,7 @@ class Problem:
         present = np.flatnonzero(counts > 0)
         renumber = np.full(self.n_phases + 1, -1)
         renumber[present] = np.arange(present.size)
-        return renumber[self.labels], restrict_phases(self.wear, present)
+        return renumber[self.labels], self.wear.restrict(present)
 
     # -- the grid --------------------------------------------------------
     @property
@@ -637,11 +638,12 @@ class Problem:
         """Steady pressure of every pixel, Pa, shape (nx, ny); zero off the face.
 
         Constant on each phase (eq. 7); under non-uniform sliding the pixel-wise
-        closed form ``k_i v(x) p^m / v_ref = C`` (:func:`steady.sliding.steady_pressure`).
+        closed form ``k_i v(x) p^m / v_ref = C``
+        (:meth:`steady.wear.Factorisation.pixel_pressures`).
         """
         if self.sliding is not None:
-            return sliding_pressure(self.coefficient_field(), self.normal_force,
-                                    self.pixel_area, self.wear.exponent)
+            return self.wear.factor.pixel_pressures(self.coefficient_field(), self.normal_force,
+                                                    self.pixel_area)
         # Label -1 (off the face) picks the trailing zero.
         return np.append(self.phase_pressures(), 0.0)[self.labels]
 

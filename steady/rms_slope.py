@@ -62,7 +62,6 @@ from .halfspace import grid_shape
 from .labels import extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_outline
 from .phases import Homogeneous
-from .sliding import steady_pressure
 from .wear import pressure_field
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
@@ -890,7 +889,7 @@ def _steady_pressure(labels, wear, normal_force, grid, sliding):
         return pressure_field(labels, wear, normal_force, grid.pixel_area)[0]
     validate_labels(labels, wear.n_phases)
     coefficients = wear.coefficient_field(labels) * sliding.speed_ratio(grid)
-    return steady_pressure(coefficients, normal_force, grid.pixel_area, wear.exponent)
+    return wear.factor.pixel_pressures(coefficients, normal_force, grid.pixel_area)
 
 
 def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, sliding=None,

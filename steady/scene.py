@@ -310,11 +310,7 @@ def input_names(outline, normal_force, E_star, n, wear=None):
     names.update(normal_force=f"[load] normal_force = {normal_force!r}",
                  E_star=f"[counterbody] E_star = {E_star!r}", n=f"[grid] n = {n!r}")
     if wear is not None:
-        k = getattr(wear, "coefficients", None)
-        words = "" if k is None else f"coefficients = {shorten(list(k))}"
-        if getattr(wear, "kind", None) == "power":
-            words += f", exponent = {wear.exponent!r}"
-        names["wear"] = f"[wear] {words or wear.describe()}"
+        names["wear"] = wear.scene_words()
     return names
 
 

@@ -83,6 +83,10 @@ class Key:
         The values a string may take.
     finite : bool, optional
         Whether a number must be finite (default True).
+    per_phase : bool, optional
+        Whether the value is a list with one entry per phase (a wear law's
+        coefficients): the law of some of the phases keeps those entries
+        (:meth:`steady.wear.WearLaw.restrict`).  Default False.
 
     Notes
     -----
@@ -104,6 +108,7 @@ class Key:
     high_open: bool = True
     choices: tuple | None = None
     finite: bool = True
+    per_phase: bool = False
 
     def __post_init__(self):
         """Check the declaration itself."""

@@ -23,8 +23,11 @@ Each kind gives the speed ratio ``v / v_ref`` at the pixel centres
   ``v / v_ref = |x| / L``.
 
 In the steady state every point wears at the same rate, ``k_i v p^m / v_ref
-= C``, so ``p(x) = (C v_ref / (k_i v(x)))^(1/m)`` with ``C`` from the load
-(:func:`steady_pressure`); the face is ``K p`` as before.  The axis must
+= C``, so ``p(x) = (C v_ref / (k_i v(x)))^(1/m)`` with ``C`` from the load:
+the speed multiplies the coefficients of a wear law ``k_i g(p)``, whose
+factorisation gives the pixel-wise steady pressure
+(:meth:`steady.wear.Factorisation.pixel_pressures`); the face is ``K p`` as
+before.  The axis must
 lie off the closed face: where the speed vanishes a face does not wear, and
 its steady pressure ``p ~ r^(-1/m)`` is unbounded at the axis (a rotating
 disk; an annulus about its centre is regular).
@@ -47,11 +50,9 @@ import math
 
 import numpy as np
 
-from .pressures import phase_pressures
 from .schema import Context, Key, Registry
 
-__all__ = ["SLIDING", "PinOnDisk", "Rotation", "Translation", "sliding_from_table",
-           "steady_pressure"]
+__all__ = ["SLIDING", "PinOnDisk", "Rotation", "Translation", "sliding_from_table"]
 
 #: Registered sliding kinematics, by ``[sliding] kind`` (default ``"translation"``).
 SLIDING = Registry("sliding kind", "kind", default="translation")
@@ -222,32 +223,3 @@ def sliding_from_table(table, outline, base_dir="."):
 
     context = Context(base_dir=pathlib.Path(base_dir), outline=outline, where="[sliding]")
     return SLIDING.build(table, context)
-
-
-def steady_pressure(coefficients, normal_force, pixel_area, exponent):
-    """Pixel-wise steady pressure ``k_j v_j p_j^m / v_ref = C``, ``sum_j h^2 p_j = F``.
-
-    The closed form of eq. 7 with every face pixel its own phase:
-    ``p_j = F (k_j v_j)^(-1/m) / (h^2 sum_l (k_l v_l)^(-1/m))``.
-
-    Parameters
-    ----------
-    coefficients : ndarray, shape (nx, ny), 1/Pa (Pa^-m)
-        ``k v / v_ref`` of every pixel, positive on the face, zero off it.
-    normal_force : float, N
-    pixel_area : float, m^2
-    exponent : float
-        ``m`` of the power law.
-
-    Returns
-    -------
-    ndarray, shape (nx, ny), Pa
-        Zero off the face.
-    """
-    coefficients = np.asarray(coefficients, dtype=float)
-    on = coefficients > 0
-    pressure = np.zeros(coefficients.shape)
-    k = coefficients[on]
-    pressure[on] = phase_pressures(np.ones(k.size), k, normal_force, pixel_area,
-                                   exponent=exponent)
-    return pressure

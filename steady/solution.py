@@ -75,10 +75,9 @@ class SteadyResult:
         12); see :mod:`steady.normalisation`.
     fill_factors : ndarray, shape (P,)
         Realised area fractions of the phases (pixel counts, eq. 13).
-    wear_coefficients : ndarray, shape (P,), 1/Pa
-        ``k_i`` of each phase.
-    exponent : float
-        Pressure exponent ``m`` of the wear law.
+    wear : steady.wear.WearLaw or None
+        The wear law of the phases (:mod:`steady.wear`); None for a result
+        read from a file whose law is not registered here.
     normal_force : float, N
     E_star : float, Pa
     outline : outline object
@@ -98,8 +97,6 @@ class SteadyResult:
         Uncertainty of ``reference_slope`` (0 for a closed form).
     reference_slope_source : str
         Where ``reference_slope`` comes from, in words.
-    wear_law : str
-        The wear law in words (its ``describe()``); empty when not known.
     """
 
     labels: np.ndarray
@@ -110,8 +107,7 @@ class SteadyResult:
     rms_slope: float
     reference_slope: float
     fill_factors: np.ndarray
-    wear_coefficients: np.ndarray
-    exponent: float
+    wear: object
     normal_force: float
     E_star: float
     outline: object
@@ -120,7 +116,6 @@ class SteadyResult:
     rms_height: float = math.nan
     reference_slope_error: float = 0.0
     reference_slope_source: str = ""
-    wear_law: str = ""
 
     @property
     def n(self):
@@ -319,8 +314,7 @@ def _limiting_face(problem):
         rms_slope=math.nan,
         reference_slope=ref.value,
         fill_factors=counts / counts.sum(),
-        wear_coefficients=np.asarray(problem.wear.coefficients, dtype=float),
-        exponent=problem.wear.exponent,
+        wear=problem.wear,
         normal_force=problem.normal_force,
         E_star=problem.E_star,
         outline=problem.outline,
@@ -328,7 +322,6 @@ def _limiting_face(problem):
         rms_height=height,
         reference_slope_error=ref.error,
         reference_slope_source=ref.source,
-        wear_law=problem.wear.describe(),
     )
 
 

@@ -1,44 +1,58 @@
 """Local wear laws: how fast each phase wears under a pressure.
 
 A wear law gives the local wear rate ``dw/ds = g_i(p)`` of phase ``i``
-(m of depth per m of sliding) at the contact pressure ``p``.  Everything the
-model asks of a law goes through one object:
+(m of depth per m of sliding) at the contact pressure ``p``.  Every law is
+a :class:`WearLaw`: the class states, once, what the model asks of a law,
+and every caller asks the law (its methods and its capabilities), never
+which class it is.
 
-- ``n_phases`` and ``describe()``;
-- the steady state (paper eq. 3-7): every point wears at the same rate,
+- Identity: ``n_phases``, ``describe()``, its ``[wear]`` values as a scene
+  file writes them (:meth:`WearLaw.scene_values`, :meth:`WearLaw.scene_words`
+  for messages) and the attributes result and run files record
+  (:meth:`WearLaw.file_attributes`, read back by :func:`wear_law_from_file`).
+- The steady state (paper eq. 3-7): every point wears at the same rate,
   ``g_i(p_i) = C``, and the phases carry the load, ``sum_i A_i p_i = F``:
-  :meth:`~PowerLaw.phase_pressures` inverts it;
-- the run-in (:mod:`transient`): the rate of every pixel,
-  :meth:`~PowerLaw.rate`, from the per-pixel coefficients of a phase map
-  (:meth:`~PowerLaw.coefficient_field`); its linearisation about a
-  pressure for an implicit stage (:meth:`~PowerLaw.linearisation`); the
-  slope ``dg/dp`` that bounds an explicit step
-  (:meth:`~PowerLaw.largest_rate_slope`); and the rate constant that sets
-  the natural sliding distances (:meth:`~PowerLaw.rate_constant`).
+  :meth:`WearLaw.phase_pressures` inverts it; :meth:`WearLaw.restrict` is
+  the law of some of the phases (a section of a depth-varying map).
+- The run-in (:mod:`transient`): the per-pixel field of a phase map
+  (:meth:`WearLaw.coefficient_field`), the rate of every pixel
+  (:meth:`WearLaw.rate`), the linearisation of an implicit stage about a
+  pressure (:meth:`WearLaw.linearisation`), the largest ``g'`` that bounds an
+  explicit step (:meth:`WearLaw.largest_rate_slope`) and the rate constant
+  ``g'(pbar)`` that sets the natural distances (:meth:`WearLaw.rate_constant`).
+- Capabilities, which a law states and callers ask: :attr:`WearLaw.linear`
+  (``g_i = k_i p``: the run-in's linear path) and :attr:`WearLaw.factor`
+  (``g_i = k_i g(p)`` with one ``g`` for every phase, a
+  :class:`Factorisation`: a per-pixel factor on ``k`` -- the sliding speed,
+  the coefficients of a section met at depth -- is then a field of ``k``;
+  its ``exponent`` says whether ``g = p^m``, the model of the fit of wear
+  ratios).
 
 Laws are registered in :data:`WEAR_LAWS` with their ``[wear]`` keys
-(``[wear] law``, default ``"power"``); docs/model.md ("The code") shows
-how a law is added, with :class:`ArchardLaw` as the example.  The laws are
-the power law ``g_i(p) = k_i p^m`` and Archard's ``k_i p`` (paper eq. 1-2),
-the power law with ``m = 1``; the threshold law ``k_i max(p - p_th,i, 0)^m``
-(:class:`ThresholdLaw`) and a tabulated monotone rate ``g_i(p)``
-(:class:`TableLaw`).  The last two key their per-pixel field by phase
-(phase + 1, 0 off the face) and are not linear: the run-in takes its
-Newton path.  The fit (:class:`steady.fit.FaceModel`), the design rule
-(:mod:`steady.design`) and the sweep basis assume the power law.
+(``[wear] law``, default ``"power"``); docs/model.md ("The code") shows how
+a law is added.  The laws here are the power law ``g_i(p) = k_i p^m`` and
+Archard's ``k_i p`` (paper eq. 1-2), the power law with ``m = 1``; the
+threshold law ``k_i max(p - p_th,i, 0)^m`` (:class:`ThresholdLaw`) and a
+tabulated monotone rate ``g_i(p)`` (:class:`TableLaw`).  The last two key
+their per-pixel field by phase (phase + 1, 0 off the face), are not linear
+(the run-in takes its Newton path) and do not factorise.
 
 Examples
 --------
 >>> law = PowerLaw((1e-13, 1e-12))
 >>> law.phase_pressures([50, 50], 11.0, 1.0)       # eq. 7: 10 : 1
 array([0.2 , 0.02])
->>> law.linear, law.n_phases
-(True, 2)
+>>> law.linear, law.n_phases, law.factor.exponent
+(True, 2, 1.0)
+>>> law.restrict([1]).coefficients
+(1e-12,)
 """
 
 from __future__ import annotations
 
+import abc
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -48,21 +62,365 @@ from .pressures import phase_pressures
 from .schema import Context, Key, Registry
 from .text import shorten
 
-__all__ = ["WEAR_LAWS", "ArchardLaw", "PowerLaw", "TableLaw", "ThresholdLaw", "as_wear_law",
-           "pressure_field", "restrict_phases", "wear_law_from_table"]
+__all__ = ["WEAR_LAWS", "ArchardLaw", "Factorisation", "PowerLaw", "TableLaw", "ThresholdLaw",
+           "WearLaw", "as_wear_law", "pressure_field", "wear_coefficient_units",
+           "same_wear_law", "wear_file_attributes", "wear_law_from_file",
+           "wear_law_from_table"]
 
 #: Registered wear laws, by ``[wear] law`` (default ``"power"``).
 WEAR_LAWS = Registry("wear law", "law", default="power")
 
 
+def wear_coefficient_units(exponent):
+    """The udunits unit of the coefficients ``k`` of the wear law ``dw/ds = k p^m``: ``Pa-m``.
+
+    Parameters
+    ----------
+    exponent : float
+        ``m``.
+
+    Returns
+    -------
+    str
+        ``"Pa-1"`` for Archard's law; udunits has integer powers only, so
+        a fractional exponent gives ``"Pa^-1.5"``, which it cannot parse.
+
+    Examples
+    --------
+    >>> wear_coefficient_units(1.0), wear_coefficient_units(2), wear_coefficient_units(1.5)
+    ('Pa-1', 'Pa-2', 'Pa^-1.5')
+    """
+    m = float(exponent)
+    return f"Pa-{m:.0f}" if m == round(m) else f"Pa^-{m:g}"
+
+
+def _plain(value):
+    """A value as TOML would hold it: floats, lists of floats (no numpy scalars or tuples)."""
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    return float(value)
+
+
+class Factorisation(abc.ABC):
+    """A law whose rate is ``k_i g(p)``: a coefficient per phase times one function of ``p``.
+
+    Such a law's per-pixel field (:meth:`WearLaw.coefficient_field`) is the
+    coefficient ``k`` itself, so a factor on it -- the sliding speed
+    ``v / v_ref``, the coefficients of the section a pixel has worn down to
+    -- is again a field the law takes.
+
+    Attributes
+    ----------
+    coefficients : tuple of float, shape (P,)
+        ``k_i`` of the phases.
+    exponent : float or None
+        ``m`` when ``g(p) = p^m`` (the fit's model, and closed forms), else
+        None.
+    """
+
+    coefficients = ()
+    exponent = None
+
+    @abc.abstractmethod
+    def rate(self, pressure):
+        """``g(p)`` of every entry (the rate of a unit coefficient), m/m per unit ``k``."""
+
+    @abc.abstractmethod
+    def pixel_pressures(self, coefficients, normal_force, pixel_area):
+        """Steady pressure of pixels of coefficients ``k_j``: ``k_j g(p_j) = C``, load ``F``.
+
+        Every face pixel is its own phase: ``sum_j h^2 p_j = F``.
+
+        Parameters
+        ----------
+        coefficients : ndarray, shape (nx, ny)
+            ``k`` of every pixel (times any factor), positive on the face,
+            zero off it.
+        normal_force : float, N
+        pixel_area : float, m^2
+
+        Returns
+        -------
+        ndarray, shape (nx, ny), Pa
+            Zero off the face.
+        """
+
+
+@dataclasses.dataclass(frozen=True)
+class PowerFactorisation(Factorisation):
+    """``k_i p^m``: the factorisation of the power law (:attr:`PowerLaw.factor`)."""
+
+    coefficients: tuple
+    exponent: float
+
+    def rate(self, pressure):
+        """``max(p, 0)^m``."""
+        p = np.maximum(pressure, 0.0)
+        return p if self.exponent == 1.0 else p ** self.exponent
+
+    def pixel_pressures(self, coefficients, normal_force, pixel_area):
+        """Eq. 7 with every face pixel its own phase (:func:`steady.pressures.phase_pressures`).
+
+        ``p_j = F (k_j)^(-1/m) / (h^2 sum_l k_l^(-1/m))``.
+        """
+        coefficients = np.asarray(coefficients, dtype=float)
+        on = coefficients > 0
+        pressure = np.zeros(coefficients.shape)
+        k = coefficients[on]
+        pressure[on] = phase_pressures(np.ones(k.size), k, normal_force, pixel_area,
+                                       exponent=self.exponent)
+        return pressure
+
+
+class WearLaw(abc.ABC):
+    """The contract of a local wear law ``dw/ds = g_i(p)`` of each phase.
+
+    A law is a frozen object built from its values (:meth:`from_values`,
+    what a scene's ``[wear]`` table holds once checked through the keys it
+    is registered with, :data:`WEAR_LAWS`).  The abstract methods are what
+    every law provides; the concrete ones derive from them and from the
+    keys, and a law overrides them only where its files or messages differ.
+
+    Attributes
+    ----------
+    kind : str
+        ``[wear] law`` (set by :meth:`steady.schema.Registry.register`; ""
+        for a law that is not registered).
+    keys : tuple of steady.schema.Key
+        Its ``[wear]`` keys; those marked ``per_phase`` hold one entry per
+        phase (:meth:`restrict` keeps the entries of the phases kept).
+    linear : bool
+        Whether ``g_i(p) = k_i p`` (Archard): the run-in then solves each
+        implicit stage once, with the stitched preconditioner's phase levels
+        and the warm start's kept Gram matrices.  Default False: Newton.
+    factor : Factorisation or None
+        The factorisation ``g_i = k_i g(p)``, if the law has one (default
+        None): needed by non-uniform sliding (``[sliding]``), run-ins across
+        interfaces (a depth-varying map) and, with ``exponent``, the fit of
+        wear ratios.
+    """
+
+    kind = ""
+    keys = ()
+    linear = False
+    factor = None
+
+    # -- identity ----------------------------------------------------------
+    @property
+    @abc.abstractmethod
+    def n_phases(self):
+        """Number of phases ``P``."""
+
+    @abc.abstractmethod
+    def describe(self):
+        """The law in words (summaries, files)."""
+
+    @abc.abstractmethod
+    def scene_values(self):
+        """The law's ``[wear]`` values, by key, as a scene file writes them.
+
+        Returns
+        -------
+        dict of str to float, list of float or list of list of float
+            One entry per key of :attr:`keys` (without ``law``).
+        """
+
+    @classmethod
+    @abc.abstractmethod
+    def from_values(cls, values, context):
+        """The law of its checked ``[wear]`` values (:meth:`scene_values` read back).
+
+        ``context`` is a :class:`steady.schema.Context`: its ``n_phases``,
+        when not None, is the number of phases the law must have.
+        """
+
+    def scene_words(self):
+        """The law as a scene names it, for messages: ``[wear] law = 'threshold', k = ...``."""
+        words = ", ".join(f"{name} = {shorten(value)}"
+                          for name, value in self.scene_values().items())
+        # The default law goes without saying, as a scene file may leave it out.
+        law = f"law = {self.kind!r}, " if self.kind not in ("", WEAR_LAWS.default) else ""
+        return f"[wear] {law}{words}"
+
+    def file_attributes(self):
+        """What result and run files record of the law: ``name -> (value, udunits unit)``.
+
+        By default ``wear_<key>`` for each key: numbers as float arrays, a
+        list of lists as JSON text.  :func:`wear_law_from_file` reads them
+        back (:meth:`from_file_attributes`).
+        """
+        values, out = self.scene_values(), {}
+        for key in self.keys:
+            value = values[key.name]
+            if key.type == "number_lists":
+                value = json.dumps(value)
+            elif key.type in ("numbers", "integers", "pairs"):
+                value = np.asarray(value, dtype=float)
+            out[f"wear_{key.name}"] = (value, key.unit or None)
+        return out
+
+    @classmethod
+    def from_file_attributes(cls, attrs):
+        """The law of the attributes :meth:`file_attributes` wrote (a mapping ``name -> value``).
+
+        Raises
+        ------
+        ValueError
+            An attribute missing or not a value of its key.
+        """
+        values = {}
+        for key in cls.keys:
+            name = f"wear_{key.name}"
+            if name not in attrs:
+                if key.required:
+                    raise ValueError(f"the {cls.kind} wear law lacks the attribute {name!r}")
+                continue
+            value = attrs[name]
+            if isinstance(value, bytes):
+                value = value.decode()
+            value = json.loads(value) if key.type == "number_lists" else _plain(
+                np.atleast_1d(value) if key.type in ("numbers", "integers", "pairs") else value)
+            values[key.name] = key.parse(value, "")
+        return cls.from_values(values, Context())
+
+    def restrict(self, phases):
+        """The law of some of the phases only, renumbered ``0..len(phases)-1`` in that order.
+
+        A section that lacks a phase (:meth:`steady.problem.Problem.section`)
+        has the steady state of the law of its present phases: the absent one
+        carries no load.  By default the entries of the keys marked
+        ``per_phase`` are kept for those phases and the law rebuilt.
+
+        Parameters
+        ----------
+        phases : sequence of int
+            Phases kept, each in ``0..P-1``.
+        """
+        phases = [int(i) for i in phases]
+        if not phases or min(phases) < 0 or max(phases) >= self.n_phases:
+            raise ValueError(f"phases {phases} must be a non-empty subset of "
+                             f"0..{self.n_phases - 1}")
+        values = dict(self.scene_values())
+        for key in self.keys:
+            if key.per_phase:
+                values[key.name] = tuple(values[key.name][i] for i in phases)
+        return type(self).from_values(values, Context(n_phases=len(phases)))
+
+    # -- the steady state ----------------------------------------------------
+    @abc.abstractmethod
+    def phase_pressures(self, counts, normal_force, pixel_area):
+        """Steady pressure of each phase: ``g_i(p_i) = C`` with ``sum_i A_i p_i = F`` (eq. 3-7).
+
+        Parameters
+        ----------
+        counts : array_like, shape (P,)
+            Face pixels of each phase (or any measure proportional to the
+            phase areas, e.g. fill factors with ``pixel_area`` 1); a phase
+            of count 0 carries no load.
+        normal_force : float, N
+        pixel_area : float, m^2
+
+        Returns
+        -------
+        ndarray, shape (P,), Pa
+
+        Raises
+        ------
+        ValueError
+            No steady state with every phase wearing, in the law's terms.
+        """
+
+    # -- the run-in, pixel by pixel ------------------------------------------
+    @abc.abstractmethod
+    def coefficient_field(self, labels):
+        """The law's per-pixel field of a phase map (``labels < 0`` off the face: 0 there).
+
+        Whatever :meth:`rate` and the other run-in methods take: ``k`` of the
+        pixel's phase for a law with a :attr:`factor`, a phase key otherwise.
+
+        Parameters
+        ----------
+        labels : ndarray of int, shape (nx, ny)
+
+        Returns
+        -------
+        ndarray, shape (nx, ny)
+        """
+
+    @abc.abstractmethod
+    def rate(self, pressure, coefficient_field):
+        """Wear rate ``g(p)`` of every pixel, m/m; zero off the face and for ``p <= 0``.
+
+        Parameters
+        ----------
+        pressure : ndarray, shape (nx, ny), Pa
+        coefficient_field : ndarray, shape (nx, ny)
+            :meth:`coefficient_field`.
+        """
+
+    @abc.abstractmethod
+    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
+        """The implicit stage ``w = height + c g(P(w))`` linearised about ``pressure``.
+
+        ``g(p) ~ g(p0) + g'(p0) (p - p0)`` turns the stage into the contact
+        problem with the shift ``c g'(p0)`` and the height
+        ``height + c (g(p0) - g'(p0) p0)``.
+
+        Parameters
+        ----------
+        height : ndarray, shape (nx, ny), m
+        c : float, m
+            Sliding distance multiplying the implicit rate.
+        pressure : ndarray, shape (nx, ny), Pa
+            The linearisation point ``p0``.
+        coefficient_field : ndarray, shape (nx, ny)
+        face_mask : ndarray of bool, shape (nx, ny)
+        floor : float, Pa
+            Least linearisation pressure where ``g'`` is infinite at 0.
+
+        Returns
+        -------
+        shift : ndarray, shape (nx, ny), m/Pa
+        height : ndarray, shape (nx, ny), m
+        """
+
+    @abc.abstractmethod
+    def largest_rate_slope(self, pressure, coefficients, floor):
+        """``max dg/dp`` over the pixels given, 1/Pa (m/Pa per m of sliding).
+
+        Parameters
+        ----------
+        pressure : ndarray, Pa
+        coefficients : ndarray
+            Their :meth:`coefficient_field` entries, the same shape.
+        floor : float, Pa
+            Least pressure taken where ``g'`` is infinite at 0.
+        """
+
+    @abc.abstractmethod
+    def rate_constant(self, field, mean_pressure):
+        """``dg/dp`` at the mean pressure of pixels of the given field, 1/Pa.
+
+        The rate at which a pressure difference wears the face flat; with
+        ``E*`` and a length it sets the natural sliding distances
+        (``s* = L / (g'(pbar) E*)``).  ``field`` holds
+        :meth:`coefficient_field` entries (one per phase:
+        ``coefficient_field(np.arange(P))``).
+        """
+
+
 @WEAR_LAWS.register("power", (
-    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True,
+    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True, per_phase=True,
         doc="k_i = k_wear,i / sigma_0,i, one per phase (Pa^-m for an exponent m != 1)"),
     Key("exponent", "number", unit="1", low=0.0, default=1.0,
         doc="m in dw/ds = k p^m (default 1: Archard)")),
     doc="dw/ds = k_i p^m: Archard's law for m = 1, the paper's")
 @dataclasses.dataclass(frozen=True)
-class PowerLaw:
+class PowerLaw(WearLaw):
     """The power law ``dw/ds = k_i p^m`` of each phase (Archard's for ``m = 1``).
 
     Parameters
@@ -129,12 +487,37 @@ class PowerLaw:
         """Whether the rate is linear in the pressure (``m = 1``, Archard)."""
         return self.exponent == 1.0
 
+    @property
+    def factor(self):
+        """``k_i p^m``: the coefficients and ``g(p) = p^m`` (:class:`PowerFactorisation`)."""
+        return PowerFactorisation(self.coefficients, self.exponent)
+
     def describe(self):
         """The law in words."""
         k = ", ".join(f"{v:.4g}" for v in self.coefficients)
         if self.linear:
             return f"Archard's law dw/ds = k p, k = [{k}] 1/Pa"
         return f"power law dw/ds = k p^{self.exponent:g}, k = [{k}] Pa^-{self.exponent:g}"
+
+    def scene_values(self):
+        """``coefficients`` and ``exponent``."""
+        return {"coefficients": list(self.coefficients), "exponent": self.exponent}
+
+    def file_attributes(self):
+        """``wear_coefficients`` (unit ``Pa-m``) and ``exponent``."""
+        return {"wear_coefficients": (np.asarray(self.coefficients, dtype=float),
+                                      wear_coefficient_units(self.exponent)),
+                "exponent": (self.exponent, "1")}
+
+    @classmethod
+    def from_file_attributes(cls, attrs):
+        """The law of ``wear_coefficients`` and ``exponent`` (:meth:`file_attributes`)."""
+        missing = [name for name in ("wear_coefficients", "exponent") if name not in attrs]
+        if missing:
+            raise ValueError(f"the {cls.kind} wear law lacks the attribute {missing[0]!r}")
+        k = tuple(float(v) for v in np.atleast_1d(attrs["wear_coefficients"]))
+        return cls.from_values({"coefficients": k, "exponent": float(attrs["exponent"])},
+                               Context())
 
     # -- the steady state ----------------------------------------------
     def phase_pressures(self, counts, normal_force, pixel_area):
@@ -249,7 +632,7 @@ class PowerLaw:
 
 
 @WEAR_LAWS.register("archard", (
-    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True,
+    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True, per_phase=True,
         doc="k_i = k_wear,i / sigma_0,i, one per phase"),),
     doc="dw/ds = k_i p: Archard's law, the power law with m = 1")
 @dataclasses.dataclass(frozen=True)
@@ -274,10 +657,9 @@ class ArchardLaw(PowerLaw):
         """From the checked ``[wear]`` keys; their count must be the phase map's."""
         return cls(PowerLaw.from_values(dict(values, exponent=1.0), context).coefficients)
 
-
-def _phase_field(labels, values):
-    """``values[i]`` on the pixels of phase ``i``, 0 off the face (``labels < 0``)."""
-    return np.append(np.asarray(values, dtype=float), 0.0)[np.asarray(labels)]
+    def scene_values(self):
+        """``coefficients``."""
+        return {"coefficients": list(self.coefficients)}
 
 
 def _phase_keys(labels):
@@ -304,15 +686,15 @@ def _numbers(values, name, unit):
 
 
 @WEAR_LAWS.register("threshold", (
-    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True,
+    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True, per_phase=True,
         doc="k_i, one per phase (Pa^-m for an exponent m != 1)"),
-    Key("thresholds", "numbers", unit="Pa", required=True,
+    Key("thresholds", "numbers", unit="Pa", required=True, per_phase=True,
         doc="p_th,i >= 0, one per phase: no wear at or below it"),
     Key("exponent", "number", unit="1", low=0.0, default=1.0,
         doc="m in dw/ds = k max(p - p_th, 0)^m (default 1)")),
     doc="dw/ds = k_i max(p - p_th,i, 0)^m: no wear up to a threshold pressure")
 @dataclasses.dataclass(frozen=True)
-class ThresholdLaw:
+class ThresholdLaw(WearLaw):
     """The threshold law ``dw/ds = k_i max(p - p_th,i, 0)^m`` of each phase.
 
     No wear at or below the threshold pressure ``p_th,i`` of phase ``i``;
@@ -369,17 +751,31 @@ class ThresholdLaw:
         """Number of phases ``P``."""
         return len(self.coefficients)
 
-    @property
-    def linear(self):
-        """False: the rate is not linear in the pressure (the run-in takes Newton's path)."""
-        return False
-
     def describe(self):
         """The law in words."""
         k = ", ".join(f"{v:.4g}" for v in self.coefficients)
         p = ", ".join(f"{v:.4g}" for v in self.thresholds)
         return (f"threshold law dw/ds = k max(p - p_th, 0)^{self.exponent:g}, k = [{k}] "
                 f"Pa^-{self.exponent:g}, p_th = [{p}] Pa")
+
+    def scene_values(self):
+        """``coefficients``, ``thresholds`` and ``exponent``."""
+        return {"coefficients": list(self.coefficients), "thresholds": list(self.thresholds),
+                "exponent": self.exponent}
+
+    def file_attributes(self):
+        """The power law's (``wear_coefficients``, ``exponent``) and ``wear_thresholds`` (Pa)."""
+        return {**PowerLaw(self.coefficients, self.exponent).file_attributes(),
+                "wear_thresholds": (np.asarray(self.thresholds, dtype=float), "Pa")}
+
+    @classmethod
+    def from_file_attributes(cls, attrs):
+        """The law of :meth:`file_attributes`."""
+        power = PowerLaw.from_file_attributes(attrs)
+        if "wear_thresholds" not in attrs:
+            raise ValueError(f"the {cls.kind} wear law lacks the attribute 'wear_thresholds'")
+        p_th = tuple(float(v) for v in np.atleast_1d(attrs["wear_thresholds"]))
+        return cls(power.coefficients, p_th, power.exponent)
 
     def phase_pressures(self, counts, normal_force, pixel_area):
         """Steady pressures ``p_i = p_th,i + (eq. 7 for F_N - sum_j A_j p_th,j)``, Pa.
@@ -535,13 +931,13 @@ def _as_tables(values, name):
 
 
 @WEAR_LAWS.register("table", (
-    Key("pressures", "number_lists", unit="Pa", required=True,
+    Key("pressures", "number_lists", unit="Pa", required=True, per_phase=True,
         doc="one list per phase: increasing pressures p_i,j, the first 0"),
-    Key("rates", "number_lists", unit="1", required=True,
+    Key("rates", "number_lists", unit="1", required=True, per_phase=True,
         doc="one list per phase: non-decreasing rates g_i(p_i,j) (m/m), the first 0")),
     doc="dw/ds = g_i(p): a monotone (PCHIP) interpolation of points per phase")
 @dataclasses.dataclass(frozen=True)
-class TableLaw:
+class TableLaw(WearLaw):
     """A tabulated rate ``dw/ds = g_i(p)`` of each phase, interpolated monotonically.
 
     Between the points ``g_i`` is the monotone cubic (PCHIP,
@@ -612,24 +1008,10 @@ class TableLaw:
         """Number of phases ``P``."""
         return len(self.pressures)
 
-    @property
-    def linear(self):
-        """False: the run-in takes Newton's path."""
-        return False
-
-    @property
-    def coefficients(self):
-        """The secants ``g_i(p_last) / p_last`` of each phase, 1/Pa: Archard's equivalents.
-
-        Written to files as the wear coefficients (with exponent 1);
-        ``describe()`` gives the law itself.
-        """
-        return tuple(g / p for p, g, _ in self._ends)
-
-    @property
-    def exponent(self):
-        """1: files write :attr:`coefficients` as Archard's."""
-        return 1.0
+    def scene_values(self):
+        """``pressures`` and ``rates``, one list per phase."""
+        return {"pressures": [list(p) for p in self.pressures],
+                "rates": [list(g) for g in self.rates]}
 
     def describe(self):
         """The law in words."""
@@ -757,38 +1139,6 @@ class TableLaw:
         return self._by_phase(self.phase_slope, shifted, field)
 
 
-def restrict_phases(wear, phases):
-    """The law of some of the phases only, renumbered ``0..len(phases)-1`` in that order.
-
-    A section that lacks a phase (:meth:`steady.problem.Problem.section`)
-    has the steady state of the law of its present phases: the absent one
-    carries no load.
-
-    Parameters
-    ----------
-    wear : wear law
-    phases : sequence of int
-        Phases kept, each in ``0..P-1``.
-
-    Returns
-    -------
-    wear law of the same kind
-    """
-    wear = as_wear_law(wear)
-    phases = [int(i) for i in phases]
-    if isinstance(wear, TableLaw):
-        return TableLaw(tuple(wear.pressures[i] for i in phases),
-                        tuple(wear.rates[i] for i in phases))
-    k = tuple(wear.coefficients[i] for i in phases)
-    if isinstance(wear, ThresholdLaw):
-        return ThresholdLaw(k, tuple(wear.thresholds[i] for i in phases), wear.exponent)
-    if isinstance(wear, ArchardLaw):
-        return ArchardLaw(k)
-    if isinstance(wear, PowerLaw):
-        return PowerLaw(k, wear.exponent)
-    raise ValueError(f"cannot restrict the {wear.describe()} to phases {phases}")
-
-
 def as_wear_law(wear):
     """A wear law: ``wear`` itself, or Archard's law of a sequence of coefficients (1/Pa).
 
@@ -797,7 +1147,7 @@ def as_wear_law(wear):
     >>> as_wear_law([1e-13, 1e-12])
     PowerLaw(coefficients=(1e-13, 1e-12), exponent=1.0)
     """
-    if isinstance(wear, PowerLaw) or hasattr(wear, "phase_pressures"):
+    if isinstance(wear, WearLaw):
         return wear
     return PowerLaw(wear)
 
@@ -838,6 +1188,63 @@ def wear_law_from_table(table, base_dir=".", n_phases=None):
         message = str(err)
         raise ValueError(message if "[wear]" in message else f"[wear] {message}") \
             from None
+
+
+def wear_file_attributes(wear):
+    """What a result or run file records of a wear law: ``name -> (value, unit)``.
+
+    ``wear_law_kind`` (its ``[wear] law``), ``wear_law`` (in words) and the
+    law's own :meth:`WearLaw.file_attributes`; :func:`wear_law_from_file`
+    reads them back.
+    """
+    return {"wear_law_kind": (wear.kind, None), "wear_law": (wear.describe(), None),
+            **wear.file_attributes()}
+
+
+def same_wear_law(a, b):
+    """Whether two wear laws are the same law: the same file attributes, value for value.
+
+    Archard's law and the power law of exponent 1 with the same
+    coefficients are the same law; a threshold law is not the power law of
+    its coefficients.  None (a law unknown) is the same as nothing.
+    """
+    if a is None or b is None:
+        return False
+    fa, fb = a.file_attributes(), b.file_attributes()
+    return fa.keys() == fb.keys() and all(
+        np.array_equal(np.asarray(fa[name][0]), np.asarray(fb[name][0])) for name in fa)
+
+
+def wear_law_from_file(attrs):
+    """The wear law a file recorded (:func:`wear_file_attributes`), or None if unknown.
+
+    Parameters
+    ----------
+    attrs : mapping
+        The file's attributes (``h5py`` attributes, or a dict of them).  A
+        file written before ``wear_law_kind`` was recorded holds the power
+        law's ``wear_coefficients`` and ``exponent``.
+
+    Returns
+    -------
+    WearLaw or None
+        None when the file names a law that is not registered (a law
+        defined and registered by another program) or holds none.
+
+    Raises
+    ------
+    ValueError
+        A registered law whose attributes are missing or bad.
+    """
+    kind = attrs.get("wear_law_kind", "power")
+    if isinstance(kind, bytes):
+        kind = kind.decode()
+    kind = str(kind)
+    if kind not in WEAR_LAWS:
+        return None
+    if kind == "power" and "wear_coefficients" not in attrs:
+        return None
+    return WEAR_LAWS[kind].from_file_attributes(attrs)
 
 
 def pressure_field(labels, wear, normal_force, pixel_area, *, face_mask=None):

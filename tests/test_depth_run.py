@@ -324,7 +324,7 @@ def test_bad_columns_are_refused_naming_the_fault():
         FacePhases(columnar.problem.grid, columnar.labels, 2, columns=flipped)
     threshold = Problem(columnar.problem.phases, ThresholdLaw([K1, 10 * K1], [0.0, 0.0]),
                         FORCE, columnar.problem.E_star)
-    with pytest.raises(ValueError, match="need a power law .* got ThresholdLaw"):
+    with pytest.raises(ValueError, match=r"need a wear law k_i g\(p\).* not the threshold law"):
         WearProblem(with_columns(threshold, columns))
 
 

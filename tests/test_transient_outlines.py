@@ -175,7 +175,7 @@ def run_to_steady(outline, geometry, ratios, n, options=FAST):
     problem = problem_on(outline, geometry, ratios, n)
     result = run_in(problem, initial_face.flat(problem.grid), options)
     assert result.status == "steady", result.message
-    steady = solve(face_problem(geometry, problem.wear_coefficients, n=n, outline=outline))
+    steady = solve(face_problem(geometry, problem.wear.coefficients, n=n, outline=outline))
     return problem, result, steady
 
 
@@ -203,7 +203,7 @@ def test_two_phase_rectangle_runs_in_to_the_steady_face(case, n):
         assert load == pytest.approx(FORCE, rel=1e-12), f"load {load!r} N"
     # The history ends on the steady module's corrected value on the twice
     # finer grid, within the two error bars (measured 0.08 .. 0.39 of them).
-    ref = estimate_rms_slope(geometry, problem.wear_coefficients, FORCE, BLOCK, E_STAR, 2 * n)
+    ref = estimate_rms_slope(geometry, problem.wear.coefficients, FORCE, BLOCK, E_STAR, 2 * n)
     end, bar = result.history["rms_slope"][-1], result.history["rms_slope_error"][-1]
     assert abs(end - ref.rms_slope) <= bar + ref.error, \
         f"run ends at {end:.5f} +- {bar:.5f}, steady (n = {2 * n}) {ref.rms_slope:.5f} +- " \

@@ -33,7 +33,17 @@ from steady.fit import FaceModel
 from steady.output import OutputExistsError
 from steady.scene import parse_scene
 from steady.solution import solve, solve_scene
-from steady.wear import PowerLaw, TableLaw, ThresholdLaw, wear_law_from_table
+from steady.wear import (
+    WEAR_LAWS,
+    ArchardLaw,
+    PowerLaw,
+    TableLaw,
+    ThresholdLaw,
+    same_wear_law,
+    wear_file_attributes,
+    wear_law_from_file,
+    wear_law_from_table,
+)
 from transient.comparison import compare_with_steady
 from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
@@ -266,7 +276,93 @@ def test_resume_refuses_other_thresholds(tmp_path, capsys):
     assert status == 0, err
     status, _, err = run_cli(transient_cli, [scene((1e5, 1.3e5)), "-o", out, "--resume"],
                              capsys)
-    assert status == 2 and "was run with another [wear] table" in err, err
+    assert status == 2 and "was run with another wear law" in err and "130000.0" in err, err
     status, _, err = run_cli(transient_cli, [scene((1e5, 1.2e5)), "-o", out, "--resume"],
                              capsys)
     assert status == 0, err
+
+
+# -- the contract: every shipped law answers it ----------------------------------------------
+SHIPPED = {
+    "power": PowerLaw((K1, 3 * K1, 10 * K1), 1.5),
+    "archard": ArchardLaw((K1, 3 * K1, 10 * K1)),
+    "threshold": ThresholdLaw((K1, 3 * K1, 10 * K1), (0.0, 0.3 * PBAR, 0.1 * PBAR), 2.0),
+    "table": TableLaw(((0, PBAR, 2 * PBAR), (0, PBAR), (0, 0.5 * PBAR, 3 * PBAR)),
+                      ((0, 1e-9, 4e-9), (0, 1e-8), (0, 1e-9, 2e-8))),
+}
+
+
+def test_every_registered_law_is_tested():
+    assert set(SHIPPED) == set(WEAR_LAWS), f"registered {sorted(WEAR_LAWS)}"
+    for kind, law in SHIPPED.items():
+        assert type(law) is WEAR_LAWS[kind] and law.kind == kind, kind
+
+
+@pytest.mark.parametrize("kind", sorted(SHIPPED))
+def test_file_attributes_read_back_the_same_law(kind):
+    law = SHIPPED[kind]
+    attrs = {name: value for name, (value, _) in wear_file_attributes(law).items()}
+    back = wear_law_from_file(attrs)
+    assert back == law and same_wear_law(back, law), f"{kind}: {back} != {law}"
+    assert attrs["wear_law_kind"] == kind and attrs["wear_law"] == law.describe(), attrs
+
+
+@pytest.mark.parametrize("kind", sorted(SHIPPED))
+def test_restriction_keeps_the_phases_steady_state(kind):
+    law = SHIPPED[kind]
+    counts = np.array([60, 0, 40])  # a section without phase 1
+    kept = law.restrict([0, 2])
+    assert kept.n_phases == 2 and type(kept) is type(law), kept
+    full = law.phase_pressures(counts, FORCE, 1e-8)
+    restricted = kept.phase_pressures(counts[[0, 2]], FORCE, 1e-8)
+    assert np.allclose(full[[0, 2]], restricted, rtol=1e-12, atol=0), (full, restricted)
+    with pytest.raises(ValueError, match=r"phases \[0, 3\] must be a non-empty subset of 0..2"):
+        law.restrict([0, 3])
+
+
+@pytest.mark.parametrize("kind", sorted(SHIPPED))
+def test_scene_words_read_back_through_the_scene_keys(kind):
+    law = SHIPPED[kind]
+    table = dict(law.scene_values(), law=kind)
+    assert wear_law_from_table(table, n_phases=3) == law, kind
+    words = law.scene_words()
+    assert "np.float64" not in words and words.startswith("[wear] "), words
+    assert ("law = " in words) == (kind != "power"), words
+
+
+def test_only_the_power_family_factorises_and_only_archard_is_linear():
+    capabilities = {kind: (law.linear, law.factor is not None,
+                           None if law.factor is None else law.factor.exponent)
+                    for kind, law in SHIPPED.items()}
+    assert capabilities == {"power": (False, True, 1.5), "archard": (True, True, 1.0),
+                            "threshold": (False, False, None), "table": (False, False, None)}, \
+        capabilities
+
+
+def test_same_wear_law_tells_equal_laws_from_others():
+    assert same_wear_law(ArchardLaw((K1, 2 * K1)), PowerLaw((K1, 2 * K1), 1.0)), \
+        "Archard's law is the power law with m = 1"
+    assert not same_wear_law(ThresholdLaw((K1, 2 * K1), (0.0, 0.0)), PowerLaw((K1, 2 * K1))), \
+        "a threshold law is another law, even with thresholds 0"
+    assert not same_wear_law(None, PowerLaw((K1, 2 * K1))), "an unknown law is no law"
+
+
+def test_no_law_class_is_asked_for_outside_the_law_module():
+    """Callers ask the law (its methods and capabilities), never which class it is."""
+    import ast
+
+    names = {"WearLaw", *(cls.__name__ for cls in (WEAR_LAWS[kind] for kind in WEAR_LAWS))}
+    root = pathlib.Path(__file__).resolve().parents[1]
+    found = []
+    for package in ("steady", "transient"):
+        for path in (root / package).rglob("*.py"):
+            if path == root / "steady" / "wear.py":
+                continue
+            for node in ast.walk(ast.parse(path.read_text())):
+                if (isinstance(node, ast.Call) and getattr(node.func, "id", "") in (
+                        "isinstance", "issubclass") and len(node.args) == 2):
+                    classes = ast.walk(node.args[1])
+                    found += [f"{path.relative_to(root)}:{node.lineno}" for c in classes
+                              if isinstance(c, (ast.Name, ast.Attribute))
+                              and getattr(c, "id", getattr(c, "attr", "")) in names]
+    assert not found, f"isinstance of a wear law class: {found}"

@@ -24,7 +24,9 @@ Layout (root group)::
                   it and are read as 0);
                   the problem's inputs (:func:`problem_inputs`, when the
                   result knows its problem): n, normal_force (N), E_star
-                  (Pa), exponent, wear_coefficients (Pa-m), wear_law;
+                  (Pa), the wear law (wear_law_kind, wear_law in words and
+                  the law's own attributes: exponent, wear_coefficients
+                  (Pa-m) for the power law);
                   the caller's input attributes (scene...; an attribute
                   given as None is left out);
                   with the face's outline known (every run since version 2):
@@ -124,11 +126,11 @@ from steady.output import (
     attach_scales,
     describe,
     read_outline,
-    wear_coefficient_units,
     write_grid_coordinates,
     write_outline,
     write_phase_names,
 )
+from steady.wear import wear_file_attributes
 
 from .run_in_distance import COATING_EVENTS, coating_distance, distance_table
 from .runin import (
@@ -379,19 +381,17 @@ def problem_inputs(problem):
     Returns
     -------
     attrs : dict of str to (value, units)
-        ``n``, ``normal_force`` (N), ``E_star`` (Pa), ``exponent``,
-        ``wear_coefficients`` (Pa-m), ``wear_law`` (in words).
+        ``n``, ``normal_force`` (N), ``E_star`` (Pa) and the wear law
+        (:func:`steady.wear.wear_file_attributes`: ``wear_law_kind``,
+        ``wear_law`` in words, and the law's own, for the power law
+        ``wear_coefficients`` (Pa-m) and ``exponent``).
     arrays : dict of str to ndarray
         ``phase``, the phase map (-1 off the face).
     names : tuple of str
         The phase names, phase 0 first.
     """
-    wear = problem.wear
     attrs = {"n": (problem.n, "1"), "normal_force": (problem.normal_force, "N"),
-             "E_star": (problem.E_star, "Pa"), "exponent": (wear.exponent, "1"),
-             "wear_coefficients": (np.asarray(wear.coefficients, dtype=float),
-                                   wear_coefficient_units(wear.exponent)),
-             "wear_law": (wear.describe(), None)}
+             "E_star": (problem.E_star, "Pa"), **wear_file_attributes(problem.wear)}
     return attrs, {"phase": np.asarray(problem.labels)}, tuple(problem.phase_names)
 
 

@@ -20,7 +20,6 @@ import numpy as np
 from steady.normalisation import reference_slope
 from steady.problem import Problem, check_scale, input_names
 from steady.solution import solve
-from steady.wear import PowerLaw
 
 from .contact import solve_trusted_contact
 from .depth import WorkDepth
@@ -219,15 +218,14 @@ class WearProblem:
             self._check_columns(problem)
             if not self.columns.columnar:
                 factor = problem.speed_ratio if problem.sliding is not None else None
-                self.work_depth = WorkDepth(self.columns, self.wear.coefficients, factor)
-                # p^m on the face: the rate of the wear work.
-                self._unit_field = np.where(self.face_mask, 1.0, 0.0)
+                self.work_depth = WorkDepth(self.columns, self.wear.factor.coefficients, factor)
 
     def _check_columns(self, problem):
         """Refuse a wear law the run across interfaces does not take (the phases checked them)."""
-        if not isinstance(self.wear, PowerLaw):
-            raise ValueError(f"depth-varying phases need a power law (archard or power), got "
-                             f"{type(self.wear).__name__}")
+        if self.wear.factor is None:
+            # The run integrates the wear work g(p) and maps it to depth through k of each layer.
+            raise ValueError(f"depth-varying phases need a wear law k_i g(p) (the power law), "
+                             f"not the {self.wear.describe()}")
 
     @classmethod
     def from_scene(cls, scene, *, n=None, problem=None, **options):
@@ -301,16 +299,6 @@ class WearProblem:
         return self.problem.n_phases
 
     @property
-    def wear_coefficients(self):
-        """``k_i`` of each phase, shape (P,), 1/Pa (the power law's coefficients)."""
-        return np.asarray(self.wear.coefficients, dtype=float)
-
-    @property
-    def exponent(self):
-        """The power law's exponent ``m``."""
-        return self.wear.exponent
-
-    @property
     def scale(self):
         """``L``, the outline's length scale, m (the radius ``a`` of a disk)."""
         return self.outline.scale
@@ -374,8 +362,13 @@ class WearProblem:
         """
         if self.work_depth is not None:
             k = self.work_depth.slope(self.columns.segment_at(self.columns.bottom))
+            factor = self.wear.factor
+            if factor.exponent is None:
+                return factor.pixel_pressures(np.where(self.face_mask, k, 0.0),
+                                              self.normal_force, self.halfspace.h ** 2)
+            # g = p^m: p proportional to k^(-1/m), carrying the load.
             p = np.where(self.face_mask, np.where(self.face_mask, k, 1.0)
-                         ** (-1.0 / self.exponent), 0.0)
+                         ** (-1.0 / factor.exponent), 0.0)
             return p * (self.normal_force / (float(p.sum()) * self.halfspace.h ** 2))
         if self.problem.sliding is not None:  # pixel-wise, k_i v p^m / v_ref = C
             return self.problem.steady_pressure()
@@ -440,7 +433,7 @@ class WearProblem:
         """Rate of the integration variable: ``k p^m`` (m/m), or ``p^m`` for the wear work."""
         if self.work_depth is None:
             return self.rate(pressure)
-        return self.wear.rate(pressure, self._unit_field)
+        return np.where(self.face_mask, self.wear.factor.rate(pressure), 0.0)
 
     def depth_error(self, error, variable):
         """An error of the integration variable in metres: times the local ``k`` at ``variable``."""

@@ -32,6 +32,7 @@ import numpy as np
 from steady.outline import describe_change
 from steady.output import file_identity
 from steady.text import shorten
+from steady.wear import same_wear_law, wear_law_from_file
 
 from .. import output
 
@@ -43,56 +44,45 @@ def run_inputs(scene, problem):
     """Root attributes and datasets that identify the run's inputs.
 
     The outline goes into the run file with the result (its group
-    ``outline``; ``radius`` for a disk), from ``problem.outline``.
+    ``outline``; ``radius`` for a disk), from ``problem.outline``; the wear
+    law with the problem (:func:`transient.output.problem_inputs`).
     """
     attrs = {"scene": scene.text, "scene_path": str(scene.source_path or ""),
-             "n": problem.n, "normal_force": scene.normal_force,
-             "E_star": scene.E_star, "exponent": scene.wear.exponent,
-             "wear_coefficients": problem.wear_coefficients}
+             "n": problem.n, "normal_force": scene.normal_force, "E_star": scene.E_star}
     if scene.load_programme is not None:
         attrs["load_programme"] = np.array(scene.load_programme.pairs)  # [s (m), F (N)] rows
     return attrs, {"phase": problem.labels}
 
 
-def _wear_table(text):
-    """The ``[wear]`` table of a scene's text, empty when there is none or it does not parse."""
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # Python 3.10
-        import tomli as tomllib
-    try:
-        wear = tomllib.loads(str(text)).get("wear", {})
-    except tomllib.TOMLDecodeError:
-        return {}
-    return wear if isinstance(wear, dict) else {}
+def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, outline,
+                      wear):
+    """Refuse to resume a run of another problem (face, grid, load, phases, wear law, start).
 
-
-def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, outline):
-    """Refuse to resume a run of another problem (face, grid, load, phases, wear law, start)."""
+    ``wear`` is the scene's law, compared with the file's (:func:`steady.wear.same_wear_law`).
+    """
     if stored.outline is None or stored.outline != outline:
         change = (f"an unknown face, the scene has the {outline.describe()}"
                   if stored.outline is None else describe_change(stored.outline, outline))
         raise ValueError(f"{str(path)!r} was run on {change}; use --force to start over")
-    for key in ("n", "normal_force", "E_star", "exponent"):
+    for key in ("n", "normal_force", "E_star"):
         if stored_attrs.get(key) != attrs[key]:
             raise ValueError(f"{str(path)!r} was run with {key} = "
                              f"{shorten(stored_attrs.get(key))}, the scene has {attrs[key]!r}; "
                              f"use --force to start over")
-    if not np.array_equal(np.asarray(stored_attrs.get("wear_coefficients")),
-                          attrs["wear_coefficients"]):
-        raise ValueError(f"{str(path)!r} was run with other wear coefficients "
-                         f"({shorten(stored_attrs.get('wear_coefficients'))}); use --force")
+    try:
+        stored_wear = wear_law_from_file(stored_attrs)
+    except ValueError:
+        stored_wear = None
+    if not same_wear_law(stored_wear, wear):
+        was = ("an unknown wear law" if stored_wear is None
+               else f"another wear law ({stored_wear.scene_words()})")
+        raise ValueError(f"{str(path)!r} was run with {was}; the scene has "
+                         f"{wear.scene_words()}; use --force to start over")
     stored_programme, programme = (a.get("load_programme") for a in (stored_attrs, attrs))
     if (stored_programme is None) != (programme is None) or (
             programme is not None and not np.array_equal(stored_programme, programme)):
         raise ValueError(f"{str(path)!r} was run with another [load] programme "
                          f"({shorten(stored_programme)}); use --force")
-    wear = _wear_table(attrs.get("scene", ""))
-    if wear.get("law", "power") not in ("power", "archard") and \
-            _wear_table(stored_attrs.get("scene", "")) != wear:
-        # Thresholds and tables are not in the attributes compared above.
-        raise ValueError(f"{str(path)!r} was run with another [wear] table "
-                         f"({shorten(_wear_table(stored_attrs.get('scene', '')))}); use --force")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
     face_mask = arrays["phase"] >= 0

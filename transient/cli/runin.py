@@ -293,7 +293,7 @@ def _prepare(args, lock, scene, initial, options, checked):
     if args.resume and out.exists():
         resume, stored_attrs, stored_arrays = read_resume(out)
         check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
-                           problem.outline)
+                           problem.outline, scene.wear)
         if "sha256" not in stored_attrs:
             note(f"{str(out)!r} carries no checksums; resumed without verification")
         finished = resume.status == "steady" and not _lacks_spatial_error(args, resume)
