@@ -145,6 +145,23 @@ class LoadProgramme:
             force = f_i
         return tuple(out)
 
+    def rim_layers(self, s, *, before=False):
+        """The rim layers the rises of the force reached at ``s`` (m) have worn so far.
+
+        Each rise adds the flat punch's pressure under the increase,
+        singular at the rim, whose worn layer grows from the rise on: one
+        ``(s - s_j (m), (dF_j / F_final)^2)`` per rise (:meth:`rises`, with
+        ``before``), ``F_final`` the programme's last force, the run's
+        normal force.
+
+        Examples
+        --------
+        >>> LoadProgramme(10.0, ((1.0, 20.0),)).rim_layers(3.0)
+        ((3.0, 0.25), (2.0, 0.25))
+        """
+        return tuple((s - s_j, (rise / self.final_force) ** 2)
+                     for s_j, rise in self.rises(s, before=before))
+
     def snap(self, s):
         """``s`` (m) replaced by the breakpoint it reached within the slack, if any."""
         i = self._reached(s)

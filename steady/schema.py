@@ -195,6 +195,8 @@ class Key:
             return
         low, high = SCALE_RANGE
         for v in values:
+            if (math.isinf(v) and not self.finite) or (v == 0 and not self.low_open):
+                continue  # "no limit", or a value the key admits at its bound
             if not low <= v <= high:
                 given = (f"{shorten(shown)} {self.unit}" if len(values) == 1 and
                          not isinstance(shown, list)

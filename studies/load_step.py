@@ -9,7 +9,7 @@ close to steady.  Each run ends on the steady face of its last force (eq. 9;
 the linear law's face scales with the load).  The study records the
 histories (rms slope, face deviation from the final steady face, contact
 fraction, force) and the distance after the step at which each run is back
-within 1 % of its steady state (:meth:`transient.runin.RunResult.run_in_distance`),
+within 1 % of its steady state (:meth:`transient.result.RunResult.run_in_distance`),
 against the run-in distance from flat at constant load.
 
 What to expect (docs/model.md, "Load programmes"): the deviation is linear

@@ -78,7 +78,7 @@ def run_case(point, *, tol, distances):
     scene = _scene(point["case"])
     n = point["n"]
     problem = WearProblem.from_scene(scene, n=n)
-    result = run_in(problem, flat(problem.grid), RunOptions(tol=tol, snapshots=distances))
+    result = run_in(problem, flat(problem.grid), RunOptions(tol=tol, snapshots_s_star=distances))
     if not result.success:
         raise RuntimeError(f"{point}: run-in ended {result.status}: {result.message}")
     g0 = result.reference_slope

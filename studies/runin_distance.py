@@ -2,7 +2,7 @@
 
 From a flat face, :func:`transient.runin.run_in` (ESDIRK3, local error
 ``tol`` in ``f*``) wears biphasic Voronoi punches to their steady state.
-The run-in distance is :meth:`transient.runin.RunResult.run_in_distance`:
+The run-in distance is :meth:`transient.result.RunResult.run_in_distance`:
 the distance after which both the friction proxy (the history's continuum
 rms slope, :mod:`transient.history`) and the face (its rms deviation from
 the steady face of eq. 9 over the steady face's relief) stay within the

@@ -78,6 +78,7 @@ from transient.initial_face import flat
 from transient.options import RunOptions
 from transient.problem import WearProblem
 from transient.runin import run_in
+from transient.solver import StageSolver
 from transient.spatial_error import spatial_error
 from transient.stepping import SCHEMES
 
@@ -121,9 +122,9 @@ def scene(n=N):
                  wear=PowerLaw((K1, K1 * RATIO)), geometry=Voronoi(SEEDS, FILL, SEED))
 
 
-def build(n, *, contact_rtol=CONTACT_RTOL):
+def build(n):
     """The study's wear problem on the ``n x n`` grid."""
-    return WearProblem.from_scene(scene(n), n=n, contact_rtol=contact_rtol)
+    return WearProblem.from_scene(scene(n), n=n)
 
 
 def unit_cost(hs, face):
@@ -164,8 +165,8 @@ def run_scheme(n, scheme, tol, distances, *, companion=False):
     """
     problem = build(n)
     # No jump: the history up to the last distance is what is measured.
-    options = RunOptions(scheme=scheme, tol=tol, snapshots=distances,
-                         max_distance=distances[-1], jump_spread=0.0,
+    options = RunOptions(scheme=scheme, tol=tol, snapshots_s_star=distances,
+                         distance_limit=distances[-1] * problem.distance_scale, jump_spread=0.0,
                          spread_tol=1e-300, shape_tol=1e-300, max_steps=10 ** 6)
     t = time.perf_counter()
     result = run_in(problem, np.zeros((n, n)), options)
@@ -184,7 +185,7 @@ def run_scheme(n, scheme, tol, distances, *, companion=False):
     if companion:
         t = time.perf_counter()
         try:
-            extra = spatial_error(scene(n), flat, options, result, contact_rtol=CONTACT_RTOL)
+            extra = spatial_error(scene(n), flat, options, result)
         except ValueError as err:  # no admissible coarser grid
             logger.info("no companion run at n = %d: %s", n, err)
             return out
@@ -195,11 +196,11 @@ def run_scheme(n, scheme, tol, distances, *, companion=False):
 
 def run_baseline(n, distances, end):
     """The loop users write: fixed-step explicit Euler around a contact solve."""
-    problem = build(n, contact_rtol=1e-10)
+    problem = build(n)
     hs, face, wear = problem.halfspace, problem.face_mask, problem.coefficient_field
     s_star = problem.distance_scale
     p = solve_contact(hs, face, np.zeros((n, n)), FORCE, rtol=CONTACT_RTOL).pressure
-    limit = problem.stable_step(p) / s_star
+    limit = StageSolver(problem).stable_step(p) / s_star
     per = math.ceil(1e-4 / limit)          # steps per 1e-4 s*, so steps land on distances
     ds = 1e-4 / per * s_star
     w = np.zeros((n, n))

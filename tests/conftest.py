@@ -145,7 +145,7 @@ SCENES = {
     # A run-in: the gallery's "voronoi" geometry with k_1/k_0 = 10, snapshots.
     "runin": dict(n=32, coefficients=(1.0e-13, 1.0e-12), n_seeds=64,
                   fill_factors=(0.7, 0.3), seed=2029,
-                  transient={"tol": 1e-3, "snapshots": (0.1, 1.0)}),
+                  transient={"tol": 1e-3, "snapshots_s_star": (0.1, 1.0)}),
 }
 
 

@@ -189,17 +189,30 @@ CASES = [
          "unknown key 'bogus' in [transient]", ("transient",)),
     Case("[transient] scheme", scene(lambda t: with_section(t, "transient", 'scheme = "rk4"')),
          "unknown scheme 'rk4'", ("transient",)),
-    Case("[transient] snapshots", scene(lambda t: with_section(t, "transient",
-                                                               'snapshots = "often"')),
-         "[transient] snapshots must be an array of numbers each >= 0 (s*), got 'often'",
+    Case("[transient] snapshots_s_star", scene(lambda t: with_section(
+        t, "transient", 'snapshots_s_star = "often"')),
+         "[transient] snapshots_s_star must be an array of numbers each >= 0 (s*), got 'often'",
          ("transient",)),
+    # A distance that was in s* under its old name is refused, its value given in m (s* =
+    # 0.004 / (1e-13 1.3e6) m = 30769.2 m for this scene).
+    Case("[transient] snapshots in s*", scene(lambda t: with_section(
+        t, "transient", "snapshots = [0.1, 1]")),
+         "[transient] snapshots was a distance in units of s*; distances are now in m: "
+         "snapshot_distances ([0.1, 1] s* with this scene's s* = 30769.2 m is "
+         "snapshot_distances = [3076.92, 30769.2]), or snapshots_s_star = [0.1, 1] to keep "
+         "them in s*", ("transient",)),
+    Case("[transient] max_distance in s*", scene(lambda t: with_section(
+        t, "transient", "max_distance = 2.0")),
+         "distances are now in m: distance_limit (2.0 s* with this scene's s* = 30769.2 m is "
+         "distance_limit = 61538.5)", ("transient",)),
     Case("[transient] max_steps", scene(lambda t: with_section(t, "transient", "max_steps = 0")),
          "[transient] max_steps must be an integer >= 1, got 0", ("transient",)),
     Case("[transient] contact_rtol", scene(lambda t: with_section(t, "transient",
                                                                   "contact_rtol = 0.0")),
          "[transient] contact_rtol must be a number in (0, 1) (1), got 0.0", ("transient",)),
     Case("100,000 snapshots", scene(lambda t: with_key(with_section(
-        t, "transient", "snapshots = [" + ", ".join(f"{i}.0" for i in range(100_000)) + "]"),
+        t, "transient", "snapshots_s_star = [" + ", ".join(f"{i}.0" for i in range(100_000))
+        + "]"),
         "n", "256")), "a run-in at n = 256 with 100000 snapshots needs about", ("transient",)),
     Case("[initial_face] missing file", scene(lambda t: with_section(
         t, "initial_face", 'kind = "file"\npath = "h.npy"')), "h.npy' does not exist",

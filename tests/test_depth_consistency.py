@@ -34,10 +34,11 @@ def test_the_held_pressure_is_the_contact_pressure_of_the_held_face():
 
     def check(run):
         fresh = solve_contact(problem.halfspace.with_own_buffers(), face, run.height,
-                              problem.applied_force, rtol=1e-12).pressure
+                              run.solver.force, rtol=1e-12).pressure
         worst.append(np.max(np.abs(fresh - run.pressure)[face]) / run.pressure[face].mean())
 
     result = run_in(problem, np.zeros(problem.shape),
-                    RunOptions(tol=1e-6, max_distance=0.5), on_step=check)
+                    RunOptions(tol=1e-6, distance_limit=0.5 * problem.distance_scale),
+                    on_step=check)
     assert np.sum(result.history["crossings"]) > 0, "no pixel wore through"
     assert max(worst) < 1e-9, f"held pressure off its face's by {max(worst):.3g} pbar"

@@ -25,14 +25,9 @@ from steady.wear import PowerLaw
 from transient.history import Coating, crossings
 from transient.output import read_run, write_run
 from transient.problem import WearProblem
+from transient.result import COATING_HISTORY_UNITS, DEPTH_HISTORY_UNITS, HISTORY_UNITS
 from transient.run_in_distance import coating_distance
-from transient.runin import (
-    COATING_HISTORY_UNITS,
-    DEPTH_HISTORY_UNITS,
-    HISTORY_UNITS,
-    RunOptions,
-    run_in,
-)
+from transient.runin import RunOptions, run_in
 
 N = 31
 NAMES = ("matrix", "matrix twin", "filler")
@@ -52,7 +47,7 @@ def three_phases(n=N):
 def run(problem, columns=None):
     """A run-in to the steady state, with snapshots, of ``problem`` given ``columns``."""
     wear = WearProblem(with_columns(problem, columns))
-    return run_in(wear, np.zeros(problem.shape), RunOptions(tol=1e-3, snapshots=SNAPSHOTS))
+    return run_in(wear, np.zeros(problem.shape), RunOptions(tol=1e-3, snapshots_s_star=SNAPSHOTS))
 
 
 @pytest.fixture(scope="module")
@@ -342,7 +337,7 @@ def test_resumed_depth_run_repeats_the_history(tmp_path, swapped):
     whole, columns, _ = swapped
     problem = three_phases()
     wear = WearProblem(with_columns(problem, columns))
-    options = RunOptions(tol=1e-3, snapshots=SNAPSHOTS)
+    options = RunOptions(tol=1e-3, snapshots_s_star=SNAPSHOTS)
     first = run_in(wear, np.zeros(problem.shape), dataclasses.replace(options, max_steps=6))
     assert first.status != "steady", first.status
     write_run(tmp_path / "run.h5", first)

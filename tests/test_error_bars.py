@@ -23,6 +23,7 @@ from steady.wear import pressure_field
 from transient.comparison import SteadyComparison
 from transient.history import FaceEstimator
 from transient.problem import WearProblem
+from transient.solver import StageSolver
 
 N = 32
 K = (1e-13, 1e-12)
@@ -97,7 +98,7 @@ def test_an_unestimated_map_error_is_infinite_not_nan():
     estimator = FaceEstimator(problem, np.zeros(grid.shape))
     assert math.isfinite(estimator.map_error), f"map error {estimator.map_error}"
     estimator.map_error = math.inf
-    res = problem.contact(np.zeros(grid.shape))
+    res = StageSolver(problem).contact(np.zeros(grid.shape))
     for pressure in (res.pressure, np.zeros(grid.shape)):  # the latter: a zero slope
         fig = estimator.figures(1.0, np.zeros(grid.shape), pressure, res.approach)
         assert fig["rms_slope_error"] == math.inf, f"error bar {fig['rms_slope_error']}"

@@ -33,7 +33,7 @@ from conftest import scene_text, temporaries
 
 from steady.output import read_result
 from transient.output import backup_path, lock_path, read_run
-from transient.runin import HISTORY_UNITS
+from transient.result import HISTORY_UNITS
 
 pytestmark = pytest.mark.slow
 
@@ -351,7 +351,7 @@ def test_signals_at_random_moments_of_runin_transient(tmp_path):
     rng = np.random.default_rng(5261)
     scene = tmp_path / "scene.toml"
     scene.write_text(scene_text("runin", n=32, transient={"tol": 3e-5, "scheme": "sdirk2",
-                                                          "snapshots": (0.1, 1.0)}))
+                                                          "snapshots_s_star": (0.1, 1.0)}))
     reference = tmp_path / "reference.h5"
     status, err = finish(spawn(["-m", "transient", scene, "-o", reference], cwd=tmp_path))
     assert status == 0, f"the uninterrupted run: exit {status}: {err}"

@@ -27,7 +27,7 @@ import steady.cli.solve as steady_cli
 import transient.__main__ as cli
 from steady.output import read_result
 from transient.output import RunLock, backup_path, lock_path, read_run
-from transient.problem import WearProblem
+from transient.solver import StageSolver
 
 
 @pytest.fixture
@@ -168,7 +168,7 @@ def test_first_checkpoint_follows_the_first_step(tmp_path, scene, capsys, monkey
 
 # -- interrupts ----------------------------------------------------------------
 def _interrupt_at_solve(monkeypatch, k):
-    real = WearProblem.contact
+    real = StageSolver.contact
     calls = {"n": 0}
 
     def contact(self, *args, **kw):
@@ -177,7 +177,7 @@ def _interrupt_at_solve(monkeypatch, k):
             raise KeyboardInterrupt
         return real(self, *args, **kw)
 
-    monkeypatch.setattr(WearProblem, "contact", contact)
+    monkeypatch.setattr(StageSolver, "contact", contact)
 
 
 def test_interrupt_before_the_first_checkpoint(tmp_path, scene, capsys, monkeypatch):
@@ -246,7 +246,8 @@ def write_slow_scene(scene_file):
     """A run of a thousand steps or more (n = 64, SDIRK2, tol 1e-6): long enough to interrupt."""
     def write():
         return scene_file("runin", filename="slow.toml", n=64,
-                          transient={"scheme": "sdirk2", "tol": 1e-6, "snapshots": (0.1, 1.0)})
+                          transient={"scheme": "sdirk2", "tol": 1e-6,
+                                     "snapshots_s_star": (0.1, 1.0)})
     return write
 
 
@@ -358,7 +359,8 @@ def test_damaged_run_file_is_refused(stopped_run, capsys, damage, fragment):
     assert status == 2, f"exit {status}: {err}"
     assert line.startswith(f"error: run file {str(out)!r} is damaged: {fragment}"), line
     assert line.endswith(f"the previous checkpoint {str(backup_path(out))!r} (step 3, s = "
-                         f"0.000612691 s*) is intact: rename it to {str(out)!r} and --resume"), \
+                         f"18.852 m = 0.000612691 s*) is intact: rename it to {str(out)!r} and "
+                         f"--resume"), \
         line
     assert out.read_bytes() == damaged, "the damaged file must be left as it is"
     backup_path(out).replace(out)  # what the message says to do
@@ -394,7 +396,8 @@ def test_resume_with_another_scheme_is_recorded(stopped_run, capsys):
     assert status == 0, f"exit {status}: {err}"
     notes = err.splitlines()
     assert len(notes) == 1 and notes[0].startswith(
-        f"note: resuming {str(out)!r} at step 3, s = 0.000612691 s* with changed settings: "
+        f"note: resuming {str(out)!r} at step 3, s = 18.852 m = 0.000612691 s* with changed "
+        f"settings: "
         f"scheme 'esdirk3' -> 'bdf2'; max_steps 3 -> 100000; checkpoint_interval 0.0 -> "
         f"10.0"), f"stderr {err!r}"
     result, attrs, _ = read_run(out)
@@ -407,24 +410,28 @@ def test_resume_with_another_scheme_is_recorded(stopped_run, capsys):
 
 
 def test_passed_snapshots_are_reported_missing(tmp_path, scene_file, capsys):
-    first = scene_file("runin", filename="a.toml", transient={"tol": 1e-3, "snapshots": (1.0,)})
+    s_star = 0.004 / (1.0e-13 * 1.3e6)  # the "runin" scene's: L / (k_min E*)
+    first = scene_file("runin", filename="a.toml",
+                       transient={"tol": 1e-3, "snapshots_s_star": (1.0,)})
     out = tmp_path / "run.h5"
-    status, _, err = run_cli(cli, [first, "-o", out, "--max-distance", "0.5"], capsys)
+    status, _, err = run_cli(cli, [first, "-o", out, "--distance-limit", f"{0.5 * s_star!r}"],
+                             capsys)
     assert status == 1, f"exit {status}: {err}"
     more = scene_file("runin", filename="b.toml",
-                      transient={"tol": 1e-3, "snapshots": (0.1, 1.0)})
+                      transient={"tol": 1e-3, "snapshots_s_star": (0.1, 1.0)})
     status, _, err = run_cli(cli, [more, "-o", out, "--resume"], capsys)
     assert status == 0, f"exit {status}: {err}"
-    assert "note: snapshots at 0.1 s* were passed before this resume (at s = 0.5" in err and \
+    assert (f"note: snapshots at {0.1 * s_star:.6g} m were passed before this resume (at s = "
+            f"{0.5 * s_star:.6g} m)") in err and \
         "are not in the file (listed in the attribute snapshots_missing)" in err, err
     result, attrs, _ = read_run(out)
-    s_star = result.distance_scale
+    assert result.distance_scale == s_star, "the scene's s*"
     assert np.allclose(attrs["snapshots_missing"], [0.1 * s_star], rtol=1e-12), \
         f"snapshots_missing {attrs['snapshots_missing']}"
     assert np.allclose(result.snapshot_distance, [s_star], rtol=1e-12), \
         f"stored snapshots {result.snapshot_distance / s_star} s*"
     parts = json.loads(attrs["settings_history"])
-    assert parts[-1]["snapshots_missing"] == [pytest.approx(0.1)], parts[-1]
+    assert parts[-1]["snapshots_missing"] == [pytest.approx(0.1 * s_star)], parts[-1]
 
 
 def test_resume_of_a_finished_run_leaves_it_untouched(tmp_path, scene, capsys):

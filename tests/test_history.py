@@ -26,6 +26,7 @@ from transient.history import (
     rim_layer_excess,
 )
 from transient.runin import RunOptions, run_in
+from transient.solver import StageSolver
 
 FAST = RunOptions(tol=1e-3)
 VORONOI = GEOMETRIES["voronoi"]
@@ -120,7 +121,7 @@ def test_partial_contact_estimate_is_the_face_slope(n):
     problem = wear_problem("homogeneous", (1.0,), n)
     height = initial_face.crowned(problem.grid, sphere)
     estimator = FaceEstimator(problem, height)
-    contact = problem.contact(height)
+    contact = StageSolver(problem).contact(height)
     figures = estimator.figures(1e-12, height, contact.pressure, contact.approach)
     exact = initial_face.exact_statistics("crowned", RADIUS, sphere_radius=sphere).rms_slope
     assert figures["rms_slope_source"] == SOURCE_PARTIAL_CONTACT, "partial contact expected"
@@ -221,10 +222,11 @@ def test_single_precision_figures_are_the_double_ones(n):
     h0 = initial_face.flat(problem.grid)
     single, double = FaceEstimator(problem, h0), FaceEstimator(problem, h0, precision="double")
     assert single.map_error == double.map_error, "the map's error is double precision"
-    result = run_in(problem, h0, dataclasses.replace(FAST, snapshots=(0.1,), max_distance=0.1))
+    result = run_in(problem, h0, dataclasses.replace(
+        FAST, snapshots_s_star=(0.1,), distance_limit=0.1 * problem.distance_scale))
     height = np.where(problem.face_mask, result.snapshot_height[0], 0.0)
     states = [(result.snapshot_distance[0], height, result.snapshot_pressure[0])]
-    first = problem.contact(h0)
+    first = StageSolver(problem).contact(h0)
     states.append((1e-5 * result.distance_scale, h0, first.pressure))
     for distance, height, pressure in states:
         a = double.figures(distance, height, np.nan_to_num(pressure), 0.0)

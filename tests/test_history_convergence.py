@@ -30,7 +30,8 @@ def test_homogeneous_history_converges_to_the_axisymmetric_reference():
     for n in grids:
         problem = wear_problem(GEOMETRIES["homogeneous"], (1.0,), n)
         result = run_in(problem, np.zeros((n, n)), RunOptions(
-            tol=1e-5, snapshots=DISTANCES, max_distance=DISTANCES[-1], jump_spread=0.0))
+            tol=1e-5, snapshots_s_star=DISTANCES,
+            distance_limit=DISTANCES[-1] * problem.distance_scale, jump_spread=0.0))
         g0 = result.reference_slope
         s = result.history["distance"] / result.distance_scale
         at = [int(np.argmin(np.abs(s - d))) for d in DISTANCES]

@@ -21,7 +21,7 @@ from steady.scene import parse_scene
 from transient import RunOptions, WearProblem, compare_with_steady, run_in
 from transient.cli import runin as runin_cli
 from transient.output import read_run, write_run
-from transient.runin import HISTORY_UNITS
+from transient.result import HISTORY_UNITS
 from transient.stepping import SCHEMES
 
 STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
@@ -87,7 +87,7 @@ def test_before_a_step_up_the_history_is_the_constant_load_one():
     # load: the face, and the rms slope, whose rim layer the estimator weighs by
     # (10 N / 20 N)^2 against the final force's grad_f0 (equal to round-off, measured
     # 2.2e-16; the worn depth 9.2e-16).  At the breakpoint the face has not moved.
-    options = RunOptions(scheme="bdf2", step=0.02, max_distance=0.1)
+    options = RunOptions(scheme="bdf2", fixed_step=0.02 * S_STAR, distance_limit=0.1 * S_STAR)
     plain, _ = run(options=options)
     result, _ = run([(0.1 * S_STAR, 20.0)], options=options)
     assert result.history["force"][-1] == 20.0, "the run did not reach the breakpoint"
@@ -162,10 +162,11 @@ def test_a_load_step_from_the_steady_face_is_the_run_in_from_flat_scaled():
     # restarts at the breakpoint as at s = 0; without the restart the two would differ.
     s_b = 0.2
     step = _from_steady_face([(s_b * S_STAR, 20.0)],
-                             RunOptions(scheme="bdf2", step=0.02, max_distance=s_b + 0.4))
+                             RunOptions(scheme="bdf2", fixed_step=0.02 * S_STAR,
+                             distance_limit=(s_b + 0.4) * S_STAR))
     problem = WearProblem.from_scene(parse_scene(scene_text("runin", normal_force=20.0), "."))
     flat = run_in(problem, np.zeros(problem.shape),
-                  RunOptions(scheme="bdf2", step=0.02, max_distance=0.4))
+                  RunOptions(scheme="bdf2", fixed_step=0.02 * S_STAR, distance_limit=0.4 * S_STAR))
     distance = step.history["distance"]
     at = int(np.flatnonzero(distance == s_b * S_STAR)[0])
     after, reference = step.history["face_deviation"][at:], flat.history["face_deviation"]
@@ -181,7 +182,8 @@ def test_a_load_step_down_lifts_the_rim_off():
     # contact right after the step) and the response is no longer the scaled run-in.
     s_b = 0.2
     step = _from_steady_face([(s_b * S_STAR, 5.0)],
-                             RunOptions(scheme="bdf2", step=0.02, max_distance=s_b + 0.1))
+                             RunOptions(scheme="bdf2", fixed_step=0.02 * S_STAR,
+                             distance_limit=(s_b + 0.1) * S_STAR))
     distance, contact = step.history["distance"], step.history["contact_fraction"]
     before = distance < s_b * S_STAR
     assert np.all(contact[before] == 1.0), "contact lost before the step"
@@ -224,7 +226,7 @@ def test_run_file_marks_the_breakpoints(tmp_path, capsys):
     programme = [(0.05 * S_STAR, 20.0)]
     scene = tmp_path / "scene.toml"
     scene.write_text(programme_text(programme, transient={"tol": 1e-3,
-                                                          "snapshots": (0.01, 0.1)}))
+                                                          "snapshots_s_star": (0.01, 0.1)}))
     out = tmp_path / "run.h5"
     status, _, err = run_cli(runin_cli, [scene, "-o", out], capsys)
     assert status == 0, err
@@ -242,12 +244,12 @@ def test_run_file_marks_the_breakpoints(tmp_path, capsys):
 def test_resume_refuses_another_programme(tmp_path, capsys):
     scene = tmp_path / "scene.toml"
     scene.write_text(programme_text([(0.05 * S_STAR, 20.0)],
-                                    transient={"tol": 1e-3, "max_distance": 0.1}))
+                                    transient={"tol": 1e-3, "distance_limit": 0.1 * S_STAR}))
     out = tmp_path / "run.h5"
     status, _, err = run_cli(runin_cli, [scene, "-o", out], capsys)
     assert status == 1, f"a stopped run exits 1, got {status}: {err}"
     scene.write_text(programme_text([(0.05 * S_STAR, 30.0)],
-                                    transient={"tol": 1e-3, "max_distance": 0.2}))
+                                    transient={"tol": 1e-3, "distance_limit": 0.2 * S_STAR}))
     status, _, err = run_cli(runin_cli, [scene, "-o", out, "--resume"], capsys)
     assert status == 2 and "was run with another [load] programme" in err, (status, err)
 

@@ -69,7 +69,7 @@ if kind == "steady":
 else:
     problem = WearProblem.from_scene(scene)
     options = RunOptions(tol=1e-3, max_steps=k + 3, checkpoint_interval=0,
-                         snapshots=tuple(1e-9 * (i + 1) for i in range(k)))
+                         snapshots_s_star=tuple(1e-9 * (i + 1) for i in range(k)))
     result = run_in(problem, problem.face_mask * 0.0, options,
                     on_checkpoint=lambda r: write_run(d / "run.h5", r))
     assert result.snapshot_height.shape[0] == k

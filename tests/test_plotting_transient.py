@@ -44,7 +44,7 @@ def steady(wide_problem):
 @pytest.fixture(scope="module")
 def run_file(tmp_path_factory, wide_problem, steady):
     result = run_in(wide_problem, initial_face.flat(wide_problem.grid),
-                    RunOptions(tol=1e-2, snapshots=(0.1,)))
+                    RunOptions(tol=1e-2, snapshots_s_star=(0.1,)))
     path = tmp_path_factory.mktemp("run") / "run.h5"
     write_run(path, result, comparison=compare_with_steady(result, steady, wide_problem))
     return path

@@ -133,8 +133,9 @@ def test_history_ends_with_the_dynamics(disk64):
 
 
 def test_a_run_stopped_early_has_not_reached_it():
-    stopped = run_in(WearProblem.from_scene(disk_scene(32)), flat(Circle(1.0).grid(32)),
-                     RunOptions(tol=1e-4, max_distance=0.5))
+    problem = WearProblem.from_scene(disk_scene(32))
+    stopped = run_in(problem, flat(Circle(1.0).grid(32)),
+                     RunOptions(tol=1e-4, distance_limit=0.5 * problem.distance_scale))
     assert stopped.status == "stopped", stopped.message
     found = stopped.run_in_distance(0.01)
     assert not found.reached and math.isnan(found.distance_m) and found.time_s is None, found

@@ -24,8 +24,9 @@ from transient import initial_face
 from transient.comparison import compare_with_steady
 from transient.control import MAX_JUMPS
 from transient.output import read_run, write_run
-from transient.problem import StepFailure
-from transient.runin import HISTORY_UNITS, RunOptions, run_in
+from transient.result import HISTORY_UNITS
+from transient.runin import RunOptions, run_in
+from transient.solver import StageSolver, StepFailure
 
 FAST = RunOptions(tol=1e-3)
 VORONOI = GEOMETRIES["voronoi"]
@@ -189,7 +190,7 @@ def _same_result(a, b):
 
 def test_resume_from_any_checkpoint_is_bitwise_identical(tmp_path):
     problem = wear_problem(VORONOI, (1.0, 10.0), 32)
-    options = RunOptions(tol=1e-3, checkpoint_interval=0.0, snapshots=(0.01, 0.5))
+    options = RunOptions(tol=1e-3, checkpoint_interval=0.0, snapshots_s_star=(0.01, 0.5))
     checkpoints = []
     full = run_in(problem, np.zeros((32, 32)), options, on_checkpoint=checkpoints.append)
     assert full.status == "steady", full.message
@@ -212,7 +213,7 @@ def test_stagnating_jumps_stop_at_the_same_point_after_a_resume(tmp_path):
     # MAX_JUMPS of them.  Resumed from a checkpoint written between its
     # jumps, it must stop where the uninterrupted run does: the jump count
     # is part of the state a checkpoint carries.
-    options = RunOptions(tol=1e-3, jump_spread=math.inf, jump_step=0.01,
+    options = RunOptions(tol=1e-3, jump_spread=math.inf, jump_step_s_star=0.01,
                          checkpoint_interval=0.0)
     problem = wear_problem(RODS, (1.0, 1.7), 32)
     checkpoints = []
@@ -253,7 +254,7 @@ def test_run_file_without_jump_count_reads_as_none_taken(tmp_path):
 
 def test_run_file_round_trip(tmp_path):
     result, cmp = run_and_compare(RODS, (1.0, 1.7), 32,
-                                  options=RunOptions(tol=1e-3, snapshots=(0.0, 0.1, 1.0)))
+                                  options=RunOptions(tol=1e-3, snapshots_s_star=(0.0, 0.1, 1.0)))
     path = tmp_path / "run.h5"
     write_run(path, result, arrays={"phase": RODS.labels(32)}, comparison=cmp)
     back, attrs, arrays = read_run(path)
@@ -292,41 +293,41 @@ def test_read_run_rejects_other_files(tmp_path):
         read_run(path)
 
 
-def test_failed_steps_are_retried_smaller():
+def test_failed_steps_are_retried_smaller(monkeypatch):
     problem = wear_problem(RODS, (1.0, 1.7), 32)
-    real = problem.contact
+    real = StageSolver.contact
     calls = {"n": 0}
 
-    def flaky(height, **kw):
+    def flaky(solver, height, **kw):
         calls["n"] += 1
         if calls["n"] in (5, 6, 7):
             raise StepFailure("injected failure")
-        return real(height, **kw)
+        return real(solver, height, **kw)
 
-    problem.contact = flaky
+    monkeypatch.setattr(StageSolver, "contact", flaky)
     result = run_in(problem, np.zeros((32, 32)), FAST)
     assert result.status == "steady", result.message
     assert result.failures == 3, f"{result.failures} failures recorded"
 
 
-def test_persistent_failure_stops_with_a_resumable_state():
+def test_persistent_failure_stops_with_a_resumable_state(monkeypatch):
     problem = wear_problem(RODS, (1.0, 1.7), 32)
-    real = problem.contact
+    real = StageSolver.contact
     calls = {"n": 0}
 
-    def broken(height, **kw):
+    def broken(solver, height, **kw):
         calls["n"] += 1
         if calls["n"] > 10:
             raise StepFailure("solver gave up")
-        return real(height, **kw)
+        return real(solver, height, **kw)
 
-    problem.contact = broken
+    monkeypatch.setattr(StageSolver, "contact", broken)
     result = run_in(problem, np.zeros((32, 32)), dataclasses.replace(FAST, max_failures=4))
     assert result.status == "failed", "a persistent failure must stop the run"
     assert "failed 4 times" in result.message and "solver gave up" in result.message, \
         "expected 'failed 4 times' in result.message and 'solver gave up' in result.message"
     assert np.all(np.isfinite(result.pressure)), "failed run returned non-finite pressure"
-    problem.contact = real
+    monkeypatch.setattr(StageSolver, "contact", real)
     resumed = run_in(problem, None, FAST, resume=result)
     assert resumed.status == "steady", resumed.message
 
@@ -346,8 +347,12 @@ def test_stopped_run_resumes_to_steady():
     ("tol", 0.0, r"tol must be a number > 0 \(f\*\), got 0.0"),
     ("spread_tol", -1.0, r"spread_tol must be a number > 0 \(1\), got -1.0"),
     ("max_steps", 0, r"max_steps must be an integer >= 1, got 0"),
-    ("snapshots", (-1.0,), r"snapshots must be an array of numbers each >= 0 \(s\*\)"),
-    ("step", math.inf, r"step must be a number > 0 \(s\*\), got inf"),
+    ("snapshot_distances", (-1.0,),
+     r"snapshot_distances must be an array of numbers each >= 0 \(m\)"),
+    ("snapshots_s_star", (-1.0,),
+     r"snapshots_s_star must be an array of numbers each >= 0 \(s\*\)"),
+    ("fixed_step", math.inf, r"fixed_step must be a number > 0 \(m\), got inf"),
+    ("distance_limit", -1.0, r"distance_limit must be a number > 0 \(m\), got -1.0"),
 ])
 def test_bad_options_are_named(field, value, match):
     with pytest.raises(ValueError, match=match):

@@ -55,7 +55,8 @@ def run(scene, n):
     fields / f*, shape (3, n, n), NaN off the face).
     """
     problem = WearProblem.from_scene(dataclasses.replace(scene, n=n))
-    options = RunOptions(tol=1e-3, snapshots=SNAPSHOTS, max_distance=SNAPSHOTS[-1])
+    options = RunOptions(tol=1e-3, snapshots_s_star=SNAPSHOTS,
+                         distance_limit=SNAPSHOTS[-1] * problem.distance_scale)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ValidityWarning)
         result = run_in(problem, np.zeros(problem.shape), options)

@@ -27,6 +27,7 @@ from steady.outline import Circle
 from steady.wear import PowerLaw
 from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
+from transient.solver import StageSolver
 from transient.stepping import ESDIRK3, SCHEMES, ExplicitEuler, StepState, get_scheme
 
 N_EXACT = 12
@@ -42,10 +43,15 @@ def run_options(**options):
     return RunOptions(contact_rtol=RTOL, **options)
 
 
-def make_problem(n, ratio, *, exponent=1.0, rtol=RTOL):
+def make_problem(n, ratio, *, exponent=1.0):
     """The 9-seed Voronoi map (fits n = 12) with wear ratio ``ratio``."""
     wear = PowerLaw([K1 * r for r in (1.0, ratio)], exponent=exponent)
-    return WearProblem(problem(GEOMETRIES["voronoi_small"], wear, n=n), contact_rtol=rtol)
+    return WearProblem(problem(GEOMETRIES["voronoi_small"], wear, n=n))
+
+
+def solver_of(problem):
+    """The contact solves of ``problem`` to :data:`RTOL`."""
+    return StageSolver(problem, contact_rtol=RTOL)
 
 
 def uniform_pressure_face(problem):
@@ -93,8 +99,9 @@ def shape_error(result, idx, w_exact):
 
 def fixed_run(scheme, steps, h0):
     problem = make_problem(N_EXACT, 10.0)
-    options = run_options(scheme=scheme, step=DISTANCE / steps, max_distance=DISTANCE,
-                         spread_tol=1e-300, shape_tol=1e-300)
+    s_star = problem.distance_scale
+    options = run_options(scheme=scheme, fixed_step=DISTANCE / steps * s_star,
+                          distance_limit=DISTANCE * s_star, spread_tol=1e-300, shape_tol=1e-300)
     result = run_in(problem, h0, options)
     assert result.status == "stopped", result.message
     assert result.steps == steps, f"{scheme}: {result.steps} steps, expected {steps}"
@@ -112,8 +119,8 @@ ADAPTIVE_BOUND = {1: 1e-3, 2: 1.5e-4, 3: 2e-5}
 def test_adaptive_scheme_matches_exact_run_in(name, exact):
     h0, idx, w_exact = exact
     problem = make_problem(N_EXACT, 10.0)
-    options = run_options(scheme=name, tol=1e-5, max_distance=DISTANCE, spread_tol=1e-300,
-                         shape_tol=1e-300)
+    options = run_options(scheme=name, tol=1e-5, distance_limit=DISTANCE * problem.distance_scale,
+                          spread_tol=1e-300, shape_tol=1e-300)
     result = run_in(problem, h0, options)
     assert result.status == "stopped", result.message
     assert result.distance == pytest.approx(DISTANCE * result.distance_scale, rel=1e-12), \
@@ -175,26 +182,26 @@ def test_esdirk3_tableau_is_third_order_l_stable_and_stiffly_accurate():
 
 def test_explicit_euler_refuses_steps_beyond_stability_limit():
     problem = make_problem(16, 100.0)
+    solver = solver_of(problem)
     h0 = uniform_pressure_face(problem)
-    res = problem.contact(h0)
+    res = solver.contact(h0)
     state = StepState(h0, res.pressure, res.approach)
-    limit = problem.stable_step(res.pressure)
+    limit = solver.stable_step(res.pressure)
     # The limit is of the order of h / (k_max E*) (docs/model.md, "Wear and time integration").
     assert 0.5 < limit / problem.fast_distance < 2.5, \
         f"limit {limit:.3g} m vs h/(k_max E*) {problem.fast_distance:.3g} m"
     with pytest.raises(ValueError, match="stability limit"):
-        ExplicitEuler().step(problem, state, 1.5 * limit)
-    ExplicitEuler().step(problem, state, 0.99 * limit)
+        ExplicitEuler().step(solver, state, 1.5 * limit)
+    ExplicitEuler().step(solver, state, 0.99 * limit)
     with pytest.raises(ValueError, match="stability limit"):
-        run_in(problem, h0, run_options(scheme="explicit_euler",
-                                       step=2 * limit / problem.distance_scale))
+        run_in(problem, h0, run_options(scheme="explicit_euler", fixed_step=2 * limit))
 
 
 def test_adaptive_explicit_euler_stays_below_its_limit():
     problem = make_problem(16, 100.0)
     result = run_in(problem, uniform_pressure_face(problem),
                     run_options(scheme="explicit_euler", tol=1e-2, max_steps=200))
-    limit = problem.stable_step(result.pressure)
+    limit = solver_of(problem).stable_step(result.pressure)
     assert np.max(result.history["step"]) <= 0.9 * limit * (1 + 1e-12), \
         "adaptive explicit Euler exceeded 0.9 x its stability limit"
     assert np.all(np.isfinite(result.history["rms_slope"])), "non-finite history"
@@ -204,11 +211,12 @@ def test_huge_implicit_step_is_the_steady_state():
     # (K + ds k) p = d - w: as ds -> infinity, k p -> const (eq. 3-7) with an
     # error of order s* / ds.
     problem = make_problem(16, 1e3)
+    solver = solver_of(problem)
     h0 = np.zeros((16, 16))
-    res0 = problem.contact(h0)
+    res0 = solver.contact(h0)
     for ratio in (1e4, 1e8):
         state = StepState(h0, res0.pressure, res0.approach)
-        trial = get_scheme("implicit_euler").step(problem, state,
+        trial = get_scheme("implicit_euler").step(solver, state,
                                                   ratio * problem.distance_scale)
         rate = problem.rate(trial.pressure)[problem.face_mask]
         spread = (rate.max() - rate.min()) / rate.mean()
@@ -234,12 +242,13 @@ def test_bad_wear_coefficient_is_named(bad):
 def test_power_law_implicit_step_solves_the_nonlinear_stage(exponent):
     # w = w0 + ds k P(w)^m exactly (Newton on the linearised shift).
     problem = make_problem(16, 10.0, exponent=exponent)
+    solver = solver_of(problem)
     h0 = uniform_pressure_face(problem)
-    res0 = problem.contact(h0)
+    res0 = solver.contact(h0)
     ds = 0.3 * problem.distance_scale
-    w, res = problem.implicit(h0, ds, res0.pressure)
+    w, res = solver.implicit(h0, ds, res0.pressure)
     # The face is consistent with its own contact pressure ...
-    again = problem.contact(w, x0=res.pressure)
+    again = solver.contact(w, x0=res.pressure)
     scale = problem.pixel_mean_pressure
     assert np.max(np.abs(again.pressure - res.pressure)) < 1e-6 * scale, \
         "implicit stage face and pressure disagree"
@@ -258,9 +267,11 @@ FINE_DISTANCE = 0.3  # s*
 def fine_run(scheme, steps, exponent):
     """Fixed-step run at n = 32, k2/k1 = 10 (h / (k_max E*) = s*/160), from w0 = -K pbar."""
     problem = make_problem(32, 10.0, exponent=exponent)
+    s_star = problem.distance_scale
     r = run_in(problem, uniform_pressure_face(problem),
-               run_options(scheme=scheme, step=FINE_DISTANCE / steps, max_distance=FINE_DISTANCE,
-                          spread_tol=1e-300, shape_tol=1e-300))
+               run_options(scheme=scheme, fixed_step=FINE_DISTANCE / steps * s_star,
+                           distance_limit=FINE_DISTANCE * s_star, spread_tol=1e-300,
+                           shape_tol=1e-300))
     assert r.status == "stopped", r.message
     return (r.height + r.offset)[problem.face_mask], r.depth_scale
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from transient.output import backup_path, history_cf, read_run
-from transient.runin import HISTORY_UNITS
+from transient.result import HISTORY_UNITS
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -23,7 +23,7 @@ def write_scene(scene_file):
     def write(*, n=32, tol=1e-3, filename="s.toml", coefficients=(1.0e-13, 1.0e-12),
               **transient):
         return scene_file("runin", filename=filename, n=n, coefficients=coefficients,
-                          transient={"tol": tol, "snapshots": (0.1, 1.0), **transient})
+                          transient={"tol": tol, "snapshots_s_star": (0.1, 1.0), **transient})
     return write
 
 
@@ -143,7 +143,7 @@ def test_resume_refuses_another_scene(tmp_path, write_scene):
         "expected cli(scene, '-o', out, '--max-steps', '2', cwd=tmp_path).returncode == 1"
     other = write_scene(filename="o.toml", coefficients=(1.0e-13, 2.0e-12))
     proc = cli(other, "-o", out, "--resume", cwd=tmp_path)
-    assert proc.returncode == 2 and "wear coefficients" in proc.stderr, proc.stderr
+    assert proc.returncode == 2 and "another wear law" in proc.stderr, proc.stderr
 
 
 def test_sigkill_at_any_moment_then_resume_is_bitwise_identical(tmp_path, write_scene):

@@ -54,10 +54,11 @@ from transient.comparison import compare_with_steady
 from transient.contact import solve_contact
 from transient.output import read_run, write_run
 from transient.problem import WearProblem
-from transient.runin import HISTORY_UNITS, RunOptions, run_in
+from transient.result import HISTORY_UNITS
+from transient.runin import RunOptions, run_in
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-FAST = RunOptions(tol=1e-3, snapshots=(0.01, 0.1, 1.0))
+FAST = RunOptions(tol=1e-3, snapshots_s_star=(0.01, 0.1, 1.0))
 
 #: A tread block of aspect 1:2 (x: 4 mm, y: 8 mm), L = 4 mm like the epoxy disk.
 BLOCK = Rectangle(4e-3, 8e-3)
@@ -315,7 +316,7 @@ def test_history_of_other_outlines_converges_with_the_grid(outline):
     for n in (48, 96, 192):
         problem = problem_on(outline, Homogeneous(), (1.0,), n)
         result = run_in(problem, initial_face.flat(problem.grid),
-                        RunOptions(tol=1e-4, snapshots=tuple(targets)))
+                        RunOptions(tol=1e-4, snapshots_s_star=tuple(targets)))
         assert result.status == "steady", result.message
         h, s = result.history, result.history["distance"]
         at = targets * result.distance_scale
@@ -545,7 +546,7 @@ def test_command_line_runs_a_rectangle_and_names_its_reference_slope(tmp_path, s
     from test_transient_cli import cli
 
     scene = scene_file(punch={"shape": "rectangle", "width": 0.004, "length": 0.008}, n=48,
-                       transient={"tol": 1e-3, "snapshots": (0.1,)})
+                       transient={"tol": 1e-3, "snapshots_s_star": (0.1,)})
     out, png = tmp_path / "run.h5", tmp_path / "run.png"
     proc = cli(scene, "-o", out, "--plot", png, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr

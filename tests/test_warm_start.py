@@ -1,6 +1,6 @@
 """The warm start of the implicit stages on a grid of several summation blocks.
 
-:class:`transient.problem.WarmStart` sums its products block by block
+:class:`transient.warm_start.WarmStart` sums its products block by block
 (``transient.problem._BLOCK`` columns at a time); the grids of the other
 warm-start tests (tests/test_preconditioners.py) fit in one block.  Here the
 grid holds one full block and a partial one.
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from conftest import wear_problem
 
-from transient import problem as problem_module
-from transient.problem import WarmStart
+from transient import warm_start as warm_start_module
+from transient.warm_start import WarmStart
 
 N = 272  # 73984 pixels: one block of 65536 and a partial one
 
@@ -19,7 +19,7 @@ N = 272  # 73984 pixels: one block of 65536 and a partial one
 @pytest.fixture(scope="module")
 def history():
     """A wear problem at ``N`` and a history of four pressures (five pushed) carrying one load."""
-    assert N * N > problem_module._BLOCK, "the grid must span more than one block"
+    assert N * N > warm_start_module._BLOCK, "the grid must span more than one block"
     problem = wear_problem("voronoi", (1.0, 10.0), N)
     rng = np.random.default_rng(15485863)
     history = WarmStart(problem, size=4)

@@ -25,7 +25,8 @@ from steady.wear import PowerLaw
 from transient import output as run_output
 from transient.output import read_run, write_run
 from transient.problem import WearProblem
-from transient.runin import HISTORY_UNITS, RunOptions, run_in
+from transient.result import HISTORY_UNITS
+from transient.runin import RunOptions, run_in
 
 NAMES = ("epoxy", "bronze filler")
 N = 24
@@ -50,7 +51,7 @@ def files(tmp_path_factory):
     problem = named_problem()
     steady = solve(problem)
     result_path = write_result(where / "result.h5", steady, phase_names=NAMES)
-    run = run_in(WearProblem(problem), np.zeros(problem.shape), RunOptions(snapshots=(0.5,)))
+    run = run_in(WearProblem(problem), np.zeros(problem.shape), RunOptions(snapshots_s_star=(0.5,)))
     run_path = where / "run.h5"
     write_run(run_path, run)
     fit = fit_face(MeasuredFace(steady.face, problem.grid.h), problem)

@@ -9,8 +9,12 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
 - :mod:`transient.preconditioners` -- registered preconditioners of the
   contact solver;
 - :mod:`transient.initial_face` -- registered initial face shapes;
-- :mod:`transient.problem` -- the discretised wear problem and its factory
-  from a scene;
+- :mod:`transient.problem` -- the discretised wear problem (fixed) and its
+  factory from a scene;
+- :mod:`transient.solver` -- the stage solver: the contact solves of a run
+  and the state they carry (tolerances, counters, the force and section of
+  the current point); :mod:`transient.warm_start` -- the warm start of its
+  implicit stages;
 - :mod:`transient.depth` -- the worn depth as a function of the wear work,
   across the interfaces of phases that change with depth;
 - :mod:`transient.stepping` -- the registered time integrators;
@@ -22,8 +26,9 @@ equalise and the face reaches the steady state of :mod:`steady`.  Modules:
   the same run on a coarser grid;
 - :mod:`transient.axisymmetric` -- the axisymmetric run-in of the
   homogeneous cylinder, the reference of the history;
-- :mod:`transient.runin` -- the run loop, its result and the state a
-  resumed run needs, history and checkpoints;
+- :mod:`transient.runin` -- the run loop and its checkpoints;
+  :mod:`transient.recording` -- the history and the snapshots it records;
+  :mod:`transient.result` -- its result and the state a resumed run needs;
 - :mod:`transient.run_in_distance` -- the run-in distance within a tolerance
   of the steady state, with its uncertainty;
 - :mod:`transient.comparison` -- agreement with the steady face;
@@ -57,7 +62,7 @@ _MODULE_OF = {
     "FORMAT": "output",
     "FORMAT_VERSION": "output",
     "FourierPreconditioner": "preconditioners",
-    "HISTORY_UNITS": "runin",
+    "HISTORY_UNITS": "result",
     "INITIAL_FACES": "initial_face",
     "ImplicitEuler": "stepping",
     "InitialFace": "scene",
@@ -65,17 +70,19 @@ _MODULE_OF = {
     "PRECONDITIONERS": "preconditioners",
     "RunInDistance": "run_in_distance",
     "RunOptions": "options",
-    "RunResult": "runin",
-    "RunState": "runin",
+    "RunResult": "result",
+    "RunState": "result",
     "SCHEMES": "stepping",
     "SDIRK2": "stepping",
     "Scheme": "stepping",
     "SteadyComparison": "comparison",
     "StepController": "control",
-    "StepFailure": "problem",
+    "StageSolver": "solver",
+    "StepFailure": "solver",
     "StepState": "stepping",
     "StopTests": "control",
     "Trial": "stepping",
+    "WarmStart": "warm_start",
     "WearProblem": "problem",
     "compare_with_steady": "comparison",
     "crowned": "initial_face",

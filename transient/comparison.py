@@ -119,7 +119,7 @@ def compare_with_steady(result, steady, problem):
 
     Parameters
     ----------
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
     steady : steady.solution.SteadyResult
         For the same grid, phases, wear coefficients, force and exponent
         (:func:`steady.solution.solve` on ``problem.halfspace`` and

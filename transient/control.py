@@ -134,7 +134,7 @@ class StepController:
 
     Parameters
     ----------
-    options : transient.runin.RunOptions
+    options : transient.options.RunOptions
     s_star : float, m
         Run-in distance ``s*``.
     """
@@ -142,15 +142,15 @@ class StepController:
     def __init__(self, options, s_star):
         self.options = options
         self.s_star = s_star
-        self.fixed = options.step is not None
+        self.fixed = options.fixed_step is not None
 
     def first_step(self, h, scale):
         """Length of the first attempt, m (``h`` the pixel size, ``scale`` L, a disk's radius)."""
         o = self.options
-        if o.step is not None:
-            return o.step * self.s_star
-        if o.initial_step is not None:
-            return o.initial_step * self.s_star
+        if o.fixed_step is not None:
+            return o.fixed_step
+        if o.first_step is not None:
+            return o.first_step
         return INITIAL_STEP_FACTOR * math.sqrt(o.tol) * h / scale * self.s_star
 
     def explicit_limit(self, ds, stable_step):
@@ -164,8 +164,9 @@ class StepController:
         limit = EXPLICIT_SAFETY * stable_step
         if self.fixed and ds > limit / EXPLICIT_SAFETY:
             raise ValueError(
-                f"fixed step {ds / self.s_star:.6g} s* exceeds the explicit Euler "
-                f"stability limit {limit / EXPLICIT_SAFETY / self.s_star:.6g} s*")
+                f"fixed step {ds:.6g} m ({ds / self.s_star:.6g} s*) exceeds the explicit "
+                f"Euler stability limit {limit / EXPLICIT_SAFETY:.6g} m "
+                f"({limit / EXPLICIT_SAFETY / self.s_star:.6g} s*)")
         return min(ds, limit)
 
     @staticmethod
@@ -182,7 +183,7 @@ class StepController:
     def after_accept(self, ds, err, scheme):
         """Next step after an accepted one of length ``ds`` with scaled error ``err``."""
         if self.fixed:
-            return self.options.step * self.s_star
+            return self.options.fixed_step
         q = scheme.error_order
         growth = min(scheme.max_growth,
                      SAFETY * err ** (-1.0 / (q + 1)) if err > 0 else scheme.max_growth)
@@ -226,7 +227,7 @@ class StopTests:
     the shape changes by less than ``shape_tol`` f* per s* (across
     interfaces: once the face is below every interface); it ends
     (resumable) at ``end_depth`` of mean worn depth (status ``"depth"``),
-    ``max_distance`` or ``max_steps``.  Once the spread is
+    ``distance_limit`` or ``max_steps``.  Once the spread is
     below ``jump_spread`` and no snapshot is pending it jumps; after
     ``MAX_JUMPS`` jumps without reaching the steady state it stops as
     stagnating.  ``max_failures`` failed attempts in a row (one at a fixed
@@ -234,11 +235,11 @@ class StopTests:
 
     The tests hold no state of the run: the loop hands them the figures
     they judge (the jump count is part of the run's checkpointed state,
-    :class:`transient.runin.RunState`).
+    :class:`transient.result.RunState`).
 
     Parameters
     ----------
-    options : transient.runin.RunOptions
+    options : transient.options.RunOptions
     s_star : float, m
     """
 
@@ -281,13 +282,13 @@ class StopTests:
             return "depth", (f"reached end_depth {o.end_depth:.6g} m (mean worn depth "
                              f"{depth:.6g} m) at s = {distance:.6g} m "
                              f"({distance / s_star:.6g} s*)")
-        if distance >= o.max_distance * s_star * (1 - _DISTANCE_SLACK):
-            return "stopped", (f"reached max_distance {o.max_distance:.6g} s* before the "
+        if distance >= o.distance_limit * (1 - _DISTANCE_SLACK):
+            return "stopped", (f"reached distance_limit {o.distance_limit:.6g} m before the "
                                f"steady state (spread {spread:.3g}); resume with a "
-                               f"larger max_distance")
+                               f"larger distance_limit")
         if steps >= o.max_steps:
             return "stopped", (f"reached max_steps {o.max_steps} before the steady state "
-                               f"(s = {distance / s_star:.6g} s*, spread "
+                               f"(s = {distance:.6g} m = {distance / s_star:.6g} s*, spread "
                                f"{spread:.3g}); resume with a larger max_steps")
         return None
 
@@ -341,7 +342,7 @@ class StopTests:
         distance : float, m
             Where it started.
         reason : Exception
-            Why it failed (:class:`transient.problem.StepFailure`).
+            Why it failed (:class:`transient.solver.StepFailure`).
         """
         if consecutive >= self.options.max_failures or fixed:
             s_star = self.s_star
@@ -352,7 +353,20 @@ class StopTests:
 
     def end(self):
         """The distance limit, m."""
-        return self.options.max_distance * self.s_star
+        return self.options.distance_limit
+
+    def depth_landing(self, distance, ds, before, after):
+        """Where to land instead of a trial that went past ``end_depth``, m, or None.
+
+        The trial of length ``ds`` (m) from ``distance`` (m) took the mean
+        worn depth from ``before`` to ``after`` (m); None unless ``after``
+        is past ``end_depth``.  The secant of the mean worn depth over the
+        trial: the rate at its start misses the step's crossings.
+        """
+        end = self.options.end_depth
+        if end is None or after <= end * (1 + DEPTH_SLACK):
+            return None
+        return distance + ds * (end - before) / (after - before)
 
     def depth_target(self, distance, depth, rate):
         """Distance (m) at which the mean worn depth reaches ``end_depth``, or None.

@@ -109,22 +109,25 @@ def face_rms_slope(halfspace, face_mask, height, pressure, approach, *, gradient
     return float(np.sqrt(np.mean(s2[face_mask])))
 
 
-def wear_rate_spread(problem, pressure):
+def wear_rate_spread(rate, pressure, face_mask):
     """Spread of the wear rate, the steady-state test (eq. 3).
 
     Parameters
     ----------
-    problem : transient.problem.WearProblem
+    rate : callable
+        The wear rate of a pressure field, m/m (the run's
+        :meth:`transient.solver.StageSolver.rate`: the law at the current
+        section).
     pressure : ndarray, shape (nx, ny), Pa
+    face_mask : ndarray of bool, shape (nx, ny)
 
     Returns
     -------
     float
-        ``(max - min) / mean`` of ``k p^m`` over the face; 1 when some face
+        ``(max - min) / mean`` of ``g(p)`` over the face; 1 when some face
         pixel is out of contact (its rate is 0).
     """
-    face_mask = problem.face_mask
     if np.any(pressure[face_mask] <= 0):
         return 1.0
-    r = problem.rate(pressure)[face_mask]
+    r = rate(pressure)[face_mask]
     return float((r.max() - r.min()) / r.mean())

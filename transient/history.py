@@ -229,6 +229,9 @@ class FaceEstimator:
         time; over the shipped Voronoi run-in at n = 1024 the history's rms
         slope moved by at most 2.9e-7 of itself, 1.9e-4 of its error bar).
         The map's error and :attr:`energy` are double precision either way.
+    contact_rtol : float, optional
+        Relative tolerance of the contact solves that weigh the rim layer of
+        a face that is not flat (default 1e-10; a run passes its options').
 
     Attributes
     ----------
@@ -266,33 +269,36 @@ class FaceEstimator:
     >>> scene, _, _ = load_transient_scene("steady/examples/voronoi_transient.toml")
     >>> problem = WearProblem.from_scene(scene, n=40)
     >>> estimator = FaceEstimator(problem, np.zeros((40, 40)))
-    >>> res = problem.contact(np.zeros((40, 40)))
+    >>> from transient.solver import StageSolver
+    >>> res = StageSolver(problem).contact(np.zeros((40, 40)))
     >>> fig = estimator.figures(0.0, np.zeros((40, 40)), res.pressure, res.approach)
     >>> fig["rms_slope"], fig["rms_slope_error"], fig["rms_height"]
     (0.0, 0.0, 0.0)
     """
 
     @classmethod
-    def of(cls, problem, initial_height):
+    def of(cls, problem, initial_height, **options):
         """The estimator of ``problem`` from ``initial_height``, built once and then reused.
 
         The run (:func:`transient.runin.run_in`) and the comparison of its
         end with the steady face (:func:`transient.comparison.compare_with_steady`)
         share it: on a 1024^2 grid building one takes over a second.  Kept
-        while the problem lives, for the last initial face asked for.  Not
-        to be applied from two threads at once.
+        while the problem lives, for the last initial face asked for (the
+        ``options`` of the constructor apply when it is built).  Not to be
+        applied from two threads at once.
         """
         h0 = np.where(problem.face_mask, np.asarray(initial_height, dtype=float), 0.0)
         kept = _ESTIMATORS.get(problem)
         if kept is not None and np.array_equal(kept[0], h0):
             return kept[1]
-        estimator = cls(problem, h0)
+        estimator = cls(problem, h0, **options)
         _ESTIMATORS[problem] = (h0, estimator)
         return estimator
 
-    def __init__(self, problem, initial_height, *, precision="single"):
+    def __init__(self, problem, initial_height, *, precision="single", contact_rtol=1e-10):
         hs = problem.halfspace
         self.problem = problem
+        self.contact_rtol = float(contact_rtol)
         self.face_mask = problem.face_mask
         self.h = hs.h
         self.energy = SlopeEnergy(problem.shape, hs.h, hs.E_star)
@@ -344,11 +350,10 @@ class FaceEstimator:
         if np.ptp(h0[self.face_mask]) <= 1e-12 * f_star:
             return np.ones(int(self.rim.sum()))
         p = self.problem
-        kw = dict(rtol=p.contact_rtol, maxiter=p.contact_maxiter)
         flat = solve_contact(p.halfspace, self.face_mask, np.zeros_like(h0), p.normal_force,
-                             **kw).pressure[self.rim]
+                             rtol=self.contact_rtol).pressure[self.rim]
         start = solve_contact(p.halfspace, self.face_mask, h0, p.normal_force,
-                              **kw).pressure[self.rim]
+                              rtol=self.contact_rtol).pressure[self.rim]
         return (start / flat) ** 2
 
     @property

@@ -31,7 +31,7 @@ def run_in_memory(n, snapshots=0):
       :class:`steady.rms_slope.SlopeEnergy`), kept (its spectra in single
       precision, about 65, :func:`steady.memory.slope_estimator_memory`);
     - the pressure history of the warm starts
-      (:class:`transient.problem.WarmStart`: six pressures and their
+      (:class:`transient.warm_start.WarmStart`: six pressures and their
       products; their differences are formed one at a time): 96;
     - the larger of one step and the slope estimator's work: a step of
       ESDIRK3, the largest, has three stages, each a contact solve

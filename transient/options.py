@@ -11,23 +11,33 @@ declaration come
 - the flags of ``runin-transient`` that override them (the fields marked
   ``flag``: :func:`add_option_flags`, :func:`options_from_flags`).
 
-Adding an option is one field here (and its use in the run).  Distances are
-in units of the run-in distance ``s* = L / (k_min E*)``, ``L`` the face
-outline's scale (the radius ``a`` of a disk).
+Adding an option is one field here (and its use in the run).  Distances and
+lengths are in m, times in s, as everywhere in the project; the run-in's
+distance scale ``s* = L / (k_min E*)`` (``L`` the face outline's scale, the
+radius ``a`` of a disk) is only ever a unit that a name says
+(``snapshots_s_star``, ``jump_step_s_star``).  The names of the options that
+were in s* before they were in m are refused with the value converted
+(:data:`RENAMED`, :func:`options_from_table`).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 
 from steady.schema import Key, read_table
 from steady.text import shorten
 
 from .stepping import get_scheme
 
-__all__ = ["RunOptions", "add_option_flags", "option_keys", "options_from_flags",
+__all__ = ["RENAMED", "RunOptions", "add_option_flags", "option_keys", "options_from_flags",
            "options_from_table"]
+
+#: Options that were distances in units of s* under another name: ``old -> new``.  A
+#: scene (or a script) that names one is refused, with the value in m where s* is known.
+RENAMED = {"step": "fixed_step", "initial_step": "first_step", "max_distance": "distance_limit",
+           "snapshots": "snapshot_distances", "jump_step": "jump_step_s_star"}
 
 
 def _option(default, key, *, flag=False):
@@ -37,7 +47,7 @@ def _option(default, key, *, flag=False):
 
 @dataclasses.dataclass(frozen=True)
 class RunOptions:
-    """Options of :func:`transient.runin.run_in`; distances in units of ``s*``.
+    """Options of :func:`transient.runin.run_in`; distances in m.
 
     Each attribute is also the ``[transient]`` key of the same name; those
     marked (flag) also a flag of ``runin-transient`` (``--spread-tol`` for
@@ -51,11 +61,11 @@ class RunOptions:
     tol : float
         Local error per step, rms over the face of the shape error in units
         of ``f*`` (default 1e-5) (flag).
-    step : float or None
-        Fixed step in s* (no adaptivity, no jump); default None (adaptive).
-    initial_step : float or None
-        First adaptive step in s*; default ``0.01 * sqrt(tol) * h/L``
-        (the fast scale, where the flat punch's edge relaxes).
+    fixed_step : float or None
+        Fixed step, m (no adaptivity, no jump); default None (adaptive).
+    first_step : float or None
+        First adaptive step, m; default ``0.01 sqrt(tol) (h/L) s*`` (the
+        fast scale, where the flat punch's edge relaxes).
     spread_tol : float
         Steady when the wear-rate spread is below this (default 1e-6) ...
         (flag)
@@ -65,19 +75,23 @@ class RunOptions:
     jump_spread : float
         Jump to the steady state once the spread is below this (default
         1e-3; 0 disables, ``inf`` jumps at once) (flag).
-    jump_step : float
-        Length of a jump, in s* (default 1e8).
-    max_distance : float
-        Stop (resumable, status ``"stopped"``) beyond this distance in s*
-        (default 1e12) (flag).
+    jump_step_s_star : float
+        Length of a jump, in units of s* (default 1e8): a step many times
+        the slowest relaxation, whatever the scene.
+    distance_limit : float
+        Stop (resumable, status ``"stopped"``) beyond this sliding distance,
+        m (default inf: no limit) (flag).
     max_steps : int
         Stop after this many accepted steps (default 100000) (flag).
     end_depth : float or None
         End the run (status ``"depth"``) once the mean worn depth over the
-        face reaches this, in m (not s*); steps land on it.  Default None.
-    snapshots : tuple of float
-        Distances in s* at which the face and the pressure are stored; steps
-        land on them exactly.
+        face reaches this, m; steps land on it.  Default None.
+    snapshot_distances : tuple of float
+        Sliding distances, m, at which the face and the pressure are
+        stored; steps land on them exactly.
+    snapshots_s_star : tuple of float
+        More of them, in units of s* (the run's distance scale, known once
+        the problem is): :meth:`snapshots` merges both.
     max_failures : int
         Consecutive failed attempts before the run stops (default 20).
     checkpoint_interval : float
@@ -95,10 +109,11 @@ class RunOptions:
     tol: float = _option(1e-5, Key(
         "tol", "number", unit="f*", low=0.0, doc="local error per step, shape rms / f*"),
         flag=True)
-    step: float | None = _option(None, Key(
-        "step", "number", unit="s*", low=0.0, doc="fixed steps, no adaptivity (default: adaptive)"))
-    initial_step: float | None = _option(None, Key(
-        "initial_step", "number", unit="s*", low=0.0, doc="first adaptive step"))
+    fixed_step: float | None = _option(None, Key(
+        "fixed_step", "number", unit="m", low=0.0,
+        doc="fixed steps, no adaptivity (default: adaptive)"))
+    first_step: float | None = _option(None, Key(
+        "first_step", "number", unit="m", low=0.0, doc="first adaptive step"))
     spread_tol: float = _option(1e-6, Key(
         "spread_tol", "number", unit="1", low=0.0,
         doc="steady when (max - min) / mean of k p^m is below this"), flag=True)
@@ -109,20 +124,24 @@ class RunOptions:
         "jump_spread", "number", unit="1", low=0.0, low_open=False, finite=False,
         doc="jump to the steady state once the spread is below this (inf: at once, 0: never)"),
         flag=True)
-    jump_step: float = _option(1e8, Key(
-        "jump_step", "number", unit="s*", low=0.0, finite=False, doc="length of a jump"))
-    max_distance: float = _option(1e12, Key(
-        "max_distance", "number", unit="s*", low=0.0, finite=False,
-        doc="stop (resumable) beyond this distance"), flag=True)
+    jump_step_s_star: float = _option(1e8, Key(
+        "jump_step_s_star", "number", unit="s*", low=0.0, finite=False,
+        doc="length of a jump, in units of s*"))
+    distance_limit: float = _option(math.inf, Key(
+        "distance_limit", "number", unit="m", low=0.0, finite=False,
+        doc="stop (resumable) beyond this sliding distance (default: none)"), flag=True)
     max_steps: int = _option(100000, Key(
         "max_steps", "integer", low=1, low_open=False, doc="stop after this many steps"),
         flag=True)
     end_depth: float | None = _option(None, Key(
         "end_depth", "number", unit="m", low=0.0,
         doc="end once the mean worn depth over the face reaches this"))
-    snapshots: tuple = _option((), Key(
-        "snapshots", "numbers", unit="s*", low=0.0, low_open=False,
-        doc="distances at which face and pressure are stored"))
+    snapshot_distances: tuple = _option((), Key(
+        "snapshot_distances", "numbers", unit="m", low=0.0, low_open=False,
+        doc="sliding distances at which face and pressure are stored"))
+    snapshots_s_star: tuple = _option((), Key(
+        "snapshots_s_star", "numbers", unit="s*", low=0.0, low_open=False,
+        doc="more of them, in units of s*"))
     max_failures: int = _option(20, Key(
         "max_failures", "integer", low=1, low_open=False,
         doc="consecutive failed attempts before the run stops"))
@@ -146,13 +165,26 @@ class RunOptions:
             elif key.type == "numbers" and isinstance(value, tuple):
                 value = list(value)  # the scene's array, given as a tuple from Python
             key.parse(value, "")
-        snaps = tuple(float(s) for s in self.snapshots)
-        object.__setattr__(self, "snapshots", tuple(sorted(set(snaps))))
+        for name in ("snapshot_distances", "snapshots_s_star"):
+            values = tuple(float(s) for s in getattr(self, name))
+            object.__setattr__(self, name, tuple(sorted(set(values))))
+
+    def snapshots(self, distance_scale):
+        """Every snapshot distance, m, sorted: ``snapshot_distances`` and ``snapshots_s_star``.
+
+        Parameters
+        ----------
+        distance_scale : float, m
+            The run's ``s*``.
+        """
+        return tuple(sorted({*self.snapshot_distances,
+                             *(s * distance_scale for s in self.snapshots_s_star)}))
 
     def settings(self):
         """The options as plain values (JSON-ready), as the run file records them."""
         values = dataclasses.asdict(self)
-        values["snapshots"] = list(values["snapshots"])
+        for name in ("snapshot_distances", "snapshots_s_star"):
+            values[name] = list(values[name])
         return values
 
 
@@ -161,19 +193,50 @@ def option_keys():
     return tuple(field.metadata["key"] for field in dataclasses.fields(RunOptions))
 
 
-def options_from_table(table, base_dir="."):
+def options_from_table(table, base_dir=".", *, distance_scale=None):
     """The :class:`RunOptions` of a scene's ``[transient]`` table (absent keys: defaults).
+
+    Parameters
+    ----------
+    table : dict
+    base_dir : path-like, optional
+    distance_scale : float, optional, m
+        The scene's ``s*``, which the refusal of a key renamed from s* to m
+        (:data:`RENAMED`) uses to give the value in m.
 
     Raises
     ------
     ValueError
-        An unknown key or a bad value, named.
+        An unknown or renamed key or a bad value, named.
     """
+    if isinstance(table, dict):
+        for old, new in RENAMED.items():
+            if old in table:
+                raise ValueError(_renamed(old, new, table[old], distance_scale))
     values = read_table(table, "[transient]", option_keys(), base_dir)
     try:
         return RunOptions(**values)
     except ValueError as err:
         raise ValueError(f"[transient] {err}") from None
+
+
+def _renamed(old, new, value, distance_scale):
+    """The refusal of ``[transient] old``, a distance in s* that is now ``new``, in m."""
+    if new.endswith("_s_star"):
+        return (f"[transient] {old} is now {new} (the same value, in units of s*): write "
+                f"{new} = {shorten(value)}")
+    converted = ""
+    numbers = value if isinstance(value, list) else [value]
+    if distance_scale is not None and all(isinstance(v, (int, float)) and not isinstance(
+            v, bool) for v in numbers):
+        metres = [float(f"{v * distance_scale:.6g}") for v in numbers]
+        shown = metres if isinstance(value, list) else metres[0]
+        converted = (f" ({shorten(value)} s* with this scene's s* = {distance_scale:.6g} m is "
+                     f"{new} = {shorten(shown)})")
+    also = (", or snapshots_s_star = " + shorten(value) + " to keep them in s*"
+            if old == "snapshots" else "")
+    return (f"[transient] {old} was a distance in units of s*; distances are now in m: "
+            f"{new}{converted}{also}")
 
 
 def _flag_type(key):

@@ -1,7 +1,7 @@
 """HDF5 run files (layout ``runin.transient``, version 3), their checksums and their lock.
 
 A run file holds a run-in, finished or in progress (a checkpoint): the
-state a resumed run needs (:class:`transient.runin.RunState`), the
+state a resumed run needs (:class:`transient.result.RunState`), the
 history, the snapshots, the inputs that identify the run and, once the run
 is steady, its agreement with the steady face.  It is written whole and
 atomically by the project's one HDF5 writer (:func:`steady.output.atomic_h5`),
@@ -41,12 +41,12 @@ Layout (root group)::
     phase         (nx, ny) the phase map, and the caller's input datasets
     state/        height, initial_height, previous_height, previous_rate,
                   pressure_history, pressure_history_displacement
-    history/      one dataset per :data:`transient.runin.HISTORY_UNITS` name,
+    history/      one dataset per :data:`transient.result.HISTORY_UNITS` name,
                   along the dimension scale ``distance`` (m); attribute
                   distance_scale (s*, m); a depth run's also
-                  :data:`transient.runin.DEPTH_HISTORY_UNITS` (phase_fraction
+                  :data:`transient.result.DEPTH_HISTORY_UNITS` (phase_fraction
                   also along ``phase_name``) and, under a coating,
-                  :data:`transient.runin.COATING_HISTORY_UNITS`
+                  :data:`transient.result.COATING_HISTORY_UNITS`
     snapshots/    distance (k,) m (a dimension scale), height (k, nx, ny) m,
                   pressure (k, nx, ny) Pa (byte shuffle and deflate, except
                   in a checkpoint); for a depth run section (k, nx, ny)
@@ -132,8 +132,7 @@ from steady.output import (
 )
 from steady.wear import wear_file_attributes
 
-from .run_in_distance import COATING_EVENTS, coating_distance, distance_table
-from .runin import (
+from .result import (
     COATING_HISTORY_UNITS,
     DEPTH_HISTORY_UNITS,
     HISTORY_UNITS,
@@ -141,6 +140,7 @@ from .runin import (
     RunResult,
     RunState,
 )
+from .run_in_distance import COATING_EVENTS, coating_distance, distance_table
 
 try:
     import fcntl
@@ -328,10 +328,10 @@ def history_cf(name):
     Parameters
     ----------
     name : str
-        A key of :data:`transient.runin.HISTORY_UNITS`,
-        :data:`transient.runin.DEPTH_HISTORY_UNITS`,
-        :data:`transient.runin.COATING_HISTORY_UNITS` or
-        :data:`transient.runin.PROGRAMME_HISTORY_UNITS`.
+        A key of :data:`transient.result.HISTORY_UNITS`,
+        :data:`transient.result.DEPTH_HISTORY_UNITS`,
+        :data:`transient.result.COATING_HISTORY_UNITS` or
+        :data:`transient.result.PROGRAMME_HISTORY_UNITS`.
 
     Returns
     -------
@@ -407,7 +407,7 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     Parameters
     ----------
     path : str or path-like
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
     attrs : mapping, optional
         Extra root attributes (scene text, parameters); those whose value is
         None are left out.  They replace the problem's of the same name.
@@ -802,7 +802,7 @@ def read_run(path):
 
     Returns
     -------
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
     attrs : dict
         All root attributes (``attrs["sha256"]`` absent: an unverified file
         without checksums).

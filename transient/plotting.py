@@ -1,7 +1,7 @@
 """Figures of a run: the rms slope's history, the worn face as relief and its pressure.
 
 Each ``plot_*`` function takes a run file (written by
-:func:`transient.output.write_run`) or a :class:`transient.runin.RunResult`,
+:func:`transient.output.write_run`) or a :class:`transient.result.RunResult`,
 draws into the axes given as ``ax=`` (or a new figure) and returns the
 :class:`~matplotlib.figure.Figure`::
 
@@ -99,7 +99,7 @@ def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, stea
     history : mapping of str to ndarray
         ``distance`` (m), ``rms_slope`` and, when present,
         ``rms_slope_error``, ``rms_slope_spatial_error``, ``rms_slope_plain``
-        (:data:`transient.runin.HISTORY_UNITS`).
+        (:data:`transient.result.HISTORY_UNITS`).
     distance_scale : float, m
         ``s*``, the distance scale of the run.
     reference_slope : float
@@ -643,7 +643,7 @@ def run_figure(result, attrs=None, comparison=None, run_in=None, *, units="m",
 
     Parameters
     ----------
-    result : transient.runin.RunResult or str or path-like
+    result : transient.result.RunResult or str or path-like
         A result, or a run file (then ``attrs``, ``comparison`` and
         ``run_in`` are read from it).
     attrs : mapping, optional

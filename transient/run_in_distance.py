@@ -1,12 +1,12 @@
 """The run-in distance: how far the face slides before it stays within a tolerance of steady.
 
-The history of a run (:class:`transient.runin.RunResult`) records, at
+The history of a run (:class:`transient.result.RunResult`) records, at
 every accepted step, two relative deviations from the steady state
 (docs/model.md, "The run-in distance"):
 
 - the friction proxy's, ``d_S = |S(s) - S_inf| / S_inf``: the history's
   ``rms_slope`` against the rms slope of the closed-form steady face by the
-  same estimator (:attr:`~transient.runin.RunResult.steady_rms_slope`);
+  same estimator (:attr:`~transient.result.RunResult.steady_rms_slope`);
 - the face's, ``d_f = rms(f(s) - f_inf - c) / (max f_inf - min f_inf)``:
   the history's ``face_deviation`` (``c`` the least-squares constant: the
   rigid offset is not part of the shape).
@@ -127,7 +127,7 @@ def deviations(result):
 
     Parameters
     ----------
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
 
     Returns
     -------
@@ -215,7 +215,7 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
 
     Parameters
     ----------
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
     within : float, optional
         Relative tolerance in (0, 1); default 0.01.
     sliding_speed : float, optional, m/s
@@ -361,7 +361,7 @@ def coating_distance(result, event):
 
     Parameters
     ----------
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
     event : str
         A key of :data:`COATING_EVENTS`.
 
@@ -409,7 +409,7 @@ def distance_table(result, tolerances=TOLERANCES):
 
     Parameters
     ----------
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
     tolerances : sequence of float, optional
         Default :data:`TOLERANCES`.
 

@@ -7,7 +7,7 @@ parses them itself::
     [transient]
     scheme = "esdirk3"          # registered integrator (transient.stepping.SCHEMES)
     tol = 1e-5                  # local error per step, rms shape / f*
-    snapshots = [0.1, 1.0, 3.0] # s*, face and pressure stored there
+    snapshots_s_star = [0.1, 1.0, 3.0]  # face and pressure stored there
 
     [initial_face]
     kind = "tilted"             # "flat" (default), "tilted", "crowned" or "file"
@@ -17,9 +17,11 @@ The keys of ``[transient]`` are the fields of
 :class:`transient.options.RunOptions`, declared there with their types,
 units, ranges and meanings; those of ``[initial_face]`` are declared by
 each kind of :data:`transient.initial_face.INITIAL_FACES`.  Distances are
-in units of the run-in distance ``s* = L / (k_min E*)``, ``L`` the face
-outline's scale (the radius ``a`` of a disk; docs/model.md, "Natural
-scales").  Every key is optional and checked; unknown keys are errors.
+in m; a key in units of the run-in distance ``s* = L / (k_min E*)`` says so
+in its name (``snapshots_s_star``; ``L`` the face outline's scale, the
+radius ``a`` of a disk; docs/model.md, "Natural scales").  Every key is
+optional and checked; unknown keys are errors, and a key that was a
+distance in s* under another name is refused with its value in m.
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from __future__ import annotations
 import dataclasses
 import pathlib
 import types
+
+import numpy as np
 
 from steady.array_files import npy_header
 from steady.scene import RUN_IN_SECTIONS, load_scene
@@ -91,7 +95,7 @@ class InitialFace:
             raise ValueError(f"[initial_face]: {one_line(err, 300)}") from None
 
 
-def parse_transient(table, base_dir="."):
+def parse_transient(table, base_dir=".", *, distance_scale=None):
     """Parse a ``[transient]`` table.
 
     Parameters
@@ -99,6 +103,9 @@ def parse_transient(table, base_dir="."):
     table : dict
     base_dir : path-like, optional
         Unused (no paths in this section).
+    distance_scale : float, optional, m
+        The scene's ``s*``, for the refusal of a key renamed from s* to m
+        (:func:`transient.options.options_from_table`).
 
     Returns
     -------
@@ -109,7 +116,7 @@ def parse_transient(table, base_dir="."):
     ValueError
         Unknown key or bad value, named.
     """
-    return options_from_table(table, base_dir)
+    return options_from_table(table, base_dir, distance_scale=distance_scale)
 
 
 def parse_initial_face(table, base_dir):
@@ -140,6 +147,20 @@ def parse_initial_face(table, base_dir):
     return InitialFace(build.kind, types.MappingProxyType(values))
 
 
+def _distance_scale(scene):
+    """The scene's run-in distance ``s* = L / (g'(pbar) E*)`` of its slowest phase, m.
+
+    At the outline's mean pressure ``F / A`` (the run takes the face's
+    pixel area, within a pixel of it); for the messages that give a
+    distance in m.
+    """
+    wear = scene.wear
+    with np.errstate(all="ignore"):
+        constants = wear.rate_constant(wear.coefficient_field(np.arange(wear.n_phases)),
+                                       scene.final_force / scene.outline.area)
+        return float(scene.outline.scale / (np.min(constants) * scene.E_star))
+
+
 def load_transient_scene(path):
     """Read a scene file with its ``[transient]`` and ``[initial_face]`` sections.
 
@@ -165,7 +186,8 @@ def load_transient_scene(path):
     scene = load_scene(path, extra_sections=RUN_IN_SECTIONS)
     base_dir = pathlib.Path(path).parent
     try:
-        options = (parse_transient(scene.extra["transient"], base_dir)
+        options = (parse_transient(scene.extra["transient"], base_dir,
+                                   distance_scale=_distance_scale(scene))
                    if "transient" in scene.extra else RunOptions())
         initial = (parse_initial_face(scene.extra["initial_face"], base_dir)
                    if "initial_face" in scene.extra else InitialFace())

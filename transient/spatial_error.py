@@ -47,7 +47,7 @@ class SpatialError:
     ----------
     grid : int
         The companion's grid ``m``.
-    run : transient.runin.RunResult
+    run : transient.result.RunResult
         The companion run itself.
     rms_slope : ndarray, shape (K,)
         Its rms slope at the main run's recorded distances (linear in
@@ -79,12 +79,12 @@ class SpatialError:
 
         Parameters
         ----------
-        result : transient.runin.RunResult
+        result : transient.result.RunResult
             The main run this error belongs to.
 
         Returns
         -------
-        transient.runin.RunResult
+        transient.result.RunResult
         """
         if len(self.error) != len(result.history["distance"]):
             raise ValueError(f"the spatial error has {len(self.error)} points, the run's history "
@@ -144,8 +144,7 @@ def companion_grid(geometry, n, outline=None):
                      f"(minimum {minimum}): no companion run")
 
 
-def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
-                  **problem_options):
+def spatial_error(scene, initial, options, result, *, grid=None, on_step=None):
     """Run ``scene`` on a coarser grid and measure the history's spatial error against it.
 
     Parameters
@@ -159,16 +158,14 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
         companion's :class:`steady.outline.FaceGrid`).  It
         must exist on the companion's grid: a height file of the main grid
         (``kind = "file"``) does not, and raises ``ValueError``.
-    options : transient.runin.RunOptions
+    options : transient.options.RunOptions
         The main run's options (the same distances, tolerance, scheme).
-    result : transient.runin.RunResult
+    result : transient.result.RunResult
         The main run.
     grid : int, optional
         Companion grid; default :func:`companion_grid` of ``n``.
     on_step : callable, optional
         Passed to :func:`transient.runin.run_in` (progress).
-    **problem_options
-        Keyword arguments of :meth:`transient.problem.WearProblem.from_scene`.
 
     Returns
     -------
@@ -196,7 +193,7 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None,
     if not 2 <= m < n:
         raise ValueError(f"companion grid must lie in [2, {n}), got {m}")
     build = initial.height if hasattr(initial, "height") else initial
-    problem = WearProblem.from_scene(scene, n=m, **problem_options)
+    problem = WearProblem.from_scene(scene, n=m)
     logger.info("companion run on n = %d (main run n = %d)", m, n)
     coarse = run_in(problem, build(problem.grid), options, on_step=on_step)
     if not coarse.success:

@@ -20,14 +20,15 @@ so it is stiff, and stiffer with refinement and with the wear ratio.
 Schemes
 -------
 Every scheme is registered by name with the class decorator
-:func:`register_scheme` (:data:`SCHEMES`, :func:`get_scheme`); the problem
-it steps is a :class:`transient.problem.WearProblem`:
+:func:`register_scheme` (:data:`SCHEMES`, :func:`get_scheme`); it steps a
+:class:`transient.problem.WearProblem` through the run's stage solver
+(:class:`transient.solver.StageSolver`), which solves its contact problems:
 
 ``explicit_euler``
     ``w+ = w + ds k P(w)^m``: one unshifted contact solve per step; stable
     only for ``ds < 2 lambda_min(K) / max(k m p^(m-1))`` (about
     ``1.16 h / (k_max E*)`` for ``m = 1``, see
-    :meth:`transient.problem.WearProblem.stable_step`).
+    :meth:`transient.solver.StageSolver.stable_step`).
     A step beyond that limit is refused.
 ``implicit_euler``
     ``w+ = w + ds k P(w+)^m``: the step *is* a contact problem with the
@@ -53,9 +54,10 @@ Across interfaces (phases that change with depth below the face) the
 schemes integrate the wear work ``R`` of the face instead of its height,
 ``dR/ds = P(w)^m`` with ``w = w0 + D(R)`` (docs/model.md, "Wear across
 interfaces"), through the problem's hooks
-:meth:`~transient.problem.WearProblem.variable`, ``face``,
-``variable_rate`` and ``depth_error``, which are the identity for a
-columnar problem; the state's ``origin`` is the height of zero worn depth.
+:meth:`~transient.problem.WearProblem.variable`, ``face`` and
+``depth_error`` and the solver's ``variable_rate``, which are the identity
+(the wear rate) for a columnar problem; the state's ``origin`` is the
+height of zero worn depth.
 
 Power-law wear (``m != 1``) is treated in every implicit stage by Newton's
 method on ``w = w0 + c k P(w)^m``: ``k p^m`` is linearised about the last
@@ -135,13 +137,15 @@ class StepState:
         ``k p^m`` there.
     previous_step : float, m, or None
         The step that led from there to here.
-    history : transient.problem.WarmStart or None
-        Recent pressures of the run, the warm start of every implicit stage
-        (:meth:`transient.problem.WearProblem.implicit`); None: each stage
-        starts from the pressure before it.
+    warm : bool
+        Whether every implicit stage starts from the solver's warm start of
+        the recent pressures and adds its own to them
+        (:meth:`transient.solver.StageSolver.implicit`; default True);
+        False: each stage starts from the pressure before it (a jump to the
+        steady state).
     contact_atol : float, m
         Absolute tolerance of the step's contact solves (their ``atol``, see
-        :func:`transient.contact.solve_contact`; the problem's
+        :func:`transient.contact.solve_contact`; the solver's
         ``contact_rtol`` holds beside it): what the step's error control and
         the wear-rate spread leave to the solves
         (:func:`transient.control.contact_tolerance`).  Default 0: every
@@ -159,7 +163,7 @@ class StepState:
     previous_height: np.ndarray | None = None
     previous_rate: np.ndarray | None = None
     previous_step: float | None = None
-    history: object = None
+    warm: bool = True
     contact_atol: float = 0.0
     origin: np.ndarray | None = None
 
@@ -208,13 +212,13 @@ class Scheme:
     max_growth = 5.0
     explicit = False
 
-    def step(self, problem, state, ds):
+    def step(self, solver, state, ds):
         """Attempt one step of length ``ds`` from ``state``.
 
         Parameters
         ----------
-        problem : transient.problem.WearProblem
-            The discretised wear system.
+        solver : transient.solver.StageSolver
+            The run's contact solves on its problem (``solver.problem``).
         state : StepState
             The accepted point to step from.
         ds : float, m
@@ -227,7 +231,7 @@ class Scheme:
 
         Raises
         ------
-        transient.problem.StepFailure
+        transient.solver.StepFailure
             A contact solve failed or a value turned non-finite; the caller
             retries with a smaller step.
         """
@@ -238,17 +242,23 @@ class Scheme:
         return f"<{type(self).__name__} {self.name!r}, order {self.order}>"
 
 
-def _trial(problem, state, variable, res, error):
+def _trial(solver, state, variable, res, error):
     """The trial of a step that ended at ``variable`` with local error ``error`` of it."""
+    problem = solver.problem
     return Trial(height=problem.face(variable, state.origin), pressure=res.pressure,
                  approach=float(res.approach), contact_fraction=float(res.contact_fraction),
                  error=problem.depth_error(error, variable))
 
 
-def _implicit(problem, state, base, c, x0):
+def _implicit(solver, state, base, c, x0):
     """One implicit stage ``y = base + c f(y)`` of a step from ``state``: ``(y, contact)``."""
-    return problem.implicit(base, c, x0, history=state.history, atol=state.contact_atol,
-                            origin=state.origin)
+    return solver.implicit(base, c, x0, warm=state.warm, atol=state.contact_atol,
+                           origin=state.origin)
+
+
+def _variable(solver, state, height):
+    """The integration variable of the face ``height`` (m) in the frame of ``state``."""
+    return solver.problem.variable(height, state.origin)
 
 
 @register_scheme
@@ -260,23 +270,23 @@ class ExplicitEuler(Scheme):
     error_order = 1
     explicit = True
 
-    def step(self, problem, state, ds):
+    def step(self, solver, state, ds):
         """One forward Euler step (see :meth:`Scheme.step`).
 
         The error estimate is ``ds/2`` times the change of the rate over the
-        step.  A step beyond :meth:`~transient.problem.WearProblem.stable_step`
+        step.  A step beyond :meth:`~transient.solver.StageSolver.stable_step`
         raises ``ValueError``.
         """
-        limit = problem.stable_step(state.pressure)
+        limit = solver.stable_step(state.pressure)
         if ds > limit * (1.0 + 1e-12):
             raise ValueError(f"explicit Euler step {ds!r} m exceeds its stability limit "
                              f"{limit:.6g} m (2 lambda_min(K) / max k m p^(m-1))")
-        f0 = problem.variable_rate(state.pressure)
-        y = problem.variable(state.height, state.origin) + ds * f0
-        res = problem.contact(problem.face(y, state.origin), x0=state.pressure,
-                              atol=state.contact_atol)
-        error = 0.5 * ds * (problem.variable_rate(res.pressure) - f0)
-        return _trial(problem, state, y, res, error)
+        f0 = solver.variable_rate(state.pressure)
+        y = _variable(solver, state, state.height) + ds * f0
+        res = solver.contact(solver.problem.face(y, state.origin), x0=state.pressure,
+                             atol=state.contact_atol)
+        error = 0.5 * ds * (solver.variable_rate(res.pressure) - f0)
+        return _trial(solver, state, y, res, error)
 
 
 @register_scheme
@@ -287,16 +297,16 @@ class ImplicitEuler(Scheme):
     order = 1
     error_order = 1
 
-    def step(self, problem, state, ds):
+    def step(self, solver, state, ds):
         """One backward Euler step, a shifted contact solve (see :meth:`Scheme.step`).
 
         The error estimate is ``ds/2`` times the change of the rate over the step.
         """
-        f0 = problem.variable_rate(state.pressure)
-        y, res = _implicit(problem, state, problem.variable(state.height, state.origin), ds,
+        f0 = solver.variable_rate(state.pressure)
+        y, res = _implicit(solver, state, _variable(solver, state, state.height), ds,
                            state.pressure)
-        error = 0.5 * ds * (problem.variable_rate(res.pressure) - f0)
-        return _trial(problem, state, y, res, error)
+        error = 0.5 * ds * (solver.variable_rate(res.pressure) - f0)
+        return _trial(solver, state, y, res, error)
 
 
 @register_scheme
@@ -318,21 +328,21 @@ class BDF2(Scheme):
     error_order = 2
     max_growth = 2.4
 
-    def step(self, problem, state, ds):
+    def step(self, solver, state, ds):
         """One BDF2 step, or implicit Euler without a previous point (see :meth:`Scheme.step`)."""
-        f0 = problem.variable_rate(state.pressure)
+        f0 = solver.variable_rate(state.pressure)
         if state.previous_height is None:
-            return SCHEMES["implicit_euler"].step(problem, state, ds)
+            return SCHEMES["implicit_euler"].step(solver, state, ds)
         omega = ds / state.previous_step
-        y0 = problem.variable(state.height, state.origin)
+        y0 = _variable(solver, state, state.height)
         base = ((1 + omega) ** 2 * y0
-                - omega ** 2 * problem.variable(state.previous_height, state.origin)
+                - omega ** 2 * _variable(solver, state, state.previous_height)
                 ) / (1 + 2 * omega)
         beta = (1 + omega) / (1 + 2 * omega)
-        y, res = _implicit(problem, state, base, beta * ds, state.pressure)
+        y, res = _implicit(solver, state, base, beta * ds, state.pressure)
         predictor = y0 + ds * ((1 + 0.5 * omega) * f0 - 0.5 * omega * state.previous_rate)
         error = (8.0 / 23.0) * (y - predictor)
-        return _trial(problem, state, y, res, error)
+        return _trial(solver, state, y, res, error)
 
 
 @register_scheme
@@ -349,16 +359,16 @@ class SDIRK2(Scheme):
     error_order = 1
     gamma = 1.0 - 1.0 / math.sqrt(2.0)
 
-    def step(self, problem, state, ds):
+    def step(self, solver, state, ds):
         """One SDIRK2 step, two shifted contact solves (see :meth:`Scheme.step`)."""
         g = self.gamma
-        y0 = problem.variable(state.height, state.origin)
-        _, res1 = _implicit(problem, state, y0, g * ds, state.pressure)
-        f1 = problem.variable_rate(res1.pressure)
+        y0 = _variable(solver, state, state.height)
+        _, res1 = _implicit(solver, state, y0, g * ds, state.pressure)
+        f1 = solver.variable_rate(res1.pressure)
         base = y0 + (1 - g) * ds * f1
-        y, res2 = _implicit(problem, state, base, g * ds, res1.pressure)
-        error = g * ds * (problem.variable_rate(res2.pressure) - f1)
-        return _trial(problem, state, y, res2, error)
+        y, res2 = _implicit(solver, state, base, g * ds, res1.pressure)
+        error = g * ds * (solver.variable_rate(res2.pressure) - f1)
+        return _trial(solver, state, y, res2, error)
 
 
 def _esdirk3_tableau():
@@ -405,16 +415,16 @@ class ESDIRK3(Scheme):
     error_order = 2
     gamma, a, b, b_hat = _esdirk3_tableau()
 
-    def step(self, problem, state, ds):
+    def step(self, solver, state, ds):
         """One ESDIRK3 step, three shifted contact solves (see :meth:`Scheme.step`)."""
-        rates = [problem.variable_rate(state.pressure)]
-        y0 = problem.variable(state.height, state.origin)
+        rates = [solver.variable_rate(state.pressure)]
+        y0 = _variable(solver, state, state.height)
         x0 = state.pressure
         for i in range(1, 4):
             base = y0 + ds * sum(self.a[i, j] * rates[j] for j in range(i))
-            y, res = _implicit(problem, state, base, self.gamma * ds, x0)
-            rates.append(problem.variable_rate(res.pressure))
+            y, res = _implicit(solver, state, base, self.gamma * ds, x0)
+            rates.append(solver.variable_rate(res.pressure))
             x0 = res.pressure
         weights = self.b - self.b_hat
         error = ds * sum(weights[j] * rates[j] for j in range(4))
-        return _trial(problem, state, y, res, error)
+        return _trial(solver, state, y, res, error)

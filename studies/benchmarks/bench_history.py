@@ -46,6 +46,7 @@ def measure(n, distance):
     from transient.problem import WearProblem
     from transient.runin import run_in
     from transient.scene import load_transient_scene
+    from transient.solver import StageSolver
 
     scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" /
                                              "voronoi_transient.toml")
@@ -54,13 +55,15 @@ def measure(n, distance):
     build = _median(lambda: history.FaceEstimator(problem, h0), 3)
     estimator = history.FaceEstimator(problem, h0)
     # A state in the middle of the run-in: 0.1 s*.
-    mid = run_in(problem, h0, RunOptions(tol=1e-4, snapshots=(0.1,), max_distance=0.1,
-                                         jump_spread=0.0))
+    s_star = problem.distance_scale
+    mid = run_in(problem, h0, RunOptions(tol=1e-4, snapshots_s_star=(0.1,),
+                                         distance_limit=0.1 * s_star, jump_spread=0.0))
     height, pressure = np.where(problem.face_mask, mid.height, 0.0), mid.pressure
     call = _median(lambda: estimator.figures(0.1 * mid.distance_scale, height, pressure,
                                              mid.approach), REPEATS)
     shift = 1e-2 * mid.distance_scale * problem.coefficient_field
-    solve = _median(lambda: problem.contact(height, shift=shift, x0=pressure), 3)
+    solver = StageSolver(problem)
+    solve = _median(lambda: solver.contact(height, shift=shift, x0=pressure), 3)
     # A whole run with the estimator's calls timed.
     spent = []
     original = history.FaceEstimator.figures
@@ -75,7 +78,8 @@ def measure(n, distance):
     try:
         fresh = WearProblem.from_scene(scene, n=n)
         t = time.perf_counter()
-        result = run_in(fresh, h0, RunOptions(tol=1e-4, max_distance=distance, jump_spread=0.0))
+        result = run_in(fresh, h0, RunOptions(tol=1e-4, distance_limit=distance * s_star,
+                                              jump_spread=0.0))
         wall = time.perf_counter() - t
     finally:
         history.FaceEstimator.figures = original

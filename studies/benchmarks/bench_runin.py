@@ -246,8 +246,9 @@ def scheme_table(scene_path, n, ratio, ladders, reference=REFERENCE):
 
     def one(name, tol):
         problem = problem_of(scene, n, ratio)
-        options = RunOptions(scheme=name, tol=tol, snapshots=DISTANCES,
-                             max_distance=DISTANCES[-1], jump_spread=0.0, spread_tol=1e-300,
+        options = RunOptions(scheme=name, tol=tol, snapshots_s_star=DISTANCES,
+                             distance_limit=DISTANCES[-1] * problem.distance_scale,
+                             jump_spread=0.0, spread_tol=1e-300,
                              shape_tol=1e-300, max_steps=10 ** 6, checkpoint_interval=1e9)
         result, row = run_counted(problem, np.zeros((n, n)), options)
         slopes, face = history(result, problem)

@@ -52,8 +52,8 @@ def measure(scene, options, initial, n):
 
     a, b = shape(result.face), shape(steady)
     gap = float(np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2)))
-    return dict(steps=result.steps, solves=problem.solves, iterations=problem.iterations,
-                per_solve=problem.iterations / problem.solves, wall=wall, gap=gap)
+    return dict(steps=result.steps, solves=result.solves, iterations=result.iterations,
+                per_solve=result.iterations / result.solves, wall=wall, gap=gap)
 
 
 def main(argv=None):

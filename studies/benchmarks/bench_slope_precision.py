@@ -45,14 +45,16 @@ def run_states(n):
     from transient.problem import WearProblem
     from transient.runin import run_in
     from transient.scene import load_transient_scene
+    from transient.solver import StageSolver
 
     scene, _, initial = load_transient_scene(SCENE)
     problem = WearProblem.from_scene(scene, n=n)
     h0 = initial.height(problem.grid)
-    result = run_in(problem, h0, RunOptions(tol=1e-4, snapshots=SNAPSHOTS,
-                                            max_distance=SNAPSHOTS[-1]))
+    result = run_in(problem, h0, RunOptions(
+        tol=1e-4, snapshots_s_star=SNAPSHOTS,
+        distance_limit=SNAPSHOTS[-1] * problem.distance_scale))
     mask = problem.face_mask
-    start = problem.contact(np.where(mask, h0, 0.0))
+    start = StageSolver(problem).contact(np.where(mask, h0, 0.0))
     states = [(0.0, np.where(mask, h0, 0.0), start.pressure)]
     for d, height, pressure in zip(result.snapshot_distance, result.snapshot_height,
                                    result.snapshot_pressure, strict=True):

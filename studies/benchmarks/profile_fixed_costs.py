@@ -11,7 +11,7 @@ What it reproduces
       its slope energy, the ladder of the phase geometry behind its error);
     - the first contact solve (``transient.runin._Run._first_state``);
     - the steady reference the history measures against
-      (``transient.runin._Run._steady_reference``: the closed-form face and
+      (``transient.recording.RunRecord.__init__``: the closed-form face and
       its figures);
     - the rest of the run's set-up (``transient.runin._Run.__init__``);
     - checkpoints (:func:`transient.output.write_run` of a running result)
@@ -21,7 +21,7 @@ What it reproduces
       its error bar) and the comparison itself
       (:func:`transient.comparison.compare_with_steady`);
     - the main thread's waits for the history's figures
-      (``transient.runin._Run.collect``), which checkpoints include;
+      (``transient.recording.RunRecord.collect``), which checkpoints include;
     - everything else: the step loop and its contact solves.
 
     Each timer counts its own time only (the profile's timers,
@@ -60,7 +60,7 @@ N = 1024
 PARTS = {
     "estimator (FaceEstimator.of)": [("transient.history", "FaceEstimator.of")],
     "first contact solve": [("transient.runin", "_Run._first_state")],
-    "steady reference": [("transient.runin", "_Run._steady_reference"),
+    "steady reference": [("transient.recording", "RunRecord.__init__"),
                          ("transient.problem", "WearProblem.solve_steady")],
     "rest of the set-up": [("transient.runin", "_Run.__init__")],
     "checkpoints": [],
@@ -69,7 +69,7 @@ PARTS = {
     "closing steady solve (solve_scene)": [("steady.solution", "solve_scene"),
                                            ("transient.comparison", "solve_scene")],
     "comparison (compare_with_steady)": [("transient.comparison", "compare_with_steady")],
-    "waits for the history's figures": [("transient.runin", "_Run.collect")],
+    "waits for the history's figures": [("transient.recording", "RunRecord.collect")],
 }
 
 

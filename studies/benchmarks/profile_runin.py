@@ -9,7 +9,7 @@ What it reproduces
     - contact solves (:meth:`transient.problem.WearProblem.contact`: the
       solver, its preconditioner and its FFT products);
     - the rest of the implicit stages: the warm start
-      (:meth:`transient.problem.WarmStart.predict`) and the face
+      (:meth:`transient.warm_start.WarmStart.predict`) and the face
       rebuilt from the pressure (``WearProblem._rebuild``, one FFT product);
     - the figures recorded after every step (``transient.runin._Run.record``:
       rms slope and the other diagnostics of the history);
@@ -59,11 +59,11 @@ N = 512
 
 #: The timed parts: label and the functions (module, dotted attribute) behind it.
 PARTS = {
-    "contact solves": [("transient.problem", "WearProblem.contact")],
+    "contact solves": [("transient.solver", "StageSolver.contact")],
     "stages outside the solver (warm start, face rebuild)": [
-        ("transient.problem", "WarmStart.predict"),
-        ("transient.problem", "WearProblem._rebuild")],
-    "per-step diagnostics (history figures)": [("transient.runin", "_Run.record")],
+        ("transient.warm_start", "WarmStart.predict"),
+        ("transient.solver", "StageSolver._rebuild")],
+    "per-step diagnostics (history figures)": [("transient.recording", "RunRecord.record")],
     "checkpoints and run file (HDF5)": [("transient.output", "write_run"),
                                         ("transient.output", "read_run")],
     "comparison with the steady face": [

@@ -90,9 +90,9 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
         raise ValueError(f"{str(path)!r} was run from another initial face; use --force")
 
 
-def at_text(steps, distance_s_star):
-    """Where a run is, for messages: ``step 12, s = 0.5 s*``."""
-    return f"step {steps}, s = {distance_s_star:.6g} s*"
+def at_text(steps, distance, distance_scale):
+    """Where a run is, for messages: ``step 12, s = 1538.5 m = 0.05 s*``."""
+    return f"step {steps}, s = {distance:.6g} m = {distance / distance_scale:.6g} s*"
 
 
 @contextlib.contextmanager
@@ -127,7 +127,7 @@ class RunFile:
         The inputs stored with every checkpoint (:func:`run_inputs`).
     settings : dict
         The settings of this part of the run (:meth:`RunOptions.settings`).
-    requested : transient.runin.RunOptions
+    requested : transient.options.RunOptions
         The options as asked for (stored in the attribute ``options``).
     """
 
@@ -141,7 +141,7 @@ class RunFile:
         self.settings = settings
         # Whether ``path`` holds a checkpoint of this run (then it becomes the backup).
         self.ours = False
-        self.saved = None  # (steps, distance in s*) of the checkpoint on disk
+        self.saved = None  # (steps, distance (m), s* (m)) of the checkpoint on disk
         # The file at ``path`` the next write may replace (None: none); see atomic_h5.
         self.replaces = None
         self._kept = None  # what saved_text() says when the final file failed its check
@@ -165,14 +165,13 @@ class RunFile:
         notes : list of str
             Changed settings and missing snapshots, for stderr.
         snapshots : tuple of float
-            Snapshot distances (s*) for the run: the stored ones, then the
+            Snapshot distances (m) for the run: the stored ones, then the
             requested ones still ahead.
         """
         s_star = stored.distance_scale
-        here = stored.distance / s_star
         self.ours = True
         self.replaces = file_identity(self.path)
-        self.saved = (stored.steps, here)
+        self.saved = (stored.steps, stored.distance, s_star)
         try:
             self.history = json.loads(stored_attrs.get("settings_history", "[]"))
         except (TypeError, ValueError):
@@ -191,26 +190,24 @@ class RunFile:
             changes = [f"{key} {shorten(previous.get(key), 40)} -> {shorten(value, 40)}"
                        for key, value in self.settings.items() if previous.get(key) != value]
             if changes:
-                notes.append(f"resuming {str(self.path)!r} at {at_text(stored.steps, here)} with "
+                notes.append(f"resuming {str(self.path)!r} at {at_text(*self.saved)} with "
                              f"changed settings: {'; '.join(changes)} (each part of the run is "
                              f"recorded with its settings in the attribute settings_history)")
         # Requested snapshots behind the run: stored already, or missing for good.
         stored_d = stored.snapshot_distance.tolist()
-        passed = [r for r in self.requested.snapshots
-                  if r * s_star <= stored.distance * (1 + 1e-12)]
-        ahead = [r for r in self.requested.snapshots if r not in passed]
+        requested = self.requested.snapshots(s_star)
+        passed = [r for r in requested if r <= stored.distance * (1 + 1e-12)]
+        ahead = [r for r in requested if r not in passed]
         gone = [r for r in passed
-                if not any(abs(d - r * s_star) <= 1e-9 * max(d, r * s_star) + 1e-12 * s_star
-                           for d in stored_d)]
-        new_missing = [r * s_star for r in gone if r * s_star not in self.missing]
+                if not any(abs(d - r) <= 1e-9 * max(d, r) + 1e-12 * s_star for d in stored_d)]
+        new_missing = [r for r in gone if r not in self.missing]
         if new_missing:
             self.missing += new_missing
-            notes.append(f"snapshots at {', '.join(f'{r:g}' for r in gone)} s* were passed "
-                         f"before this resume (at s = {here:.6g} s*) and are not in the file "
-                         f"(listed in the attribute snapshots_missing)")
-        self.history.append(self._part(stored.steps, stored.distance,
-                                       [d / s_star for d in new_missing]))
-        return notes, tuple(d / s_star for d in stored_d) + tuple(ahead)
+            notes.append(f"snapshots at {', '.join(f'{r:.6g}' for r in gone)} m were passed "
+                         f"before this resume (at s = {stored.distance:.6g} m) and are not in "
+                         f"the file (listed in the attribute snapshots_missing)")
+        self.history.append(self._part(stored.steps, stored.distance, new_missing))
+        return notes, tuple(stored_d) + tuple(ahead)
 
     def _part(self, steps, distance, missing):
         return {"from_step": steps, "to_step": steps, "from_distance": distance,
@@ -249,8 +246,8 @@ class RunFile:
                 # A backup beside a new run belongs to the run this one replaced.
                 output.backup_path(self.path).unlink(missing_ok=True)
             self.ours = True
-            previous, self.saved = self.saved, (result.steps,
-                                                result.distance / result.distance_scale)
+            previous, self.saved = self.saved, (result.steps, result.distance,
+                                                result.distance_scale)
             if result.finished:
                 self._drop_backup(previous)
 
@@ -295,6 +292,6 @@ def read_resume(out):
             hint = "no intact previous checkpoint is left; start over with --force"
         else:
             hint = (f"the previous checkpoint {str(backup)!r} "
-                    f"({at_text(prev.steps, prev.distance / prev.distance_scale)}) is intact: "
+                    f"({at_text(prev.steps, prev.distance, prev.distance_scale)}) is intact: "
                     f"rename it to {str(out)!r} and --resume")
         raise ValueError(f"{err}; {hint}") from None

@@ -306,7 +306,8 @@ def _prepare(args, lock, scene, initial, options, checked):
             notes, snapshots = run_file.resume(resume, stored_attrs)
             for text in notes:
                 note(text)
-            options = dataclasses.replace(options, snapshots=snapshots)
+            options = dataclasses.replace(options, snapshot_distances=snapshots,
+                                          snapshots_s_star=())
             check_memory(run_in_memory(problem.shape, len(snapshots)),
                          _run_in_text(problem.grid, len(snapshots)), args.memory_limit)
     else:
@@ -357,8 +358,9 @@ def run(args):
         options = options_from_flags(options, args)
         _check_outputs(args)
         grid = scene.grid()  # load_scene has checked n against the outline
-        check_memory(run_in_memory(grid.shape, len(options.snapshots)),
-                     _run_in_text(grid, len(options.snapshots)), args.memory_limit)
+        snapshots = len(options.snapshot_distances) + len(options.snapshots_s_star)
+        check_memory(run_in_memory(grid.shape, snapshots), _run_in_text(grid, snapshots),
+                     args.memory_limit)
         # Names a phase without a face pixel, or a scale out of range, before the run; the
         # run's problem takes its map (rasterised once).
         checked = Problem.from_scene(scene)
@@ -389,7 +391,7 @@ def run(args):
                                EXIT_FAILED if saved else EXIT_BAD_INPUT) from None
         print("\n".join(_report(result, comparison)))
         status = EXIT_OK if result.finished else EXIT_FAILED
-        at = at_text(result.steps, result.distance / result.distance_scale)
+        at = at_text(result.steps, result.distance, result.distance_scale)
         stop = f"run {result.status} at {at}: {result.message}; continue with --resume"
         if job.companion_failure is not None:
             status = EXIT_FAILED
@@ -410,8 +412,8 @@ class _StepFailureAtStart(Exception):
 def _run(job):
     """Run (or continue), checkpointing; compare and write the result; return both."""
     from ..comparison import compare_with_steady, steady_of_run
-    from ..problem import StepFailure
     from ..runin import run_in
+    from ..solver import StepFailure
 
     problem, resume = job.problem, job.resume
     finished = job.finished  # a finished run lacking its spatial error is not: it gets it
@@ -444,7 +446,7 @@ def _companion(job, result):
     If the companion run fails, the main run is returned as it is (and
     written: it is finished) and :attr:`_Job.companion_failure` says why.
     """
-    from ..problem import StepFailure
+    from ..solver import StepFailure
     from ..spatial_error import spatial_error
 
     bar = Progress(0, log=job.verbose)
