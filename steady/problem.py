@@ -40,11 +40,13 @@ from .halfspace import HalfSpace
 from .labels import validate_labels
 from .outline import FaceGrid
 from .schema import SCALE_RANGE as _SCALE_RANGE
+from .schema import Key
 from .text import shorten
 from .wear import as_wear_law
 
-__all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_phase_names", "check_scale",
-           "check_scales", "default_phase_names", "input_names"]
+__all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_input_scales", "check_load_scales",
+           "check_phase_names", "check_phase_scales", "check_pixel_scale", "check_rate_scales",
+           "check_scale", "check_scales", "default_phase_names", "input_names"]
 
 #: The range of every scale of a problem, in SI units (m, N, Pa, 1/Pa, 1): the
 #: lengths of the face and its pixel, the force, the modulus, the mean and phase
@@ -58,19 +60,10 @@ __all__ = ["SCALE_RANGE", "FacePhases", "Problem", "check_phase_names", "check_s
 SCALE_RANGE = _SCALE_RANGE
 
 
-def _positive(value, name, unit):
-    """A positive finite float; ``ValueError`` naming ``name`` and the value."""
-    if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be a positive finite number ({unit}), got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive finite number ({unit}), got "
-                         f"{shorten(value)}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number ({unit}), got "
-                         f"{shorten(value)}")
-    return v
+#: The force and the modulus of a problem built in Python: positive finite numbers in
+#: :data:`SCALE_RANGE`, as the scene's keys of the same name.
+_FORCE = Key("normal_force", "number", unit="N", low=0.0)
+_MODULUS = Key("E_star", "number", unit="Pa", low=0.0)
 
 
 def input_names(outline, normal_force, E_star, n=None, wear=None):
@@ -156,21 +149,93 @@ def check_scale(value, what, unit, inputs, names):
     raise ValueError(f"{given}: {what} = {_shown(value)} {unit} is {span}")
 
 
+def check_input_scales(outline, normal_force, E_star, names):
+    """The inputs themselves in range: the outline's lengths, the force and the modulus.
+
+    A scene's keys declare their range (:data:`steady.schema.SCALE_RANGE`)
+    and are checked as they are read: this is for inputs given in Python.
+    """
+    for name, (value, unit) in outline.parameters().items():
+        if unit == "m":
+            check_scale(float(value), None, "m", (name,), names)
+    check_scale(float(normal_force), None, "N", ("normal_force",), names)
+    check_scale(float(E_star), None, "Pa", ("E_star",), names)
+
+
+def check_load_scales(outline, normal_force, E_star, names, n=None):
+    """The scales of a load on the face: ``pbar = F_N / A``, ``grad_f0``, ``f*``; the pixel.
+
+    ``grad_f0 = 4 pbar / (pi E*)`` is the disk's, the scale of every
+    outline's; ``f* = pbar L / E*``.  With ``n``, first the pixel
+    ``h = 2 L / n``.
+    """
+    F, E, L = float(normal_force), float(E_star), outline.scale
+    if n is not None:
+        check_pixel_scale(outline, n, names)
+    pbar = F / outline.area
+    check_scale(pbar, "the mean pressure pbar = F_N / A", "Pa", ("normal_force", "outline"),
+                names)
+    check_scale(4.0 * pbar / (math.pi * E), "the reference slope grad_f0 = 4 pbar / (pi E*)",
+                "1", ("normal_force", "outline", "E_star"), names)
+    check_scale(pbar * L / E, "the depth scale f* = pbar L / E*", "m",
+                ("normal_force", "outline", "E_star"), names)
+
+
+def check_pixel_scale(outline, n, names):
+    """The pixel ``h = 2 L / n`` of the grid of ``n`` pixels along the longer side, m."""
+    check_scale(2.0 * outline.scale / n, "the pixel h = 2 L / n", "m", ("outline", "n"), names)
+
+
+def check_rate_scales(wear, outline, normal_force, names):
+    """The wear law's rate constant ``dg/dp`` at ``pbar`` of every phase, 1/Pa.
+
+    ``k m pbar^(m-1)`` for the power law: with ``E*`` and a length it sets
+    the natural sliding distances.
+    """
+    pbar = float(normal_force) / outline.area
+    k = np.asarray(wear.coefficient_field(np.arange(wear.n_phases)), dtype=float)
+    with np.errstate(all="ignore"):
+        rate_constants = np.asarray(wear.rate_constant(k, np.float64(pbar)), dtype=float)
+    for i, kappa in enumerate(np.atleast_1d(rate_constants)):
+        check_scale(float(kappa), f"the rate constant of phase {i}, dg/dp at pbar "
+                    f"(k m pbar^(m-1) for the power law)", "1/Pa",
+                    ("wear", "normal_force", "outline"), names)
+
+
+def check_phase_scales(wear, counts, normal_force, pixel_area, names):
+    """The steady phase pressures (eq. 7) and the steady wear rate ``g_i(p_i)`` of a phase map.
+
+    ``k^(-1/m)`` of extreme ratios underflows: the pressures of the phases
+    with ``counts`` face pixels each (of area ``pixel_area``, m^2), and
+    their common wear rate, must be numbers in range.
+    """
+    k = np.asarray(wear.coefficient_field(np.arange(wear.n_phases)), dtype=float)
+    with np.errstate(all="ignore"):
+        pressures = np.asarray(wear.phase_pressures(counts, float(normal_force), pixel_area),
+                               dtype=float)
+        rates = np.asarray(wear.rate(pressures, k), dtype=float)
+    for i, p in enumerate(pressures):
+        check_scale(float(p), f"the steady pressure of phase {i} (eq. 7)", "Pa",
+                    ("wear", "normal_force", "outline"), names)
+    for i, rate in enumerate(rates):
+        check_scale(float(rate), f"the steady wear rate of phase {i}, g_i(p_i) (k p^m for "
+                    f"the power law)", "1", ("wear", "normal_force", "outline"), names)
+
+
 def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=None,
                  names=None):
     """Refuse a problem whose scales leave :data:`SCALE_RANGE`, naming the inputs of each.
 
     Checked in order (each only when its inputs are given): the lengths of
-    the outline, the normal force and the modulus themselves; the pixel
-    ``h = 2 L / n``; the mean pressure ``pbar = F_N / A``, the reference
-    slope ``grad_f0 = 4 pbar / (pi E*)`` (the disk's, the scale of every
-    outline's) and the depth scale ``f* = pbar L / E*``; the wear law's rate
-    constant ``dg/dp`` at ``pbar`` of every phase (``k m pbar^(m-1)`` for
-    the power law); with the pixel ``counts`` of the phases, the steady
-    phase pressures of eq. 7 (``k^(-1/m)`` of extreme ratios underflows)
-    and the steady wear rate ``k_i p_i^m``.  Every value is computed as the
-    solvers compute it, in double precision: an overflow is ``inf``, an
-    underflow 0, and both are out of range.
+    the outline, the normal force and the modulus themselves
+    (:func:`check_input_scales`); the pixel ``h = 2 L / n``, the mean
+    pressure, the reference slope and the depth scale
+    (:func:`check_load_scales`); the wear law's rate constants
+    (:func:`check_rate_scales`); with the pixel ``counts`` of the phases,
+    the steady phase pressures and wear rate (:func:`check_phase_scales`).
+    Every value is computed as the solvers compute it, in double precision:
+    an overflow is ``inf``, an underflow 0, and both are out of range.  A
+    scene checks each once as it is read (:func:`steady.scene.parse_scene`).
 
     Parameters
     ----------
@@ -192,45 +257,17 @@ def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=Non
         The first scale out of range: its formula, value and unit, the
         range, and the inputs it comes from.
     """
-    F, E = float(normal_force), float(E_star)
-    names = input_names(outline, F, E, n, wear) if names is None else names
-    for name, (value, unit) in outline.parameters().items():
-        if unit == "m":
-            check_scale(float(value), None, "m", (name,), names)
-    check_scale(F, None, "N", ("normal_force",), names)
-    check_scale(E, None, "Pa", ("E_star",), names)
-    L = outline.scale
-    if n is not None:
-        check_scale(2.0 * L / n, "the pixel h = 2 L / n", "m", ("outline", "n"), names)
-    pbar = F / outline.area
-    check_scale(pbar, "the mean pressure pbar = F_N / A", "Pa", ("normal_force", "outline"),
-                names)
-    check_scale(4.0 * pbar / (math.pi * E), "the reference slope grad_f0 = 4 pbar / (pi E*)",
-                "1", ("normal_force", "outline", "E_star"), names)
-    check_scale(pbar * L / E, "the depth scale f* = pbar L / E*", "m",
-                ("normal_force", "outline", "E_star"), names)
+    normal_force, E_star = float(normal_force), float(E_star)
+    names = input_names(outline, normal_force, E_star, n, wear) if names is None else names
+    check_input_scales(outline, normal_force, E_star, names)
+    check_load_scales(outline, normal_force, E_star, names, n)
     if wear is None:
         return
     wear = as_wear_law(wear)
-    k = np.asarray(wear.coefficient_field(np.arange(wear.n_phases)), dtype=float)
-    with np.errstate(all="ignore"):
-        rate_constants = np.asarray(wear.rate_constant(k, np.float64(pbar)), dtype=float)
-    for i, kappa in enumerate(np.atleast_1d(rate_constants)):
-        check_scale(float(kappa), f"the rate constant of phase {i}, dg/dp at pbar "
-                    f"(k m pbar^(m-1) for the power law)", "1/Pa",
-                    ("wear", "normal_force", "outline"), names)
-    if counts is None or n is None:
-        return
-    h = 2.0 * L / n
-    with np.errstate(all="ignore"):
-        pressures = np.asarray(wear.phase_pressures(counts, F, h * h), dtype=float)
-        rates = np.asarray(wear.rate(pressures, k), dtype=float)
-    for i, p in enumerate(pressures):
-        check_scale(float(p), f"the steady pressure of phase {i} (eq. 7)", "Pa",
-                    ("wear", "normal_force", "outline"), names)
-    for i, rate in enumerate(rates):
-        check_scale(float(rate), f"the steady wear rate of phase {i}, g_i(p_i) (k p^m for "
-                    f"the power law)", "1", ("wear", "normal_force", "outline"), names)
+    check_rate_scales(wear, outline, normal_force, names)
+    if counts is not None and n is not None:
+        h = 2.0 * outline.scale / n
+        check_phase_scales(wear, counts, normal_force, h * h, names)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -403,6 +440,14 @@ class Problem:
         (:meth:`coefficient_field`) and makes the steady pressure vary
         within each phase (:meth:`steady_pressure`); it needs a wear law with
         a factorisation ``k_i g(p)`` (:attr:`steady.wear.WearLaw.factor`).
+    checked : bool, optional, keyword
+        The outline, the force, the modulus and the law and the scales that
+        follow from them were checked where they entered (a scene file,
+        :meth:`from_scene`; the problem a :meth:`section` comes from): only
+        those of the phase map are checked here (default False: all).
+    names : mapping, optional, keyword
+        How messages name the inputs (default :func:`input_names`; a
+        scene's keys).
 
     Raises
     ------
@@ -419,8 +464,10 @@ class Problem:
     normal_force: float
     E_star: float
     sliding: object = None
+    checked: dataclasses.InitVar[bool] = dataclasses.field(default=False, kw_only=True)
+    names: dataclasses.InitVar[object] = dataclasses.field(default=None, kw_only=True)
 
-    def __post_init__(self):
+    def __post_init__(self, checked, names):
         """Check the law against the phases, the force and the modulus."""
         if not isinstance(self.phases, FacePhases):
             raise ValueError(f"phases must be a FacePhases, got {type(self.phases).__name__}")
@@ -430,11 +477,16 @@ class Problem:
                              f"({wear.describe()}), the phase map has "
                              f"{self.phases.n_phases}")
         object.__setattr__(self, "wear", wear)
-        object.__setattr__(self, "normal_force",
-                           _positive(self.normal_force, "normal_force", "N"))
-        object.__setattr__(self, "E_star", _positive(self.E_star, "E_star", "Pa"))
-        check_scales(self.outline, self.normal_force, self.E_star, n=self.n, wear=wear,
-                     counts=self.phases.counts)
+        if not checked:  # their range is checked below, named in the caller's words
+            object.__setattr__(self, "normal_force",
+                               _FORCE.parse(self.normal_force, "", scale=False))
+            object.__setattr__(self, "E_star", _MODULUS.parse(self.E_star, "", scale=False))
+        names = (input_names(self.outline, self.normal_force, self.E_star, self.n, wear)
+                 if names is None else names)
+        if not checked:
+            check_scales(self.outline, self.normal_force, self.E_star, n=self.n, wear=wear,
+                         names=names)
+        check_phase_scales(wear, self.phases.counts, self.normal_force, self.pixel_area, names)
         if self.sliding is not None:
             self._check_sliding(wear)
 
@@ -502,12 +554,14 @@ class Problem:
         if force != scene.normal_force:
             names["normal_force"] = f"[load] programme force {force!r}"
         try:
-            check_scales(scene.outline, force, scene.E_star, n=grid.n,
-                         wear=scene.wear, counts=phases.counts, names=names)
+            checked = scene.checked  # as read from its file (else: checked here)
+            if checked and grid.n != scene.n:  # the scene checked its own grid's pixel
+                check_pixel_scale(scene.outline, grid.n, dict(names, n=f"n = {grid.n!r}"))
+            return cls(phases, scene.wear, force, scene.E_star, scene.sliding,
+                       checked=checked, names=names)
         except ValueError as err:
             where = "" if scene.source_path is None else f"{scene.source_path}: "
             raise ValueError(f"{where}{err}") from None
-        return cls(phases, scene.wear, force, scene.E_star, scene.sliding)
 
     def section(self, depth):
         """The problem of the section at ``depth``: the quasi-steady problem there.
@@ -533,7 +587,7 @@ class Problem:
             A columnar problem (no columns), or a depth that is negative,
             not finite or of another shape.
         """
-        return dataclasses.replace(self, phases=self.phases.section(depth))
+        return dataclasses.replace(self, phases=self.phases.section(depth), checked=True)
 
     def present_phases(self):
         """The labels and the wear law of the phases with a face pixel, renumbered from 0.

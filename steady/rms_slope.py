@@ -62,7 +62,7 @@ from .halfspace import grid_shape
 from .labels import extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_outline
 from .phases import Homogeneous
-from .wear import pressure_field
+from .wear import as_wear_law
 
 __all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
            "estimate_map_rms_slope", "estimate_rms_slope", "grid_ladder", "ladder_error",
@@ -883,11 +883,18 @@ def ladder_error(grids, values):
     return np.max(diffs * factors.reshape((-1,) + (1,) * (v.ndim - 1)), axis=0)
 
 
-def _steady_pressure(labels, wear, normal_force, grid, sliding):
-    """The steady pressure of a map on ``grid``: per phase (eq. 7), or pixel-wise under sliding."""
+def _steady_pressure(labels, wear, normal_force, grid, sliding, *, checked=False):
+    """The steady pressure of a map on ``grid``: per phase (eq. 7), or pixel-wise under sliding.
+
+    A map the ladder rasterised is checked here (a phase may vanish on a
+    coarse grid: ``ValueError``); one that is ``checked`` (the problem's own)
+    is not checked again.
+    """
+    counts = (np.bincount(labels[labels >= 0], minlength=wear.n_phases) if checked
+              else validate_labels(labels, wear.n_phases))
     if sliding is None:
-        return pressure_field(labels, wear, normal_force, grid.pixel_area)[0]
-    validate_labels(labels, wear.n_phases)
+        p = wear.phase_pressures(counts, normal_force, grid.pixel_area)
+        return np.append(p, 0.0)[labels]  # label -1 (off the face) picks the trailing zero
     coefficients = wear.coefficient_field(labels) * sliding.speed_ratio(grid)
     return wear.factor.pixel_pressures(coefficients, normal_force, grid.pixel_area)
 
@@ -933,6 +940,7 @@ def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, slid
         for the ladder ``n/4, n/2, n``).
     """
     outline = as_outline(outline)
+    wear = as_wear_law(wear)
     grids = grid_ladder(geometry, n, outline)
     values = []
     plain = None
@@ -940,7 +948,7 @@ def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, slid
         grid = FaceGrid(outline, m)
         given = labels is not None and m == n and labels.shape == grid.shape
         lab = labels if given else geometry.labels(grid)
-        pressure = _steady_pressure(lab, wear, normal_force, grid, sliding)
+        pressure = _steady_pressure(lab, wear, normal_force, grid, sliding, checked=given)
         reuse = (energy is not None and m == n and energy.shape == grid.shape
                  and energy.h == grid.h and energy.E_star == float(E_star))
         own = energy if reuse else SlopeEnergy(grid.shape, grid.h, E_star)
@@ -1087,6 +1095,7 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
     """
     labels = np.asarray(labels)
     outline = as_outline(outline)
+    wear = as_wear_law(wear)
     n = max(labels.shape)
     grid = FaceGrid(outline, n)
     if labels.shape != grid.shape:

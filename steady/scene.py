@@ -55,11 +55,15 @@ except ModuleNotFoundError:  # Python 3.10
 
 from . import depth_maps, inclusions, micrograph  # noqa: F401 -- they register their map kinds
 from .depth_maps import DepthLayers, LayerPhase
-from .labels import validate_labels
 from .load_programme import LoadProgramme
 from .outline import FaceGrid, outline_from_table
 from .phases import PHASE_MAPS, Voronoi
-from .problem import check_phase_names, check_scales
+from .problem import (
+    check_load_scales,
+    check_phase_names,
+    check_rate_scales,
+    check_scale,
+)
 from .schema import Context, Key, read_table
 from .sliding import sliding_from_table
 from .text import one_line, shorten
@@ -186,6 +190,23 @@ class Scene:
     sliding: object = None
     load_programme: LoadProgramme | None = None
     depth: DepthLayers | None = None
+    #: The inputs as :func:`parse_scene` checked them (None: a scene built in Python).
+    _checked: tuple | None = dataclasses.field(default=None, repr=False, compare=False)
+
+    @property
+    def checked(self):
+        """Whether the scales of its inputs were checked as it was read (:func:`parse_scene`).
+
+        True for a scene read from a file and not changed since (a scene
+        built in Python, or with another grid, load or law, is checked
+        where it enters a problem, :meth:`steady.problem.Problem.from_scene`).
+        """
+        return self._checked is not None and self._checked == self._inputs()
+
+    def _inputs(self):
+        """What the scales depend on: outline, load, modulus, grid, law and programme."""
+        return (self.outline, self.normal_force, self.E_star, self.n, self.wear,
+                self.load_programme)
 
     @property
     def final_force(self):
@@ -292,8 +313,7 @@ class Scene:
                     f"seed or a finer grid")
             raise ValueError(f"{where}[phases] map: phase {phase} has no pixel on the face at "
                              f"n = {n}")
-        validate_labels(labels, self.n_phases, face_mask=grid.mask)
-        return labels
+        return labels  # the rest is checked once, where it enters a problem (FacePhases)
 
 
 def input_names(outline, normal_force, E_star, n, wear=None):
@@ -383,8 +403,9 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
     outline = outline_from_table(doc["punch"], base_dir)
     n = values["grid"]["n"]
     force, E_star = values["load"]["normal_force"], values["counterbody"]["E_star"]
-    # The scales of the face and the load, before a phase map is drawn on it.
-    check_scales(outline, force, E_star, n=n, names=input_names(outline, force, E_star, n))
+    # The scales that follow from the face and the load (the keys checked their own),
+    # before a phase map is drawn on it.
+    check_load_scales(outline, force, E_star, input_names(outline, force, E_star, n), n)
     try:
         outline.check_grid(n)
     except ValueError as err:
@@ -403,8 +424,7 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
             names = check_phase_names(names, layout.n_phases)
         except ValueError as err:
             raise ValueError(f"[phases] names: {err}") from None
-    check_scales(outline, force, E_star, n=n, wear=wear,
-                 names=input_names(outline, force, E_star, n, wear))
+    check_rate_scales(wear, outline, force, input_names(outline, force, E_star, n, wear))
     programme = _programme(values["load"], outline, E_star, n, wear)
     try:
         layout.check_grid(FaceGrid(outline, n))
@@ -417,12 +437,13 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
         sliding = None if sliding.uniform else sliding
 
     extra = {name: doc[name] for name in extra_sections if name in doc}
-    return Scene(outline=outline, normal_force=force, E_star=E_star, n=n, wear=wear,
-                 geometry=geometry,
-                 source_path=None if source_path is None else pathlib.Path(source_path),
-                 text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
-                 phase_names=names, sliding_speed=values["load"].get("sliding_speed"),
-                 sliding=sliding, load_programme=programme, depth=depth)
+    scene = Scene(outline=outline, normal_force=force, E_star=E_star, n=n, wear=wear,
+                  geometry=geometry,
+                  source_path=None if source_path is None else pathlib.Path(source_path),
+                  text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
+                  phase_names=names, sliding_speed=values["load"].get("sliding_speed"),
+                  sliding=sliding, load_programme=programme, depth=depth)
+    return dataclasses.replace(scene, _checked=scene._inputs())
 
 
 def _depth(table, substrate, outline, base_dir, n):
@@ -467,14 +488,20 @@ def _check_layer_phases(depth, wear):
 
 
 def _programme(load, outline, E_star, n, wear):
-    """The :class:`LoadProgramme` of ``[load]`` (None without one), every force's scales checked."""
+    """The :class:`LoadProgramme` of ``[load]`` (None without one), every force's scales checked.
+
+    Each force other than ``normal_force`` (checked already) is a load the
+    run meets: it and its scales must lie in range.
+    """
     if "programme" not in load:
         return None
     programme = LoadProgramme(load["normal_force"], load["programme"])
-    for force in programme.forces:
+    for force in sorted(set(programme.forces) - {load["normal_force"]}):
         names = input_names(outline, force, E_star, n, wear)
         names["normal_force"] = f"[load] programme force {force!r}"
-        check_scales(outline, force, E_star, n=n, wear=wear, names=names)
+        check_scale(force, None, "N", ("normal_force",), names)
+        check_load_scales(outline, force, E_star, names)
+        check_rate_scales(wear, outline, force, names)
     return programme
 
 

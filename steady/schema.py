@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import pathlib
 
 from .text import shorten
@@ -143,7 +144,7 @@ class Key:
             noun = "one of " + ", ".join(repr(c) for c in self.choices)
         return f"{noun} ({self.unit})" if self.unit else noun
 
-    def parse(self, value, where, base_dir="."):
+    def parse(self, value, where, base_dir=".", *, scale=True):
         """The value of this key, checked; ``ValueError`` naming ``where``, the key and the value.
 
         Parameters
@@ -154,6 +155,10 @@ class Key:
             The table, for messages (``"[load]"``, ``"[phases] map"``).
         base_dir : path-like, optional
             Directory against which a ``"path"`` is resolved.
+        scale : bool, optional
+            Check a length, force or modulus against :data:`SCALE_RANGE`
+            (default True); False leaves that to a caller that names the
+            value in its own words (:func:`steady.problem.check_input_scales`).
 
         Returns
         -------
@@ -182,10 +187,12 @@ class Key:
             except ValueError:
                 raise ValueError(f"{name} must be {self.describe()}, got "
                                  f"{shorten(value)}") from None
-            self._check_scale(values, name, value)
+            if scale:
+                self._check_scale(values, name, value)
             return values
         parsed = self._scalar(value, name, value, base_dir)
-        self._check_scale((parsed,), name, value)
+        if scale:
+            self._check_scale((parsed,), name, value)
         return parsed
 
     def _check_scale(self, values, name, shown):
@@ -224,11 +231,13 @@ class Key:
                 raise ValueError(bad)
             number = dataclasses.replace(self, type="number")
             return tuple(number._scalar(v, name, shown, base_dir) for v in value)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        # numpy's numbers too (from Python); a bool is not a number.
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise ValueError(bad)
         if self.type == "integer":
-            if not isinstance(value, int):
+            if not isinstance(value, numbers.Integral):
                 raise ValueError(bad)
+            value = int(value)
         else:
             value = float(value)
             if self.finite and not math.isfinite(value):

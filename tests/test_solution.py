@@ -225,7 +225,7 @@ def test_plain_grid_rms_of_fine_grains_grows_under_refinement():
 
 
 @pytest.mark.parametrize("kwargs, fragment", [
-    (dict(normal_force=-1.0), "normal_force must be a positive finite number (N), got -1.0"),
+    (dict(normal_force=-1.0), "normal_force must be a number > 0 (N), got -1.0"),
     (dict(normal_force=0.0), "got 0.0"),
     (dict(normal_force=math.inf), "got inf"),
     (dict(wear_coefficients=[1e-13, 0.0]), "got [1e-13, 0.0]"),
