@@ -15,7 +15,8 @@ give the same pixels.  Every geometry has
   ``n`` stands for the ``n x n`` grid of the unit disk, of radius 1 m
   (:func:`steady.outline.as_grid`);
 - ``min_grid(outline=None)`` : the smallest ``n`` (pixels along the longer
-  side) at which the geometry is resolved on that outline (default: a disk);
+  side) at which the geometry is resolved on that outline (default: the
+  unit disk);
 - ``check_grid(grid)`` : raises :class:`ValueError` (naming ``n`` and the
   minimum) if ``labels(grid)`` would refuse the grid.
 
@@ -171,9 +172,12 @@ def scale_units_note(scale, **lengths):
 
     Examples
     --------
-    >>> print(scale_units_note(4e-3, centre=(0.6, 0.0), radius=0.25)[2:])
-    lengths are in m, not in units of the face scale L = 0.004 m (in those units centre (0.6, 0) L = (0.0024, 0) m, radius 0.25 L = 0.001 m)
-    """  # noqa: E501 -- a doctest's output is one line
+    >>> note = scale_units_note(4e-3, centre=(0.6, 0.0), radius=0.25)
+    >>> print(note[:62])
+    ; lengths are in m, not in units of the face scale L = 0.004 m
+    >>> print(note[63:])
+    (in those units centre (0.6, 0) L = (0.0024, 0) m, radius 0.25 L = 0.001 m)
+    """
     meant = ", ".join(f"{name} {_in_scale_units(value, scale)}"
                       for name, value in lengths.items())
     return (f"; lengths are in m, not in units of the face scale L = {scale:.6g} m (in those "
