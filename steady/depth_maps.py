@@ -41,7 +41,14 @@ from .array_files import npy_header
 from .depth import DepthColumns
 from .labels import extend_off_face
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid
-from .phases import PHASE_MAPS, check_refinement, check_resolution
+from .phases import (
+    PHASE_MAPS,
+    check_refinement,
+    check_resolution,
+    face_words,
+    grid_outline,
+    scale_units_note,
+)
 from .schema import Key
 
 __all__ = ["MAX_SPHERES", "MAX_VOLUME_FRACTION", "DepthLayers", "Spheres", "Voxels",
@@ -143,12 +150,13 @@ class Voxels:
         :class:`~steady.phases.ArrayMap`), ``nz`` slices from the surface
         down.  On the face ``0..P-1`` with every phase somewhere in the
         stack; off the face any value.
-    voxel_depth : float
-        Depth of one slice, units of the outline's scale ``L``.
+    voxel_depth : float, m
+        Depth of one slice, at most the scale ``L`` of ``outline`` (a
+        slice deeper than half the face is wide is not a voxel of it).
     source : str, optional
         Where the stack came from (for messages).
     outline : outline object, optional
-        The face (default: a disk).
+        The face (default: the unit disk, radius 1 m).
 
     Notes
     -----
@@ -176,7 +184,13 @@ class Voxels:
             raise ValueError(f"{what} is empty: an array of shape {a.shape}")
         d = float(self.voxel_depth)
         if not (math.isfinite(d) and d > 0):
-            raise ValueError(f"voxel_depth must be positive and finite, got {self.voxel_depth!r}")
+            raise ValueError(f"voxel_depth must be positive and finite (m), got "
+                             f"{self.voxel_depth!r}")
+        L = outline.scale
+        if d > L:
+            raise ValueError(f"{what}: voxel_depth {d:.6g} m is deeper than the face scale L = "
+                             f"{L:.6g} m of the {outline.describe()}, at most L is accepted"
+                             f"{scale_units_note(L, voxel_depth=d)}")
         n0 = max(a.shape[:2])
         check_resolution(n0, MIN_SIDE_PIXELS, what)
         grid = FaceGrid(outline, n0)
@@ -210,8 +224,8 @@ class Voxels:
     @classmethod
     def from_values(cls, values, context):
         """From the checked keys: the file read through :func:`steady.array_files.npy_header`."""
-        return cls(load_voxels(values["file"], max_side=context.n), values["voxel_depth"]
-                   / context.outline.scale, repr(str(values["file"])), context.outline)
+        return cls(load_voxels(values["file"], max_side=context.n), values["voxel_depth"],
+                   repr(str(values["file"])), context.outline)
 
     @property
     def n_phases(self):
@@ -255,9 +269,7 @@ class Voxels:
 
     def columns(self, grid):
         """The columns on ``grid``: an interface where a pixel's phase changes between slices, m."""
-        grid = as_grid(grid)
-        d = self.voxel_depth * grid.outline.scale
-        tops = d * np.arange(self.n_slices)
+        tops = self.voxel_depth * np.arange(self.n_slices)
         return _stack_columns(self._slices(grid), tops, self.n_phases)
 
 
@@ -305,15 +317,17 @@ class Spheres:
 
     Parameters
     ----------
-    radius : float
-        Mean sphere radius, units of the face scale ``L``.
+    radius : float, m
+        Mean sphere radius; the largest (``radius (1 + spread)``) at most
+        half the face scale ``L`` (checked when the spheres meet a face,
+        :meth:`check_outline`).
     volume_fraction : float
         Volume fraction of the spheres in the field, in ``(0, 0.5]``.
     seed : int
         Seed of :func:`numpy.random.default_rng`.
-    depth : float
-        Depth of the particle field's bottom, units of ``L``: below it the
-        matrix continues; a sphere reaching below it is cut there.
+    depth : float, m
+        Depth of the particle field's bottom: below it the matrix
+        continues; a sphere reaching below it is cut there.
     spread : float, optional
         Radii uniform in ``[radius (1 - spread), radius (1 + spread)]``,
         ``0 <= spread < 1`` (default 0: one size).
@@ -325,13 +339,26 @@ class Spheres:
     Placement by random sequential addition, largest sphere first, each at
     a uniformly random centre that overlaps no sphere placed before
     (touching allowed), in the box ``[-B, B)^2 x [-r_max, depth + r_max)``
-    with ``B = 1 + r_max``, periodic along all three axes: no walls, so
+    with ``B = L + r_max``, periodic along all three axes: no walls, so
     the packing is homogeneous and the field starts above the surface; the
     box's spheres and their periodic images are cut to the depths
-    ``[0, depth]``.  Random sequential addition of equal spheres jams near
-    a volume fraction of 0.38; a target it cannot reach is refused.  A pixel
-    is in a sphere at depth ``w`` when ``rho^2 + (w - z_c)^2 < r^2``: its
-    column meets the sphere over ``z_c -+ sqrt(r^2 - rho^2)``.
+    ``[0, depth]``.  The placement is drawn in units of ``L``, so that the
+    same parameters on a face twice as large give the same packing scaled.
+    Random sequential addition of equal spheres jams near a volume fraction
+    of 0.38; a target it cannot reach is refused.  A pixel is in a sphere
+    at depth ``w`` when ``rho^2 + (w - z_c)^2 < r^2``: its column meets the
+    sphere over ``z_c -+ sqrt(r^2 - rho^2)``.
+
+    Examples
+    --------
+    Spheres of 0.4 mm down to 2 mm below a disk of 4 mm:
+
+    >>> from steady.outline import Circle
+    >>> spheres = Spheres(0.4e-3, 0.3, 2031, 2e-3)
+    >>> spheres.min_grid(Circle(4e-3))
+    40
+    >>> spheres.labels(Circle(4e-3).grid(40)).shape
+    (40, 40)
     """
 
     radius: float
@@ -347,7 +374,7 @@ class Spheres:
         for name in ("radius", "depth"):
             v = getattr(self, name)
             if isinstance(v, bool) or not (math.isfinite(float(v)) and float(v) > 0):
-                raise ValueError(f"sphere {name} must be positive and finite, got {v!r}")
+                raise ValueError(f"sphere {name} must be positive and finite (m), got {v!r}")
         phi = float(self.volume_fraction)
         if not 0.0 < phi <= MAX_VOLUME_FRACTION:
             raise ValueError(f"sphere volume_fraction = {self.volume_fraction!r} is outside "
@@ -361,23 +388,17 @@ class Spheres:
         if max(self.matrix_phase, self.particle_phase) > 1:
             raise ValueError(f"matrix_phase = {self.matrix_phase} and particle_phase = "
                              f"{self.particle_phase}: the two phases must be 0 and 1")
-        if self.max_radius > 0.5:
-            raise ValueError(f"sphere radius {self.max_radius:.6g} L is larger than 0.5 L, "
-                             f"half the face scale")
         for name in ("radius", "volume_fraction", "depth", "spread"):
             object.__setattr__(self, name, float(getattr(self, name)))
-        count = self._expected_count()
-        if count > MAX_SPHERES:
-            raise ValueError(f"about {count:.0f} spheres of radius {self.radius:.6g} L to a "
-                             f"depth of {self.depth:.6g} L, more than {MAX_SPHERES}")
 
     @classmethod
     def from_values(cls, values, context):
-        """From the checked keys (m), in units of the outline's scale."""
-        L = context.outline.scale
-        return cls(values["radius"] / L, values["volume_fraction"], values["seed"],
-                   values["depth"] / L, values.get("spread", 0.0), values["matrix_phase"],
-                   values["particle_phase"])
+        """From the checked keys (m), checked against the scene's face."""
+        spheres = cls(values["radius"], values["volume_fraction"], values["seed"],
+                      values["depth"], values.get("spread", 0.0), values["matrix_phase"],
+                      values["particle_phase"])
+        spheres.check_outline(context.outline)
+        return spheres
 
     @property
     def n_phases(self):
@@ -386,15 +407,121 @@ class Spheres:
 
     @property
     def max_radius(self):
+        """Largest radius, m."""
+        return self.radius * (1.0 + self.spread)
+
+    def _scaled(self, outline):
+        """The :class:`_SpherePacking` of the face of ``outline``: lengths over its scale."""
+        L = outline.scale
+        return self._packing(self.radius / L, self.depth / L, L)
+
+    @functools.lru_cache(maxsize=4)  # noqa: B019 -- frozen, hashable; a few faces at most
+    def _packing(self, radius, depth, scale):
+        return _SpherePacking(radius, self.volume_fraction, self.seed, depth, self.spread, scale)
+
+    def check_outline(self, outline):
+        """``ValueError`` unless the spheres fit the face of ``outline``.
+
+        The largest radius at most ``L / 2``; at most :data:`MAX_SPHERES`
+        spheres in the placement box.
+        """
+        packing = self._scaled(outline)
+        L = outline.scale
+        if packing.max_radius > 0.5:
+            note = scale_units_note(L, radius=self.radius) if self.max_radius <= 0.5 else ""
+            raise ValueError(f"sphere radius {self.max_radius:.6g} m is larger than 0.5 L = "
+                             f"{0.5 * L:.6g} m, half the scale of the face "
+                             f"({outline.describe()}){note}")
+        count = packing.expected_count()
+        if count > MAX_SPHERES:
+            raise ValueError(f"about {count:.0f} spheres of radius {self.radius:.6g} m to a "
+                             f"depth of {self.depth:.6g} m under the face ({outline.describe()}), "
+                             f"more than {MAX_SPHERES}")
+
+    def spheres(self, outline=None):
+        """Centres (N, 3) and radii (N,), m, placed for the face of ``outline``.
+
+        In the periodic box ``[-B, B)^2 x [-r_max, depth + r_max)``; the
+        default face is the unit disk (1 m).
+
+        Raises
+        ------
+        ValueError
+            The spheres do not fit the face (:meth:`check_outline`), or the
+            volume fraction cannot be reached by random sequential addition.
+        """
+        outline = UNIT_DISK if outline is None else outline
+        self.check_outline(outline)
+        centres, radii = self._scaled(outline).spheres
+        centres, radii = centres * outline.scale, radii * outline.scale
+        centres.flags.writeable = False
+        radii.flags.writeable = False
+        return centres, radii
+
+    def realised_volume_fraction(self, outline=None):
+        """Volume of the placed spheres over the placement box's volume (default face 1 m)."""
+        outline = UNIT_DISK if outline is None else outline
+        self.check_outline(outline)
+        return self._scaled(outline).realised_volume_fraction()
+
+    def min_grid(self, outline=None):
+        """``ceil(4 L / radius)``: the mean radius at least two pixels ``2 L / n``.
+
+        ``L`` is the scale of ``outline`` (default: the unit disk, 1 m).
+        """
+        radius = self._scaled(UNIT_DISK if outline is None else outline).radius
+        return max(MIN_SIDE_PIXELS, math.ceil(4.0 / radius - 1e-9))
+
+    def check_grid(self, grid):
+        """``n`` as an int; ``ValueError`` naming the radius, pixel (m) and ``n`` if too coarse."""
+        outline = grid_outline(grid)
+        low = self.min_grid(outline)
+        n = check_resolution(grid, MIN_SIDE_PIXELS, f"spheres of radius {self.radius:.6g} m")
+        if n < low:
+            raise ValueError(f"grid too coarse for spheres of radius {self.radius:.6g} m on "
+                             f"{face_words(grid)}: the radius is under two pixels at n = {n} "
+                             f"(pixel {2.0 * outline.scale / n:.6g} m), the minimum is n = {low}")
+        return n
+
+    def labels(self, grid):
+        """The surface section (depth 0): the particle phase inside a sphere, else the matrix."""
+        return self.columns(grid).phase_at(0.0)
+
+    def columns(self, grid):
+        """The columns on ``grid``, m: where each pixel's column enters and leaves a sphere."""
+        self.check_outline(grid_outline(grid))  # first: it names lengths meant in units of L
+        self.check_grid(grid)
+        grid = as_grid(grid)
+        return self._scaled(grid.outline).columns(grid, self.matrix_phase, self.particle_phase)
+
+
+@dataclasses.dataclass(frozen=True)
+class _SpherePacking:
+    """Spheres placed in units of the face scale ``L``: the numbers of the rasteriser.
+
+    ``radius`` and ``depth`` over ``L``; ``scale`` (``L``, m) turns the
+    columns into m and words the messages.
+    """
+
+    radius: float
+    volume_fraction: float
+    seed: int
+    depth: float
+    spread: float
+    scale: float
+
+    @property
+    def max_radius(self):
         """Largest radius, units of ``L``."""
-        return float(self.radius) * (1.0 + float(self.spread))
+        return self.radius * (1.0 + self.spread)
 
     def _box(self):
         """Half side ``B`` and the depth range ``(z0, z1)`` of the periodic placement box."""
         r = self.max_radius
         return 1.0 + r, (-r, self.depth + r)
 
-    def _expected_count(self):
+    def expected_count(self):
+        """Spheres expected in the placement box."""
         B, (z0, z1) = self._box()
         s = self.spread
         mean_cube = self.radius ** 3 * (1.0 + s * s)  # <r^3> of the uniform radii
@@ -434,27 +561,13 @@ class Spheres:
         reached = float(np.sum(4.0 / 3.0 * math.pi * radii[:placed] ** 3) / np.prod(period))
         return ValueError(f"sphere volume_fraction = {self.volume_fraction:g} is not reachable "
                           f"by random sequential addition: placing stalled at {reached:.3f} "
-                          f"(radius {self.radius:.6g} L, spread {self.spread:g})")
+                          f"(radius {self.radius * self.scale:.6g} m, spread {self.spread:g})")
 
     def realised_volume_fraction(self):
         """Volume of the placed spheres over the placement box's volume."""
         _, radii = self.spheres
         B, (z0, z1) = self._box()
         return float(np.sum(4.0 / 3.0 * math.pi * radii ** 3) / (4.0 * B * B * (z1 - z0)))
-
-    def min_grid(self, outline=None):
-        """``ceil(4 / radius)``: the mean radius at least two pixels ``2 / n``."""
-        return max(MIN_SIDE_PIXELS, math.ceil(4.0 / self.radius - 1e-9))
-
-    def check_grid(self, grid):
-        """``n`` as an int; ``ValueError`` naming the radius, pixel and ``n`` if too coarse."""
-        n = grid.n if isinstance(grid, FaceGrid) else int(grid)
-        if n < self.min_grid():
-            L, unit = (grid.outline.scale, "m") if isinstance(grid, FaceGrid) else (1.0, "L")
-            raise ValueError(f"sphere radius {self.radius * L:.6g} {unit} is under two pixels at "
-                             f"n = {n} (pixel {2.0 * L / n:.6g} {unit}): the minimum is n = "
-                             f"{self.min_grid()}")
-        return check_resolution(grid, self.min_grid(), f"spheres of radius {self.radius:.6g} L")
 
     def _intervals(self, grid):
         """Every (pixel, top, bottom) where a column meets a sphere, units of ``L``."""
@@ -484,14 +597,8 @@ class Spheres:
             return np.zeros(0, int), np.zeros(0), np.zeros(0)
         return np.concatenate(pix), np.concatenate(tops), np.concatenate(bottoms)
 
-    def labels(self, grid):
-        """The surface section (depth 0): the particle phase inside a sphere, else the matrix."""
-        return self.columns(grid).phase_at(0.0)
-
-    def columns(self, grid):
-        """The columns on ``grid``, m: where each pixel's column enters and leaves a sphere."""
-        self.check_grid(grid)
-        grid = as_grid(grid)
+    def columns(self, grid, matrix_phase, particle_phase):
+        """The columns on ``grid`` (of the face of scale ``scale``), m."""
         pix, tops, bottoms = self._intervals(grid)
         mask = grid.mask.ravel()
         keep = mask[pix] & (bottoms > tops)
@@ -503,15 +610,15 @@ class Spheres:
         rank = np.arange(pix.size) - starts[pix]
         S = 2 * (int(rank.max()) + 1 if rank.size else 0)
         z = np.full((S, npix), np.inf)
-        phases = np.full((S + 1, npix), self.matrix_phase, dtype=np.int64)
+        phases = np.full((S + 1, npix), matrix_phase, dtype=np.int64)
         z[2 * rank, pix] = tops
         z[2 * rank + 1, pix] = bottoms
-        phases[2 * rank + 1, pix] = self.particle_phase
+        phases[2 * rank + 1, pix] = particle_phase
         phases[:, ~mask] = -1
         L = grid.outline.scale
         shape = (S,) + grid.shape
         return columns_from_segments(z.reshape(shape) * L, phases.reshape((S + 1,) + grid.shape),
-                                     self.n_phases)
+                                     2)
 
 
 def _place(radii, low, period, rng, stalled, batch=16):

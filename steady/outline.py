@@ -29,8 +29,8 @@ rectangle whose sides are whole numbers of pixels is covered exactly.  A
 pixel belongs to the face when its centre lies strictly inside the
 outline; areas are pixel counts times ``h^2``.  For a disk this is the
 ``n x n`` grid over ``[-a, a]^2``, pixel centres ``-a + (i + 1/2) h``.
-:func:`as_grid` turns a bare ``n`` into the grid of the unit disk (the
-coordinates of phase geometries).
+:func:`as_grid` turns a bare ``n`` into the grid of the unit disk (radius
+1 m).
 
 Outlines are registered in :data:`OUTLINES` (a
 :class:`steady.schema.Registry`) with their ``[punch]`` keys;
@@ -151,8 +151,8 @@ class FaceGrid:
     x, y : ndarray, shapes (nx,) and (ny,), m
         Pixel-centre coordinates.
     unit_x, unit_y : ndarray, m / L
-        The same in units of the outline's scale ``L`` (the coordinates of
-        phase geometries).
+        The same in units of the outline's scale ``L`` (where phase
+        geometries are rasterised, their lengths in m divided by ``L``).
     mask : ndarray of bool, shape (nx, ny)
         Pixels whose centre lies strictly inside the outline (read-only).
     """
@@ -801,8 +801,7 @@ class MaskOutline(_Outline):
                 f"{self.pixel_size * 1e3:.6g} mm)")
 
 
-#: The outline of grids given by their size alone: the unit disk, the face of
-#: phase geometries in units of the outline's scale.
+#: The outline of grids given by their size alone: the unit disk, radius 1 m.
 UNIT_DISK = Circle(1.0)
 
 
@@ -832,8 +831,8 @@ def as_outline(outline):
 def as_grid(grid):
     """A :class:`FaceGrid`: ``grid`` itself, or for a bare ``n`` the unit disk's ``n x n`` grid.
 
-    Phase geometries are in units of the outline's scale, so the unit disk's
-    grid is where a geometry given only ``n`` is rasterised.
+    Phase geometries take lengths in m: on the unit disk (radius 1 m) their
+    numbers are also in units of its scale.
 
     Examples
     --------

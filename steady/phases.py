@@ -1,18 +1,22 @@
 """Phase maps of the punch face that can be rasterised at any grid size.
 
 A phase geometry is a continuous description of which phase sits where on
-the face, in units of the face's scale ``L`` (:mod:`steady.outline`: the
-punch radius ``a`` of a disk, else the larger half side of the face's
-bounding box), centred on the face's centre.  Every geometry has
+the face, centred on the face's centre, its lengths in m (as in scene
+files).  It is rasterised in units of the face's scale ``L``
+(:mod:`steady.outline`: the punch radius ``a`` of a disk, else the larger
+half side of the face's bounding box): a length ``x`` becomes ``x / L``,
+the one division, so that a geometry and the scene file that describes it
+give the same pixels.  Every geometry has
 
 - ``n_phases`` : the number of phases ``P``;
 - ``labels(grid)`` : an ``(nx, ny)`` integer array with the phase index
   ``0..P-1`` at every face pixel of ``grid`` (a
   :class:`steady.outline.FaceGrid`) and ``-1`` off the face; an integer
-  ``n`` stands for the ``n x n`` grid of the unit disk
+  ``n`` stands for the ``n x n`` grid of the unit disk, of radius 1 m
   (:func:`steady.outline.as_grid`);
 - ``min_grid(outline=None)`` : the smallest ``n`` (pixels along the longer
-  side) at which the geometry is resolved on that outline (default: a disk);
+  side) at which the geometry is resolved on that outline (default: the
+  unit disk);
 - ``check_grid(grid)`` : raises :class:`ValueError` (naming ``n`` and the
   minimum) if ``labels(grid)`` would refuse the grid.
 
@@ -25,16 +29,20 @@ Resolution rules (``labels`` refuses coarser grids):
 
 - every geometry: ``n >= 8``;
 - :class:`Voronoi`: at least 2 pixels per mean seed spacing.  ``N`` seeds
-  in the bounding box ``[-bx, bx] x [-by, by]`` (units of ``L``; the square
-  ``[-1, 1]^2`` of a disk) are ``sqrt(4 bx by / N)`` apart on average and a
-  pixel is ``2 / n`` wide, so ``n >= ceil(2 sqrt(N / (bx by)))``;
+  in the bounding box ``[-bx L, bx L] x [-by L, by L]`` (``bx = by = 1``
+  for a disk) are ``L sqrt(4 bx by / N)`` apart on average and a pixel is
+  ``2 L / n`` wide, so ``n >= ceil(2 sqrt(N / (bx by)))``;
 - :class:`Rods`: at least 3 pixels per radius of the smallest rod,
-  ``n >= ceil(6 / r_min)`` (``r_min`` in units of ``L``);
+  ``n >= ceil(6 L / r_min)``;
 - :class:`ArrayMap`: ``n`` must be a multiple of the map's size along its
   longer side;
 - :class:`~steady.inclusions.Inclusions` (random circular inclusions, in
   :mod:`steady.inclusions`): at least 3 pixels per mean radius,
-  ``n >= ceil(6 / r)``.
+  ``n >= ceil(6 L / r)``.
+
+A length that fits the face only when read in units of ``L`` (a script
+written when geometries took lengths in units of ``L``) is refused, and
+the message gives what it meant in m (:func:`scale_units_note`).
 
 Every kind is registered in :data:`PHASE_MAPS` with its ``[phases] map``
 keys (:class:`steady.schema.Registry`): besides the kinds here,
@@ -70,7 +78,10 @@ __all__ = [
     "Voronoi",
     "check_refinement",
     "check_resolution",
+    "face_words",
+    "grid_outline",
     "load_phase_map",
+    "scale_units_note",
 ]
 
 logger = logging.getLogger(__name__)
@@ -118,6 +129,61 @@ def check_refinement(grid, shape, what, name=None):
     return n
 
 
+def grid_outline(grid):
+    """The outline a grid covers: its own, or for a bare ``n`` the unit disk (radius 1 m)."""
+    return grid.outline if isinstance(grid, FaceGrid) else UNIT_DISK
+
+
+def face_words(grid):
+    """The face of ``grid`` in words, for messages; a bare ``n`` says where it rasterises."""
+    if isinstance(grid, FaceGrid):
+        return f"the {grid.outline.describe()}"
+    return ("the unit disk of a bare n (radius 1 m: lengths are in m, rasterise on "
+            "outline.grid(n) for a face of another size)")
+
+
+def _in_scale_units(value, scale):
+    """``"0.6 L = 0.0024 m"``: a number read in units of the face scale ``scale`` (m)."""
+    if isinstance(value, tuple):
+        return (f"({', '.join(f'{v:.6g}' for v in value)}) L = "
+                f"({', '.join(f'{v * scale:.6g}' for v in value)}) m")
+    return f"{value:.6g} L = {value * scale:.6g} m"
+
+
+def scale_units_note(scale, **lengths):
+    """The end of a refusal of lengths that look given in units of the face scale ``L``.
+
+    Phase geometries take lengths in m.  A script written for lengths in
+    units of ``L`` gives numbers near 1, which do not fit a face of a few
+    mm; its refusal says what those numbers meant in m, so that the script
+    is converted, never silently re-read.
+
+    Parameters
+    ----------
+    scale : float, m
+        ``L`` of the face.
+    **lengths : float or tuple of float
+        The lengths as given (the numbers of the script), by name.
+
+    Returns
+    -------
+    str
+        ``"; lengths are in m (...)"``, to append to the message.
+
+    Examples
+    --------
+    >>> note = scale_units_note(4e-3, centre=(0.6, 0.0), radius=0.25)
+    >>> print(note[:62])
+    ; lengths are in m, not in units of the face scale L = 0.004 m
+    >>> print(note[63:])
+    (in those units centre (0.6, 0) L = (0.0024, 0) m, radius 0.25 L = 0.001 m)
+    """
+    meant = ", ".join(f"{name} {_in_scale_units(value, scale)}"
+                      for name, value in lengths.items())
+    return (f"; lengths are in m, not in units of the face scale L = {scale:.6g} m (in those "
+            f"units {meant})")
+
+
 @PHASE_MAPS.register("homogeneous", doc="one phase")
 @dataclasses.dataclass(frozen=True)
 class Homogeneous:
@@ -163,9 +229,8 @@ class Voronoi:
     Parameters
     ----------
     n_seeds : int
-        Seeds, uniform in the face's bounding box (units of ``L``: the
-        square ``[-1, 1]^2`` around a disk).  The paper uses ``20^2, 40^2,
-        80^2, 160^2``.
+        Seeds, uniform in the face's bounding box (the square ``[-a, a]^2``
+        around a disk).  The paper uses ``20^2, 40^2, 80^2, 160^2``.
     fill_factors : sequence of float, shape (P,)
         Target share of the seeds of each phase, each in (0, 1), summing
         to 1.  Exactly ``round(rho_i N)`` seeds (largest remainder) get
@@ -173,7 +238,8 @@ class Voronoi:
         face scatter around the targets (see :func:`realised_fill_factors`).
     seed : int
         Seed of :func:`numpy.random.default_rng`; the geometry is a pure
-        function of the three parameters.
+        function of the three parameters, and the same on faces of every
+        size (the seeds are drawn in units of the face scale ``L``).
 
     Notes
     -----
@@ -214,20 +280,11 @@ class Voronoi:
         return len(self.fill_factors)
 
     @functools.lru_cache(maxsize=4)  # noqa: B019 -- frozen, hashable; a few boxes at most
-    def seeds(self, box=(1.0, 1.0)):
-        """Seed points, their phases and their k-d tree in a bounding box.
+    def _seeds(self, box=(1.0, 1.0)):
+        """Seed points, their phases and k-d tree in the box of half sides ``box``; units of ``L``.
 
-        Parameters
-        ----------
-        box : (float, float), optional
-            Half sides ``(bx, by)`` of the box, units of ``L`` (default the
-            square ``[-1, 1]^2`` around a disk).
-
-        Returns
-        -------
-        points : ndarray, shape (n_seeds, 2), read-only
-        phases : ndarray, shape (n_seeds,), read-only
-        tree : scipy.spatial.cKDTree
+        The seeds are drawn in units of the face scale, so that a geometry
+        gives the same cells, scaled, on faces of every size.
         """
         bx, by = (float(b) for b in box)
         rng = np.random.default_rng(self.seed)
@@ -241,15 +298,35 @@ class Voronoi:
         phases.flags.writeable = False
         return points, phases, spatial.cKDTree(points)
 
+    def seeds(self, outline=None):
+        """Seed points and their phases on the face of ``outline``.
+
+        Parameters
+        ----------
+        outline : outline object, optional
+            The face (default: the unit disk, radius 1 m).
+
+        Returns
+        -------
+        points : ndarray, shape (n_seeds, 2), m, read-only
+            Uniform in the outline's bounding box.
+        phases : ndarray, shape (n_seeds,), read-only
+        """
+        outline = UNIT_DISK if outline is None else outline
+        points, phases, _ = self._seeds(outline.aspect)
+        points = points * outline.scale
+        points.flags.writeable = False
+        return points, phases
+
     @property
     def seed_phases(self):
         """Phase of each seed, shape (n_seeds,) (read-only)."""
-        return self.seeds()[1]
+        return self._seeds()[1]
 
     def min_grid(self, outline=None):
         """``max(8, ceil(2 sqrt(n_seeds / (bx by))))``: two pixels per mean seed spacing.
 
-        ``(bx, by)`` is the outline's bounding box in units of its scale
+        ``(bx, by)`` is the outline's bounding box over its scale ``L``
         (``(1, 1)`` for a disk, the default).
         """
         bx, by = (1.0, 1.0) if outline is None else outline.aspect
@@ -267,7 +344,7 @@ class Voronoi:
         """
         self.check_grid(grid)
         grid = as_grid(grid)
-        _, phases, tree = self.seeds(grid.outline.aspect)
+        _, phases, tree = self._seeds(grid.outline.aspect)
         i, j = np.nonzero(grid.mask)
         _, nearest = tree.query(np.column_stack([grid.unit_x[i], grid.unit_y[j]]))
         out = np.full(grid.shape, -1, dtype=np.int64)
@@ -289,11 +366,10 @@ class Rods:
 
     Parameters
     ----------
-    centres : sequence of (float, float)
-        Rod centres, units of the face's scale ``L`` (the radius ``a`` of a
-        disk).
-    radii : sequence of float
-        Rod radii, units of ``L``, one per rod.
+    centres : sequence of (float, float), m
+        Rod centres, from the face's centre.
+    radii : sequence of float, m
+        Rod radii, one per rod.
     matrix_phase : int, optional
         Phase of the face outside the rods (default 0).
     rod_phases : sequence of int, optional
@@ -301,11 +377,23 @@ class Rods:
 
     Notes
     -----
-    Rods must lie inside the face (for a disk ``|c| + r <= 1``; checked
-    when they are rasterised, :meth:`check_outline`) and must not overlap
-    (touching is allowed).  Every phase ``0..P-1``, with
+    Rods must lie inside the face (checked when they meet it,
+    :meth:`check_outline`: on rasterising and on reading a scene) and must
+    not overlap (touching is allowed).  Every phase ``0..P-1``, with
     ``P = 1 + max(matrix_phase, rod_phases)``, must be used.  A pixel
     belongs to a rod when its centre lies strictly inside the rod.
+
+    Examples
+    --------
+    Two rods of 1 mm on a disk of 5 mm:
+
+    >>> from steady.outline import Circle
+    >>> rods = Rods(centres=[(0.0, 0.0), (2.5e-3, 0.0)], radii=[1e-3, 1e-3])
+    >>> rods.min_grid(Circle(5e-3))
+    30
+    >>> labels = rods.labels(Circle(5e-3).grid(96))
+    >>> labels.shape, int(labels.max())
+    ((96, 96), 1)
     """
 
     centres: tuple
@@ -319,24 +407,24 @@ class Rods:
             centres = tuple((float(c[0]), float(c[1])) for c in self.centres)
             bad_len = [c for c in self.centres if len(c) != 2]
         except (TypeError, ValueError, IndexError):
-            raise ValueError(f"rod centres must be pairs of numbers, got "
+            raise ValueError(f"rod centres must be pairs of numbers (m), got "
                              f"{self.centres!r}") from None
         if bad_len:
-            raise ValueError(f"rod centres must be pairs of numbers, got {self.centres!r}")
+            raise ValueError(f"rod centres must be pairs of numbers (m), got {self.centres!r}")
         try:
             radii = tuple(float(r) for r in self.radii)
         except (TypeError, ValueError):
-            raise ValueError(f"rod radii must be numbers, got {self.radii!r}") from None
+            raise ValueError(f"rod radii must be numbers (m), got {self.radii!r}") from None
         if not centres:
             raise ValueError("at least one rod is needed")
         if len(radii) != len(centres):
             raise ValueError(f"{len(centres)} rod centres but {len(radii)} radii")
         for r in radii:
             if not (np.isfinite(r) and r > 0):
-                raise ValueError(f"rod radii must be positive and finite, got {list(radii)}")
+                raise ValueError(f"rod radii must be positive and finite (m), got {list(radii)}")
         for c in centres:
             if not all(np.isfinite(c)):
-                raise ValueError(f"rod centres must be finite, got {list(centres)}")
+                raise ValueError(f"rod centres must be finite (m), got {list(centres)}")
         rod_phases = (1,) * len(centres) if self.rod_phases is None else self.rod_phases
         phases = (self.matrix_phase, *rod_phases)
         if any(isinstance(p, bool) or not isinstance(p, (int, np.integer)) or p < 0
@@ -346,18 +434,13 @@ class Rods:
         rod_phases = tuple(int(p) for p in rod_phases)
         if len(rod_phases) != len(centres):
             raise ValueError(f"{len(centres)} rods but {len(rod_phases)} rod phases")
-        for k, ((cx, cy), r) in enumerate(zip(centres, radii, strict=True)):
-            # Every face lies in [-1, 1]^2 (units of its scale); the face
-            # itself is checked when the rods meet it (check_outline).
-            if max(abs(cx), abs(cy)) + r > 1.0 + 1e-12:
-                raise ValueError(f"rod {k} (centre ({cx}, {cy}), radius {r}, units of the face "
-                                 f"scale) does not lie inside the face's bounding square")
         for k in range(len(centres)):
             for m in range(k + 1, len(centres)):
                 d = math.dist(centres[k], centres[m])
-                if d < radii[k] + radii[m] - 1e-12:
-                    raise ValueError(f"rods {k} and {m} overlap: centres {d:.6g} apart, radii "
-                                     f"{radii[k]} and {radii[m]} (units of the punch radius)")
+                # Touching is allowed, to round-off relative to the radii.
+                if d < (radii[k] + radii[m]) * (1.0 - 1e-12):
+                    raise ValueError(f"rods {k} and {m} overlap: centres {d:.6g} m apart, radii "
+                                     f"{radii[k]:.6g} m and {radii[m]:.6g} m")
         used = set(phases)
         missing = sorted(set(range(max(used) + 1)) - used)
         if missing:
@@ -370,10 +453,8 @@ class Rods:
 
     @classmethod
     def from_values(cls, values, context):
-        """From the checked ``[phases] map`` keys (m), in units of the outline's scale."""
-        scale = context.outline.scale
-        rods = cls(tuple((x / scale, y / scale) for x, y in values["centres"]),
-                   tuple(r / scale for r in values["radii"]), values["matrix_phase"],
+        """From the checked ``[phases] map`` keys (m), checked against the scene's face."""
+        rods = cls(values["centres"], values["radii"], values["matrix_phase"],
                    values.get("rod_phases"))
         rods.check_outline(context.outline)
         return rods
@@ -384,30 +465,42 @@ class Rods:
         return 1 + max(self.matrix_phase, *self.rod_phases)
 
     def min_grid(self, outline=None):
-        """``max(8, ceil(6 / r_min))``: three pixels per radius of the smallest rod."""
-        return max(MIN_SIDE_PIXELS, math.ceil(6.0 / min(self.radii) - 1e-9))
+        """``max(8, ceil(6 L / r_min))``: three pixels per radius of the smallest rod.
+
+        ``L`` is the scale of ``outline`` (default: the unit disk, 1 m).
+        """
+        scale = (UNIT_DISK if outline is None else outline).scale
+        # r / L as the rasteriser divides (the smallest of the quotients).
+        return max(MIN_SIDE_PIXELS, math.ceil(6.0 / (min(self.radii) / scale) - 1e-9))
 
     def check_grid(self, grid):
-        """``n`` as an int; ``ValueError`` if the grid is too coarse."""
-        return check_resolution(grid, self.min_grid(), f"rods of radius {min(self.radii)} L")
+        """``n`` as an int; ``ValueError`` in m if the grid is too coarse for the smallest rod."""
+        return check_resolution(grid, self.min_grid(grid_outline(grid)),
+                                f"rods of radius {min(self.radii):.6g} m (3 pixels per radius) "
+                                f"on {face_words(grid)}")
 
     def check_outline(self, outline):
         """``ValueError`` naming the first rod that does not lie inside the face of ``outline``."""
         L = outline.scale
         for k, ((cx, cy), r) in enumerate(zip(self.centres, self.radii, strict=True)):
-            if not outline.encloses_disk((cx * L, cy * L), r * L):
-                raise ValueError(f"rod {k} (centre ({cx}, {cy}), radius {r}, units of the face "
-                                 f"scale {L:.6g} m) does not lie inside the face "
-                                 f"({outline.describe()})")
+            if outline.encloses_disk((cx, cy), r):
+                continue
+            note = ""
+            if outline.encloses_disk((cx * L, cy * L), r * L):
+                note = scale_units_note(L, centre=(cx, cy), radius=r)
+            raise ValueError(f"rod {k} (centre ({cx:.6g}, {cy:.6g}) m, radius {r:.6g} m) does "
+                             f"not lie inside the face ({outline.describe()}){note}")
 
     def labels(self, grid):
         """Rod phase inside each rod, matrix phase elsewhere on the face; shape of the grid."""
+        self.check_outline(grid_outline(grid))  # first: it names lengths meant in units of L
         self.check_grid(grid)
         grid = as_grid(grid)
-        self.check_outline(grid.outline)
+        L = grid.outline.scale
         x, y = grid.unit_x, grid.unit_y
         out = np.where(grid.mask, self.matrix_phase, -1)
         for (cx, cy), r, phase in zip(self.centres, self.radii, self.rod_phases, strict=True):
+            cx, cy, r = cx / L, cy / L, r / L
             inside = (x[:, None] - cx) ** 2 + (y[None, :] - cy) ** 2 < r * r
             out[inside] = phase
         return out

@@ -63,15 +63,15 @@ def compute(path, params):
         datasets[f"{key}/differential"] = (np.asarray(profiles), "m")
         datasets[f"{key}/phase_pressures"] = (res.phase_pressures, "Pa")
         datasets[f"{key}/wear_coefficients"] = (np.asarray(scene.wear.coefficients), "1/Pa")
-        datasets[f"{key}/rod_centres"] = (np.asarray(scene.geometry.centres) * a, "m")
-        datasets[f"{key}/rod_radii"] = (np.asarray(scene.geometry.radii) * a, "m")
+        datasets[f"{key}/rod_centres"] = (np.asarray(scene.geometry.centres), "m")
+        datasets[f"{key}/rod_radii"] = (np.asarray(scene.geometry.radii), "m")
         # Differential profile at the side rods on the y = 0 chord (rods minus the
         # ring average at 6 mm, where rods hold about half the ring).
         x, dp = positions[0], profiles[0]
         near = np.zeros_like(x, dtype=bool)
         for cx, cy in scene.geometry.centres:
             if abs(cy) < 1e-12 and abs(cx) > 0:
-                near |= np.abs(x - cx * a) < 0.5 * scene.geometry.radii[0] * a
+                near |= np.abs(x - cx) < 0.5 * scene.geometry.radii[0]
         attrs[f"{key}_side_rods"] = (float(np.nanmean(dp[near])), "m")
         # solve_scene: energy-corrected value with its error (grids n, n/2, n/4).
         attrs[f"{key}_rms_slope"] = (res.rms_slope, "1")

@@ -66,12 +66,12 @@ from steady.validity import ValidityWarning
 NAME = "particles_3d"
 logger = logging.getLogger(__name__)
 SCENE = study_io.ROOT / "steady" / "examples" / "spheres_transient.toml"
-PARAMS = {"n": 64, "radius": 0.08, "volume_fraction": 0.3, "seed": 2031,
+PARAMS = {"n": 64, "radius_over_a": 0.08, "volume_fraction": 0.3, "seed": 2031,
           "coefficients": [1.0e-12, 1.0e-13],
           "radius_over_f_star": [0.125, 0.25, 0.5, 1.0, 2.0, 4.0],
           "settle": 4.0, "diameters": 3.0, "tol": 1e-4, "inclusion_seeds": [6101, 6102, 6103],
           "samples": 200}
-QUICK = {"n": 32, "radius": 0.125, "volume_fraction": 0.3, "seed": 2031,
+QUICK = {"n": 32, "radius_over_a": 0.125, "volume_fraction": 0.3, "seed": 2031,
          "coefficients": [1.0e-12, 1.0e-13], "radius_over_f_star": [0.5, 4.0],
          "settle": 2.0, "diameters": 1.0, "tol": 1e-3, "inclusion_seeds": [6101],
          "samples": 40}
@@ -85,13 +85,12 @@ def case_scene(params, ratio):
     """
     base = load_scene(SCENE, extra_sections=("transient", "initial_face"))
     a = base.outline.scale
-    r = params["radius"] * a
+    r = params["radius_over_a"] * a
     f_star = r / ratio
     # f* = pbar a / E* with pbar = F / (pi a^2) on the disk.
     force = f_star * math.pi * a * base.E_star
     end = params["settle"] * f_star + params["diameters"] * 2.0 * r
-    geometry = Spheres(params["radius"], params["volume_fraction"], params["seed"],
-                       (end + 2.0 * r) / a + 0.5)
+    geometry = Spheres(r, params["volume_fraction"], params["seed"], end + 2.0 * r + 0.5 * a)
     wear = dataclasses.replace(base.wear, coefficients=tuple(params["coefficients"]))
     scene = dataclasses.replace(base, geometry=geometry, normal_force=force, n=params["n"],
                                 wear=wear)
@@ -132,10 +131,11 @@ def inclusion_slopes(params):
     scene, _, _ = case_scene(params, 1.0)
     values = []
     for seed in params["inclusion_seeds"]:
-        geometry = Inclusions(params["radius"], seed, fill_factor=params["volume_fraction"])
+        geometry = Inclusions(params["radius_over_a"] * scene.outline.scale, seed,
+                              fill_factor=params["volume_fraction"])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ValidityWarning)
-            n = max(params["n"], geometry.min_grid())
+            n = max(params["n"], geometry.min_grid(scene.outline))
             solution = solve(Problem.from_scene(dataclasses.replace(scene, geometry=geometry),
                                                 n=n))
         values.append(solution.normalised_rms_slope)
@@ -236,7 +236,7 @@ def plot(path, png):
     cmap = ListedColormap(["#bdbdbd", "#252525"])
     ax_map.imshow(np.ma.masked_less(d["surface_section"], 0).T, origin="lower",
                   extent=(-1, 1, -1, 1), cmap=cmap, interpolation="nearest")
-    ax_map.set_title(f"surface section, n = {p['n']}:\nspheres r = {p['radius']:g} a, "
+    ax_map.set_title(f"surface section, n = {p['n']}:\nspheres r = {p['radius_over_a']:g} a, "
                      f"{100 * p['volume_fraction']:g} % by volume\n(dark: particles, k / 10)",
                      fontsize=8.5)
     ax_map.set_xticks([])

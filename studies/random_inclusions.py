@@ -45,6 +45,7 @@ from steady.pressures import phase_pressures
 from steady.reference import fine_grain_rms_slope
 
 NAME = "random_inclusions"
+# The face is the unit disk (a = 1 m, the grid of a bare n): radii in m are in units of a.
 PARAMS = {"n": 512, "radii": [0.02, 0.04, 0.08], "fill_factors": [0.05, 0.1, 0.2, 0.3, 0.4],
           "ratios": [1e-3, 1e-1, 1e1], "seeds": list(range(6100, 6108)), "picture_fill": 0.2,
           "inclusion_grids": [512, 1024, 2048]}
@@ -159,7 +160,8 @@ def compute(path, params):
                 for key in out:
                     out[key][a, b, s] = v[key]
                 realised[a, b, s] = v["fill"]
-                counts[a, b, s] = np.sum(np.hypot(*geometry.centres.T) < 1.0)
+                centres, _ = geometry.placement()  # on the unit disk, m
+                counts[a, b, s] = np.sum(np.hypot(*centres.T) < 1.0)
     k = np.column_stack([np.ones(len(ratios)), ratios])
     closed = fine_grain_rms_slope(np.stack([1 - realised, realised], axis=-1)[..., None, :], k)
     rel = out["face"] / closed - 1

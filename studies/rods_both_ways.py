@@ -64,8 +64,7 @@ def _rod_heights(face, geometry, radius):
     x = grid.x
     out = []
     for (cx, cy), rr in zip(geometry.centres, geometry.radii, strict=True):
-        inside = ((x[:, None] - cx * radius) ** 2 + (x[None, :] - cy * radius) ** 2
-                  < (rr * radius) ** 2) & grid.mask
+        inside = ((x[:, None] - cx) ** 2 + (x[None, :] - cy) ** 2 < rr ** 2) & grid.mask
         out.append(float(np.mean(relief[inside])))
     return np.asarray(out)
 
@@ -79,8 +78,8 @@ def compute(path, params):
         if abs(k[STEEL[key]] / k[1 - STEEL[key]] - 1.7) > 1e-12:
             raise ValueError(f"scene {file}: expected k_steel / k_brass = 1.7")
         a = base.outline.radius
-        datasets[f"{key}/rod_centres"] = (np.asarray(base.geometry.centres) * a, "m")
-        datasets[f"{key}/rod_radii"] = (np.asarray(base.geometry.radii) * a, "m")
+        datasets[f"{key}/rod_centres"] = (np.asarray(base.geometry.centres), "m")
+        datasets[f"{key}/rod_radii"] = (np.asarray(base.geometry.radii), "m")
         for case, ratio in RATIOS.items():
             scene = _with_ratio(base, key, ratio)
             res = solve_scene(scene, n=params["n"])

@@ -37,9 +37,10 @@ K1 = 1e-13         # 1/Pa, wear coefficient of the matrix (phase 0)
 #: Tilt beyond which a flat punch lifts off on one side (transient.initial_face.tilted).
 CRITICAL_TILT = FORCE / (4 * RADIUS ** 2 * E_STAR)
 
-#: Five rods of radius 0.25 a: one on the axis, four at 0.6 a on the axes
-#: (the arrangement of steady/examples/rods_*.toml).
-RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
+#: Five rods of radius 0.25 a on the disk of :data:`RADIUS`: one on the axis, four at 0.6 a
+#: on the axes (the arrangement of steady/examples/rods_*.toml).
+RODS = Rods(((0.0, 0.0), (0.6 * RADIUS, 0.0), (0.0, 0.6 * RADIUS), (-0.6 * RADIUS, 0.0),
+             (0.0, -0.6 * RADIUS)), (0.25 * RADIUS,) * 5)
 
 GEOMETRIES = {
     "homogeneous": Homogeneous(),

@@ -62,10 +62,10 @@ def _stack(n0=8):
 
 def test_voxel_columns_are_the_slices_by_hand():
     a = _stack()
-    vox = Voxels(a, 0.1, outline=Circle(1.0))
+    d = 0.1 * 2e-3                                             # voxel_depth, m
+    vox = Voxels(a, d, outline=Circle(2e-3))
     grid = Circle(2e-3).grid(8)
     c = vox.columns(grid)
-    d = 0.1 * 2e-3                                             # voxel_depth in m (L = 2 mm)
     # Pixel (0, 3): 0, 1, 1: one interface at d.  Pixel (4, 3): 0, 0, 0: none.
     # Pixel (2, 1) is off the face of the 8-pixel disk? (2, 1) is on it: 0, 1, 0.
     assert c.interfaces[:, 0, 3][np.isfinite(c.interfaces[:, 0, 3])].tolist() == [d]
@@ -136,9 +136,9 @@ def test_sphere_columns_are_the_spheres_by_hand():
     spheres = Spheres(0.15, 0.25, 11, 0.4, spread=0.2)
     grid = Circle(1.0).grid(32)
     c = spheres.columns(grid)
-    centres, radii = spheres.spheres
-    B, (z0, z1) = spheres._box()
-    period = np.array([2 * B, 2 * B, z1 - z0])
+    centres, radii = spheres.spheres()
+    r_max = spheres.max_radius
+    period = np.array([2 * (1.0 + r_max), 2 * (1.0 + r_max), 0.4 + 2 * r_max])  # L = 1 m
     x, y = np.meshgrid(grid.unit_x, grid.unit_y, indexing="ij")
     shifts = np.array([(a, b, e) for a in (-1, 0, 1) for b in (-1, 0, 1) for e in (-1, 0, 1)])
     images = (centres[:, None, :] + shifts * period).reshape(-1, 3)
@@ -167,8 +167,8 @@ def test_stereology_the_section_area_fraction_is_the_volume_fraction():
     fractions = []
     for seed in range(4):
         spheres = Spheres(0.08, 0.3, seed, 0.5)
-        B, (z0, z1) = spheres._box()
-        one = 4.0 / 3.0 * math.pi * 0.08 ** 3 / (4 * B * B * (z1 - z0))
+        B, height = 1.0 + 0.08, 0.5 + 2 * 0.08             # the placement box, L = 1 m
+        one = 4.0 / 3.0 * math.pi * 0.08 ** 3 / (4 * B * B * height)
         assert abs(spheres.realised_volume_fraction() - 0.3) <= one, "realised volume fraction"
         c = spheres.columns(grid)
         fractions += [c.fractions(w)[1] for w in np.linspace(0.0, 0.45, 8)]
@@ -177,8 +177,9 @@ def test_stereology_the_section_area_fraction_is_the_volume_fraction():
 
 
 @pytest.mark.parametrize("keys, n, fragment", [
-    ("radius = 2e-4", 32, r"\[grid\] n: sphere radius 0.0002 m is under two pixels at n = 32 "
-                          r"\(pixel 0.00025 m\): the minimum is n = 80"),
+    ("radius = 2e-4", 32, r"\[grid\] n: grid too coarse for spheres of radius 0.0002 m on the "
+                          r"circle face \(radius 4 mm\): the radius is under two pixels at "
+                          r"n = 32 \(pixel 0.00025 m\), the minimum is n = 80"),
     ("volume_fraction = 0.6", 32, r"\[phases\] map volume_fraction must be a number in "
                                   r"\(0, 0.5\] \(1\), got 0.6"),
     ("volume_fraction = 0", 32, r"volume_fraction must be a number in \(0, 0.5\]"),
@@ -201,6 +202,44 @@ def test_a_packing_beyond_random_sequential_addition_is_refused():
         spheres.columns(Circle(1.0).grid(16))
 
 
+def test_spheres_in_metres_give_the_columns_of_the_scene_file(tmp_path):
+    """Spheres of 0.5 mm to 2 mm deep under a disk of 5 mm, built in m, are the scene file's."""
+    head = HEAD.replace("radius = 0.004", "radius = 0.005")
+    s = parse_scene(head.format(n=48, k="[1.0e-12, 1.0e-13]") + '[phases]\nmap = { kind = '
+                    '"spheres", radius = 5e-4, volume_fraction = 0.3, seed = 2031, '
+                    'depth = 2e-3 }\n', tmp_path)
+    spheres = Spheres(5e-4, 0.3, 2031, 2e-3)
+    assert s.geometry == spheres, s.geometry
+    mine, theirs = spheres.columns(Circle(5e-3).grid(48)), s.depth_columns()
+    assert np.array_equal(mine.interfaces, theirs.interfaces), "interfaces differ"
+    assert np.array_equal(mine.phases, theirs.phases), "phases differ"
+    assert 0.0 < mine.bottom.max() <= 2e-3, f"interfaces (m) down to the depth: {mine.bottom.max()}"
+    centres, radii = spheres.spheres(Circle(5e-3))
+    assert np.allclose(radii, 5e-4, rtol=1e-15, atol=0) and \
+        np.abs(centres[:, :2]).max() <= 5e-3 + 5e-4, \
+        "spheres in m, in the box [-L - r, L + r)^2"
+    with pytest.raises(ValueError, match=r"grid too coarse for spheres of radius 0.0005 m on the "
+                                         r"circle face \(radius 5 mm\): the radius is under two "
+                                         r"pixels at n = 16 \(pixel 0.000625 m\), the minimum is "
+                                         r"n = 40"):
+        spheres.labels(Circle(5e-3).grid(16))
+
+
+def test_depths_in_units_of_the_face_scale_are_refused_with_their_meaning():
+    """Spheres and voxels of a script written for lengths in units of L are refused."""
+    old = Spheres(0.1, 0.3, 2031, 0.5)
+    with pytest.raises(ValueError, match=r"sphere radius 0.1 m is larger than 0.5 L = 0.002 m, "
+                                         r"half the scale of the face \(circle face \(radius 4 "
+                                         r"mm\)\); lengths are in m, not in units of the face "
+                                         r"scale L = 0.004 m \(in those units radius 0.1 L = "
+                                         r"0.0004 m\)"):
+        old.labels(Circle(4e-3).grid(64))
+    with pytest.raises(ValueError, match=r"voxel_depth 0.05 m is deeper than the face scale "
+                                         r"L = 0.004 m .*voxel_depth 0.05 L = 0.0002 m"):
+        Voxels(_stack(), 0.05, outline=Circle(4e-3))
+    assert Voxels(_stack(), 0.05).voxel_depth == 0.05, "on the unit disk (1 m) 0.05 m is a slice"
+
+
 # -- layers ----------------------------------------------------------------------------------
 COATING = """[phases]
 map = { kind = "homogeneous" }
@@ -219,7 +258,7 @@ def test_layers_over_a_voxel_stack_by_hand(tmp_path):
                         '[[depth.layers]]\nthickness = 1e-4\nmap = { kind = "homogeneous" }\n',
               n=16)
     c, grid = s.depth_columns(), s.grid()
-    vox = Voxels(_stack(), 1e-4 / 4e-3).columns(grid)
+    vox = Voxels(_stack(), 1e-4).columns(grid)
     face = grid.mask
     assert np.array_equal(c.phase_at(0.0), np.where(face, 1, -1)), "the top layer"
     assert np.array_equal(c.phase_at(2.5e-4), np.where(face, 0, -1)), "the second layer"

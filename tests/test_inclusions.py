@@ -6,15 +6,16 @@ import numpy as np
 import pytest
 from conftest import scene_text
 
-from steady.inclusions import MAX_FILL, MAX_RADIUS, Inclusions
+from steady.inclusions import MAX_FILL, MAX_RELATIVE_RADIUS, Inclusions
 from steady.labels import realised_fill_factors, validate_labels
+from steady.outline import Circle, Rectangle
 from steady.scene import parse_scene
 
 
 def _gaps(geometry):
     """Smallest ``|c_i - c_j| - r_i - r_j`` over all pairs, at the nearest periodic image."""
-    c, r = geometry.centres, geometry.radii
-    period = 2 * geometry.box_half_width
+    c, r = geometry.placement()
+    period = 2 * geometry.placement_half_width()
     d = c[:, None, :] - c[None, :, :]
     d -= period * np.round(d / period)
     gap = np.hypot(d[..., 0], d[..., 1]) - r[:, None] - r[None, :]
@@ -29,11 +30,13 @@ def _gaps(geometry):
 ])
 def test_inclusions_do_not_overlap(options):
     g = Inclusions(seed=3119, **options)
-    assert g.centres.shape == (g.radii.size, 2) and g.radii.size > 10, "inclusions placed"
+    centres, radii = g.placement()
+    assert centres.shape == (radii.size, 2) and radii.size > 10, "inclusions placed"
     # Touching is allowed; the test of a candidate is exact up to round-off.
     assert _gaps(g) >= -1e-12, f"overlapping inclusions: gap {_gaps(g)}"
-    assert g.radii.max() <= g.max_radius + 1e-12, "radius above the truncated distribution"
-    assert np.all(np.abs(g.centres) <= g.box_half_width), "centre outside the placement box"
+    assert radii.max() <= g.max_radius + 1e-12, "radius above the truncated distribution"
+    assert np.all(np.abs(centres) <= g.placement_half_width()), \
+        "centre outside the placement box"
 
 
 @pytest.mark.parametrize("radius, fill", [(0.02, 0.3), (0.1, 0.1), (0.16, 0.3), (0.1, 0.45)])
@@ -52,8 +55,8 @@ def test_realised_fill_factor_scatters_about_the_target(radius, fill):
 
 def test_count_sets_the_expected_number_on_the_face():
     g = Inclusions(0.04, 2203, count=200)
-    assert g.target_fill_factor == pytest.approx(200 * 0.04**2), "fill = count <r^2>"
-    on_face = np.hypot(*g.centres.T) < 1.0
+    assert g.target_fill_factor() == pytest.approx(200 * 0.04**2), "fill = count <r^2>"
+    on_face = np.hypot(*g.placement()[0].T) < 1.0
     # Poisson-like count: 200 +- 14; random sequential addition is more regular still.
     assert abs(on_face.sum() - 200) < 4 * math.sqrt(200), f"{on_face.sum()} centres on the face"
 
@@ -63,7 +66,8 @@ def test_same_seed_same_map_other_seed_other_map():
     b = Inclusions(0.05, 7411, fill_factor=0.25)
     c = Inclusions(0.05, 7412, fill_factor=0.25)
     assert np.array_equal(a.labels(128), b.labels(128)), "same seed must give the same map"
-    assert np.array_equal(a.centres, b.centres), "same seed must give the same centres"
+    assert np.array_equal(a.placement()[0], b.placement()[0]), \
+        "same seed must give the same centres"
     assert not np.array_equal(a.labels(128), c.labels(128)), "another seed, another map"
 
 
@@ -77,7 +81,7 @@ def test_labels_are_a_valid_two_phase_map(n):
 
 def test_lognormal_mean_square_radius():
     g = Inclusions(0.05, 2711, fill_factor=0.3, radius_spread=0.5)
-    draws = g.radii
+    draws = g.placement()[1]
     # <r^2> of the placed radii against the closed form (2 % from 300-odd draws).
     assert np.mean(draws**2) == pytest.approx(g.mean_square_radius, rel=0.1), \
         "mean square radius of the truncated log-normal"
@@ -90,26 +94,54 @@ def test_lognormal_mean_square_radius():
     ({"radius": 0.05, "seed": 3, "fill_factor": "0.2"}, "must be a number"),
     ({"radius": 0.05, "seed": 3, "fill_factor": True}, "must be a number"),
     ({"radius": 0.05, "seed": 3, "fill_factor": 0.6}, "impossible packing"),
-    ({"radius": 0.05, "seed": 3, "count": 300}, "impossible packing"),
-    ({"radius": MAX_RADIUS, "seed": 3, "fill_factor": 0.1}, "too large"),
-    ({"radius": 0.3, "seed": 3, "fill_factor": 0.1, "radius_spread": 0.5}, "too large"),
     ({"radius": -0.1, "seed": 3, "fill_factor": 0.1}, "positive"),
     ({"radius": 0.05, "seed": 3}, "exactly one"),
     ({"radius": 0.05, "seed": 3, "fill_factor": 0.1, "count": 10}, "exactly one"),
     ({"radius": 0.05, "seed": -1, "fill_factor": 0.1}, "seed"),
     ({"radius": 0.05, "seed": 3, "fill_factor": 0.1, "radius_spread": -0.1}, "radius_spread"),
-    ({"radius": 1e-4, "seed": 3, "fill_factor": 0.3}, "too many"),
 ])
 def test_bad_parameters_are_refused(options, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
         Inclusions(**options)
 
 
-def test_too_coarse_grid_is_refused():
+@pytest.mark.parametrize("options, message", [
+    # Count and radius against the face: the unit disk (a bare n) and a disk of 4 mm.
+    ({"radius": 0.05, "seed": 3, "count": 300}, "impossible packing: count 300"),
+    ({"radius": MAX_RELATIVE_RADIUS, "seed": 3, "fill_factor": 0.1},
+     "inclusion radius 0.5 m is too large for the face (circle face (radius 1000 mm)): radii "
+     "must stay below 0.5 L = 0.5 m"),
+    ({"radius": 0.3, "seed": 3, "fill_factor": 0.1, "radius_spread": 0.5},
+     "the largest radius of the distribution is"),
+    ({"radius": 1e-4, "seed": 3, "fill_factor": 0.3}, "too many"),
+])
+def test_parameters_that_do_not_fit_the_face_are_refused(options, message):
+    geometry = Inclusions(**options)
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        geometry.labels(64)
+
+
+def test_too_coarse_grid_is_refused_in_metres():
     g = Inclusions(0.05, 3, fill_factor=0.1)
     assert g.min_grid() == 120, "three pixels per mean radius"
-    with pytest.raises(ValueError, match="grid too coarse"):
+    with pytest.raises(ValueError, match=r"grid too coarse for inclusions of radius 0.05 m .*"
+                                         r"unit disk of a bare n.*n = 100, the minimum is n = 120"):
         g.labels(100)
+    small = Inclusions(0.2e-3, 3, fill_factor=0.1)
+    assert small.min_grid(Circle(4e-3)) == 120, "three pixels per mean radius, r = 0.05 L"
+    with pytest.raises(ValueError, match=r"grid too coarse for inclusions of radius 0.0002 m .*"
+                                         r"circle face \(radius 4 mm\): n = 100, the minimum is "
+                                         r"n = 120"):
+        small.labels(Circle(4e-3).grid(100))
+
+
+def test_lengths_in_units_of_the_face_scale_are_refused_with_their_meaning():
+    """A radius meant in units of L (old scripts) is refused, its meaning in m given."""
+    g = Inclusions(0.05, 3, fill_factor=0.1)
+    with pytest.raises(ValueError, match=r"inclusion radius 0.05 m is too large for the face .*"
+                                         r"lengths are in m, not in units of the face scale "
+                                         r"L = 0.004 m .*radius 0.05 L = 0.0002 m"):
+        g.labels(Circle(4e-3).grid(128))
 
 
 def test_max_fill_is_reachable():
@@ -118,13 +150,35 @@ def test_max_fill_is_reachable():
     assert _gaps(g) >= -1e-12, "overlap at the densest accepted packing"
 
 
+@pytest.mark.parametrize("options", [{"fill_factor": 0.2}, {"count": 40, "radius_spread": 0.3}])
+@pytest.mark.parametrize("punch", [{"radius": 5e-3},
+                                   {"shape": "rectangle", "width": 4e-3, "length": 7e-3}])
+def test_inclusions_in_metres_give_the_labels_of_the_scene_file(options, punch):
+    """Built in m on a disk of 5 mm (or a rectangle), the geometry is the scene file's."""
+    keys = ", ".join(f"{k} = {v!r}" for k, v in options.items())
+    text = scene_text("parser", map="homogeneous", n=128, punch=punch).replace(
+        'map = { kind = "homogeneous" }',
+        f'map = {{ kind = "inclusions", radius = 0.00025, seed = 2029, {keys} }}')
+    scene = parse_scene(text, ".")
+    geometry = Inclusions(2.5e-4, 2029, **options)
+    assert scene.geometry == geometry, scene.geometry
+    outline = Circle(5e-3) if "radius" in punch else Rectangle(4e-3, 7e-3)
+    labels = geometry.labels(outline.grid(128))
+    assert np.array_equal(labels, scene.geometry.labels(scene.grid())), "labels differ"
+    assert validate_labels(labels, 2).min() > 0, "inclusions and matrix on the face"
+    if "count" in options:  # count per the face's area, m^2
+        expected = options["count"] * math.pi * geometry.mean_square_radius / outline.area
+        assert geometry.target_fill_factor(outline) == pytest.approx(expected, rel=1e-12), \
+            "fill factor of the count"
+
+
 def test_scene_kind_inclusions():
     """Scene syntax: radius in m; the geometry is the same as built directly."""
     text = scene_text("parser", map="homogeneous").replace(
         'map = { kind = "homogeneous" }',
         'map = { kind = "inclusions", radius = 0.0004, fill_factor = 0.2, seed = 2024 }')
     scene = parse_scene(text, ".")
-    assert scene.geometry == Inclusions(0.1, 2024, fill_factor=0.2), scene.geometry
+    assert scene.geometry == Inclusions(4e-4, 2024, fill_factor=0.2), scene.geometry
     with pytest.raises(ValueError, match=r"\[phases\] map: impossible packing"):
         parse_scene(text.replace("fill_factor = 0.2", "fill_factor = 0.7"), ".")
     with pytest.raises(ValueError, match="unknown key"):

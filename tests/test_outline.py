@@ -47,9 +47,11 @@ def test_circle_grid_is_the_disk_grid(n):
 
 def test_integer_grids_keep_their_labels():
     """A geometry rasterised on the disk's FaceGrid gives the labels of ``labels(n)``."""
-    for geometry in (Voronoi(64, (0.7, 0.3), 2029), Rods(((0.0, 0.0),), (0.5,))):
+    rods = Rods(((0.0, 0.0),), (0.5 * RADIUS,))         # on the disk of RADIUS
+    for geometry, unit in ((Voronoi(64, (0.7, 0.3), 2029),) * 2,
+                           (rods, Rods(((0.0, 0.0),), (0.5,)))):
         for n in (32, 45):
-            old = geometry.labels(n)
+            old = unit.labels(n)
             new = geometry.labels(Circle(RADIUS).grid(n))
             assert np.array_equal(old, new), f"{geometry}: labels changed at n = {n}"
 
@@ -198,9 +200,9 @@ def test_voronoi_seeds_fill_the_bounding_box():
     """Seeds are uniform in the face's box: the cells have the same size on every outline."""
     geometry = Voronoi(1200, (0.5, 0.5), 2718)
     rect = Rectangle(4e-3, 12e-3)
-    points, phases, _ = geometry.seeds(rect.aspect)
-    assert np.all(np.abs(points[:, 0]) <= 1 / 3) and np.all(np.abs(points[:, 1]) <= 1), \
-        "seeds inside the rectangle's box (units of L)"
+    points, phases = geometry.seeds(rect)
+    assert np.all(np.abs(points[:, 0]) <= 2e-3) and np.all(np.abs(points[:, 1]) <= 6e-3), \
+        "seeds inside the rectangle's box (m)"
     assert np.bincount(phases).tolist() == [600, 600], "seed counts of the fill factors"
     assert geometry.min_grid(rect) == 120, "two pixels per mean seed spacing"
     labels = geometry.labels(rect.grid(120))
@@ -208,7 +210,7 @@ def test_voronoi_seeds_fill_the_bounding_box():
     # 1200 cells: the realised fill factor scatters by about 1/sqrt(1200) = 0.03.
     assert abs(fill[1] - 0.5) < 0.06, f"realised fill factor {fill}"
     # The disk's seeds are unchanged by the generalisation.
-    square, _, _ = geometry.seeds()
+    square, _ = geometry.seeds()
     expected = np.random.default_rng(2718).uniform(-1.0, 1.0, size=(1200, 2))
     assert np.array_equal(square, expected), "the disk's seeds bit for bit"
 

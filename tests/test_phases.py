@@ -4,11 +4,13 @@ import math
 
 import numpy as np
 import pytest
+from conftest import scene_text
 
 from steady.array_files import read_npy
 from steady.labels import realised_fill_factors, validate_labels
-from steady.outline import as_grid
+from steady.outline import Circle, as_grid
 from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi, load_phase_map
+from steady.scene import parse_scene
 
 FIVE_RODS = Rods(((0.0, 0.0), (0.6, 0.0), (0.0, 0.6), (-0.6, 0.0), (0.0, -0.6)), (0.25,) * 5)
 
@@ -148,7 +150,6 @@ def test_array_map_needs_multiple_of_its_size():
 
 
 @pytest.mark.parametrize("kwargs, fragment", [
-    (dict(centres=((0.9, 0.0),), radii=(0.2,)), "does not lie inside the face"),
     (dict(centres=((0.0, 0.0), (0.3, 0.0)), radii=(0.2, 0.2)), "rods 0 and 1 overlap"),
     (dict(centres=((0.0, 0.0),), radii=(-0.1,)), "positive"),
     (dict(centres=((0.0, 0.0),), radii=(0.2,), rod_phases=(2,)), "phase 1 is used by neither"),
@@ -158,6 +159,60 @@ def test_bad_rods(kwargs, fragment):
     with pytest.raises(ValueError) as err:
         Rods(**kwargs)
     assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
+
+
+def test_rods_outside_the_face_are_refused_on_rasterising():
+    rods = Rods(((0.9, 0.0),), (0.2,))
+    with pytest.raises(ValueError, match=r"rod 0 \(centre \(0.9, 0\) m, radius 0.2 m\) does "
+                                         r"not lie inside the face \(circle face \(radius "
+                                         r"1000 mm\)\)$"):
+        rods.labels(32)
+
+
+def test_rods_in_metres_give_the_labels_of_the_scene_file():
+    """Rods of 1 mm on a disk of 5 mm, built in m, are the scene file's rods, pixel for pixel."""
+    centres, radii = [(0.0, 0.0), (2.5e-3, 0.0), (-1.5e-3, 2.5e-3)], [1e-3, 1e-3, 0.8e-3]
+    text = scene_text("parser", map="rods", radius=5e-3, n=96, centres=centres, radii=radii)
+    scene = parse_scene(text, ".")
+    rods = Rods(centres=centres, radii=radii)
+    assert scene.geometry == rods, scene.geometry
+    labels = rods.labels(Circle(5e-3).grid(96))
+    assert np.array_equal(labels, scene.phase_labels()), "labels differ from the scene's"
+    # On the unit disk (a bare n), the rods divided by L = 5 mm give the same pixels.
+    unit = Rods([(x / 5e-3, y / 5e-3) for x, y in centres], [r / 5e-3 for r in radii])
+    assert np.array_equal(labels, unit.labels(96)), "the same rods scaled to the unit disk"
+    assert rods.min_grid(Circle(5e-3)) == 38 and unit.min_grid() == 38, \
+        "three pixels per radius of the smallest rod: 6 / 0.16"
+
+
+def test_rods_too_small_for_the_grid_are_named_in_metres():
+    rods = Rods(centres=[(0.0, 0.0), (2.5e-3, 0.0)], radii=[1e-3, 1e-3])
+    with pytest.raises(ValueError, match=r"grid too coarse for rods of radius 0.001 m \(3 pixels "
+                                         r"per radius\) on the circle face \(radius 5 mm\): "
+                                         r"n = 24, the minimum is n = 30"):
+        rods.labels(Circle(5e-3).grid(24))
+    # A bare n is the unit disk, 1 m: the message says so.
+    with pytest.raises(ValueError, match=r"rods of radius 0.001 m .* on the unit disk of a bare n "
+                                         r"\(radius 1 m: lengths are in m.*the minimum is "
+                                         r"n = 6000"):
+        rods.labels(96)
+
+
+def test_rods_in_units_of_the_face_scale_are_refused_with_their_meaning():
+    """A script written for lengths in units of L is refused, never re-read as metres."""
+    old = Rods(((0.0, 0.0), (0.6, 0.0)), (0.25, 0.25))
+    with pytest.raises(ValueError, match=r"rod 0 \(centre \(0, 0\) m, radius 0.25 m\) does not "
+                                         r"lie inside the face .*lengths are in m, not in units "
+                                         r"of the face scale L = 0.004 m \(in those units centre "
+                                         r"\(0, 0\) L = \(0, 0\) m, radius 0.25 L = 0.001 m\)"):
+        old.labels(Circle(4e-3).grid(64))
+    centre = Rods(((0.6, 0.0),), (0.01,))
+    with pytest.raises(ValueError, match=r"centre \(0.6, 0\) L = \(0.0024, 0\) m"):
+        centre.labels(Circle(4e-3).grid(64))
+    # The scene reader says the same, for the key in the file.
+    text = scene_text("parser", map="rods", centres=[(0.6, 0.0)], radii=[0.01])
+    with pytest.raises(ValueError, match=r"\[phases\] map: rod 0 .*\(0.6, 0\) L = \(0.0024, 0\) m"):
+        parse_scene(text, ".")
 
 
 def test_labels_validation():

@@ -58,7 +58,8 @@ def test_ring_average_and_differential_profile_of_homogeneous_face():
 def test_differential_profile_shows_hard_rod():
     n = 128
     # Hard central rod (low k): it carries more pressure and stands proud.
-    res = _face(n, Rods(((0.0, 0.0), (0.6, 0.0)), (0.25, 0.25)), [1.7e-13, 1.0e-13])
+    res = _face(n, Rods(((0.0, 0.0), (0.6 * RADIUS, 0.0)), (0.25 * RADIUS,) * 2),
+                [1.7e-13, 1.0e-13])
     _, diff = differential_profile(res.face, RADIUS, (-RADIUS, 0.0), (RADIUS, 0.0), 201)
     x = np.linspace(-1, 1, 201)
     over_rod = diff[np.abs(x - 0.6) < 0.1].mean()

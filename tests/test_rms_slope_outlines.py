@@ -28,9 +28,9 @@ FORCE = 10.0   # N
 SQUARE = Rectangle(2 * A, 2 * A)
 TALL = Rectangle(2 * A / 3, 2 * A)   # 1:3, width < length
 WIDE = Rectangle(2 * A, 2 * A / 3)   # 3:1, width > length
-#: Three rods of radius 0.2 L along the long axis of TALL, and the same along WIDE's.
-RODS_TALL = Rods(((0.0, -0.6), (0.0, 0.0), (0.0, 0.6)), (0.2, 0.2, 0.2))
-RODS_WIDE = Rods(((-0.6, 0.0), (0.0, 0.0), (0.6, 0.0)), (0.2, 0.2, 0.2))
+#: Three rods of radius 0.2 L along the long axis of TALL, and the same along WIDE's (L = A).
+RODS_TALL = Rods(((0.0, -0.6 * A), (0.0, 0.0), (0.0, 0.6 * A)), (0.2 * A,) * 3)
+RODS_WIDE = Rods(((-0.6 * A, 0.0), (0.0, 0.0), (0.6 * A, 0.0)), (0.2 * A,) * 3)
 
 
 def _exact(outline):

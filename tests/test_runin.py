@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from conftest import CRITICAL_TILT, E_STAR, FORCE, GEOMETRIES, K1, RADIUS, RODS, wear_problem
 
+from steady.outline import Circle
 from steady.phases import Voronoi
 from steady.rms_slope import estimate_rms_slope
 from transient import initial_face
@@ -256,7 +257,8 @@ def test_run_file_round_trip(tmp_path):
     result, cmp = run_and_compare(RODS, (1.0, 1.7), 32,
                                   options=RunOptions(tol=1e-3, snapshots_s_star=(0.0, 0.1, 1.0)))
     path = tmp_path / "run.h5"
-    write_run(path, result, arrays={"phase": RODS.labels(32)}, comparison=cmp)
+    write_run(path, result, arrays={"phase": RODS.labels(Circle(RADIUS).grid(32))},
+              comparison=cmp)
     back, attrs, arrays = read_run(path)
     _same_result(result, back)
     assert attrs["format"] == "runin.transient" and attrs["format_version"] == 3, \

@@ -40,8 +40,8 @@ def test_rods_in_metres(tmp_path):
                       radii=[0.001, 0.0008])
     scene = parse_scene(text, tmp_path)
     assert isinstance(scene.geometry, Rods), f"{scene.geometry}"
-    assert np.allclose(scene.geometry.centres, [(0.0, 0.0), (0.5, 0.0)]), "centres in units of a"
-    assert np.allclose(scene.geometry.radii, [0.25, 0.2]), "radii in units of a"
+    assert scene.geometry.centres == ((0.0, 0.0), (0.002, 0.0)), "centres in m, as in the file"
+    assert scene.geometry.radii == (0.001, 0.0008), "radii in m, as in the file"
 
 
 def test_file_map_relative_to_scene(tmp_path):
@@ -173,7 +173,7 @@ def test_shipped_scenes_load(name, geometry_type, n_phases):
     scene = load_scene(SCENES / name)
     assert isinstance(scene.geometry, geometry_type), f"{name}: {scene.geometry}"
     assert scene.n_phases == n_phases, f"{name}: {scene.n_phases} phases"
-    labels = scene.geometry.labels(scene.n)
+    labels = scene.geometry.labels(scene.grid())
     assert labels.shape == (scene.n, scene.n), f"{name}: shape {labels.shape}"
 
 

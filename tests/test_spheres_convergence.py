@@ -41,7 +41,7 @@ VOXEL_DEPTH = 1.0e-4            # m, the coarsest voxel stack
 def base_scene():
     """The example scene with its spheres enlarged to radius 0.125 a (the same seed)."""
     scene = load_scene(SCENE, extra_sections=("transient", "initial_face"))
-    spheres = Spheres(0.125, 0.3, 2031, DEPTH / scene.outline.scale)
+    spheres = Spheres(0.125 * scene.outline.scale, 0.3, 2031, DEPTH)
     return dataclasses.replace(scene, geometry=spheres)
 
 
@@ -83,8 +83,7 @@ def voxel_scene(scene, n, dz, directory):
     stack = np.maximum(np.stack(slices, axis=-1), 0).astype(np.int8)
     path = pathlib.Path(directory) / f"spheres_dz{dz:.3g}.npy"
     np.save(path, stack)
-    voxels = Voxels(load_voxels(path, max_side=n), dz / scene.outline.scale, str(path),
-                    scene.outline)
+    voxels = Voxels(load_voxels(path, max_side=n), dz, str(path), scene.outline)
     return dataclasses.replace(scene, geometry=voxels)
 
 

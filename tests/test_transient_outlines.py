@@ -66,8 +66,8 @@ BLOCK = Rectangle(4e-3, 8e-3)
 RING = Annulus(2e-3, 4e-3)
 #: 64 seeds, 30 % of phase 1 in the bounding box: n >= 23 on the block.
 VORONOI = Voronoi(64, (0.7, 0.3), 2029)
-#: Three rods of radius 1 mm along the block's long axis (units of L = 4 mm).
-BLOCK_RODS = Rods(((0.0, 0.0), (0.0, 0.55), (0.0, -0.55)), (0.25,) * 3)
+#: Three rods of radius 1 mm along the block's long axis.
+BLOCK_RODS = Rods(((0.0, 0.0), (0.0, 2.2e-3), (0.0, -2.2e-3)), (1e-3,) * 3)
 
 
 def problem_on(outline, geometry, ratios, n, **options):

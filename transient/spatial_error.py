@@ -109,7 +109,8 @@ def companion_grid(geometry, n, outline=None):
         The main run's grid (pixels along the longer side).
     outline : outline object, optional
         The face (:mod:`steady.outline`), whose grid must resolve it too
-        (``outline.check_grid``); default a disk.
+        (``outline.check_grid``); default the unit disk, radius 1 m (the
+        grid of a bare ``n``).
 
     Returns
     -------

@@ -144,7 +144,7 @@ def two_phase_cases():
     from steady.outline import Rectangle
     from steady.phases import Rods, Voronoi
 
-    rods = Rods(((0.0, -0.6), (0.0, 0.0), (0.0, 0.6)), (0.2, 0.2, 0.2))
+    rods = Rods(((0.0, -0.6 * A), (0.0, 0.0), (0.0, 0.6 * A)), (0.2 * A,) * 3)  # on 1:3, L = A
     square = Rectangle(2 * A, 2 * A)
     return {
         # About 25 seeds per L^2 on both.
