@@ -164,7 +164,7 @@ def test_ring_refinement_is_second_order():
 
 def test_reference_history_error_bars():
     """Extrapolated away from the front, the difference on it; the flat face at s = 0."""
-    ref = coated_reference_history([0.0, 0.05, 0.2], thickness=0.1, ratio=10.0, rings=40)
+    ref = coated_reference_history([0.0, 0.05, 0.2], thickness_f_star=0.1, ratio=10.0, rings=40)
     assert ref.rms_slope[0] == 0.0 and ref.mean_worn_depth[0] == 0.0, "s = 0 is the flat face"
     assert ref.first_through < 0.05 < ref.last_through < 0.2, \
         f"crossings {ref.first_through}, {ref.last_through}"
@@ -187,7 +187,7 @@ def test_bad_input_is_named():
 @pytest.mark.slow
 def test_reference_history_160_rings():
     """The figures docs/model.md quotes (t = 0.1, k_s/k_c = 10, 160 rings); 56 s on 2 cores."""
-    ref = coated_reference_history([1e-3, 0.05, 0.2, 0.5], thickness=0.1, ratio=10.0,
+    ref = coated_reference_history([1e-3, 0.05, 0.2, 0.5], thickness_f_star=0.1, ratio=10.0,
                                    rings=160)
     assert ref.first_through == pytest.approx(0.009839, abs=1e-6), ref.first_through
     assert ref.last_through == pytest.approx(0.14561, abs=1e-5), ref.last_through

@@ -295,7 +295,7 @@ class ReferenceHistory:
 
     Attributes
     ----------
-    distance : ndarray, shape (K,)
+    distance_s_star : ndarray, shape (K,)
         Sliding distances, units of ``s* = a / (k E*)``.
     rms_slope : ndarray, shape (K,)
         Rms slope of the face over ``grad_f0``.
@@ -308,7 +308,7 @@ class ReferenceHistory:
         The two ring counts ``(N/2, N)``.
     """
 
-    distance: np.ndarray
+    distance_s_star: np.ndarray
     rms_slope: np.ndarray
     rms_slope_error: np.ndarray
     rms_height: np.ndarray
@@ -316,15 +316,16 @@ class ReferenceHistory:
     rings: tuple
 
 
-def reference_history(distances, *, rings=1200, grading=4.0):
+def reference_history(distances_s_star, *, rings=1200, grading=4.0):
     """The homogeneous run-in history, second-order extrapolated from ``N/2`` and ``N`` rings.
 
     Parameters
     ----------
-    distances : array_like, shape (K,)
-        Sliding distances in units of ``s*``, non-negative.
+    distances_s_star : array_like, shape (K,)
+        Sliding distances in units of ``s* = a / (k E*)``, non-negative: the
+        history is normalised, the same for every cylinder.
     rings : int, optional
-        The finer ring count ``N`` (default 1200: about 5 s on 2 cores).
+        The finer ring count ``N`` (default 1200).
     grading : float, optional
         Grading exponent (default 4).
 
@@ -339,9 +340,10 @@ def reference_history(distances, *, rings=1200, grading=4.0):
     >>> print(f"{ref.rms_slope[0]:.3f} {ref.rms_slope[1]:.4f}")
     0.000 0.9829
     """
-    s = np.asarray(distances, dtype=float)
+    s = np.asarray(distances_s_star, dtype=float)
     if s.ndim != 1 or not np.all(np.isfinite(s) & (s >= 0)):
-        raise ValueError(f"distances must be a 1-d array of non-negative numbers, got {s!r}")
+        raise ValueError(f"distances_s_star must be a 1-d array of non-negative numbers, got "
+                         f"{s!r}")
     values = []
     counts = (int(rings) // 2, int(rings))
     for count in counts:
@@ -353,7 +355,7 @@ def reference_history(distances, *, rings=1200, grading=4.0):
     (slope_c, height_c), (slope_f, height_f) = values
     slope = slope_f + (slope_f - slope_c) / 3.0
     height = height_f + (height_f - height_c) / 3.0
-    return ReferenceHistory(distance=s, rms_slope=slope,
+    return ReferenceHistory(distance_s_star=s, rms_slope=slope,
                             rms_slope_error=np.abs(slope - slope_f),
                             rms_height=height, rms_height_error=np.abs(height - height_f),
                             rings=counts)
@@ -661,8 +663,8 @@ class CoatedReferenceHistory:
 
     Attributes
     ----------
-    distance : ndarray, shape (K,)
-    thickness : float
+    distance_s_star : ndarray, shape (K,)
+    thickness_f_star : float
     ratio : float
         ``k_s / k_c``.
     first_through, first_through_error : float
@@ -683,8 +685,8 @@ class CoatedReferenceHistory:
         The two ring counts ``(N/2, N)``.
     """
 
-    distance: np.ndarray
-    thickness: float
+    distance_s_star: np.ndarray
+    thickness_f_star: float
     ratio: float
     first_through: float
     first_through_error: float
@@ -716,7 +718,8 @@ def _coated_figures(model, distances):
             for name in _COATED_FIGURES}
 
 
-def coated_reference_history(distances, *, thickness, ratio, rings=160, grading=4.0):
+def coated_reference_history(distances_s_star, *, thickness_f_star, ratio, rings=160,
+                             grading=4.0):
     """The coated run-in history, extrapolated from ``N/2`` and ``N`` rings.
 
     The rings cross one at a time, so while the wear-through front sweeps
@@ -729,10 +732,10 @@ def coated_reference_history(distances, *, thickness, ratio, rings=160, grading=
 
     Parameters
     ----------
-    distances : array_like, shape (K,)
+    distances_s_star : array_like, shape (K,)
         Sliding distances in units of the coating's ``s*``, non-negative.
-    thickness : float
-        Coating thickness over ``pbar a / E*``, positive.
+    thickness_f_star : float
+        Coating thickness over ``f* = pbar a / E*``, positive.
     ratio : float
         ``k_s / k_c``, positive.
     rings : int, optional
@@ -747,17 +750,18 @@ def coated_reference_history(distances, *, thickness, ratio, rings=160, grading=
 
     Examples
     --------
-    >>> ref = coated_reference_history([0.2], thickness=0.1, ratio=10.0, rings=40)
+    >>> ref = coated_reference_history([0.2], thickness_f_star=0.1, ratio=10.0, rings=40)
     >>> print(f"{ref.first_through:.5f} {ref.last_through:.4f} {ref.rms_slope[0]:.4f}")
     0.00984 0.1456 1.0209
     """
-    s = np.asarray(distances, dtype=float)
+    s = np.asarray(distances_s_star, dtype=float)
     if s.ndim != 1 or not np.all(np.isfinite(s) & (s >= 0)):
-        raise ValueError(f"distances must be a 1-d array of non-negative numbers, got {s!r}")
+        raise ValueError(f"distances_s_star must be a 1-d array of non-negative numbers, got "
+                         f"{s!r}")
     counts = (int(rings) // 2, int(rings))
     models, figures, through = [], [], []
     for count in counts:
-        model = CoatedAxisymmetricRunIn(count, grading=grading, thickness=thickness,
+        model = CoatedAxisymmetricRunIn(count, grading=grading, thickness=thickness_f_star,
                                         substrate_coefficient=ratio)
         through.append(np.array(model.wear_through_distances()) / model.distance_scale)
         figures.append(_coated_figures(model, s))
@@ -775,7 +779,7 @@ def coated_reference_history(distances, *, thickness, ratio, rings=160, grading=
             value, error = np.where(s == 0, 0.0, value), np.where(s == 0, 0.0, error)
         values[name], values[name + "_error"] = value, error
     return CoatedReferenceHistory(
-        distance=s, thickness=float(thickness), ratio=float(ratio),
+        distance_s_star=s, thickness_f_star=float(thickness_f_star), ratio=float(ratio),
         first_through=float(first), first_through_error=float(first_error),
         last_through=float(last), last_through_error=float(last_error),
         substrate_decay_distance=models[1].substrate_decay_distance
