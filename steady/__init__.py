@@ -10,7 +10,8 @@ bottom floor up:
 - :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
 - :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
 - :mod:`steady.array_files` -- ``.npy`` and PNG inputs, checked before
-  their data are read;
+  their data are read; :mod:`steady.safe_files` -- atomic writes, file
+  identity, backups, checksums and the writers' lock;
 - :mod:`steady.outline` -- face outlines (disk, rectangle, ellipse, annulus,
   pixel mask) and the grid over each one's bounding box;
 - :mod:`steady.labels` -- rasterised phase maps: checks, fill factors;
@@ -37,7 +38,7 @@ bottom floor up:
 - :mod:`steady.solution` -- the steady solve; :mod:`steady.basis` --
   per-phase fields for sweeps over wear coefficients;
   :mod:`steady.profiles` -- cross sections and differential profiles;
-- :mod:`steady.output` -- HDF5 result files and the atomic HDF5 writer;
+- :mod:`steady.output` -- HDF5 result files and the helpers every layout shares;
   :mod:`steady.plotting` -- figures;
 - :mod:`steady.sweep`, :mod:`steady.voronoi_sweep` -- resumable parameter
   sweeps; :mod:`steady.design` -- the design table and the fill factor for
@@ -91,7 +92,7 @@ _MODULE_OF = {
     "ValidityWarning": "validity",
     "Voronoi": "phases",
     "as_outline": "outline",
-    "atomic_h5": "output",
+    "atomic_h5": "safe_files",
     "cross_section": "profiles",
     "differential_profile": "profiles",
     "estimate_rms_slope": "rms_slope",

@@ -21,7 +21,7 @@ protruding), as a profilometer sees the worn face turned upwards: the sign
 of the steady face ``f_inf = K p``.  NaN marks a missing pixel.
 
 Fit result files (layout ``runin.fit``, version 2), written by
-:func:`write_fit` through :func:`steady.output.atomic_h5`::
+:func:`write_fit` through :func:`steady.safe_files.atomic_h5`::
 
     root attributes (unit of attribute x in x_units)
         ratios                 k_i / k_ref, one per phase (1 for the reference)
@@ -88,7 +88,6 @@ import numpy as np
 from .array_files import input_file_size, npy_header, read_npy
 from .outline import Circle
 from .output import (
-    atomic_h5,
     attach_scales,
     describe,
     read_outline,
@@ -98,6 +97,7 @@ from .output import (
     write_phase_names,
 )
 from .problem import check_phase_names, default_phase_names
+from .safe_files import atomic_h5
 
 __all__ = [
     "FIT_FORMAT",
@@ -503,7 +503,7 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
         Overwrite an existing file (default False).
     checked : bool, optional
         The caller checked ``path`` before the fit: a file found now was
-        written meanwhile (see :func:`steady.output.atomic_h5`).
+        written meanwhile (see :func:`steady.safe_files.atomic_h5`).
 
     Returns
     -------
@@ -513,7 +513,7 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
     ------
     ValueError
         ``path`` exists and ``force`` is False (an
-        :class:`steady.output.OutputAppearedError` if another writer wrote
+        :class:`steady.safe_files.OutputAppearedError` if another writer wrote
         it meanwhile: nothing is written), or is a directory.
     """
     path = pathlib.Path(path)
