@@ -19,7 +19,7 @@ says the result is saved), 2 for bad input (nothing written), 130 when
 interrupted (:mod:`steady.cli.common`).  The suffix of ``--plot`` is
 checked before the solve too (:func:`steady.cli.common.check_png_path`).
 ``--segmentation`` draws the segmentation of a ``micrograph`` phase map
-over its image (:func:`steady.micrograph.segmentation_figure`) before the
+over its image (:func:`steady.plotting.segmentation_figure`) before the
 solve; without ``-o`` it is all the command writes.
 """
 
@@ -210,8 +210,7 @@ def _check(args):
 
 def _draw_segmentation(args, scene):
     """Draw the micrograph's segmentation over its image (before the solve, or alone)."""
-    from ..micrograph import segmentation_figure  # deferred: matplotlib is slow to import
-    from ..plotting import save_png
+    from ..plotting import save_png, segmentation_figure  # deferred: matplotlib is slow
 
     figure = segmentation_figure(scene.geometry, names=scene.phase_names)
     save_png(figure, args.segmentation, force=True)  # the path was checked before
