@@ -42,8 +42,8 @@ bottom floor up:
   :mod:`steady.plotting` -- figures;
 - :mod:`steady.sweep`, :mod:`steady.voronoi_sweep` -- resumable parameter
   sweeps; :mod:`steady.design` -- the design table and the fill factor for
-  a target rms slope; :mod:`steady.fit`, :mod:`steady.fit_files` -- wear
-  ratios from a measured worn face;
+  a target rms slope; :mod:`steady.measured_face`, :mod:`steady.fit`,
+  :mod:`steady.fit_files` -- wear ratios from a measured worn face;
 - :mod:`steady.cli` -- the commands ``runin-steady`` (``python -m
   steady``), ``runin-fit``, ``runin-design`` and ``runin-examples``, and
   what every command shares.
@@ -72,7 +72,7 @@ _MODULE_OF = {
     "Homogeneous": "phases",
     "Inclusions": "inclusions",
     "MaskOutline": "outline",
-    "MeasuredFace": "fit_files",
+    "MeasuredFace": "measured_face",
     "Micrograph": "micrograph",
     "PhaseBasis": "basis",
     "PowerLaw": "wear",

@@ -61,9 +61,9 @@ import math
 import numpy as np
 from scipy import fft, ndimage, optimize, signal, special
 
-from .fit_files import MeasuredFace
 from .halfspace import HalfSpace
 from .labels import extend_off_face
+from .measured_face import MeasuredFace
 from .outline import Annulus, Circle, Rectangle
 from .problem import Problem, default_phase_names
 from .wear import PowerLaw
