@@ -41,7 +41,7 @@ from .array_files import npy_header
 from .depth import DepthColumns
 from .labels import extend_off_face
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid
-from .phases import PHASE_MAPS, check_refinement, check_resolution
+from .phases import PHASE_MAPS, PhaseMap, check_refinement, check_resolution
 from .schema import Key
 
 __all__ = ["MAX_SPHERES", "MAX_VOLUME_FRACTION", "DepthLayers", "Spheres", "Voxels",
@@ -132,7 +132,7 @@ def _stack_columns(stack, tops, n_phases):
         doc="depth of one slice; below the last slice the last slice continues (columnar)")),
     doc="a voxel stack: slice k covers the depths [k d, (k + 1) d), the last one for ever")
 @dataclasses.dataclass(frozen=True, eq=False)
-class Voxels:
+class Voxels(PhaseMap):
     """A stack of phase maps from the surface down (a tomography volume).
 
     Parameters
@@ -300,7 +300,7 @@ def load_voxels(path, *, max_side=None):
         doc="phase of the spheres (default 1)")),
     doc="random non-overlapping spheres (phase 1) in a matrix (phase 0), down to a depth")
 @dataclasses.dataclass(frozen=True)
-class Spheres:
+class Spheres(PhaseMap):
     """Random non-overlapping spheres in a matrix, from above the surface down to ``depth``.
 
     Parameters

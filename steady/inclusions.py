@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from .outline import MIN_SIDE_PIXELS, as_grid
-from .phases import PHASE_MAPS, check_resolution
+from .phases import PHASE_MAPS, PhaseMap, check_resolution
 from .schema import Key
 
 __all__ = ["MAX_FILL", "MAX_INCLUSIONS", "MAX_RADIUS", "Inclusions"]
@@ -75,7 +75,7 @@ def _positive(value, name):
         doc="relative standard deviation of the radii, log-normal (default 0)")),
     doc="random non-overlapping circular inclusions (phase 1) in a matrix (phase 0)")
 @dataclasses.dataclass(frozen=True)
-class Inclusions:
+class Inclusions(PhaseMap):
     """Random non-overlapping circular inclusions (phase 1) in a matrix (phase 0).
 
     Parameters

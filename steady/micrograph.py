@@ -45,7 +45,7 @@ from scipy import ndimage
 
 from .array_files import input_file_size, npy_header, read_png
 from .outline import MIN_SIDE_PIXELS, Circle, FaceGrid, as_outline
-from .phases import PHASE_MAPS, check_resolution
+from .phases import PHASE_MAPS, PhaseMap, check_resolution
 from .schema import Key
 from .text import shorten
 
@@ -644,7 +644,7 @@ def _placement(shape, outline, pixel_size, cover, offset, source):
     Key("offset", "pair", unit="m", doc="face centre relative to the image centre")),
     doc="a grey-level micrograph segmented into phases and placed on the face")
 @dataclasses.dataclass(frozen=True, eq=False)
-class Micrograph:
+class Micrograph(PhaseMap):
     """A segmented micrograph placed on the face: a phase geometry.
 
     Parameters
@@ -743,6 +743,49 @@ class Micrograph:
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
         return check_resolution(grid, self.min_grid(), f"micrograph {self.source!r}")
+
+    def segmented_image(self):
+        """The segmentation of the micrograph (:class:`Segmentation`)."""
+        return self.segmentation
+
+    def file_record(self):
+        """The group ``micrograph`` of a result file: the segmentation and the placement.
+
+        Returns
+        -------
+        dict
+            ``{"micrograph": attributes}``: the source, the thresholds, the
+            crop (pixels), the fill and speck counts, the image's fill
+            factors and shape, the pixel size (m), the cover and the offset
+            (m); docs/files.md lists them.
+        """
+        seg = self.segmentation
+        attributes = {
+            "source": self.source,
+            "n_phases": seg.n_phases,
+            "thresholds": np.asarray(seg.thresholds, dtype=float),
+            "image_fill_factors": np.asarray(seg.fill_factors),
+            "smoothing": seg.smoothing,
+            "min_speck": seg.min_speck,
+            "specks": seg.specks,
+            "speck_pixels": seg.speck_pixels,
+            "threshold_method": seg.method,
+            "crop": np.asarray(seg.crop or ((0, seg.shape[0]), (0, seg.shape[1]))),
+            "crop_units": "pixels",
+            "fill_phases": np.asarray(seg.fill_phases, dtype=np.int64),
+            "holes": seg.holes,
+            "hole_pixels": seg.hole_pixels,
+            "image_shape": np.asarray(seg.shape),
+            "pixel_size": self.pixel_size,
+            "pixel_size_units": "m",
+            "cover": self.cover,
+            "offset": np.asarray(self.offset),
+            "offset_units": "m",
+            # Counts of pixels: dimensionless for udunits (docs/files.md says pixels).
+            "smoothing_units": "1",
+            "min_speck_units": "1",
+        }
+        return {"micrograph": attributes}
 
     def _grid(self, grid):
         """The face grid of ``grid`` (``n``: this micrograph's own outline)."""

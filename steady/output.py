@@ -30,7 +30,8 @@ for every dataset and attribute with its unit and meaning.  In short::
         pixel_size (m), radius (m, disks only), scale (m), n (pixels along
         the longer side)
     group ``outline``: the face's outline (:func:`write_outline`)
-    group ``micrograph``: a segmented micrograph's segmentation and placement
+    groups the phase map records (:meth:`steady.phases.PhaseMap.file_record`):
+        ``micrograph``, a segmented micrograph's segmentation and placement
 
 An attribute cannot carry attributes, so the unit of attribute ``x`` is the
 string attribute ``x_units``, a udunits string like a dataset's ``units``.
@@ -47,7 +48,6 @@ import pathlib
 import h5py
 import numpy as np
 
-from .micrograph import Micrograph
 from .outline import OUTLINES, Circle, MaskOutline
 from .problem import check_phase_names, default_phase_names
 from .safe_files import atomic_h5
@@ -359,8 +359,8 @@ def _write(f, result, scene, phase_names):
     describe(ds, None, "scene file (TOML), verbatim")
     ds.attrs["source_path"] = "" if scene is None or scene.source_path is None else str(
         scene.source_path)
-    if scene is not None and isinstance(scene.geometry, Micrograph):
-        _write_micrograph(f.create_group("micrograph"), scene.geometry)
+    for name, attributes in ({} if scene is None else scene.geometry.file_record()).items():
+        f.create_group(name).attrs.update(attributes)
 
 
 def write_outline(group, outline):
@@ -417,38 +417,6 @@ def read_outline(group):
                            float(group.attrs["pixel_size"]), source=str(source))
     cls = OUTLINES[kind]
     return cls(**{key.name: float(group.attrs[key.name]) for key in cls.keys if key.required})
-
-
-def _write_micrograph(group, geometry):
-    """The segmentation and placement of a micrograph map, as attributes of ``group``."""
-    seg = geometry.segmentation
-    values = {
-        "source": geometry.source,
-        "n_phases": seg.n_phases,
-        "thresholds": np.asarray(seg.thresholds, dtype=float),
-        "image_fill_factors": np.asarray(seg.fill_factors),
-        "smoothing": seg.smoothing,
-        "min_speck": seg.min_speck,
-        "specks": seg.specks,
-        "speck_pixels": seg.speck_pixels,
-        "threshold_method": seg.method,
-        "crop": np.asarray(seg.crop or ((0, seg.shape[0]), (0, seg.shape[1]))),
-        "crop_units": "pixels",
-        "fill_phases": np.asarray(seg.fill_phases, dtype=np.int64),
-        "holes": seg.holes,
-        "hole_pixels": seg.hole_pixels,
-        "image_shape": np.asarray(seg.shape),
-        "pixel_size": geometry.pixel_size,
-        "pixel_size_units": "m",
-        "cover": geometry.cover,
-        "offset": np.asarray(geometry.offset),
-        "offset_units": "m",
-        # Counts of pixels: dimensionless for udunits (docs/files.md says pixels).
-        "smoothing_units": "1",
-        "min_speck_units": "1",
-    }
-    for name, value in values.items():
-        group.attrs[name] = value
 
 
 def _text(value):
