@@ -7,7 +7,8 @@ bottom floor up:
 
 - :mod:`steady.text`, :mod:`steady.memory` -- message text; memory
   estimates and the memory available;
-- :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
+- :mod:`steady.registry` -- registries of named entries, filled by decorators;
+  :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
 - :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
 - :mod:`steady.array_files` -- ``.npy`` and PNG inputs, checked before
   their data are read; :mod:`steady.safe_files` -- atomic writes, file

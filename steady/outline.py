@@ -33,7 +33,7 @@ outline; areas are pixel counts times ``h^2``.  For a disk this is the
 coordinates of phase geometries).
 
 Outlines are registered in :data:`OUTLINES` (a
-:class:`steady.schema.Registry`) with their ``[punch]`` keys;
+:class:`steady.schema.KindRegistry`) with their ``[punch]`` keys;
 :func:`outline_from_table` builds one from the ``[punch]`` table of a scene
 file.  Outlines compare by value (a mask by its pixels and pixel size).
 """
@@ -48,7 +48,7 @@ import pathlib
 import numpy as np
 
 from .array_files import read_face_mask
-from .schema import Context, Key, Registry
+from .schema import Context, Key, KindRegistry
 from .text import shorten
 
 __all__ = [
@@ -74,7 +74,8 @@ __all__ = [
 MIN_SIDE_PIXELS = 8
 
 #: Registered outlines, by ``shape`` (``[punch] shape``; default ``"circle"``).
-OUTLINES = Registry("face outline", "shape", default="circle")
+OUTLINES = KindRegistry("face outline", "shape", default="circle",
+                        entry_point_group="runin.outlines")
 
 
 def _length(value, name):

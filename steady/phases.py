@@ -38,7 +38,7 @@ Resolution rules (``labels`` refuses coarser grids):
 
 Every kind subclasses :class:`PhaseMap`, the written contract above, and is
 registered in :data:`PHASE_MAPS` with its ``[phases] map`` keys
-(:class:`steady.schema.Registry`): besides the kinds here,
+(:class:`steady.schema.KindRegistry`): besides the kinds here,
 ``inclusions`` (:mod:`steady.inclusions`), ``micrograph``
 (:mod:`steady.micrograph`) and the kinds that change with depth below the
 surface, ``voxels`` and ``spheres`` (:mod:`steady.depth_maps`: their
@@ -61,7 +61,7 @@ from scipy import spatial
 from .array_files import array_suffix, read_npy, read_png
 from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size, grid_size_text
-from .schema import Key, Registry
+from .schema import Key, KindRegistry
 
 __all__ = [
     "PHASE_MAPS",
@@ -123,8 +123,11 @@ class PhaseMap:
 
 
 #: Registered phase-map kinds (``[phases] map kind``), each with its keys: subclasses of
-#: :class:`PhaseMap`.
-PHASE_MAPS = Registry("phase map", "kind")
+#: :class:`PhaseMap`.  The kinds of the modules named register when the registry is first
+#: read, those of other packages through the entry points ``runin.phase_maps``.
+PHASE_MAPS = KindRegistry("phase map", "kind", base=PhaseMap,
+                          modules=("steady.inclusions", "steady.micrograph", "steady.depth_maps"),
+                          entry_point_group="runin.phase_maps")
 
 
 def check_resolution(grid, minimum, what):

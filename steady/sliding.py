@@ -48,13 +48,14 @@ import math
 import numpy as np
 
 from .pressures import phase_pressures
-from .schema import Context, Key, Registry
+from .schema import Context, Key, KindRegistry
 
 __all__ = ["SLIDING", "PinOnDisk", "Rotation", "Translation", "sliding_from_table",
            "steady_pressure"]
 
 #: Registered sliding kinematics, by ``[sliding] kind`` (default ``"translation"``).
-SLIDING = Registry("sliding kind", "kind", default="translation")
+SLIDING = KindRegistry("sliding kind", "kind", default="translation",
+                       entry_point_group="runin.sliding")
 
 
 class _Kinematics:

@@ -45,14 +45,14 @@ import numpy as np
 
 from .labels import validate_labels
 from .pressures import phase_pressures
-from .schema import Context, Key, Registry
+from .schema import Context, Key, KindRegistry
 from .text import shorten
 
 __all__ = ["WEAR_LAWS", "ArchardLaw", "PowerLaw", "TableLaw", "ThresholdLaw", "as_wear_law",
            "pressure_field", "restrict_phases", "wear_law_from_table"]
 
 #: Registered wear laws, by ``[wear] law`` (default ``"power"``).
-WEAR_LAWS = Registry("wear law", "law", default="power")
+WEAR_LAWS = KindRegistry("wear law", "law", default="power", entry_point_group="runin.wear_laws")
 
 
 @WEAR_LAWS.register("power", (

@@ -12,7 +12,7 @@ on the 64 x 64 grid, ``flat(Rectangle(4e-3, 12e-3).grid(96))`` the flat
 tread block on its 32 x 96 grid.
 
 Every shape is registered in :data:`INITIAL_FACES` (a
-:class:`steady.schema.Registry`) by the kind the scene section
+:class:`steady.schema.KindRegistry`) by the kind the scene section
 ``[initial_face]`` names, with its keys; :func:`initial_height` builds one
 by kind.  A kind may also give the exact rms slope and rms height of its
 continuous face over the outline (:func:`exact_statistics`), the values the
@@ -30,7 +30,7 @@ import scipy.integrate
 
 from steady.array_files import read_npy
 from steady.outline import Circle, FaceGrid, as_outline
-from steady.schema import Key, Registry
+from steady.schema import Key, KindRegistry
 
 __all__ = [
     "INITIAL_FACES",
@@ -48,7 +48,8 @@ __all__ = [
 #: ``build(grid, **parameters)`` with the attributes ``kind``, ``keys`` and
 #: ``statistics`` (``statistics(outline, **parameters)``, the
 #: :class:`ExactStatistics` of the continuous face over an outline, or None).
-INITIAL_FACES = Registry("initial face", "kind", default="flat")
+INITIAL_FACES = KindRegistry("initial face", "kind", default="flat",
+                             entry_point_group="runin.initial_faces")
 
 
 def _register(kind, keys=(), statistics=None, doc=""):

@@ -33,6 +33,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from steady.registry import Registry
+
 __all__ = [
     "FourierPreconditioner",
     "JacobiPreconditioner",
@@ -45,7 +47,8 @@ __all__ = [
 
 #: Preconditioner factories by name, ``factory(halfspace, face_mask, shift)``
 #: (see :func:`register_preconditioner`); ``"none"`` maps to None.
-PRECONDITIONERS = {"none": None}
+PRECONDITIONERS = Registry("preconditioner", entry_point_group="runin.preconditioners")
+PRECONDITIONERS.register("none", None)
 
 # A shift at least this many times the largest eigenvalue of K on every face
 # pixel makes the operator diagonal to within 10 %: "auto" then takes Jacobi,
@@ -96,10 +99,7 @@ def register_preconditioner(name):
     returns a callable
     ``z = precondition(residual, active)``.
     """
-    def decorate(factory):
-        PRECONDITIONERS[name] = factory
-        return factory
-    return decorate
+    return PRECONDITIONERS.register(name)
 
 
 def make_preconditioner(name, halfspace, face_mask, shift):
@@ -108,13 +108,9 @@ def make_preconditioner(name, halfspace, face_mask, shift):
     Raises
     ------
     ValueError
-        If no preconditioner has that name.
+        If no preconditioner has that name (the message lists the registered ones).
     """
-    try:
-        factory = PRECONDITIONERS[name]
-    except KeyError:
-        raise ValueError(f"preconditioner must be one of {sorted(PRECONDITIONERS)}, "
-                         f"got {name!r}") from None
+    factory = PRECONDITIONERS[name]
     return None if factory is None else factory(halfspace, face_mask, shift)
 
 

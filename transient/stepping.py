@@ -76,6 +76,8 @@ import math
 
 import numpy as np
 
+from steady.registry import Registry
+
 __all__ = [
     "BDF2",
     "ESDIRK3",
@@ -90,31 +92,27 @@ __all__ = [
     "register_scheme",
 ]
 
-SCHEMES = {}
-"""Registered integrators by name (see :func:`register_scheme`)."""
+SCHEMES = Registry("scheme", entry_point_group="runin.schemes")
+"""Registered integrators by name, instances of :class:`Scheme` (see :func:`register_scheme`)."""
 
 
 def register_scheme(cls):
     """Class decorator: register an instance of a :class:`Scheme` under its ``name``."""
     if not cls.name:
         raise ValueError(f"scheme {cls.__name__} has no name")
-    SCHEMES[cls.name] = cls()
+    SCHEMES.register(cls.name, cls())
     return cls
 
 
 def get_scheme(name):
-    """The registered scheme called ``name``.
+    """The registered scheme called ``name``: ``SCHEMES[name]``.
 
     Raises
     ------
     ValueError
-        If no scheme has that name.
+        If no scheme has that name (the message lists the registered ones).
     """
-    try:
-        return SCHEMES[name]
-    except KeyError:
-        raise ValueError(f"unknown scheme {name!r}; expected one of "
-                         f"{sorted(SCHEMES)}") from None
+    return SCHEMES[name]
 
 
 @dataclasses.dataclass(frozen=True)
