@@ -54,7 +54,6 @@ Command line (``runin-fit``, or ``python -m steady.cli.fit``; :mod:`steady.cli.f
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import math
 
@@ -64,7 +63,6 @@ from scipy import fft, ndimage, optimize, signal, special
 from .halfspace import HalfSpace
 from .labels import extend_off_face
 from .measured_face import MeasuredFace
-from .outline import Annulus, Circle, Rectangle
 from .problem import Problem, default_phase_names
 from .wear import PowerLaw
 
@@ -444,29 +442,6 @@ class _Covariance:
         return (s1 + s1[::-1, ::-1] - s2) / self._pairs
 
 
-@functools.singledispatch
-def _closed_form_rim_distance(outline, x, y):
-    """Distance (m) from points inside ``outline`` to its rim; None without a closed form."""
-    return None
-
-
-@_closed_form_rim_distance.register
-def _(outline: Circle, x, y):
-    return outline.radius - np.hypot(x, y)
-
-
-@_closed_form_rim_distance.register
-def _(outline: Rectangle, x, y):
-    bx, by = outline.half_extent
-    return np.minimum(bx - np.abs(x), by - np.abs(y))
-
-
-@_closed_form_rim_distance.register
-def _(outline: Annulus, x, y):
-    r = np.hypot(x, y)
-    return np.minimum(outline.outer_radius - r, r - outline.inner_radius)
-
-
 class FaceModel:
     """Per-phase faces of a phase map, sampled anywhere on the face.
 
@@ -650,8 +625,8 @@ class FaceModel:
             error near the rim).
         """
         if closed_form:
-            exact = _closed_form_rim_distance(self.outline, np.asarray(x, dtype=float),
-                                              np.asarray(y, dtype=float))
+            exact = self.outline.exact_rim_distance(np.asarray(x, dtype=float),
+                                                    np.asarray(y, dtype=float))
             if exact is not None:
                 return exact
         if self._transform is None:

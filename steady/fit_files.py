@@ -481,9 +481,9 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
         for name, unit in _ATTRIBUTES.items():
             f.attrs[name] = values[name]
             f.attrs[f"{name}_units"] = unit
-        if isinstance(result.outline, Circle):
-            f.attrs["radius"] = result.outline.radius
-            f.attrs["radius_units"] = "m"
+        for name, (value, unit) in result.outline.root_attributes().items():
+            f.attrs[name] = value
+            f.attrs[f"{name}_units"] = unit
         f.attrs["success"] = bool(result.success)
         f.attrs["message"] = result.message
         f.attrs["measured_source"] = result.measured.source
@@ -553,7 +553,8 @@ def read_fit(path):
         else:
             outline = Circle(float(attrs["radius"]))
         attrs["scale"] = outline.scale
-        attrs["radius"] = outline.radius if isinstance(outline, Circle) else None
+        # Disks record their radius at the root (Circle.root_attributes), other faces do not.
+        attrs["radius"] = float(f.attrs["radius"]) if "radius" in f.attrs else None
         attrs["success"] = bool(f.attrs["success"])
         attrs["message"] = _text(f.attrs["message"])
         attrs["measured_source"] = _text(f.attrs.get("measured_source", ""))

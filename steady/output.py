@@ -48,7 +48,7 @@ import pathlib
 import h5py
 import numpy as np
 
-from .outline import OUTLINES, Circle, MaskOutline
+from .outline import OUTLINES, Circle
 from .problem import check_phase_names, default_phase_names
 from .safe_files import atomic_h5
 from .solution import SteadyResult
@@ -340,9 +340,9 @@ def _write(f, result, scene, phase_names):
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
     f.attrs["wear_law"] = result.wear_law or PowerLaw(result.wear_coefficients,
                                                       exponent=result.exponent).describe()
-    if isinstance(result.outline, Circle):
-        f.attrs["radius"] = result.outline.radius
-        f.attrs["radius_units"] = "m"
+    for name, (value, unit) in result.outline.root_attributes().items():
+        f.attrs[name] = value
+        f.attrs[f"{name}_units"] = unit
     write_outline(f.create_group("outline"), result.outline)
     grid = result.outline.grid(result.n)
     scales = write_grid_coordinates(f, grid.x, grid.y)
@@ -367,8 +367,10 @@ def write_outline(group, outline):
     """A face outline as the attributes (and for a mask the dataset) of ``group``.
 
     Attribute ``x`` has its udunits unit in ``x_units``: ``area`` (``m2``)
-    and the outline's lengths (``m``).  A mask outline's ``mask`` has the
-    dimension scales ``mask_x`` and ``mask_y`` (m, its pixel centres).
+    and the outline's lengths (``m``); then what the outline records
+    besides (:meth:`~steady.outline.MaskOutline.group_record`): a mask
+    outline's ``source`` and ``mask``, with the dimension scales ``mask_x``
+    and ``mask_y`` (m, its pixel centres).
 
     Parameters
     ----------
@@ -381,19 +383,18 @@ def write_outline(group, outline):
     for name, (value, unit) in outline.parameters().items():
         group.attrs[name] = value
         group.attrs[f"{name}_units"] = unit
-    if isinstance(outline, MaskOutline):
-        ds = group.create_dataset("mask", data=outline.mask.astype(np.int8))
-        describe(ds, "1", "1 inside the face, 0 outside")
+    attributes, arrays = outline.group_record()
+    for name, (values, units, long_name, coordinates) in arrays.items():
+        ds = group.create_dataset(name, data=values)
+        describe(ds, units, long_name)
         scales = []
-        for axis, name in enumerate(("mask_x", "mask_y")):
-            m = outline.mask.shape[axis]
-            scale = group.create_dataset(name, data=(np.arange(m) - 0.5 * (m - 1))
-                                         * outline.pixel_size)
-            describe(scale, "m", f"{name[-1]} of the mask's pixel centre, from its centre")
-            scale.make_scale(name)
+        for axis, centres in zip("xy", coordinates, strict=True) if coordinates else ():
+            scale = group.create_dataset(f"{name}_{axis}", data=centres)
+            describe(scale, "m", f"{axis} of the {name}'s pixel centre, from its centre")
+            scale.make_scale(f"{name}_{axis}")
             scales.append(scale)
         attach_scales(ds, *scales)
-        group.attrs["source"] = outline.source
+    group.attrs.update(attributes)
 
 
 def read_outline(group):
@@ -409,14 +410,7 @@ def read_outline(group):
         kind = kind.decode()
     if kind not in OUTLINES:
         raise ValueError(f"unknown outline kind {kind!r} (known: {sorted(OUTLINES)})")
-    if kind == "mask":
-        source = group.attrs.get("source", "stored mask")
-        if isinstance(source, bytes):
-            source = source.decode()
-        return MaskOutline(np.asarray(group["mask"][()], dtype=bool),
-                           float(group.attrs["pixel_size"]), source=str(source))
-    cls = OUTLINES[kind]
-    return cls(**{key.name: float(group.attrs[key.name]) for key in cls.keys if key.required})
+    return OUTLINES[kind].from_group(group.attrs, lambda name: group[name][()])
 
 
 def _text(value):

@@ -586,15 +586,15 @@ def _write_run_in_distances(f, result):
 
 
 def _write_outline(f, result):
-    """The outline group and the reference slope's attributes; ``radius`` for a disk."""
+    """The outline group, the reference slope's attributes and the outline's root attributes."""
     outline = result.outline
     values = {"reference_slope_error": result.reference_slope_error,
               "scale": outline.scale, "pixel_size": result.pixel_size}
     for name, unit in _REFERENCE_UNITS.items():
         _attribute(f.attrs, name, values[name], unit)
     f.attrs["reference_slope_source"] = result.reference_slope_source
-    if isinstance(outline, Circle):
-        _attribute(f.attrs, "radius", outline.radius, "m")
+    for name, (value, unit) in outline.root_attributes().items():
+        _attribute(f.attrs, name, value, unit)
     group = f.create_group("outline")
     write_outline(group, outline)
     for ds in group.values():  # a mask's pixels: checksummed like every dataset
@@ -831,8 +831,8 @@ def _result(path, datasets, groups):
     source = attrs.get("reference_slope_source")
     if isinstance(source, bytes):
         source = source.decode("utf-8", "replace")
-    if source is None:
-        source = _DISK_SOURCE if isinstance(outline, Circle) else ""
+    if source is None:  # a file of a disk written before the outlines, or none at all
+        source = _DISK_SOURCE if outline is not None and "outline" not in groups else ""
     result = RunResult(
         **kw, state=RunState(**state, pressure=datasets["pressure"][0]),
         history=types.MappingProxyType(history),
