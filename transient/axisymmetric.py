@@ -324,7 +324,8 @@ def reference_history(distances, *, rings=1200, grading=4.0):
     distances : array_like, shape (K,)
         Sliding distances in units of ``s*``, non-negative.
     rings : int, optional
-        The finer ring count ``N`` (default 1200: about 5 s on 2 cores).
+        The finer ring count ``N`` (default 1200; its time: docs/benchmarks.md,
+        "Run-in convergence").
     grading : float, optional
         Grading exponent (default 4).
 

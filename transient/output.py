@@ -213,9 +213,8 @@ class DamagedRunFileError(ValueError):
         self.path = pathlib.Path(path)
 
 
-# Snapshots of a finished or stopped run: byte shuffle then deflate (level 1)
-# keeps about 0.59 of a 1024^2 run's snapshots, against 0.69 for deflate
-# (level 4) alone, in about half its time.
+# Snapshots of a finished or stopped run: byte shuffle then deflate (level 1), smaller and
+# quicker than deflate alone (docs/benchmarks.md, "Run-in speed").
 _SNAPSHOT_FILTERS = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 
 

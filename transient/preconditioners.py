@@ -230,8 +230,9 @@ class FourierPreconditioner:
                 spectrum=None)
         return plan
 
-    # scipy.fft's transforms, which return fresh arrays: numpy.fft's into work buffers
-    # took 1.2 to 1.3 times their CPU time here in single precision (n = 1024, two levels).
+    # scipy.fft's transforms, which return fresh arrays: numpy.fft's into work buffers took
+    # more CPU time here in single precision (docs/benchmarks.md, "Contact solve on run-in
+    # problems").
     def _forward(self, field):
         hs = self.halfspace
         if self.padded:
@@ -316,8 +317,8 @@ def _multiplier(symbol, level, dtype, root):
 
     In double precision, rounded once into ``dtype``: the same values as
     ``(1 / sqrt(symbol + level)).astype(dtype)`` through one temporary instead of
-    three fresh arrays (a stage builds its multipliers anew; at n = 1024 a level took
-    1.1 ms instead of 2.3 ms).
+    three fresh arrays (a stage builds its multipliers anew; docs/benchmarks.md,
+    "Contact solve on run-in problems").
     """
     shifted = symbol + level
     if root:

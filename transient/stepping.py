@@ -62,9 +62,9 @@ method on ``w = w0 + c k P(w)^m``: ``k p^m`` is linearised about the last
 pressure iterate ``p0``, ``k p^m ~ k p0^m + k m p0^(m-1) (p - p0)``, which is
 again a shifted contact problem with ``shift = c k m p0^(m-1)`` and height
 ``w0 + c k (1 - m) p0^m``.  The iteration stops when the pressure changes by
-less than ``newton_rtol`` (relative to the mean pressure); measured: about
-three solves per stage for ``m = 2`` and ``m = 0.5`` (Voronoi face, n = 32,
-``k_2/k_1 = 10``), each warm-started from the last.  For ``m < 1``
+less than ``newton_rtol`` (relative to the mean pressure), each solve
+warm-started from the last (solves per stage: docs/benchmarks.md, "Run-in
+stepping").  For ``m < 1``
 the derivative is unbounded at ``p = 0``; ``p0`` is floored at
 ``pressure_floor`` times the mean pressure in the linearisation only.
 """
