@@ -7,10 +7,12 @@ bottom floor up:
 
 - :mod:`steady.text`, :mod:`steady.memory` -- message text; memory
   estimates and the memory available;
-- :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
+- :mod:`steady.registry` -- registries of named entries, filled by decorators;
+  :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
 - :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
 - :mod:`steady.array_files` -- ``.npy`` and PNG inputs, checked before
-  their data are read;
+  their data are read; :mod:`steady.safe_files` -- atomic writes, file
+  identity, backups, checksums and the writers' lock;
 - :mod:`steady.outline` -- face outlines (disk, rectangle, ellipse, annulus,
   pixel mask) and the grid over each one's bounding box;
 - :mod:`steady.labels` -- rasterised phase maps: checks, fill factors;
@@ -37,12 +39,12 @@ bottom floor up:
 - :mod:`steady.solution` -- the steady solve; :mod:`steady.basis` --
   per-phase fields for sweeps over wear coefficients;
   :mod:`steady.profiles` -- cross sections and differential profiles;
-- :mod:`steady.output` -- HDF5 result files and the atomic HDF5 writer;
+- :mod:`steady.output` -- HDF5 result files and the helpers every layout shares;
   :mod:`steady.plotting` -- figures;
 - :mod:`steady.sweep`, :mod:`steady.voronoi_sweep` -- resumable parameter
   sweeps; :mod:`steady.design` -- the design table and the fill factor for
-  a target rms slope; :mod:`steady.fit`, :mod:`steady.fit_files` -- wear
-  ratios from a measured worn face;
+  a target rms slope; :mod:`steady.measured_face`, :mod:`steady.fit`,
+  :mod:`steady.fit_files` -- wear ratios from a measured worn face;
 - :mod:`steady.cli` -- the commands ``runin-steady`` (``python -m
   steady``), ``runin-fit``, ``runin-design`` and ``runin-examples``, and
   what every command shares.
@@ -71,7 +73,7 @@ _MODULE_OF = {
     "Homogeneous": "phases",
     "Inclusions": "inclusions",
     "MaskOutline": "outline",
-    "MeasuredFace": "fit_files",
+    "MeasuredFace": "measured_face",
     "Micrograph": "micrograph",
     "PhaseBasis": "basis",
     "ArchardLaw": "wear",
@@ -95,7 +97,7 @@ _MODULE_OF = {
     "ValidityWarning": "validity",
     "Voronoi": "phases",
     "as_outline": "outline",
-    "atomic_h5": "output",
+    "atomic_h5": "safe_files",
     "cross_section": "profiles",
     "differential_profile": "profiles",
     "estimate_rms_slope": "rms_slope",

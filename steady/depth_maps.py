@@ -43,6 +43,7 @@ from .labels import extend_off_face
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid
 from .phases import (
     PHASE_MAPS,
+    PhaseMap,
     check_refinement,
     check_resolution,
     face_words,
@@ -139,7 +140,7 @@ def _stack_columns(stack, tops, n_phases):
         doc="depth of one slice; below the last slice the last slice continues (columnar)")),
     doc="a voxel stack: slice k covers the depths [k d, (k + 1) d), the last one for ever")
 @dataclasses.dataclass(frozen=True, eq=False)
-class Voxels:
+class Voxels(PhaseMap):
     """A stack of phase maps from the surface down (a tomography volume).
 
     Parameters
@@ -312,7 +313,7 @@ def load_voxels(path, *, max_side=None):
         doc="phase of the spheres (default 1)")),
     doc="random non-overlapping spheres (phase 1) in a matrix (phase 0), down to a depth")
 @dataclasses.dataclass(frozen=True)
-class Spheres:
+class Spheres(PhaseMap):
     """Random non-overlapping spheres in a matrix, from above the surface down to ``depth``.
 
     Parameters

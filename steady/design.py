@@ -44,7 +44,7 @@ import h5py
 import numpy as np
 from scipy import interpolate, optimize
 
-from .output import atomic_h5
+from .safe_files import atomic_h5
 from .text import one_line, shorten
 from .validity import check_rms_slope
 
@@ -169,7 +169,7 @@ class DesignTable:
         ------
         ValueError
             ``path`` exists and ``force`` is False, or is a directory
-            (:func:`steady.output.atomic_h5`).
+            (:func:`steady.safe_files.atomic_h5`).
         """
         path = pathlib.Path(path)
         with atomic_h5(path, format=TABLE_FORMAT, version=TABLE_VERSION, force=force) as f:

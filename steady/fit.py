@@ -54,20 +54,19 @@ Command line (``runin-fit``, or ``python -m steady.cli.fit``; :mod:`steady.cli.f
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import math
 
 import numpy as np
 from scipy import fft, ndimage, optimize, signal, special
 
-from .fit_files import MeasuredFace
 from .halfspace import HalfSpace
 from .labels import extend_off_face
-from .outline import Annulus, Circle, Rectangle
+from .measured_face import MeasuredFace
 from .problem import Problem, default_phase_names
 
-__all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceModel", "FitResult", "fit_face", "fit_scene"]
+__all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceBasis", "FaceModel", "FitResult", "fit_face",
+           "fit_scene"]
 
 logger = logging.getLogger(__name__)
 
@@ -443,47 +442,22 @@ class _Covariance:
         return (s1 + s1[::-1, ::-1] - s2) / self._pairs
 
 
-@functools.singledispatch
-def _closed_form_rim_distance(outline, x, y):
-    """Distance (m) from points inside ``outline`` to its rim; None without a closed form."""
-    return None
+class FaceBasis:
+    """Per-phase faces of a phase map, sampled anywhere on the face: the fit's operator.
 
-
-@_closed_form_rim_distance.register
-def _(outline: Circle, x, y):
-    return outline.radius - np.hypot(x, y)
-
-
-@_closed_form_rim_distance.register
-def _(outline: Rectangle, x, y):
-    bx, by = outline.half_extent
-    return np.minimum(bx - np.abs(x), by - np.abs(y))
-
-
-@_closed_form_rim_distance.register
-def _(outline: Annulus, x, y):
-    r = np.hypot(x, y)
-    return np.minimum(outline.outer_radius - r, r - outline.inner_radius)
-
-
-class FaceModel:
-    """Per-phase faces of a phase map, sampled anywhere on the face.
-
-    The operator of the fit: the faces ``F_i = K chi_i`` under unit pressure
-    on each phase (m/Pa) are computed once on the model grid (the
-    outline's :class:`~steady.outline.FaceGrid`), then sampled at the
-    measured pixels by cubic-spline interpolation (the faces are continuous;
-    only their slope is log-singular at phase boundaries and at the rim).
+    The faces ``F_i = K chi_i`` under unit pressure on each phase (m/Pa)
+    are computed once on the model grid (the outline's
+    :class:`~steady.outline.FaceGrid`), then sampled at the measured pixels
+    by cubic-spline interpolation (the faces are continuous; only their
+    slope is log-singular at phase boundaries and at the rim).  The basis
+    also says which measured pixels lie on the face, how far from its rim,
+    and whether a measured map covers it.
 
     Parameters
     ----------
-    problem : steady.problem.Problem
-        The phase map on the face's grid (the model grid), ``E*``, the
-        normal force (it only enters the consistency figure
-        :attr:`FitResult.load_scale`) and the wear law, a power law
-        ``k_i p^m``: its exponent relates ratios and pressures,
-        ``k_i / k_ref = (p_ref / p_i)^m``; its coefficients are reported
-        beside the fit (:attr:`FitResult.scene_ratios`), not used by it.
+    phases : steady.problem.FacePhases
+        The phase map on the face's grid (the model grid).
+    E_star : float, Pa
 
     Attributes
     ----------
@@ -503,56 +477,21 @@ class FaceModel:
     -----
     Cost: ``P`` half-space products on the grid of ``(nx + 8) x (ny + 8)``
     pixels (the faces are computed four pixels beyond the bounding box, so
-    that the splines interpolate ``K chi_i`` up to the box's edge).  Build
-    one model and call :meth:`fit` for many measured faces.
-
-    Examples
-    --------
-    A rectangular face of aspect 1:3 with a Voronoi map; the measured face
-    is the forward model's with ``k_1 / k_0 = 3``, on the model's pixels:
-
-    >>> import numpy as np
-    >>> from steady import FacePhases, MeasuredFace, Problem, Voronoi
-    >>> from steady.outline import Rectangle
-    >>> grid = Rectangle(4e-3, 12e-3).grid(48)
-    >>> phases = FacePhases(grid, Voronoi(64, (0.6, 0.4), 2029).labels(grid), 2)
-    >>> model = FaceModel(Problem(phases, [1e-13, 1e-13], 10.0, 1.3e6))
-    >>> model.grid.shape, model.faces.shape
-    ((16, 48), (2, 16, 48))
-    >>> face = np.tensordot([3e4, 1e4], model.faces, axes=1)     # p_0 / p_1 = k_1 / k_0 = 3
-    >>> fit = model.fit(MeasuredFace(face, grid.h))
-    >>> print(f"k1/k0 = {fit.ratios[1]:.6f}, {fit.samples} pixels")
-    k1/k0 = 3.000000, 768 pixels
+    that the splines interpolate ``K chi_i`` up to the box's edge).
     """
 
-    def __init__(self, problem):
-        if not isinstance(problem, Problem):
-            raise ValueError(f"FaceModel takes a steady.problem.Problem, got "
-                             f"{type(problem).__name__}")
-        factor = problem.wear.factor
-        if factor is None or factor.exponent is None:
-            # Its model relates ratios and pressures through k_i p_i^m = C.
-            raise ValueError(f"the fit supports the power law k p^m, not the "
-                             f"{problem.wear.describe()}")
-        if problem.sliding is not None:
-            # Its model is a pressure constant on each phase: a face of K chi_i per phase.
-            raise ValueError(f"the fit assumes a uniform sliding speed (pressure constant on "
-                             f"each phase), not the sliding {problem.sliding.describe()}")
-        grid = problem.grid
-        labels = problem.labels
-        self.problem = problem
+    def __init__(self, phases, E_star):
+        grid = phases.grid
+        labels = phases.labels
         self.outline = grid.outline
-        self.E_star = problem.E_star
-        self.normal_force = problem.normal_force
-        self.exponent = factor.exponent
+        self.E_star = E_star
         self.grid = grid
         self.n = grid.n
         self.h = grid.h
-        self.n_phases = problem.n_phases
-        self.counts = problem.phases.counts
+        self.n_phases = phases.n_phases
+        self.counts = phases.counts
         self.labels = labels
         self.areas = self.counts * self.h**2
-        self.wear_coefficients = np.asarray(factor.coefficients, dtype=float)
         pad = _MODEL_PAD
         padded = np.pad(labels, pad, constant_values=-1)
         hs = HalfSpace(padded.shape, self.h, self.E_star)
@@ -572,16 +511,6 @@ class FaceModel:
         # Rim distance at the model's face pixel centres, m (for the fitted part's box).
         self._pixel_rim_distance = np.where(inside, self.rim_distance(X, Y), -np.inf)
         self.inradius = float(self._pixel_rim_distance.max())
-
-    @classmethod
-    def from_scene(cls, scene, *, n=None):
-        """The model of a :class:`steady.scene.Scene` on its grid of ``n`` (default ``scene.n``).
-
-        The phase map is rasterised on ``scene.grid(n)``
-        (:meth:`steady.scene.Scene.phase_labels`, which names a phase with no
-        pixel on the face).
-        """
-        return cls(Problem.from_scene(scene, n=n))
 
     @property
     def shape(self):
@@ -630,11 +559,12 @@ class FaceModel:
     def rim_distance(self, x, y, *, closed_form=True):
         """Distance from points of the face to the outline's rim.
 
-        Closed forms for the disk, the rectangle and the annulus; for other
-        outlines the Euclidean distance transform of the face on the model
-        grid (centre to centre, less half a pixel, signed: negative off the
-        face), interpolated linearly: within about ``h / 2`` of the true
-        distance.
+        The outline's closed form where it has one
+        (:meth:`~steady.outline.Circle.exact_rim_distance`: the disk, the
+        rectangle, the annulus); for other outlines the Euclidean distance
+        transform of the face on the model grid (centre to centre, less half
+        a pixel, signed: negative off the face), interpolated linearly:
+        within about ``h / 2`` of the true distance.
 
         Parameters
         ----------
@@ -651,8 +581,8 @@ class FaceModel:
             error near the rim).
         """
         if closed_form:
-            exact = _closed_form_rim_distance(self.outline, np.asarray(x, dtype=float),
-                                              np.asarray(y, dtype=float))
+            exact = self.outline.exact_rim_distance(np.asarray(x, dtype=float),
+                                                    np.asarray(y, dtype=float))
             if exact is not None:
                 return exact
         if self._transform is None:
@@ -709,10 +639,67 @@ class FaceModel:
         upper = np.minimum([self.grid.x[i.max()] + half, self.grid.y[j.max()] + half], box)
         return lower, upper
 
-    def _design(self, x, y, shift):
-        """Design columns ``F_0 .. F_{P-1}, 1, x - s_x, y - s_y``, shape (N, P + 3)."""
+    def design(self, x, y, shift):
+        """Design columns ``F_0 .. F_{P-1}, 1, x - s_x, y - s_y`` at points, shape (N, P + 3).
+
+        Parameters
+        ----------
+        x, y : ndarray, shape (N,), m
+            Coordinates from the map's centre.
+        shift : (float, float), m
+            The face's centre in the map.
+        """
         u, v = x - shift[0], y - shift[1]
         return np.column_stack([*self.faces_at(u, v), np.ones_like(u), u, v])
+
+    def fitted_pixels(self, measured, start, rim_margin, erosion, partial):
+        """The measured pixels' coordinates ``X, Y`` (m), the fitted ones and the covariance window.
+
+        Parameters
+        ----------
+        measured : steady.measured_face.MeasuredFace
+        start : ndarray, shape (2,), m
+            The face's centre in the map.
+        rim_margin, erosion : float, m
+            The rim margin; it plus the shift search radius.
+        partial : bool
+            Whether the part fitted is less than the face (for messages).
+
+        Returns
+        -------
+        X, Y : ndarray, shape of the map, m
+        mask : ndarray of bool
+            The fitted pixels.
+        window : float, m
+            The radius of the residual's covariance window.
+
+        Raises
+        ------
+        ValueError
+            The erosion leaves nothing to fit, the map does not cover the
+            face, or its pixels are too coarse for it.
+        """
+        reach = self.inradius - erosion
+        if reach <= 0:
+            raise ValueError(f"nothing left to fit: the rim margin {rim_margin:.4g} m "
+                             f"(and the shift search radius) cover the "
+                             f"{self.outline.describe()}, no point of which is farther than "
+                             f"{self.inradius:.4g} m from its rim")
+        self._check_coverage(measured, start, erosion, partial)
+        dx, dy = measured.pixel_size
+        if 2 * reach < _MIN_PIXELS_ACROSS * max(dx, dy):
+            raise ValueError(f"measured map {measured.source}: pixels of {max(dx, dy):.4g} m "
+                             f"give fewer than {_MIN_PIXELS_ACROSS} pixels across the "
+                             f"narrowest part of the fitted face, {2 * reach:.4g} m wide")
+        xs, ys = measured.coordinates()
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        region = self.fitted_region(X - start[0], Y - start[1], erosion)
+        mask = np.isfinite(measured.heights) & region
+        # The covariance window: half the radius of the disk of the fitted
+        # part's area (half the fitted radius for a disk; the inradius would
+        # cut the correlation of a narrow face, a ring or a long rectangle).
+        window = 0.5 * math.sqrt(region.sum() * dx * dy / math.pi)
+        return X, Y, mask, window
 
     def _check_coverage(self, measured, start, erosion, partial):
         """Raise ``ValueError`` naming both sizes unless the map covers the part to fit.
@@ -743,66 +730,184 @@ class FaceModel:
             f"{extra}; check the pixel size, or crop the map to the face with its centre at "
             f"the map's centre")
 
-    def _check_determined(self, columns, phases, min_pixels):
-        """Raise ``ValueError`` naming a phase the fitted pixels cannot determine."""
-        counts = np.bincount(phases[phases >= 0], minlength=self.n_phases)
-        n_fit = phases.size
-        for i, c in enumerate(counts):
-            if c < min_pixels:
-                raise ValueError(f"phase {i} covers {c} of the {n_fit} fitted pixels (at least "
-                                 f"{min_pixels} needed): its wear coefficient is not determined "
-                                 f"(masked by NaN holes or the rim margin?)")
-        scaled = columns / np.sqrt(np.mean(columns**2, axis=0))
-        for i in range(self.n_phases):
-            others = np.delete(scaled, i, axis=1)
-            coef = np.linalg.lstsq(others, scaled[:, i], rcond=None)[0]
-            independent = np.linalg.norm(scaled[:, i] - others @ coef) / math.sqrt(n_fit)
-            if independent < _COLLINEAR_TOL:
-                raise ValueError(f"phase {i}: its face is a combination of the other phases' "
-                                 f"faces and the plane on the fitted pixels (independent part "
-                                 f"{independent:.1e}); its wear coefficient is not determined")
+    def maps(self, measured, X, Y, start, beta):
+        """The fitted face (NaN off the face) and the phase map on the measured pixels.
 
-    @staticmethod
-    def _solve(columns, z):
-        scale = np.sqrt(np.mean(columns**2, axis=0))
-        scaled = columns / scale
-        coef = np.linalg.lstsq(scaled, z, rcond=None)[0]
-        return coef / scale, scaled, scale
+        Parameters
+        ----------
+        measured : steady.measured_face.MeasuredFace
+        X, Y : ndarray, shape of the map, m
+        start : ndarray, shape (2,), m
+        beta : ndarray, shape (P + 3,)
+            Coefficients of :meth:`design`'s columns.
 
-    def _search_shift(self, x, y, z, start, max_shift):
-        """Shift minimising the residual: a grid of model-pixel steps, then Nelder-Mead.
-
-        The grid runs on at most ``_SEARCH_PIXELS`` of the fitted pixels
-        (every ``s``-th), the refinement on all of them.
+        Returns
+        -------
+        fitted : ndarray, shape of the map, units of ``beta`` times m/Pa
+        phase : ndarray, shape of the map, int
         """
-        def rss(offset, x, y, z):
-            if np.hypot(*offset) > max_shift * (1 + 1e-9):
-                return math.inf
-            columns = self._design(x, y, start + offset)
-            beta = self._solve(columns, z)[0]
-            r = z - columns @ beta
-            return float(r @ r)
+        on_face = self.outline.contains(X - start[0], Y - start[1])
+        fitted = np.full(measured.shape, np.nan)
+        fitted[on_face] = self.design(X[on_face], Y[on_face], start) @ beta
+        phase = np.full(measured.shape, -1, dtype=np.int64)
+        phase[on_face] = self.phases_at(X[on_face] - start[0], Y[on_face] - start[1])
+        return fitted, phase
 
-        step = min(self.h, max_shift)
-        if step == 0.0:
-            return start, False
-        m = int(math.ceil(max_shift / step - 1e-9))
-        grid = [np.array([i * step, j * step]) for i in range(-m, m + 1)
-                for j in range(-m, m + 1) if math.hypot(i, j) * step <= max_shift * (1 + 1e-9)]
-        stride = max(1, z.size // _SEARCH_PIXELS)
-        sample = (x[::stride], y[::stride], z[::stride])
-        best = grid[int(np.argmin([rss(g, *sample) for g in grid]))]
-        reference = max(rss(best, x, y, z), np.finfo(float).tiny)
-        simplex = np.array([best, best + [0.5 * step, 0.0], best + [0.0, 0.5 * step]])
-        found = optimize.minimize(lambda o: rss(o, x, y, z) / reference, best,
-                                  method="Nelder-Mead",
-                                  options={"initial_simplex": simplex, "xatol": 1e-2 * self.h,
-                                           "fatol": 1e-9, "maxiter": 200})
-        offset = found.x if found.fun <= 1.0 else best
-        at_limit = np.hypot(*offset) > max_shift - 0.5 * step
-        logger.info("shift search: %d grid points on %d pixels, %d refinement steps, offset "
-                    "(%.3g, %.3g) m", len(grid), sample[2].size, found.nit, *offset)
-        return start + offset, bool(at_limit)
+
+def _least_squares(columns, z):
+    """Coefficients of ``z ~ columns @ beta``, the columns scaled to unit rms, and the scales."""
+    scale = np.sqrt(np.mean(columns**2, axis=0))
+    scaled = columns / scale
+    coef = np.linalg.lstsq(scaled, z, rcond=None)[0]
+    return coef / scale, scaled, scale
+
+
+def _check_determined(columns, phases, n_phases, min_pixels):
+    """Raise ``ValueError`` naming a phase the fitted pixels cannot determine."""
+    counts = np.bincount(phases[phases >= 0], minlength=n_phases)
+    n_fit = phases.size
+    for i, c in enumerate(counts):
+        if c < min_pixels:
+            raise ValueError(f"phase {i} covers {c} of the {n_fit} fitted pixels (at least "
+                             f"{min_pixels} needed): its wear coefficient is not determined "
+                             f"(masked by NaN holes or the rim margin?)")
+    scaled = columns / np.sqrt(np.mean(columns**2, axis=0))
+    for i in range(n_phases):
+        others = np.delete(scaled, i, axis=1)
+        coef = np.linalg.lstsq(others, scaled[:, i], rcond=None)[0]
+        independent = np.linalg.norm(scaled[:, i] - others @ coef) / math.sqrt(n_fit)
+        if independent < _COLLINEAR_TOL:
+            raise ValueError(f"phase {i}: its face is a combination of the other phases' "
+                             f"faces and the plane on the fitted pixels (independent part "
+                             f"{independent:.1e}); its wear coefficient is not determined")
+
+
+def _search_shift(basis, x, y, z, start, max_shift):
+    """Shift minimising the residual: a grid of model-pixel steps, then Nelder-Mead.
+
+    The grid runs on at most ``_SEARCH_PIXELS`` of the fitted pixels
+    (every ``s``-th), the refinement on all of them.  Returns the shift
+    and whether it lies at the search limit.
+    """
+    def rss(offset, x, y, z):
+        if np.hypot(*offset) > max_shift * (1 + 1e-9):
+            return math.inf
+        columns = basis.design(x, y, start + offset)
+        beta = _least_squares(columns, z)[0]
+        r = z - columns @ beta
+        return float(r @ r)
+
+    step = min(basis.h, max_shift)
+    if step == 0.0:
+        return start, False
+    m = int(math.ceil(max_shift / step - 1e-9))
+    grid = [np.array([i * step, j * step]) for i in range(-m, m + 1)
+            for j in range(-m, m + 1) if math.hypot(i, j) * step <= max_shift * (1 + 1e-9)]
+    stride = max(1, z.size // _SEARCH_PIXELS)
+    sample = (x[::stride], y[::stride], z[::stride])
+    best = grid[int(np.argmin([rss(g, *sample) for g in grid]))]
+    reference = max(rss(best, x, y, z), np.finfo(float).tiny)
+    simplex = np.array([best, best + [0.5 * step, 0.0], best + [0.0, 0.5 * step]])
+    found = optimize.minimize(lambda o: rss(o, x, y, z) / reference, best,
+                              method="Nelder-Mead",
+                              options={"initial_simplex": simplex, "xatol": 1e-2 * basis.h,
+                                       "fatol": 1e-9, "maxiter": 200})
+    offset = found.x if found.fun <= 1.0 else best
+    at_limit = np.hypot(*offset) > max_shift - 0.5 * step
+    logger.info("shift search: %d grid points on %d pixels, %d refinement steps, offset "
+                "(%.3g, %.3g) m", len(grid), sample[2].size, found.nit, *offset)
+    return start + offset, bool(at_limit)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Solution:
+    """The least-squares solution on the fitted pixels, in the units of the normalised heights.
+
+    ``beta`` the coefficients of the design columns (pressures, offset,
+    tilt), ``columns`` the design matrix at the fitted pixels, ``residual``
+    the residual there and ``residual_map`` on the whole map (NaN off the
+    fitted pixels), ``stats`` the residual's statistics, ``start`` the face's
+    centre in the map and ``at_limit`` whether the shift search stopped at
+    its limit.
+    """
+
+    beta: np.ndarray
+    columns: np.ndarray
+    residual: np.ndarray
+    residual_map: np.ndarray
+    stats: object
+    start: np.ndarray
+    at_limit: bool
+
+
+class FaceModel(FaceBasis):
+    """The wear-ratio fit of a phase map: its :class:`FaceBasis` and the least-squares fit.
+
+    The measured heights are fitted by the per-phase faces, sampled at the
+    measured pixels, with a free offset and tilt (:meth:`fit`).
+
+    Parameters
+    ----------
+    problem : steady.problem.Problem
+        The phase map on the face's grid (the model grid), ``E*``, the
+        normal force (it only enters the consistency figure
+        :attr:`FitResult.load_scale`) and the wear law, a power law
+        ``k_i p^m``: its exponent relates ratios and pressures,
+        ``k_i / k_ref = (p_ref / p_i)^m``; its coefficients are reported
+        beside the fit (:attr:`FitResult.scene_ratios`), not used by it.
+
+    Notes
+    -----
+    Build one model and call :meth:`fit` for many measured faces: the
+    per-phase faces are computed once (:class:`FaceBasis`).
+
+    Examples
+    --------
+    A rectangular face of aspect 1:3 with a Voronoi map; the measured face
+    is the forward model's with ``k_1 / k_0 = 3``, on the model's pixels:
+
+    >>> import numpy as np
+    >>> from steady import FacePhases, MeasuredFace, Problem, Voronoi
+    >>> from steady.outline import Rectangle
+    >>> grid = Rectangle(4e-3, 12e-3).grid(48)
+    >>> phases = FacePhases(grid, Voronoi(64, (0.6, 0.4), 2029).labels(grid), 2)
+    >>> model = FaceModel(Problem(phases, [1e-13, 1e-13], 10.0, 1.3e6))
+    >>> model.grid.shape, model.faces.shape
+    ((16, 48), (2, 16, 48))
+    >>> face = np.tensordot([3e4, 1e4], model.faces, axes=1)     # p_0 / p_1 = k_1 / k_0 = 3
+    >>> fit = model.fit(MeasuredFace(face, grid.h))
+    >>> print(f"k1/k0 = {fit.ratios[1]:.6f}, {fit.samples} pixels")
+    k1/k0 = 3.000000, 768 pixels
+    """
+
+    def __init__(self, problem):
+        if not isinstance(problem, Problem):
+            raise ValueError(f"FaceModel takes a steady.problem.Problem, got "
+                             f"{type(problem).__name__}")
+        factor = problem.wear.factor
+        if factor is None or factor.exponent is None:
+            # Its model relates ratios and pressures through k_i p_i^m = C.
+            raise ValueError(f"the fit supports the power law k p^m, not the "
+                             f"{problem.wear.describe()}")
+        if problem.sliding is not None:
+            # Its model is a pressure constant on each phase: a face of K chi_i per phase.
+            raise ValueError(f"the fit assumes a uniform sliding speed (pressure constant on "
+                             f"each phase), not the sliding {problem.sliding.describe()}")
+        super().__init__(problem.phases, problem.E_star)
+        self.problem = problem
+        self.normal_force = problem.normal_force
+        self.exponent = factor.exponent
+        self.wear_coefficients = np.asarray(factor.coefficients, dtype=float)
+
+    @classmethod
+    def from_scene(cls, scene, *, n=None):
+        """The model of a :class:`steady.scene.Scene` on its grid of ``n`` (default ``scene.n``).
+
+        The phase map is rasterised on ``scene.grid(n)``
+        (:meth:`steady.scene.Scene.phase_labels`, which names a phase with no
+        pixel on the face).
+        """
+        return cls(Problem.from_scene(scene, n=n))
 
     def fit(self, measured, *, shift=(0.0, 0.0), search_shift=False, max_shift=None,
             rim_margin=0.0, reference_phase=0, confidence=0.95,
@@ -813,8 +918,8 @@ class FaceModel:
         # Every trial shift within max_shift of the start sees the same pixels:
         # those at least rim_margin + max_shift from the rim at the start.
         erosion = rim_margin + (max_shift if search_shift else 0.0)
-        X, Y, mask, window = self._fitted_pixels(measured, start, rim_margin, erosion,
-                                                 rim_margin or search_shift)
+        X, Y, mask, window = self.fitted_pixels(measured, start, rim_margin, erosion,
+                                                rim_margin or search_shift)
         x, y, heights = X[mask], Y[mask], measured.heights[mask]
         # The fit is linear in the heights: it runs on the heights over a power of two
         # near their largest magnitude (exact, no rounding), so that the squares it forms
@@ -823,40 +928,48 @@ class FaceModel:
         # (to the same bits as a fit in metres, where that does not overflow).
         units = _HeightUnit(heights)
         z = units.normalise(heights)
-        self._check_determined(self._design(x, y, start),
-                               self.phases_at(x - start[0], y - start[1]), min_phase_pixels)
+        _check_determined(self.design(x, y, start), self.phases_at(x - start[0], y - start[1]),
+                          self.n_phases, min_phase_pixels)
         at_limit = False
         if search_shift:
-            start, at_limit = self._search_shift(x, y, z, start, max_shift)
-            self._check_determined(self._design(x, y, start),
-                                   self.phases_at(x - start[0], y - start[1]),
-                                   min_phase_pixels)
-        columns = self._design(x, y, start)
-        beta, scaled, scale = self._solve(columns, z)
+            start, at_limit = _search_shift(self, x, y, z, start, max_shift)
+            _check_determined(self.design(x, y, start),
+                              self.phases_at(x - start[0], y - start[1]), self.n_phases,
+                              min_phase_pixels)
+        columns = self.design(x, y, start)
+        beta, scaled, scale = _least_squares(columns, z)
         residual = z - columns @ beta
         residual_map = np.full(measured.shape, np.nan)
         residual_map[mask] = residual
         stats = _ResidualStatistics(residual_map, mask, measured.pixel_size, window, scaled,
                                     scale, self.n_phases + 3, confidence)
+        solution = _Solution(beta, columns, residual, residual_map, stats, start, at_limit)
+        return self._result(measured, X, Y, mask, solution, units, ref, confidence, max_shift)
+
+    def _result(self, measured, X, Y, mask, solution, units, ref, confidence, max_shift):
+        """The :class:`FitResult` of a solution: ratios, intervals, figures, back in SI units."""
+        beta, columns, stats, start = (solution.beta, solution.columns, solution.stats,
+                                       solution.start)
         P, m = self.n_phases, self.exponent
         p, v = beta[:P], stats.covariance[:P, :P]
         # Ratios and their intervals do not depend on the heights' unit.
         ratios, intervals, notes = _ratios(p, v, ref, m, stats.t)
         load = float(self.areas @ p)
         load_sd = math.sqrt(max(float(self.areas @ v @ self.areas), 0.0))
-        fitted, phase = self._maps(measured, X, Y, start, beta)
+        fitted, phase = self.maps(measured, X, Y, start, beta)
         # Back to metres and pascals.
         beta = units.restore(beta, 1, "fitted pressures")
         covariance = units.restore(v, 2, "covariance of the pressures")
         errors = units.restore(np.sqrt(np.maximum(np.diag(v), 0.0)), 1,
                                "standard errors of the pressures")
-        residual_rms = units.restore(math.sqrt(np.mean(residual**2)), 1, "residual rms")
+        residual_rms = units.restore(math.sqrt(np.mean(solution.residual**2)), 1,
+                                     "residual rms")
         relief = units.restore(float(np.ptp(columns[:, :P] @ p)), 1, "relief")
         load_interval = tuple(units.restore(load + sign * stats.t * load_sd, 1, "load scale")
                               for sign in (-1, 1))
         load = units.restore(load, 1, "load scale")
         fitted = units.restore(fitted, 1, "fitted face")
-        residual_map = units.restore(residual_map, 1, "residual")
+        residual_map = units.restore(solution.residual_map, 1, "residual")
         units.check(measured)
         p = beta[:P]
         load_scale = load / self.normal_force
@@ -874,44 +987,26 @@ class FaceModel:
             "offset and tilt": beta[P:],
             "effective samples": stats.effective_samples,
         })
-        if at_limit:
+        if solution.at_limit:
             notes.append(f"the shift lies at the search limit {max_shift:.4g} m")
         notes += stats.notes()
         logger.info("fit: %d pixels (%.0f effective), residual rms %.3g m, ratios %s",
                     stats.samples, stats.effective_samples, residual_rms, ratios.tolist())
         return FitResult(
-            ratios=ratios,
-            ratio_intervals=intervals,
-            phase_pressures=p,
-            phase_pressure_errors=errors,
-            pressure_covariance=covariance,
-            offset=float(beta[P]),
-            tilt=(float(beta[P + 1]), float(beta[P + 2])),
-            shift=(float(start[0]), float(start[1])),
-            residual_rms=residual_rms,
-            relief=relief,
-            samples=stats.samples,
+            ratios=ratios, ratio_intervals=intervals, phase_pressures=p,
+            phase_pressure_errors=errors, pressure_covariance=covariance,
+            offset=float(beta[P]), tilt=(float(beta[P + 1]), float(beta[P + 2])),
+            shift=(float(start[0]), float(start[1])), residual_rms=residual_rms,
+            relief=relief, samples=stats.samples,
             effective_samples=float(stats.effective_samples),
             correlation_length=float(stats.correlation.length),
-            degrees_of_freedom=float(stats.dof),
-            load_scale=load_scale,
-            load_scale_interval=load_scale_interval,
-            implied_normal_force=load,
-            implied_E_star=implied_E_star,
-            confidence=confidence,
-            reference_phase=ref,
-            exponent=m,
-            normal_force=self.normal_force,
-            E_star=self.E_star,
-            outline=self.outline,
-            n=self.n,
-            success=not failures,
-            message="; ".join(failures + notes),
-            measured=measured,
-            fitted=fitted,
-            residual=residual_map,
-            fit_mask=mask,
-            phase=phase,
+            degrees_of_freedom=float(stats.dof), load_scale=load_scale,
+            load_scale_interval=load_scale_interval, implied_normal_force=load,
+            implied_E_star=implied_E_star, confidence=confidence, reference_phase=ref,
+            exponent=m, normal_force=self.normal_force, E_star=self.E_star,
+            outline=self.outline, n=self.n, success=not failures,
+            message="; ".join(failures + notes), measured=measured, fitted=fitted,
+            residual=residual_map, fit_mask=mask, phase=phase,
             scene_ratios=self.wear_coefficients / self.wear_coefficients[ref],
         )
 
@@ -936,43 +1031,6 @@ class FaceModel:
                              f"got {reference_phase!r}")
         return start, rim_margin, max_shift, confidence, int(reference_phase)
 
-    def _fitted_pixels(self, measured, start, rim_margin, erosion, partial):
-        """The measured pixels' coordinates ``X, Y`` (m), the fitted ones and the covariance window.
-
-        Raises ``ValueError`` when the erosion leaves nothing to fit, the map
-        does not cover the face, or its pixels are too coarse for it.
-        """
-        reach = self.inradius - erosion
-        if reach <= 0:
-            raise ValueError(f"nothing left to fit: the rim margin {rim_margin:.4g} m "
-                             f"(and the shift search radius) cover the "
-                             f"{self.outline.describe()}, no point of which is farther than "
-                             f"{self.inradius:.4g} m from its rim")
-        self._check_coverage(measured, start, erosion, partial)
-        dx, dy = measured.pixel_size
-        if 2 * reach < _MIN_PIXELS_ACROSS * max(dx, dy):
-            raise ValueError(f"measured map {measured.source}: pixels of {max(dx, dy):.4g} m "
-                             f"give fewer than {_MIN_PIXELS_ACROSS} pixels across the "
-                             f"narrowest part of the fitted face, {2 * reach:.4g} m wide")
-        xs, ys = measured.coordinates()
-        X, Y = np.meshgrid(xs, ys, indexing="ij")
-        region = self.fitted_region(X - start[0], Y - start[1], erosion)
-        mask = np.isfinite(measured.heights) & region
-        # The covariance window: half the radius of the disk of the fitted
-        # part's area (half the fitted radius for a disk; the inradius would
-        # cut the correlation of a narrow face, a ring or a long rectangle).
-        window = 0.5 * math.sqrt(region.sum() * dx * dy / math.pi)
-        return X, Y, mask, window
-
-    def _maps(self, measured, X, Y, start, beta):
-        """The fitted face (m, NaN off the face) and the phase map on the measured pixels."""
-        on_face = self.outline.contains(X - start[0], Y - start[1])
-        fitted = np.full(measured.shape, np.nan)
-        fitted[on_face] = self._design(X[on_face], Y[on_face], start) @ beta
-        phase = np.full(measured.shape, -1, dtype=np.int64)
-        phase[on_face] = self.phases_at(X[on_face] - start[0], Y[on_face] - start[1])
-        return fitted, phase
-
 
 class _ResidualStatistics:
     """The fit's residual as a correlated field: its covariance, effective samples and ``t``.
@@ -987,7 +1045,7 @@ class _ResidualStatistics:
     window : float, m
         Radius of the covariance estimate.
     scaled : ndarray, shape (N, K)
-        The design matrix with its columns scaled (:meth:`FaceModel._solve`).
+        The design matrix with its columns scaled (:func:`_least_squares`).
     scale : ndarray, shape (K,)
         The column scales.
     unknowns : int

@@ -1,6 +1,7 @@
 """Files of the wear-ratio fit: measured height maps in, HDF5 results and figures out.
 
-Measured worn faces (:class:`MeasuredFace`, :func:`read_measured`):
+Measured worn faces (:class:`steady.measured_face.MeasuredFace`,
+:func:`read_measured`):
 
 - ``.npy``: a 2-d float array of heights;
 - ``.txt``, ``.csv``, ``.dat``, ``.asc``: a plain text grid read by
@@ -21,7 +22,7 @@ protruding), as a profilometer sees the worn face turned upwards: the sign
 of the steady face ``f_inf = K p``.  NaN marks a missing pixel.
 
 Fit result files (layout ``runin.fit``, version 2), written by
-:func:`write_fit` through :func:`steady.output.atomic_h5`::
+:func:`write_fit` through :func:`steady.safe_files.atomic_h5`::
 
     root attributes (unit of attribute x in x_units)
         ratios                 k_i / k_ref, one per phase (1 for the reference)
@@ -86,9 +87,9 @@ import h5py
 import numpy as np
 
 from .array_files import input_file_size, npy_header, read_npy
+from .measured_face import MeasuredFace, check_pixel_size
 from .outline import Circle
 from .output import (
-    atomic_h5,
     attach_scales,
     describe,
     read_outline,
@@ -98,11 +99,11 @@ from .output import (
     write_phase_names,
 )
 from .problem import check_phase_names, default_phase_names
+from .safe_files import atomic_h5
 
 __all__ = [
     "FIT_FORMAT",
     "FIT_FORMAT_VERSION",
-    "MeasuredFace",
     "StoredFit",
     "TEXT_SUFFIXES",
     "fit_figure",
@@ -125,91 +126,6 @@ TEXT_SUFFIXES = (".txt", ".csv", ".dat", ".asc")
 
 _SURFACE_HINT = ("install the optional extra with pip install 'runin[surface]' "
                  "(SurfaceTopography), or give a .npy or text grid")
-
-
-def _pixel_pair(pixel_size, what):
-    """``(dx, dy)`` from a number or a pair; ``ValueError`` unless positive and finite."""
-    values = np.atleast_1d(np.asarray(pixel_size, dtype=float)) if pixel_size is not None \
-        else np.array([])
-    if values.ndim != 1 or values.size not in (1, 2) or not np.all(np.isfinite(values)) \
-            or not np.all(values > 0):
-        raise ValueError(f"{what} must be one or two positive finite lengths (m), got "
-                         f"{pixel_size!r}")
-    return (float(values[0]), float(values[-1]))
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class MeasuredFace:
-    """A measured height map of a worn face.
-
-    Parameters
-    ----------
-    heights : array_like, shape (nx, ny), m
-        Face elevation (larger = protruding) at the pixel centres, indexed
-        ``[i, j]`` with ``i`` along x; NaN where the measurement has no
-        value.  Stored as a read-only float array.
-    pixel_size : float or (float, float), m
-        Pixel side, or ``(dx, dy)``.
-    source : str, optional
-        Where the map came from (for messages and the result file).
-
-    Notes
-    -----
-    The map's centre, the middle of its pixel array, is taken as the face's
-    centre (the origin of its outline, the axis of a disk) unless the fit is
-    given or searches a shift.
-    """
-
-    heights: np.ndarray
-    pixel_size: tuple
-    source: str = "array"
-
-    def __post_init__(self):
-        """Check the array and the pixel size; store them read-only."""
-        raw = np.asarray(self.heights)
-        # float() of a complex array keeps the real part with a bare numpy warning,
-        # of a boolean one makes heights of 0 and 1: neither is a measured face.
-        if raw.dtype.kind in "cb":
-            kind = "complex numbers" if raw.dtype.kind == "c" else "booleans"
-            raise ValueError(f"measured map {self.source} holds {kind} ({raw.dtype}); heights "
-                             f"must be real numbers")
-        try:
-            h = np.array(raw, dtype=float)
-        except (TypeError, ValueError) as err:
-            raise ValueError(f"measured map {self.source} must hold real numbers: "
-                             f"{str(err)[:200]}") from None
-        if h.ndim != 2 or min(h.shape) < 2:
-            raise ValueError(f"measured map {self.source} must be a 2-d array of at least 2 x 2 "
-                             f"pixels, got shape {h.shape}")
-        if np.any(np.isinf(h)):
-            raise ValueError(f"measured map {self.source} holds infinite heights")
-        if not np.any(np.isfinite(h)):
-            raise ValueError(f"measured map {self.source} holds no finite height")
-        h.flags.writeable = False
-        object.__setattr__(self, "heights", h)
-        object.__setattr__(self, "pixel_size",
-                           _pixel_pair(self.pixel_size, f"pixel size of {self.source}"))
-
-    @property
-    def shape(self):
-        """``(nx, ny)``, pixels."""
-        return self.heights.shape
-
-    @property
-    def extent(self):
-        """Size of the map ``(nx dx, ny dy)``, m."""
-        return (self.shape[0] * self.pixel_size[0], self.shape[1] * self.pixel_size[1])
-
-    def coordinates(self):
-        """Pixel-centre coordinates from the map's centre.
-
-        Returns
-        -------
-        x : ndarray, shape (nx,), m
-        y : ndarray, shape (ny,), m
-        """
-        (nx, ny), (dx, dy) = self.shape, self.pixel_size
-        return (np.arange(nx) - 0.5 * (nx - 1)) * dx, (np.arange(ny) - 0.5 * (ny - 1)) * dy
 
 
 #: Leading bytes of file formats a measured map is sometimes mistaken for, and their names.
@@ -308,7 +224,7 @@ def _surface_topography(path, pixel_size):
             if pixel_size is None:
                 raise ValueError(f"{str(path)!r} does not give its pixel size: give it "
                                  f"(--pixel-size, m)")
-            dx, dy = _pixel_pair(pixel_size, "pixel size")
+            dx, dy = check_pixel_size(pixel_size, "pixel size")
             nx, ny = channel.nb_grid_pts
             kwargs["physical_sizes"] = (nx * dx, ny * dy)
         if channel.unit is None:
@@ -331,7 +247,7 @@ def _surface_topography(path, pixel_size):
     file_pixel = tuple(float(s) / int(g) for s, g in zip(topography.physical_sizes,
                                                         topography.nb_grid_pts, strict=True))
     if pixel_size is not None and "physical_sizes" not in kwargs:
-        given = _pixel_pair(pixel_size, "pixel size")
+        given = check_pixel_size(pixel_size, "pixel size")
         if not np.allclose(given, file_pixel, rtol=1e-6):
             raise ValueError(f"pixel size {given} m given, but {str(path)!r} says "
                              f"{file_pixel} m")
@@ -503,7 +419,7 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
         Overwrite an existing file (default False).
     checked : bool, optional
         The caller checked ``path`` before the fit: a file found now was
-        written meanwhile (see :func:`steady.output.atomic_h5`).
+        written meanwhile (see :func:`steady.safe_files.atomic_h5`).
 
     Returns
     -------
@@ -513,7 +429,7 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
     ------
     ValueError
         ``path`` exists and ``force`` is False (an
-        :class:`steady.output.OutputAppearedError` if another writer wrote
+        :class:`steady.safe_files.OutputAppearedError` if another writer wrote
         it meanwhile: nothing is written), or is a directory.
     """
     path = pathlib.Path(path)
@@ -565,9 +481,9 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
         for name, unit in _ATTRIBUTES.items():
             f.attrs[name] = values[name]
             f.attrs[f"{name}_units"] = unit
-        if isinstance(result.outline, Circle):
-            f.attrs["radius"] = result.outline.radius
-            f.attrs["radius_units"] = "m"
+        for name, (value, unit) in result.outline.root_attributes().items():
+            f.attrs[name] = value
+            f.attrs[f"{name}_units"] = unit
         f.attrs["success"] = bool(result.success)
         f.attrs["message"] = result.message
         f.attrs["measured_source"] = result.measured.source
@@ -637,7 +553,8 @@ def read_fit(path):
         else:
             outline = Circle(float(attrs["radius"]))
         attrs["scale"] = outline.scale
-        attrs["radius"] = outline.radius if isinstance(outline, Circle) else None
+        # Disks record their radius at the root (Circle.root_attributes), other faces do not.
+        attrs["radius"] = float(f.attrs["radius"]) if "radius" in f.attrs else None
         attrs["success"] = bool(f.attrs["success"])
         attrs["message"] = _text(f.attrs["message"])
         attrs["measured_source"] = _text(f.attrs.get("measured_source", ""))

@@ -46,9 +46,8 @@ _FFT_OUT = np.lib.NumpyVersion(np.__version__) >= "2.0.0"
 # Arrays of fewer elements are transformed on the calling thread alone.
 _THREADED_SIZE = 1 << 16
 # Grids of at least this many rows take the padded product's column transforms as two
-# transforms of half the length (:meth:`HalfSpace._split_product`): 0.63 to 0.76 of the
-# product's CPU time at n = 2048, 0.99 at 512, 1.02 to 1.04 at 1024 (docs/benchmarks.md,
-# "Contact solve on run-in problems").
+# transforms of half the length (:meth:`HalfSpace._split_product`): faster there, not on
+# smaller grids (docs/benchmarks.md, "Contact solve on run-in problems").
 _SPLIT_ROWS = 2048
 _POOL_LOCK = threading.Lock()
 _POOL = []

@@ -27,7 +27,14 @@ import math
 import numpy as np
 
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, as_grid
-from .phases import PHASE_MAPS, check_resolution, face_words, grid_outline, scale_units_note
+from .phases import (
+    PHASE_MAPS,
+    PhaseMap,
+    check_resolution,
+    face_words,
+    grid_outline,
+    scale_units_note,
+)
 from .schema import Key
 
 __all__ = ["MAX_FILL", "MAX_INCLUSIONS", "MAX_RELATIVE_RADIUS", "Inclusions"]
@@ -107,7 +114,7 @@ def _box_area(radius, spread):
         doc="relative standard deviation of the radii, log-normal (default 0)")),
     doc="random non-overlapping circular inclusions (phase 1) in a matrix (phase 0)")
 @dataclasses.dataclass(frozen=True)
-class Inclusions:
+class Inclusions(PhaseMap):
     """Random non-overlapping circular inclusions (phase 1) in a matrix (phase 0).
 
     Parameters

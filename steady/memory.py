@@ -107,9 +107,10 @@ def keep_freed_memory():
     Other threads than the main one allocate from arenas of their own, heaps
     of 64 MiB that are unmapped when emptied and that map any larger block
     afresh whatever the settings: the history's figures, computed on a
-    thread of their own, allocated and faulted in 55 GiB in a run at
-    n = 2048.  This sets ``M_MMAP_MAX = 0`` (blocks come from the heap), a
-    trim threshold of 2 GiB (freed memory stays for the next array) and
+    thread of their own, faulted their arrays in afresh at every step of a
+    run at n = 2048 (docs/benchmarks.md, "Run-in memory").  This sets
+    ``M_MMAP_MAX = 0`` (blocks come from the heap), a trim threshold of
+    2 GiB (freed memory stays for the next array) and
     ``M_ARENA_MAX = 1`` (every thread allocates from the main heap).  The
     peak memory is that of the largest set of arrays alive at once, as
     before; freed memory is returned at exit.  Process-wide, so called by

@@ -25,9 +25,9 @@ steps:
 The image is placed as it is viewed: its columns run along ``x`` (to the
 right), its rows along ``-y`` (the top row lies at the largest ``y``), so
 the phase map drawn by :mod:`steady.plotting` looks like the micrograph.
-:func:`segmentation_figure` draws the segmentation over the image, with
-the face and the grey-level histogram, to check a phase map before
-trusting a result.
+:func:`steady.plotting.segmentation_figure` draws the segmentation over
+the image, with the face and the grey-level histogram, to check a phase
+map before trusting a result.
 
 Otsu thresholds need scikit-image, an optional extra:
 ``pip install 'runin[micrograph]'``; given thresholds do not.
@@ -45,7 +45,7 @@ from scipy import ndimage
 
 from .array_files import input_file_size, npy_header, read_png
 from .outline import MIN_SIDE_PIXELS, Circle, FaceGrid, as_outline
-from .phases import PHASE_MAPS, check_resolution
+from .phases import PHASE_MAPS, PhaseMap, check_resolution
 from .schema import Key
 from .text import shorten
 
@@ -57,7 +57,6 @@ __all__ = [
     "load_micrograph",
     "read_grey",
     "segment",
-    "segmentation_figure",
 ]
 
 logger = logging.getLogger(__name__)
@@ -246,7 +245,8 @@ class Segmentation:
         of the image that were kept; None: the whole image.
     image : ndarray, shape (rows, cols), float, or None
         The grey levels of the (cropped) image before smoothing
-        (read-only), for :func:`segmentation_figure`; None if not kept.
+        (read-only), for :func:`steady.plotting.segmentation_figure`; None
+        if not kept.
     """
 
     labels: np.ndarray
@@ -288,6 +288,29 @@ class Segmentation:
         words.append(f"image fill factors {fill}")
         words.append(f"{self.specks} specks ({self.speck_pixels} pixels) relabelled")
         return ", ".join(words)
+
+    def histogram(self):
+        """Histogram of the grey levels that were thresholded (after the smoothing).
+
+        Returns
+        -------
+        counts : ndarray, shape (256,), int
+            Pixels in each bin: the bins of the Otsu thresholds, a 256th of
+            the grey range each.
+        edges : ndarray, shape (257,), units of the image
+
+        Raises
+        ------
+        ValueError
+            The segmentation keeps no image.
+        """
+        if self.image is None:
+            raise ValueError("the segmentation keeps no image (made by segment() or "
+                             "load_micrograph(), it does)")
+        grey = self.image
+        if self.smoothing:
+            grey = ndimage.gaussian_filter(grey, self.smoothing, mode="nearest")
+        return np.histogram(grey, bins=_OTSU_BINS)
 
 
 def _remove_specks(labels, n_phases, min_speck):
@@ -621,7 +644,7 @@ def _placement(shape, outline, pixel_size, cover, offset, source):
     Key("offset", "pair", unit="m", doc="face centre relative to the image centre")),
     doc="a grey-level micrograph segmented into phases and placed on the face")
 @dataclasses.dataclass(frozen=True, eq=False)
-class Micrograph:
+class Micrograph(PhaseMap):
     """A segmented micrograph placed on the face: a phase geometry.
 
     Parameters
@@ -720,6 +743,49 @@ class Micrograph:
     def check_grid(self, grid):
         """``n`` as an int; ``ValueError`` if the grid is too coarse."""
         return check_resolution(grid, self.min_grid(), f"micrograph {self.source!r}")
+
+    def segmented_image(self):
+        """The segmentation of the micrograph (:class:`Segmentation`)."""
+        return self.segmentation
+
+    def file_record(self):
+        """The group ``micrograph`` of a result file: the segmentation and the placement.
+
+        Returns
+        -------
+        dict
+            ``{"micrograph": attributes}``: the source, the thresholds, the
+            crop (pixels), the fill and speck counts, the image's fill
+            factors and shape, the pixel size (m), the cover and the offset
+            (m); docs/files.md lists them.
+        """
+        seg = self.segmentation
+        attributes = {
+            "source": self.source,
+            "n_phases": seg.n_phases,
+            "thresholds": np.asarray(seg.thresholds, dtype=float),
+            "image_fill_factors": np.asarray(seg.fill_factors),
+            "smoothing": seg.smoothing,
+            "min_speck": seg.min_speck,
+            "specks": seg.specks,
+            "speck_pixels": seg.speck_pixels,
+            "threshold_method": seg.method,
+            "crop": np.asarray(seg.crop or ((0, seg.shape[0]), (0, seg.shape[1]))),
+            "crop_units": "pixels",
+            "fill_phases": np.asarray(seg.fill_phases, dtype=np.int64),
+            "holes": seg.holes,
+            "hole_pixels": seg.hole_pixels,
+            "image_shape": np.asarray(seg.shape),
+            "pixel_size": self.pixel_size,
+            "pixel_size_units": "m",
+            "cover": self.cover,
+            "offset": np.asarray(self.offset),
+            "offset_units": "m",
+            # Counts of pixels: dimensionless for udunits (docs/files.md says pixels).
+            "smoothing_units": "1",
+            "min_speck_units": "1",
+        }
+        return {"micrograph": attributes}
 
     def _grid(self, grid):
         """The face grid of ``grid`` (``n``: this micrograph's own outline)."""
@@ -854,208 +920,3 @@ def load_micrograph(path, outline, n_phases, *, thresholds=None, crop=None, smoo
         raise ValueError(f"micrograph {source!r}: {err}") from None
     logger.info("micrograph %s: %s", path, seg.summary())
     return Micrograph(seg, outline, pixel_size, cover, offset, source)
-
-
-#: Translucent colours of phases 1, 2, ... over the image (phase 0 is left
-#: clear, so the image shows through), and of phase 0 in the histogram.
-_OVERLAY_COLOURS = ("#e6194b", "#4363d8", "#3cb44b", "#f58231", "#911eb4", "#42d4f4",
-                    "#f032e6", "#bfef45")
-_PHASE0_COLOUR = "#808080"
-_OVERLAY_ALPHA = 0.4
-
-#: Largest side, pixels, of the view of a tiled micrograph over the face; a
-#: cropped image with a longer side is drawn one pixel in every few.
-_TILE_VIEW = 1200
-_IMAGE_VIEW = 2048
-
-
-def _phase_colour(phase):
-    return _PHASE0_COLOUR if phase == 0 else _OVERLAY_COLOURS[(phase - 1)
-                                                              % len(_OVERLAY_COLOURS)]
-
-
-def _view(geometry):
-    """Grey levels, labels and their extent (mm, face coordinates) as the figure shows them.
-
-    A crop shows the whole (cropped) image, one pixel in every
-    ``ceil(side / _IMAGE_VIEW)`` each way; a tiling shows the periodic
-    image over the face's bounding box, sampled at most :data:`_TILE_VIEW`
-    pixels a side.
-    """
-    seg = geometry.segmentation
-    width, height = geometry.extent
-    x0, y0 = geometry.offset
-    if geometry.cover == "crop":
-        extent = np.array([-0.5 * width - x0, 0.5 * width - x0,
-                           -0.5 * height - y0, 0.5 * height - y0])
-        every = -(-max(seg.shape) // _IMAGE_VIEW)
-        return seg.image[::every, ::every], seg.labels[::every, ::every], extent * 1e3
-    half_x, half_y = geometry.outline.half_extent
-    step = max(geometry.pixel_size, 2.0 * max(half_x, half_y) / _TILE_VIEW)
-    x = np.arange(-half_x + 0.5 * step, half_x, step)
-    y = np.arange(half_y - 0.5 * step, -half_y, -step)
-    n_rows, n_cols = seg.shape
-    cols = np.floor((x + x0 + 0.5 * width) / geometry.pixel_size).astype(np.int64) % n_cols
-    rows = np.floor((0.5 * height - y - y0) / geometry.pixel_size).astype(np.int64) % n_rows
-    extent = np.array([x[0], x[-1], y[-1], y[0]]) + 0.5 * step * np.array([-1, 1, -1, 1])
-    index = (rows[:, None], cols[None, :])
-    return seg.image[index], seg.labels[index], extent * 1e3
-
-
-def _draw_image(ax, geometry, names, legend):
-    """The image in grey, the phases over it, the face's outline; their legend handles.
-
-    With ``legend`` the legend goes below the axes; otherwise the caller places it.
-    """
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-
-    seg = geometry.segmentation
-    grey, labels, extent = _view(geometry)
-    ax.imshow(grey, cmap="gray", extent=extent, interpolation="nearest",
-              vmin=float(seg.image.min()), vmax=float(seg.image.max()))
-    overlay = np.zeros(labels.shape + (4,), dtype=np.uint8)
-    for phase in range(1, seg.n_phases):
-        rgba = (*_rgb(_phase_colour(phase)), _OVERLAY_ALPHA)
-        overlay[labels == phase] = np.rint(255 * np.asarray(rgba))
-    ax.imshow(overlay, extent=extent, interpolation="nearest")
-    half_x, half_y = geometry.outline.half_extent
-    x = np.linspace(-1.05 * half_x, 1.05 * half_x, 601)
-    y = np.linspace(-1.05 * half_y, 1.05 * half_y, 601)
-    inside = geometry.outline.covers(x[None, :], y[:, None]).astype(float)
-    ax.contour(x * 1e3, y * 1e3, inside, levels=[0.5], colors=["#ffd700"], linewidths=1.5)
-    handles = [Patch(facecolor="none" if p == 0 else _phase_colour(p),
-                     alpha=1.0 if p == 0 else _OVERLAY_ALPHA, edgecolor="black",
-                     label=f"{names[p]}: {100 * seg.fill_factors[p]:.1f} % of the image")
-               for p in range(seg.n_phases)]
-    handles.append(Line2D([], [], color="#ffd700", linewidth=1.5, label="face"))
-    if legend:
-        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12),
-                  ncols=min(len(handles), 3), fontsize="small", frameon=False)
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
-    ax.set_aspect("equal")
-    thresholds = ", ".join(f"{t:.4g}" for t in seg.thresholds)
-    ax.set_title(f"{seg.n_phases} phases, threshold{'s' if len(seg.thresholds) > 1 else ''} "
-                 f"{thresholds} ({seg.method})")
-    return handles
-
-
-def _rgb(colour):
-    from matplotlib.colors import to_rgb
-
-    return to_rgb(colour)
-
-
-def _draw_histogram(ax, geometry):
-    """Histogram of the grey levels thresholded, coloured by phase, the thresholds marked."""
-    seg = geometry.segmentation
-    grey = seg.image
-    if seg.smoothing:
-        grey = ndimage.gaussian_filter(grey, seg.smoothing, mode="nearest")
-    counts, edges = np.histogram(grey, bins=_OTSU_BINS)
-    centres = 0.5 * (edges[1:] + edges[:-1])
-    colours = [_phase_colour(p) for p in np.digitize(centres, seg.thresholds)]
-    ax.bar(centres, np.maximum(counts, 0.5), width=edges[1] - edges[0], color=colours,
-           log=True, linewidth=0)
-    for i, t in enumerate(seg.thresholds):
-        ax.axvline(t, color="black", linestyle="--", linewidth=1.0,
-                   label=f"threshold {i}: {t:.4g}")
-    ax.legend(fontsize="small", frameon=False)
-    png = geometry.source.lower().endswith(".png")
-    ax.set_xlabel("grey level" + (" (fraction of full scale)" if png else ""))
-    ax.set_ylabel("pixels")
-    ax.set_ylim(bottom=0.5)
-    smoothed = f" (smoothed, sigma {seg.smoothing:g} px)" if seg.smoothing else ""
-    ax.set_title(f"grey levels thresholded{smoothed}")
-
-
-def segmentation_figure(geometry, *, ax=None, names=None):
-    """The segmentation of a micrograph drawn over the image, and its histogram.
-
-    Parameters
-    ----------
-    geometry : Micrograph
-        A segmented micrograph placed on the face (:func:`load_micrograph`).
-    ax : matplotlib Axes or (Axes, Axes), optional
-        Where to draw: one Axes for the image alone, a pair for the image
-        and the histogram.  Default: a new figure with both panels.
-    names : sequence of str, optional
-        Names of the phases for the legend (default ``"phase 0"``, ...).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The image panel shows the (cropped) image in grey with phases 1,
-        2, ... coloured translucently over it and the face's outline (x and
-        y in mm, the face's coordinates; a tiled image is shown tiled over
-        the face's bounding box); its title gives the thresholds.  The
-        histogram panel shows the grey levels that were thresholded (after
-        the smoothing), coloured by phase, with the thresholds as dashed
-        lines.
-
-    Raises
-    ------
-    ValueError
-        ``geometry`` is not a :class:`Micrograph`, its segmentation keeps
-        no image, ``ax`` is neither an Axes nor a pair of them, or
-        ``names`` does not name every phase.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> image = np.full((60, 60), 0.5)
-    >>> image[20:40, 20:40], image[25:35, 25:35] = 1.0, 0.0     # a rim around a dark core
-    >>> seg = segment(image, 2, thresholds=[0.75], fill_holes=True)
-    >>> fig = segmentation_figure(Micrograph(seg, 1e-3))        # image spans the 2 mm face
-    >>> [a.get_title() for a in fig.axes]
-    ['2 phases, threshold 0.75 (manual)', 'grey levels thresholded']
-    """
-    from matplotlib.axes import Axes
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    if not isinstance(geometry, Micrograph):
-        raise ValueError(f"geometry must be a Micrograph, got {shorten(geometry)}")
-    seg = geometry.segmentation
-    if seg.image is None:
-        raise ValueError("the segmentation keeps no image to draw (made by segment() or "
-                         "load_micrograph(), it does)")
-    if names is None:
-        names = [f"phase {p}" for p in range(seg.n_phases)]
-    elif isinstance(names, str) or len(names) != seg.n_phases:
-        raise ValueError(f"names must name the {seg.n_phases} phases, got {shorten(names)}")
-    if ax is None:
-        fig = Figure(figsize=(11.0, 5.2), layout="constrained")
-        FigureCanvasAgg(fig)
-        image_ax, hist_ax = fig.subplots(1, 2, width_ratios=(3, 2))
-        fig.suptitle(_figure_title(geometry))
-    elif isinstance(ax, Axes):
-        image_ax, hist_ax = ax, None
-    elif (isinstance(ax, (tuple, list, np.ndarray)) and np.size(ax) == 2
-          and all(isinstance(a, Axes) for a in np.ravel(ax))):
-        image_ax, hist_ax = np.ravel(ax)
-    else:
-        raise ValueError(f"ax must be a matplotlib Axes or a pair of them, got {shorten(ax)}")
-    handles = _draw_image(image_ax, geometry, names, legend=ax is not None)
-    if ax is None:  # the figure's own: a legend the layout makes room for
-        fig.legend(handles=handles, loc="outside lower left", ncols=min(len(handles), 4),
-                   fontsize="small", frameon=False)
-    if hist_ax is not None:
-        _draw_histogram(hist_ax, geometry)
-    return image_ax.figure
-
-
-def _figure_title(geometry):
-    """The source, the crop, the smoothing, the holes and the placement in a line."""
-    seg = geometry.segmentation
-    words = [pathlib.Path(geometry.source).name]
-    if seg.crop is not None:
-        (r0, r1), (c0, c1) = seg.crop
-        words.append(f"rows {r0}:{r1}, columns {c0}:{c1}")
-    if seg.fill_phases:
-        words.append(f"{seg.holes} holes filled")
-    if seg.specks:
-        words.append(f"{seg.specks} specks relabelled")
-    words.append(f"pixel {geometry.pixel_size * 1e6:.4g} µm, cover {geometry.cover}")
-    return ", ".join(words)

@@ -7,7 +7,8 @@ For any outline the homogeneous steady face is the displacement under the
 uniform pressure ``pbar = F_N / A`` (``A`` the outline's area), and its rms
 slope is ``S pbar / E*`` with a factor ``S`` that depends only on the
 outline's shape (the displacement is ``pbar / E*`` times a function of the
-position in units of the outline's size).  ``S`` comes from
+position in units of the outline's size).  ``S`` comes from the outline's
+closed form where it has one (:meth:`~steady.outline.Circle.homogeneous_slope_factor`):
 
 - the disk: ``4 / pi`` (eq. 12; :func:`steady.reference.disk_normalised_rms_slope`
   shows that the continuum value is exactly that);
@@ -27,10 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 
-from . import reference
-from .outline import Annulus, Circle, MaskOutline, Rectangle
 from .phases import Homogeneous
 from .rms_slope import estimate_rms_slope
 
@@ -88,29 +86,14 @@ def slope_factor(outline):
     >>> print(f"{factor:.12f} {error} {source}")
     1.273239544735 0.0 disk: 4 pbar / (pi E*) (eq. 12)
     """
-    if isinstance(outline, Circle):
-        return 4.0 / math.pi, 0.0, "disk: 4 pbar / (pi E*) (eq. 12)"
-    if isinstance(outline, Rectangle):
-        factor = reference.rectangle_rms_slope(outline.width, outline.length)
-        return float(factor), 0.0, ("homogeneous rectangle: quadrature of Love's closed-form "
-                                     "gradient")
-    if isinstance(outline, Annulus):
-        factor = reference.annulus_rms_slope(outline.inner_radius / outline.outer_radius)
-        return float(factor), 0.0, "homogeneous annulus: superposed disks (elliptic integrals)"
-    return _estimated_factor(outline)
-
-
-def _reference_grid(outline):
-    """Grid of the estimated reference: :data:`REFERENCE_GRID`, a multiple of a mask's size."""
-    if isinstance(outline, MaskOutline):
-        m0 = outline.min_grid()
-        return m0 * max(1, -(-REFERENCE_GRID // m0))
-    return max(REFERENCE_GRID, outline.min_grid())
+    closed = outline.homogeneous_slope_factor()
+    return closed if closed is not None else _estimated_factor(outline)
 
 
 def _estimated_factor(outline):
     """``S`` from the corrected estimator on the homogeneous face (no closed form)."""
-    n = _reference_grid(outline)
+    # REFERENCE_GRID pixels, or the outline's next accepted grid (a multiple of a mask's size).
+    n = outline.grid_at_least(REFERENCE_GRID)
     # Unit load on a unit modulus: the rms slope is S pbar with pbar = 1 / area.
     force = outline.area
     estimate = estimate_rms_slope(Homogeneous(), [1.0], force, outline, 1.0, n)
@@ -141,13 +124,9 @@ def reference_slope(outline, normal_force, E_star):
     >>> print(f"{ref.value:.6f} {ref.mean_pressure:.2f}")
     0.194848 198943.68
     """
-    if isinstance(outline, Circle):
-        pbar = reference.disk_mean_pressure(normal_force, outline.radius)
-        value = reference.disk_reference_slope(pbar, E_star)
-    else:
-        pbar = normal_force / outline.area
+    # For a disk the area is pi a^2: pbar is steady.reference.disk_mean_pressure's, bit for bit.
+    pbar = normal_force / outline.area
     factor, error, source = slope_factor(outline)
-    if not isinstance(outline, Circle):
-        value = factor * pbar / E_star
+    value = outline.homogeneous_rms_slope(factor, pbar, E_star)
     return ReferenceSlope(value=float(value), error=float(error * pbar / E_star),
                           mean_pressure=float(pbar), factor=float(factor), source=source)

@@ -18,7 +18,15 @@ any region given as a pixel mask.  Every outline has
 - ``encloses_disk(centre, radius)`` : whether a disk (m) lies in the face;
 - ``support(direction)``, ``circumradius()`` : how far the face reaches
   along a direction, and from its centre, m;
-- ``parameters()`` : its defining lengths, ``name -> (value, unit)``.
+- ``parameters()`` : its defining lengths, ``name -> (value, unit)``;
+- what files record of it beside its lengths: ``root_attributes()`` (a
+  disk's radius), ``group_record()`` (a mask's pixels) and, to read it
+  back, ``from_group(attributes, read)``;
+- its closed forms, None where it has none: the homogeneous face's rms
+  slope (``homogeneous_slope_factor()``, used by
+  :mod:`steady.normalisation`), the distance to the rim
+  (``exact_rim_distance(x, y)``) and the statistics of a sphere cap over
+  the face (``cap_statistics(sphere_radius)``).
 
 Grid
 ----
@@ -33,7 +41,7 @@ outline; areas are pixel counts times ``h^2``.  For a disk this is the
 1 m).
 
 Outlines are registered in :data:`OUTLINES` (a
-:class:`steady.schema.Registry`) with their ``[punch]`` keys;
+:class:`steady.schema.KindRegistry`) with their ``[punch]`` keys;
 :func:`outline_from_table` builds one from the ``[punch]`` table of a scene
 file.  Outlines compare by value (a mask by its pixels and pixel size).
 """
@@ -46,9 +54,11 @@ import math
 import pathlib
 
 import numpy as np
+import scipy.integrate
 
+from . import reference
 from .array_files import read_face_mask
-from .schema import Context, Key, Registry
+from .schema import Context, Key, KindRegistry
 from .text import shorten
 
 __all__ = [
@@ -74,7 +84,8 @@ __all__ = [
 MIN_SIDE_PIXELS = 8
 
 #: Registered outlines, by ``shape`` (``[punch] shape``; default ``"circle"``).
-OUTLINES = Registry("face outline", "shape", default="circle")
+OUTLINES = KindRegistry("face outline", "shape", default="circle",
+                        entry_point_group="runin.outlines")
 
 
 def _length(value, name):
@@ -352,6 +363,129 @@ class _Outline:
                           if _ == "m")
         return f"{self.kind} face ({parts})"
 
+    def grid_at_least(self, n):
+        """The smallest grid size the outline accepts that is at least ``n`` pixels.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
+        return max(n, self.min_grid())
+
+    # -- closed forms (None where the outline has none) ---------------------------------
+    def homogeneous_slope_factor(self):
+        """``(S, error, source)``: the homogeneous face's rms slope in units of ``pbar / E*``.
+
+        The homogeneous steady face is the displacement under the uniform
+        pressure ``pbar``; its rms slope is ``S pbar / E*`` with ``S`` set by
+        the outline's shape alone (:mod:`steady.normalisation`).
+
+        Returns
+        -------
+        (float, float, str) or None
+            ``S``, its uncertainty and where it comes from, in words; None
+            without a closed form (the default: :mod:`steady.normalisation`
+            then estimates ``S``).
+        """
+        return None
+
+    def homogeneous_rms_slope(self, factor, mean_pressure, E_star):
+        """The homogeneous face's rms slope ``S pbar / E*``: the reference slope ``grad_f0``.
+
+        Parameters
+        ----------
+        factor : float
+            ``S`` (:meth:`homogeneous_slope_factor`, or an estimate).
+        mean_pressure : float, Pa
+            ``pbar = F_N / area``.
+        E_star : float, Pa
+
+        Returns
+        -------
+        float
+        """
+        return factor * mean_pressure / E_star
+
+    def exact_rim_distance(self, x, y):
+        """Distance (m) from points of the face to its rim, or None without a closed form.
+
+        Parameters
+        ----------
+        x, y : ndarray, m
+            Points of the face, from its centre.
+
+        Returns
+        -------
+        ndarray, m, or None
+            None by default (:meth:`steady.fit.FaceModel.rim_distance` then
+            takes the distance transform of the face's pixels).
+        """
+        return None
+
+    def cap_statistics(self, sphere_radius):
+        """Rms slope and rms height of a sphere cap over the face, exactly; None without a form.
+
+        Parameters
+        ----------
+        sphere_radius : float, m
+            ``R``: the cap ``R - sqrt(R^2 - r^2)`` of the sphere centred over
+            the face's centre.
+
+        Returns
+        -------
+        (float, float) or None
+            The rms of ``|grad h|`` (1) and the rms of ``h`` about its
+            least-squares plane (m); None by default.
+        """
+        return None
+
+    # -- what files record --------------------------------------------------------------
+    def root_attributes(self):
+        """Root attributes a file records of the outline beside its group (default none).
+
+        Returns
+        -------
+        dict of str to (value, str)
+            ``name -> (value, udunits unit)``.
+        """
+        return {}
+
+    def group_record(self):
+        """What the outline's group holds beyond its kind, area and :meth:`parameters`.
+
+        Returns
+        -------
+        attributes : dict of str to object
+            Further attributes of the group.
+        arrays : dict of str to (ndarray, str, str, (ndarray, ndarray) or None)
+            ``name -> (values, units, long_name, coordinates)``; the
+            coordinates (m) of the pixel centres along each axis, or None.
+            Default: neither.
+        """
+        return {}, {}
+
+    @classmethod
+    def from_group(cls, attributes, read):
+        """The outline a group records: its lengths, the required keys of its kind.
+
+        Parameters
+        ----------
+        attributes : mapping
+            The group's attributes (:func:`steady.output.write_outline`).
+        read : callable
+            ``read(name)``: the values of the group's dataset ``name``.
+
+        Returns
+        -------
+        outline object
+        """
+        return cls(**{key.name: float(attributes[key.name]) for key in cls.keys
+                      if key.required})
+
 
 @OUTLINES.register("circle", (_length_key("radius", "the disk's radius a"),),
                    doc="the disk of radius a: the paper's cylinder")
@@ -418,6 +552,50 @@ class Circle(_Outline):
     def parameters(self):
         """``{"radius": (a, "m")}``."""
         return {"radius": (self.radius, "m")}
+
+    def root_attributes(self):
+        """``{"radius": (a, "m")}``: files written before the outline group record only it."""
+        return {"radius": (self.radius, "m")}
+
+    def homogeneous_slope_factor(self):
+        """``(4 / pi, 0, ...)``: eq. 12, exact for the continuum face."""
+        return 4.0 / math.pi, 0.0, "disk: 4 pbar / (pi E*) (eq. 12)"
+
+    def homogeneous_rms_slope(self, factor, mean_pressure, E_star):
+        """Eq. 12 as written, ``4 pbar / (pi E*)`` (:func:`steady.reference.disk_reference_slope`).
+
+        ``factor`` is ``4 / pi`` (:meth:`homogeneous_slope_factor`); the
+        equation is evaluated as the paper writes it, not as the product.
+        """
+        return reference.disk_reference_slope(mean_pressure, E_star)
+
+    def exact_rim_distance(self, x, y):
+        """``a - r``, m."""
+        return self.radius - np.hypot(x, y)
+
+    def cap_statistics(self, sphere_radius):
+        """The sphere cap ``R - sqrt(R^2 - r^2)`` over the disk ``r < a``.
+
+        Mean-square slope ``(2/a^2) int_0^a r^3 / (R^2 - r^2) dr
+        = (R/a)^2 (-ln(1 - x) - x)``, ``x = (a/R)^2`` (infinite for ``R = a``);
+        the rms height (the best plane of a radial face is a constant) by
+        adaptive quadrature of the cap, written ``r^2 / (R + sqrt(R^2 - r^2))``
+        to avoid cancellation.
+        """
+        a, big = self.radius, float(sphere_radius)
+        x = (a / big) ** 2
+        mean_square = (-math.log1p(-x) - x) / x if x < 1 else math.inf
+
+        def cap(r):
+            return r * r / (big + math.sqrt(max(big * big - r * r, 0.0)))
+
+        def disk_mean(f):
+            return 2.0 / a**2 * scipy.integrate.quad(lambda r: f(r) * r, 0.0, a, epsabs=0.0,
+                                                     epsrel=1e-12)[0]
+
+        mean = disk_mean(cap)
+        variance = disk_mean(lambda r: (cap(r) - mean) ** 2)
+        return math.sqrt(mean_square), math.sqrt(variance)
 
 
 @OUTLINES.register("rectangle", (_length_key("width", "side along x"),
@@ -498,6 +676,20 @@ class Rectangle(_Outline):
     def parameters(self):
         """``{"width": ..., "length": ...}``, m."""
         return {"width": (self.width, "m"), "length": (self.length, "m")}
+
+    def homogeneous_slope_factor(self):
+        """``S`` by quadrature of Love's closed-form gradient.
+
+        See :func:`steady.reference.rectangle_rms_slope`.
+        """
+        factor = reference.rectangle_rms_slope(self.width, self.length)
+        return float(factor), 0.0, ("homogeneous rectangle: quadrature of Love's closed-form "
+                                     "gradient")
+
+    def exact_rim_distance(self, x, y):
+        """Distance to the nearer pair of sides, m."""
+        bx, by = self.half_extent
+        return np.minimum(bx - np.abs(x), by - np.abs(y))
 
 
 @OUTLINES.register("ellipse", (_length_key("semi_axis_x", "semi-axis along x"),
@@ -657,6 +849,16 @@ class Annulus(_Outline):
         return {"inner_radius": (self.inner_radius, "m"),
                 "outer_radius": (self.outer_radius, "m")}
 
+    def homogeneous_slope_factor(self):
+        """``S`` of superposed disks (:func:`steady.reference.annulus_rms_slope`)."""
+        factor = reference.annulus_rms_slope(self.inner_radius / self.outer_radius)
+        return float(factor), 0.0, "homogeneous annulus: superposed disks (elliptic integrals)"
+
+    def exact_rim_distance(self, x, y):
+        """Distance to the nearer circle, m."""
+        r = np.hypot(x, y)
+        return np.minimum(self.outer_radius - r, r - self.inner_radius)
+
 
 @OUTLINES.register("mask", (Key("path", "path", required=True,
                                 doc=".npy: booleans, True on the face, or integers: only 0 "
@@ -793,6 +995,28 @@ class MaskOutline(_Outline):
         return {"pixel_size": (self.pixel_size, "m"),
                 "mask_pixels_x": (self.mask.shape[0], "1"),
                 "mask_pixels_y": (self.mask.shape[1], "1")}
+
+    def grid_at_least(self, n):
+        """The smallest multiple of the mask's longer side that is at least ``n``."""
+        m0 = self.min_grid()
+        return m0 * max(1, -(-n // m0))
+
+    def group_record(self):
+        """The attribute ``source`` and the dataset ``mask`` (1 on the face), at its pixels."""
+        centres = tuple((np.arange(m) - 0.5 * (m - 1)) * self.pixel_size
+                        for m in self.mask.shape)
+        return ({"source": self.source},
+                {"mask": (self.mask.astype(np.int8), "1", "1 inside the face, 0 outside",
+                          centres)})
+
+    @classmethod
+    def from_group(cls, attributes, read):
+        """The mask ``read("mask")`` with the pixel size and the source of ``attributes``."""
+        source = attributes.get("source", "stored mask")
+        if isinstance(source, bytes):
+            source = source.decode()
+        return cls(np.asarray(read("mask"), dtype=bool), float(attributes["pixel_size"]),
+                   source=str(source))
 
     def describe(self):
         """The mask in words."""

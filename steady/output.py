@@ -1,11 +1,12 @@
-"""HDF5 files: the atomic writer of the project and the steady result files.
+"""Steady result files, and the HDF5 helpers every file layout of the project shares.
 
-:func:`atomic_h5` writes every HDF5 file that is written whole: a
-temporary file beside the target, put in place when complete (linked, so
-that a file another writer put there meanwhile is not replaced, or
-renamed over the file it may replace), with the layout name and version in
-the root attributes ``format`` and ``format_version``.  (Sweep files, which
-grow point by point, have their own mechanism: :mod:`steady.sweep`.)
+The helpers give a dataset its CF attributes (:func:`describe`), write the
+pixel centres and the phase names as dimension scales
+(:func:`write_grid_coordinates`, :func:`write_phase_names`,
+:func:`attach_scales`) and the face's outline (:func:`write_outline`,
+:func:`read_outline`); the fit files (:mod:`steady.fit_files`) and the run
+files use them too.  Every file is written whole and atomically by
+:func:`steady.safe_files.atomic_h5`.
 
 Steady result files (layout ``runin.steady``, version 2): see docs/files.md
 for every dataset and attribute with its unit and meaning.  In short::
@@ -31,7 +32,8 @@ for every dataset and attribute with its unit and meaning.  In short::
         pixel_size (m), radius (m, disks only), scale (m), n (pixels along
         the longer side)
     group ``outline``: the face's outline (:func:`write_outline`)
-    group ``micrograph``: a segmented micrograph's segmentation and placement
+    groups the phase map records (:meth:`steady.phases.PhaseMap.file_record`):
+        ``micrograph``, a segmented micrograph's segmentation and placement
 
 An attribute cannot carry attributes, so the unit of attribute ``x`` is the
 string attribute ``x_units``, a udunits string like a dataset's ``units``.
@@ -42,27 +44,21 @@ them, and version 1, disks only, without ``outline``, ``scale``,
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import os
 import pathlib
-import socket
-import tempfile
 
 import h5py
 import numpy as np
 
-from .micrograph import Micrograph
-from .outline import OUTLINES, Circle, MaskOutline
+from .outline import OUTLINES, Circle
 from .problem import check_phase_names, default_phase_names
+from .safe_files import atomic_h5
 from .solution import SteadyResult
 from .wear import wear_file_attributes, wear_law_from_file
 
-__all__ = ["DIMENSION_SCALE_ATTRIBUTES", "FORMAT", "FORMAT_VERSION", "AtomicH5", "FileIdentity",
-           "OutputAppearedError", "OutputExistsError", "StoredResult", "atomic_h5",
-           "attach_scales", "describe", "file_identity", "read_outline", "read_phase_names",
-           "read_result", "write_grid_coordinates", "write_outline",
-           "write_phase_names", "write_result"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "attach_scales", "describe",
+           "read_outline", "read_phase_names", "read_result", "write_grid_coordinates",
+           "write_outline", "write_phase_names", "write_result"]
 
 FORMAT = "runin.steady"
 FORMAT_VERSION = 2
@@ -76,8 +72,8 @@ _DATASETS = {
     "face": ("m", "limiting worn face f_inf = K p, NaN off the face"),
     "slope": ("1", "magnitude of the gradient of the limiting face, NaN off the face"),
 }
-# Root attributes and their units (udunits); the wear coefficients' unit
-# depends on the exponent (wear_coefficient_units).
+# Root attributes and their units (udunits); the wear law's come from the law
+# (steady.wear.wear_file_attributes).
 _ATTRIBUTES = {
     "rms_slope": "1",
     "rms_slope_error": "1",
@@ -94,11 +90,6 @@ _ATTRIBUTES = {
 # before they existed still read, with NaN).
 _OPTIONAL_ATTRIBUTES = {"rms_height": "m", "rms_slope_ref_error": "1", "mean_pressure": "Pa",
                         "scale": "m"}
-
-#: Attributes the HDF5 dimension-scale API (and netCDF-4) keeps on datasets:
-#: the file's structure, not its values.
-DIMENSION_SCALE_ATTRIBUTES = frozenset({"CLASS", "NAME", "DIMENSION_LIST", "REFERENCE_LIST",
-                                        "_Netcdf4Dimid", "_Netcdf4Coordinates"})
 
 
 def describe(obj, units, long_name):
@@ -240,461 +231,10 @@ class StoredResult:
     phase_names: tuple = ()
 
 
-def _umask():
-    """The process's file-mode creation mask."""
-    # Reading the mask means setting it: set it back at once.
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def _write_error(err, tmp, path):
-    """An :class:`OSError` of writing ``path`` that names ``path``, not the temporary file."""
-    import errno as errno_codes
-    import re
-
-    # The first error in the chain with an errno says why (e.g. a failed
-    # close reports "file write failed" after the write that hit ENOSPC).
-    code, cause, seen = None, err, set()
-    while cause is not None and id(cause) not in seen and code is None:
-        seen.add(id(cause))
-        if isinstance(cause, OSError):
-            code = cause.errno
-            if code is None:
-                # h5py's messages carry the C library's errno inside the text.
-                found = re.search(r"errno = (\d+)", str(cause))
-                code = int(found.group(1)) if found else None
-        cause = cause.__context__
-    if code is not None and code in errno_codes.errorcode:
-        reason = os.strerror(code)
-    else:
-        reason = err.strerror or str(err)
-        if tmp is not None:
-            reason = reason.replace(str(tmp), str(path))
-    return OSError(code, f"cannot write {str(path)!r}: {reason}")
-
-
-def _temporary(target):
-    """A new temporary file beside ``target``: ``(fd, path)``, named for this process.
-
-    The name ``.<name>.<host>.<pid>.<random>.tmp`` says which process made
-    it, so that a later writer can tell the file of a killed writer (its
-    process has ended) from that of a live one (:func:`_remove_dead_temporaries`).
-    """
-    host = socket.gethostname().replace(os.sep, "_") or "host"
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.{host}.{os.getpid()}.",
-                               suffix=".tmp")
-    return fd, pathlib.Path(tmp)
-
-
-def _remove_dead_temporaries(target):
-    """Remove the temporary files beside ``target`` whose writer, on this host, has ended.
-
-    A writer killed (SIGKILL) while it wrote leaves its temporary file; no
-    writer can use it any more.  A file whose process is alive, runs on
-    another host, or whose name does not say (:func:`_temporary`), is left.
-    """
-    host = socket.gethostname().replace(os.sep, "_") or "host"
-    prefix = f".{target.name}.{host}."
-    try:
-        names = [p.name for p in target.parent.iterdir()]
-    except OSError:
-        return
-    for name in names:
-        if not (name.startswith(prefix) and name.endswith(".tmp")):
-            continue
-        pid = name[len(prefix):].split(".", 1)[0]
-        if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
-            continue
-        with contextlib.suppress(OSError):
-            (target.parent / name).unlink()
-
-
-def _alive(pid):
-    """Whether process ``pid`` exists (a zombie, not yet waited for, counts as alive)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # PermissionError: another user's process
-        return True
-    return True
-
-
-def _keep_backup(path, backup):
-    """Make ``backup`` a copy of ``path`` (a hard link where possible), atomically."""
-    if backup.exists() and os.path.samefile(path, backup):
-        # A writer killed between this step and its rename left the backup a
-        # link of the file itself; renaming a third link over it would do
-        # nothing (POSIX) and leave the temporary name behind.
-        return
-    fd, tmp = _temporary(backup)
-    os.close(fd)
-    try:
-        tmp.unlink()
-        try:
-            os.link(path, tmp)
-        except OSError:
-            import shutil  # a file system without hard links: copy
-
-            shutil.copy2(path, tmp)
-        os.replace(tmp, backup)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-@dataclasses.dataclass(frozen=True)
-class FileIdentity:
-    """Which file a path names: device, inode, size and modification time.
-
-    Two identities are equal when the path still names the same, unchanged
-    file (the size and time tell a new file that reuses a freed inode).
-    Returned by :func:`file_identity` and :attr:`AtomicH5.identity`; given
-    to :func:`atomic_h5` as the file it may replace (``replaces``).
-    """
-
-    device: int
-    inode: int
-    size: int
-    mtime_ns: int
-
-    @classmethod
-    def of(cls, st):
-        """The identity of an :func:`os.stat` result."""
-        return cls(st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
-
-
-def file_identity(path):
-    """The :class:`FileIdentity` of the file ``path`` names, None if there is none.
-
-    Parameters
-    ----------
-    path : str or path-like
-
-    Returns
-    -------
-    FileIdentity or None
-    """
-    try:
-        return FileIdentity.of(os.stat(path))
-    except (FileNotFoundError, NotADirectoryError):
-        return None
-
-
-class OutputExistsError(ValueError):
-    """An output that may not be replaced (no ``force``) exists.
-
-    Attributes
-    ----------
-    path : pathlib.Path
-    """
-
-    def __init__(self, path, message=None):
-        super().__init__(message or f"output {str(path)!r} exists (use --force to overwrite)")
-        self.path = pathlib.Path(path)
-
-
-class OutputAppearedError(OutputExistsError):
-    """Another writer wrote the output after it was checked: nothing was written.
-
-    Raised when the file is about to be published (or, for a caller that
-    checked the output before its work, when the writing starts), so that a
-    result computed while another process wrote the same output never
-    silently replaces it.
-    """
-
-    def __init__(self, path, replaced=False):
-        what = ("was replaced meanwhile by another process" if replaced
-                else "appeared meanwhile (another process wrote it)")
-        super().__init__(path, f"output {str(path)!r} {what}; nothing was written (use "
-                               f"--force to overwrite)")
-
-
-class AtomicH5:
-    """The context manager :func:`atomic_h5` returns.
-
-    Attributes
-    ----------
-    path : pathlib.Path
-        The target.
-    identity : FileIdentity or None
-        After the block: the identity of the file written (None before,
-        or if nothing was written).  Give it as ``replaces`` to the next
-        write of the same path to replace this file and no other.
-    """
-
-    def __init__(self, path, **options):
-        self.path = pathlib.Path(path)
-        self.identity = None
-        self._options = options
-        self._writer = None
-
-    def __enter__(self):
-        """Check the target, open the temporary file; return the :class:`h5py.File`."""
-        self._writer = _write_atomically(self, self.path, **self._options)
-        return self._writer.__enter__()
-
-    def __exit__(self, *exc):
-        """Publish the file, or drop it on an exception."""
-        return self._writer.__exit__(*exc)
-
-
-def atomic_h5(path, *, format, version, force=False, backup=None, replaces=None,
-              checked=False):
-    """Write an HDF5 file atomically: a temporary file, then a link or a rename.
-
-    Every HDF5 file of the project that is written whole goes through this
-    helper, so that a reader never sees half a file, an interrupted
-    write leaves nothing behind, and a file another writer wrote meanwhile
-    is never replaced without ``force``.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file to write; missing parent directories are created.
-    format : str
-        Layout name, stored in the root attribute ``format``.
-    version : int
-        Layout version, stored in the root attribute ``format_version``.
-    force : bool, optional
-        Replace whatever file ``path`` names when the new one is complete
-        (default False).
-    backup : str or path-like, optional
-        Keep the file that ``path`` held before as ``backup`` (replacing
-        it), a hard link where the file system allows, else a copy.
-        Default: the replaced file is dropped.
-    replaces : FileIdentity, optional
-        Without ``force``: the file ``path`` may hold, and that the new one
-        replaces (e.g. the writer's own previous file, or the file it
-        checked before a long computation).  Default None: ``path`` must
-        not exist.
-    checked : bool, optional
-        The caller checked ``path`` before its work (a command's
-        :func:`steady.cli.common.prepare_output`, or ``replaces``): a file
-        that is not the expected one is then reported as written meanwhile
-        (:class:`OutputAppearedError`), not as an existing file.
-
-    Returns
-    -------
-    AtomicH5
-        A context manager that yields the :class:`h5py.File` to fill: the
-        temporary file, open for writing, with ``format`` and
-        ``format_version`` set.  On leaving the block without an exception
-        it is flushed to disk and published as ``path``; on any exception
-        (including ``KeyboardInterrupt``) it is removed and the exception
-        propagates, leaving an existing ``path`` untouched.  Its
-        :attr:`~AtomicH5.identity` is then that of the file written.
-
-    Raises
-    ------
-    ValueError
-        ``path`` is a directory.
-    OutputExistsError
-        (a ``ValueError``) ``path`` exists, is not the file ``replaces``
-        names, and ``force`` is False: on entering the block.
-    OutputAppearedError
-        (an :class:`OutputExistsError`) The same found when the new file is
-        complete, or on entering the block with ``checked`` or ``replaces``:
-        another writer wrote ``path`` in the meantime.  Nothing is written,
-        the temporary file is removed.
-    OSError
-        The file cannot be written; the message names ``path`` (not the
-        temporary file) and the reason.
-
-    Notes
-    -----
-    The file is written to the temporary file
-    ``.<name>.<host>.<pid>.<random>.tmp`` in the directory of ``path`` (a
-    rename across file systems is not atomic) through a Python file object
-    (h5py's ``fileobj`` driver), as HDF5 writes it (not built whole in
-    memory), so that an operating-system error is an :class:`OSError`,
-    recorded even where HDF5 would not report it, and never a truncated
-    file.  Temporary files that
-    killed writers of ``path`` on this host left are removed first.
-
-    Publishing: without ``force`` and with nothing to replace, the new file
-    is hard-linked as ``path`` (:func:`os.link` fails if ``path`` exists,
-    atomically, so of two writers exactly one wins), and the temporary
-    name removed; on a file system without hard links, ``path`` is
-    checked and the file renamed.  With ``replaces``, ``path`` is checked
-    to be that file and the new one renamed over it.  With ``force``, it is
-    renamed over whatever ``path`` is.  The check and a rename are two
-    steps: a writer that renames a file over ``path`` between them (within
-    microseconds; only one given ``force`` or ``replaces`` can) is not
-    noticed.
-    The new file gets the permissions of a file created normally
-    (``0o666`` less the umask), not the ``0o600`` of
-    :func:`tempfile.mkstemp`.
-
-    Examples
-    --------
-    >>> import pathlib, tempfile
-    >>> path = pathlib.Path(tempfile.mkdtemp()) / "example.h5"
-    >>> with atomic_h5(path, format="runin.example", version=1) as f:
-    ...     f["x"] = [1.0, 2.0]
-    >>> sorted(p.name for p in path.parent.iterdir())
-    ['example.h5']
-    """
-    return AtomicH5(path, format=format, version=version, force=force, backup=backup,
-                    replaces=replaces, checked=checked)
-
-
-def _refused(force, replaces, found):
-    """Whether a path that names ``found`` (None: nothing) may not be replaced."""
-    return not force and found is not None and found != replaces
-
-
-def _publish(tmp, path, *, force, replaces, backup):
-    """Put the complete temporary file in place as ``path`` (see :func:`atomic_h5`)."""
-    found = file_identity(path)
-    if _refused(force, replaces, found):
-        raise OutputAppearedError(path, replaced=replaces is not None)
-    if backup is not None and found is not None and path.is_file():
-        _keep_backup(path, pathlib.Path(backup))
-    if force or found is not None:
-        os.replace(tmp, path)
-        return
-    try:
-        os.link(tmp, path)
-    except FileExistsError:
-        raise OutputAppearedError(path, replaced=replaces is not None) from None
-    except OSError as err:
-        import errno as errno_codes
-
-        if err.errno not in (errno_codes.EPERM, errno_codes.EOPNOTSUPP, errno_codes.ENOTSUP,
-                             errno_codes.EMLINK, errno_codes.ENOSYS):
-            raise
-        # No hard links here: check and rename (the window of the Notes).
-        if file_identity(path) is not None:
-            raise OutputAppearedError(path, replaced=replaces is not None) from None
-        os.replace(tmp, path)
-        return
-    tmp.unlink()
-
-
-class _RecordingFile:
-    """A binary file for h5py's ``fileobj`` driver that keeps the first OSError it raised.
-
-    HDF5 turns a failed write into an error of its own, or into none at all
-    (a failure while a file is closed is reported in a destructor); the
-    recorded error is what :func:`atomic_h5` reports.  Once one call failed,
-    every later call raises the same error, so that nothing more is written.
-
-    Parameters
-    ----------
-    raw : io.BufferedRandom
-        The temporary file, open for reading and writing.
-    """
-
-    def __init__(self, raw):
-        self._raw = raw
-        self.error = None
-
-    def _call(self, name, *args):
-        if self.error is not None:
-            raise self.error
-        try:
-            return getattr(self._raw, name)(*args)
-        except OSError as err:
-            self.error = err
-            raise
-
-    def seek(self, *args):
-        """Seek, see :meth:`io.IOBase.seek`."""
-        return self._call("seek", *args)
-
-    def tell(self):
-        """The current position, see :meth:`io.IOBase.tell`."""
-        return self._call("tell")
-
-    def read(self, *args):
-        """Read, see :meth:`io.BufferedIOBase.read`."""
-        return self._call("read", *args)
-
-    def readinto(self, buffer):
-        """Read into ``buffer``, see :meth:`io.BufferedIOBase.readinto`."""
-        return self._call("readinto", buffer)
-
-    def write(self, data):
-        """Write all of ``data`` (a buffered write: all or an OSError)."""
-        return self._call("write", data)
-
-    def truncate(self, *args):
-        """Truncate, see :meth:`io.IOBase.truncate`."""
-        return self._call("truncate", *args)
-
-    def flush(self):
-        """Flush the buffer to the operating system."""
-        return self._call("flush")
-
-    def raise_recorded(self):
-        """Raise the recorded error, if a call failed (HDF5 may not have)."""
-        if self.error is not None:
-            raise self.error
-
-
-@contextlib.contextmanager
-def _write_atomically(receipt, path, *, format, version, force, backup, replaces, checked):
-    """The work of :func:`atomic_h5`; the identity written goes to ``receipt.identity``."""
-    if path.is_dir():
-        raise ValueError(f"output {str(path)!r} is a directory")
-    if _refused(force, replaces, file_identity(path)):
-        if checked or replaces is not None:
-            raise OutputAppearedError(path, replaced=replaces is not None)
-        raise OutputExistsError(path)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        _remove_dead_temporaries(path)
-        fd, tmp = _temporary(path)
-    except OSError as err:
-        raise _write_error(err, None, path) from None
-    in_caller, sink = False, None
-    try:
-        with open(fd, "w+b") as out:
-            os.chmod(tmp, 0o666 & ~_umask())
-            # HDF5 writes through a Python file object (h5py's ``fileobj``
-            # driver), so that a refused write (a full disk, a quota, a size
-            # limit) is an OSError of a buffered write, recorded where HDF5
-            # may hide it (a close reports failures only in destructors) and
-            # raised again after it; the file is never built whole in memory.
-            sink = _RecordingFile(out)
-            with h5py.File(sink, "w") as f:
-                f.attrs["format"] = format
-                f.attrs["format_version"] = version
-                in_caller = True
-                yield f
-                in_caller = False
-            sink.raise_recorded()
-            out.flush()
-            os.fsync(out.fileno())
-            # A link or a rename keeps the inode, size and time: this is what
-            # ``path`` names once published.
-            written = FileIdentity.of(os.fstat(out.fileno()))
-        _publish(tmp, path, force=force, replaces=replaces, backup=backup)
-    except BaseException as err:
-        tmp.unlink(missing_ok=True)
-        # The caller's own OSErrors pass unchanged; those of this file name it.
-        if isinstance(err, Exception) and sink is not None and sink.error is not None:
-            raise _write_error(sink.error, tmp, path) from None
-        if isinstance(err, OSError) and (not in_caller or tmp.name in str(err)):
-            raise _write_error(err, tmp, path) from None
-        raise
-    receipt.identity = written
-    try:  # make the rename itself durable; not every file system allows it
-        fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-    except OSError:
-        pass
-
-
 def write_result(path, result, scene=None, *, phase_names=None, force=False, checked=False):
     """Write a steady result (and its scene) to an HDF5 file, atomically.
 
-    See :func:`atomic_h5`: a reader never sees half a file; missing parent
+    See :func:`steady.safe_files.atomic_h5`: a reader never sees half a file; missing parent
     directories are created.  The file holds the result's inputs (load,
     modulus, wear law, phase map, outline, phase names) whether or not a
     scene is given.
@@ -712,7 +252,7 @@ def write_result(path, result, scene=None, *, phase_names=None, force=False, che
         Overwrite an existing file (default False).
     checked : bool, optional
         The caller checked ``path`` before the solve: a file found now was
-        written meanwhile (see :func:`atomic_h5`).
+        written meanwhile (see :func:`steady.safe_files.atomic_h5`).
 
     Returns
     -------
@@ -723,10 +263,10 @@ def write_result(path, result, scene=None, *, phase_names=None, force=False, che
     ValueError
         ``path`` is a directory, or ``phase_names`` are not one distinct
         name per phase.
-    OutputExistsError
+    steady.safe_files.OutputExistsError
         (a ``ValueError``) ``path`` exists and ``force`` is False; an
-        :class:`OutputAppearedError` if another writer wrote it while this
-        result was written (nothing is written then).
+        :class:`~steady.safe_files.OutputAppearedError` if another writer
+        wrote it while this result was written (nothing is written then).
 
     Examples
     --------
@@ -779,9 +319,9 @@ def _write(f, result, scene, phase_names):
         if unit is not None:
             f.attrs[f"{name}_units"] = unit
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
-    if isinstance(result.outline, Circle):
-        f.attrs["radius"] = result.outline.radius
-        f.attrs["radius_units"] = "m"
+    for name, (value, unit) in result.outline.root_attributes().items():
+        f.attrs[name] = value
+        f.attrs[f"{name}_units"] = unit
     write_outline(f.create_group("outline"), result.outline)
     grid = result.outline.grid(result.n)
     scales = write_grid_coordinates(f, grid.x, grid.y)
@@ -798,16 +338,18 @@ def _write(f, result, scene, phase_names):
     describe(ds, None, "scene file (TOML), verbatim")
     ds.attrs["source_path"] = "" if scene is None or scene.source_path is None else str(
         scene.source_path)
-    if scene is not None and isinstance(scene.geometry, Micrograph):
-        _write_micrograph(f.create_group("micrograph"), scene.geometry)
+    for name, attributes in ({} if scene is None else scene.geometry.file_record()).items():
+        f.create_group(name).attrs.update(attributes)
 
 
 def write_outline(group, outline):
     """A face outline as the attributes (and for a mask the dataset) of ``group``.
 
     Attribute ``x`` has its udunits unit in ``x_units``: ``area`` (``m2``)
-    and the outline's lengths (``m``).  A mask outline's ``mask`` has the
-    dimension scales ``mask_x`` and ``mask_y`` (m, its pixel centres).
+    and the outline's lengths (``m``); then what the outline records
+    besides (:meth:`~steady.outline.MaskOutline.group_record`): a mask
+    outline's ``source`` and ``mask``, with the dimension scales ``mask_x``
+    and ``mask_y`` (m, its pixel centres).
 
     Parameters
     ----------
@@ -820,19 +362,18 @@ def write_outline(group, outline):
     for name, (value, unit) in outline.parameters().items():
         group.attrs[name] = value
         group.attrs[f"{name}_units"] = unit
-    if isinstance(outline, MaskOutline):
-        ds = group.create_dataset("mask", data=outline.mask.astype(np.int8))
-        describe(ds, "1", "1 inside the face, 0 outside")
+    attributes, arrays = outline.group_record()
+    for name, (values, units, long_name, coordinates) in arrays.items():
+        ds = group.create_dataset(name, data=values)
+        describe(ds, units, long_name)
         scales = []
-        for axis, name in enumerate(("mask_x", "mask_y")):
-            m = outline.mask.shape[axis]
-            scale = group.create_dataset(name, data=(np.arange(m) - 0.5 * (m - 1))
-                                         * outline.pixel_size)
-            describe(scale, "m", f"{name[-1]} of the mask's pixel centre, from its centre")
-            scale.make_scale(name)
+        for axis, centres in zip("xy", coordinates, strict=True) if coordinates else ():
+            scale = group.create_dataset(f"{name}_{axis}", data=centres)
+            describe(scale, "m", f"{axis} of the {name}'s pixel centre, from its centre")
+            scale.make_scale(f"{name}_{axis}")
             scales.append(scale)
         attach_scales(ds, *scales)
-        group.attrs["source"] = outline.source
+    group.attrs.update(attributes)
 
 
 def read_outline(group):
@@ -848,46 +389,7 @@ def read_outline(group):
         kind = kind.decode()
     if kind not in OUTLINES:
         raise ValueError(f"unknown outline kind {kind!r} (known: {sorted(OUTLINES)})")
-    if kind == "mask":
-        source = group.attrs.get("source", "stored mask")
-        if isinstance(source, bytes):
-            source = source.decode()
-        return MaskOutline(np.asarray(group["mask"][()], dtype=bool),
-                           float(group.attrs["pixel_size"]), source=str(source))
-    cls = OUTLINES[kind]
-    return cls(**{key.name: float(group.attrs[key.name]) for key in cls.keys if key.required})
-
-
-def _write_micrograph(group, geometry):
-    """The segmentation and placement of a micrograph map, as attributes of ``group``."""
-    seg = geometry.segmentation
-    values = {
-        "source": geometry.source,
-        "n_phases": seg.n_phases,
-        "thresholds": np.asarray(seg.thresholds, dtype=float),
-        "image_fill_factors": np.asarray(seg.fill_factors),
-        "smoothing": seg.smoothing,
-        "min_speck": seg.min_speck,
-        "specks": seg.specks,
-        "speck_pixels": seg.speck_pixels,
-        "threshold_method": seg.method,
-        "crop": np.asarray(seg.crop or ((0, seg.shape[0]), (0, seg.shape[1]))),
-        "crop_units": "pixels",
-        "fill_phases": np.asarray(seg.fill_phases, dtype=np.int64),
-        "holes": seg.holes,
-        "hole_pixels": seg.hole_pixels,
-        "image_shape": np.asarray(seg.shape),
-        "pixel_size": geometry.pixel_size,
-        "pixel_size_units": "m",
-        "cover": geometry.cover,
-        "offset": np.asarray(geometry.offset),
-        "offset_units": "m",
-        # Counts of pixels: dimensionless for udunits (docs/files.md says pixels).
-        "smoothing_units": "1",
-        "min_speck_units": "1",
-    }
-    for name, value in values.items():
-        group.attrs[name] = value
+    return OUTLINES[kind].from_group(group.attrs, lambda name: group[name][()])
 
 
 def _text(value):

@@ -44,8 +44,9 @@ A length that fits the face only when read in units of ``L`` (a script
 written when geometries took lengths in units of ``L``) is refused, and
 the message gives what it meant in m (:func:`scale_units_note`).
 
-Every kind is registered in :data:`PHASE_MAPS` with its ``[phases] map``
-keys (:class:`steady.schema.Registry`): besides the kinds here,
+Every kind subclasses :class:`PhaseMap`, the written contract above, and is
+registered in :data:`PHASE_MAPS` with its ``[phases] map`` keys
+(:class:`steady.schema.KindRegistry`): besides the kinds here,
 ``inclusions`` (:mod:`steady.inclusions`), ``micrograph``
 (:mod:`steady.micrograph`) and the kinds that change with depth below the
 surface, ``voxels`` and ``spheres`` (:mod:`steady.depth_maps`: their
@@ -68,12 +69,13 @@ from scipy import spatial
 from .array_files import array_suffix, read_npy, read_png
 from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size, grid_size_text
-from .schema import Key, Registry
+from .schema import Key, KindRegistry
 
 __all__ = [
     "PHASE_MAPS",
     "ArrayMap",
     "Homogeneous",
+    "PhaseMap",
     "Rods",
     "Voronoi",
     "check_refinement",
@@ -86,8 +88,57 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-#: Registered phase-map kinds (``[phases] map kind``), each with its keys.
-PHASE_MAPS = Registry("phase map", "kind")
+class PhaseMap:
+    """The contract of a phase-map kind: what every ``[phases] map`` kind provides.
+
+    A kind is a frozen dataclass that subclasses this class and is
+    registered in :data:`PHASE_MAPS` with its keys.  It provides
+
+    - ``n_phases``: the number of phases ``P``;
+    - ``labels(grid)``: the phase index ``0..P-1`` of every face pixel of
+      ``grid`` (a :class:`steady.outline.FaceGrid`), ``-1`` off the face;
+    - ``min_grid(outline=None)`` and ``check_grid(grid)``: the smallest
+      ``n`` that resolves it, and the refusal of a coarser grid;
+    - the classmethod ``from_values(values, context)``: the kind built from
+      its checked keys (:class:`steady.schema.Context`).
+
+    and answers, with the defaults here for a kind that has nothing to say,
+
+    - :meth:`file_record`: what a result file records of it;
+    - :meth:`segmented_image`: the segmentation of the image it was made from.
+
+    Callers ask these, never which kind a map is.
+    """
+
+    def file_record(self):
+        """Groups of attributes a result file records of this map (default: none).
+
+        Returns
+        -------
+        dict of str to dict
+            ``{group name: {attribute: value}}``; a quantity ``x`` has its
+            udunits unit in the attribute ``x_units``.
+        """
+        return {}
+
+    def segmented_image(self):
+        """The segmentation of the grey-level image this map was made from, or None (default).
+
+        Returns
+        -------
+        steady.micrograph.Segmentation or None
+            What ``runin-steady --segmentation`` draws and the summary
+            reports (:func:`steady.plotting.segmentation_figure`).
+        """
+        return None
+
+
+#: Registered phase-map kinds (``[phases] map kind``), each with its keys: subclasses of
+#: :class:`PhaseMap`.  The kinds of the modules named register when the registry is first
+#: read, those of other packages through the entry points ``runin.phase_maps``.
+PHASE_MAPS = KindRegistry("phase map", "kind", base=PhaseMap,
+                          modules=("steady.inclusions", "steady.micrograph", "steady.depth_maps"),
+                          entry_point_group="runin.phase_maps")
 
 
 def check_resolution(grid, minimum, what):
@@ -186,7 +237,7 @@ def scale_units_note(scale, **lengths):
 
 @PHASE_MAPS.register("homogeneous", doc="one phase")
 @dataclasses.dataclass(frozen=True)
-class Homogeneous:
+class Homogeneous(PhaseMap):
     """A single-phase face."""
 
     @classmethod
@@ -223,7 +274,7 @@ class Homogeneous:
     doc="Voronoi cells of random seeds; exactly round(rho_i n_seeds) seeds (largest "
         "remainder) get phase i, in random order")
 @dataclasses.dataclass(frozen=True)
-class Voronoi:
+class Voronoi(PhaseMap):
     """Voronoi cells of random seeds, each seed labelled with a phase.
 
     Parameters
@@ -361,7 +412,7 @@ class Voronoi:
         doc="phase of each rod (default 1 for every rod)")),
     doc="circular rods inside the face, not overlapping")
 @dataclasses.dataclass(frozen=True)
-class Rods:
+class Rods(PhaseMap):
     """Circular rods of one phase in a matrix of another (paper Fig. 7-8).
 
     Parameters
@@ -513,7 +564,7 @@ class Rods:
             "on the face, by increasing value"),),
     doc="a phase map read from a file, rows along x")
 @dataclasses.dataclass(frozen=True, eq=False)
-class ArrayMap:
+class ArrayMap(PhaseMap):
     """A phase map given as pixels.
 
     Parameters

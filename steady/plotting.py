@@ -5,8 +5,10 @@ Each ``plot_*`` function takes a result file (written by
 or a :class:`steady.solution.SteadyResult`, draws into the axes given as
 ``ax=`` (or a new figure) and returns the :class:`~matplotlib.figure.Figure`;
 :func:`plot_file` writes the two-panel figure of a file into a PNG (the
-``--plot`` of ``runin-steady``).  Uses matplotlib's Agg canvas directly (no
-pyplot, no global backend state).
+``--plot`` of ``runin-steady``); :func:`segmentation_figure` draws the
+segmentation of a micrograph phase map over its image, with the grey-level
+histogram (the ``--segmentation`` of ``runin-steady``).  Uses matplotlib's
+Agg canvas directly (no pyplot, no global backend state).
 
 One convention for every map here and in :mod:`transient.plotting`: arrays
 are indexed ``[x, y]``, x runs along the horizontal axis and y up
@@ -25,20 +27,24 @@ import os
 import pathlib
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.colors import BoundaryNorm, ListedColormap, to_rgb
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.transforms import offset_copy
 
+from .micrograph import Micrograph
 from .output import read_result
 from .problem import default_phase_names
 from .relief import PlaneFit
+from .text import shorten
 
 __all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
            "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
            "plot_phases", "pressure_unit", "relief", "result_figure", "root_figure", "save_png",
-           "set_fonts"]
+           "segmentation_figure", "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
@@ -519,3 +525,195 @@ def save_png(fig, png_path, *, force=False, dpi=200):
     fig.savefig(png_path, dpi=dpi)
     logger.info("figure written to %s", png_path)
     return png_path
+
+
+# -- the segmentation of a micrograph -------------------------------------------------
+#: Translucent colours of phases 1, 2, ... over the image (phase 0 is left
+#: clear, so the image shows through), and of phase 0 in the histogram.
+_OVERLAY_COLOURS = ("#e6194b", "#4363d8", "#3cb44b", "#f58231", "#911eb4", "#42d4f4",
+                    "#f032e6", "#bfef45")
+_PHASE0_COLOUR = "#808080"
+_OVERLAY_ALPHA = 0.4
+
+#: Largest side, pixels, of the view of a tiled micrograph over the face; a
+#: cropped image with a longer side is drawn one pixel in every few.
+_TILE_VIEW = 1200
+_IMAGE_VIEW = 2048
+
+
+def _phase_colour(phase):
+    return _PHASE0_COLOUR if phase == 0 else _OVERLAY_COLOURS[(phase - 1)
+                                                              % len(_OVERLAY_COLOURS)]
+
+
+def _micrograph_view(geometry):
+    """Grey levels, labels and their extent (mm, face coordinates) as the figure shows them.
+
+    A crop shows the whole (cropped) image, one pixel in every
+    ``ceil(side / _IMAGE_VIEW)`` each way; a tiling shows the periodic
+    image over the face's bounding box, sampled at most :data:`_TILE_VIEW`
+    pixels a side.
+    """
+    seg = geometry.segmentation
+    width, height = geometry.extent
+    x0, y0 = geometry.offset
+    if geometry.cover == "crop":
+        extent = np.array([-0.5 * width - x0, 0.5 * width - x0,
+                           -0.5 * height - y0, 0.5 * height - y0])
+        every = -(-max(seg.shape) // _IMAGE_VIEW)
+        return seg.image[::every, ::every], seg.labels[::every, ::every], extent * 1e3
+    half_x, half_y = geometry.outline.half_extent
+    step = max(geometry.pixel_size, 2.0 * max(half_x, half_y) / _TILE_VIEW)
+    x = np.arange(-half_x + 0.5 * step, half_x, step)
+    y = np.arange(half_y - 0.5 * step, -half_y, -step)
+    n_rows, n_cols = seg.shape
+    cols = np.floor((x + x0 + 0.5 * width) / geometry.pixel_size).astype(np.int64) % n_cols
+    rows = np.floor((0.5 * height - y - y0) / geometry.pixel_size).astype(np.int64) % n_rows
+    extent = np.array([x[0], x[-1], y[-1], y[0]]) + 0.5 * step * np.array([-1, 1, -1, 1])
+    index = (rows[:, None], cols[None, :])
+    return seg.image[index], seg.labels[index], extent * 1e3
+
+
+def _draw_image(ax, geometry, names, legend):
+    """The image in grey, the phases over it, the face's outline; their legend handles.
+
+    With ``legend`` the legend goes below the axes; otherwise the caller places it.
+    """
+    seg = geometry.segmentation
+    grey, labels, extent = _micrograph_view(geometry)
+    ax.imshow(grey, cmap="gray", extent=extent, interpolation="nearest",
+              vmin=float(seg.image.min()), vmax=float(seg.image.max()))
+    overlay = np.zeros(labels.shape + (4,), dtype=np.uint8)
+    for phase in range(1, seg.n_phases):
+        rgba = (*to_rgb(_phase_colour(phase)), _OVERLAY_ALPHA)
+        overlay[labels == phase] = np.rint(255 * np.asarray(rgba))
+    ax.imshow(overlay, extent=extent, interpolation="nearest")
+    half_x, half_y = geometry.outline.half_extent
+    x = np.linspace(-1.05 * half_x, 1.05 * half_x, 601)
+    y = np.linspace(-1.05 * half_y, 1.05 * half_y, 601)
+    inside = geometry.outline.covers(x[None, :], y[:, None]).astype(float)
+    ax.contour(x * 1e3, y * 1e3, inside, levels=[0.5], colors=["#ffd700"], linewidths=1.5)
+    handles = [Patch(facecolor="none" if p == 0 else _phase_colour(p),
+                     alpha=1.0 if p == 0 else _OVERLAY_ALPHA, edgecolor="black",
+                     label=f"{names[p]}: {100 * seg.fill_factors[p]:.1f} % of the image")
+               for p in range(seg.n_phases)]
+    handles.append(Line2D([], [], color="#ffd700", linewidth=1.5, label="face"))
+    if legend:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12),
+                  ncols=min(len(handles), 3), fontsize="small", frameon=False)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_aspect("equal")
+    thresholds = ", ".join(f"{t:.4g}" for t in seg.thresholds)
+    ax.set_title(f"{seg.n_phases} phases, threshold{'s' if len(seg.thresholds) > 1 else ''} "
+                 f"{thresholds} ({seg.method})")
+    return handles
+
+
+def _draw_histogram(ax, geometry):
+    """Histogram of the grey levels thresholded, coloured by phase, the thresholds marked."""
+    seg = geometry.segmentation
+    counts, edges = seg.histogram()
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    colours = [_phase_colour(p) for p in np.digitize(centres, seg.thresholds)]
+    ax.bar(centres, np.maximum(counts, 0.5), width=edges[1] - edges[0], color=colours,
+           log=True, linewidth=0)
+    for i, t in enumerate(seg.thresholds):
+        ax.axvline(t, color="black", linestyle="--", linewidth=1.0,
+                   label=f"threshold {i}: {t:.4g}")
+    ax.legend(fontsize="small", frameon=False)
+    png = geometry.source.lower().endswith(".png")
+    ax.set_xlabel("grey level" + (" (fraction of full scale)" if png else ""))
+    ax.set_ylabel("pixels")
+    ax.set_ylim(bottom=0.5)
+    smoothed = f" (smoothed, sigma {seg.smoothing:g} px)" if seg.smoothing else ""
+    ax.set_title(f"grey levels thresholded{smoothed}")
+
+
+def segmentation_figure(geometry, *, ax=None, names=None):
+    """The segmentation of a micrograph drawn over the image, and its histogram.
+
+    Parameters
+    ----------
+    geometry : steady.micrograph.Micrograph
+        A segmented micrograph placed on the face
+        (:func:`steady.micrograph.load_micrograph`).
+    ax : matplotlib Axes or (Axes, Axes), optional
+        Where to draw: one Axes for the image alone, a pair for the image
+        and the histogram.  Default: a new figure with both panels.
+    names : sequence of str, optional
+        Names of the phases for the legend (default ``"phase 0"``, ...).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The image panel shows the (cropped) image in grey with phases 1,
+        2, ... coloured translucently over it and the face's outline (x and
+        y in mm, the face's coordinates; a tiled image is shown tiled over
+        the face's bounding box); its title gives the thresholds.  The
+        histogram panel shows the grey levels that were thresholded (after
+        the smoothing), coloured by phase, with the thresholds as dashed
+        lines.
+
+    Raises
+    ------
+    ValueError
+        ``geometry`` is not a micrograph, its segmentation keeps
+        no image, ``ax`` is neither an Axes nor a pair of them, or
+        ``names`` does not name every phase.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from steady.micrograph import Micrograph, segment
+    >>> image = np.full((60, 60), 0.5)
+    >>> image[20:40, 20:40], image[25:35, 25:35] = 1.0, 0.0     # a rim around a dark core
+    >>> seg = segment(image, 2, thresholds=[0.75], fill_holes=True)
+    >>> fig = segmentation_figure(Micrograph(seg, 1e-3))        # image spans the 2 mm face
+    >>> [a.get_title() for a in fig.axes]
+    ['2 phases, threshold 0.75 (manual)', 'grey levels thresholded']
+    """
+    if not isinstance(geometry, Micrograph):
+        raise ValueError(f"geometry must be a Micrograph, got {shorten(geometry)}")
+    seg = geometry.segmentation
+    if seg.image is None:
+        raise ValueError("the segmentation keeps no image to draw (made by segment() or "
+                         "load_micrograph(), it does)")
+    if names is None:
+        names = [f"phase {p}" for p in range(seg.n_phases)]
+    elif isinstance(names, str) or len(names) != seg.n_phases:
+        raise ValueError(f"names must name the {seg.n_phases} phases, got {shorten(names)}")
+    if ax is None:
+        fig = Figure(figsize=(11.0, 5.2), layout="constrained")
+        FigureCanvasAgg(fig)
+        image_ax, hist_ax = fig.subplots(1, 2, width_ratios=(3, 2))
+        fig.suptitle(_figure_title(geometry))
+    elif isinstance(ax, Axes):
+        image_ax, hist_ax = ax, None
+    elif (isinstance(ax, (tuple, list, np.ndarray)) and np.size(ax) == 2
+          and all(isinstance(a, Axes) for a in np.ravel(ax))):
+        image_ax, hist_ax = np.ravel(ax)
+    else:
+        raise ValueError(f"ax must be a matplotlib Axes or a pair of them, got {shorten(ax)}")
+    handles = _draw_image(image_ax, geometry, names, legend=ax is not None)
+    if ax is None:  # the figure's own: a legend the layout makes room for
+        fig.legend(handles=handles, loc="outside lower left", ncols=min(len(handles), 4),
+                   fontsize="small", frameon=False)
+    if hist_ax is not None:
+        _draw_histogram(hist_ax, geometry)
+    return image_ax.figure
+
+
+def _figure_title(geometry):
+    """The source, the crop, the smoothing, the holes and the placement in a line."""
+    seg = geometry.segmentation
+    words = [pathlib.Path(geometry.source).name]
+    if seg.crop is not None:
+        (r0, r1), (c0, c1) = seg.crop
+        words.append(f"rows {r0}:{r1}, columns {c0}:{c1}")
+    if seg.fill_phases:
+        words.append(f"{seg.holes} holes filled")
+    if seg.specks:
+        words.append(f"{seg.specks} specks relabelled")
+    words.append(f"pixel {geometry.pixel_size * 1e6:.4g} µm, cover {geometry.cover}")
+    return ", ".join(words)

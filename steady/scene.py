@@ -53,7 +53,6 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from . import depth_maps, inclusions, micrograph  # noqa: F401 -- they register their map kinds
 from .depth_maps import DepthLayers, LayerPhase
 from .load_programme import LoadProgramme
 from .outline import FaceGrid, outline_from_table

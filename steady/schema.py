@@ -8,11 +8,12 @@ keys, each value), and every error names the table, the key and the value.
 
 Tables that name a *kind* -- the face outline (``[punch] shape``), the phase
 map (``[phases] map kind``), the wear law (``[wear] law``), the initial face
-of a run-in (``[initial_face] kind``) -- read it from a :class:`Registry`:
-each kind is a class registered with its keys by a decorator, and builds
-itself from the checked values with ``from_values(values, context)``.
-Adding a kind is one registration in one module: the scene reader, the
-error messages and the documentation tables come from it.
+of a run-in (``[initial_face] kind``) -- read it from a :class:`KindRegistry`
+(a :class:`steady.registry.Registry`): each kind is a class registered with
+its keys by a decorator, and builds itself from the checked values with
+``from_values(values, context)``.  Adding a kind is one registration in one
+module: the scene reader, the error messages and the documentation tables
+come from it.
 
 Examples
 --------
@@ -33,9 +34,10 @@ import math
 import numbers
 import pathlib
 
+from .registry import Registry
 from .text import shorten
 
-__all__ = ["SCALE_RANGE", "SCALE_UNITS", "Context", "Key", "Registry", "read_table"]
+__all__ = ["SCALE_RANGE", "SCALE_UNITS", "Context", "Key", "KindRegistry", "read_table"]
 
 #: Types a key may hold.
 TYPES = ("number", "integer", "string", "path", "numbers", "integers", "pairs", "pair",
@@ -334,8 +336,12 @@ class Context:
     where: str = ""
 
 
-class Registry:
+class KindRegistry(Registry):
     """The kinds of one scene table, each a class registered with its keys.
+
+    A :class:`steady.registry.Registry` whose entries are the kinds a
+    table names by its ``selector`` key; the scene reader, its messages and
+    the README's tables of keys come from it.
 
     Parameters
     ----------
@@ -345,10 +351,16 @@ class Registry:
         The key that names the kind (``"kind"``, ``"shape"``, ``"law"``).
     default : str, optional
         The kind of a table that does not name one.
+    base : type, optional
+        The class every kind subclasses: its written contract
+        (:class:`steady.phases.PhaseMap` for phase maps).  Default: none.
+    modules, entry_point_group : optional
+        Where kinds defined elsewhere are registered from, imported on the
+        first lookup (:class:`steady.registry.Registry`).
 
     Examples
     --------
-    >>> shapes = Registry("demo shape", "shape", default="dot")
+    >>> shapes = KindRegistry("demo shape", "shape", default="dot")
     >>> @shapes.register("dot", (Key("size", "number", unit="m", low=0.0, required=True),))
     ... class Dot:
     ...     def __init__(self, size):
@@ -362,61 +374,53 @@ class Registry:
     ['dot']
     """
 
-    def __init__(self, what, selector, default=None):
-        self.what = what
+    def __init__(self, what, selector, default=None, *, base=None, modules=(),
+                 entry_point_group=None):
+        super().__init__(what, modules=modules, entry_point_group=entry_point_group)
         self.selector = selector
         self.default = default
-        self._kinds = {}
+        self.base = base
 
     def register(self, kind, keys=(), doc=""):
         """Class decorator: register a kind with its keys (a sequence of :class:`Key`).
 
-        The class gets the attributes ``kind`` and ``keys`` and must have a
-        classmethod ``from_values(values, context)`` (``values`` the checked
-        keys, ``context`` a :class:`Context`).
+        The class gets the attributes ``kind`` and ``keys`` (and ``kind_doc``
+        with ``doc``) and must have a classmethod ``from_values(values,
+        context)`` (``values`` the checked keys, ``context`` a
+        :class:`Context`); with a ``base``, it must subclass it.
+
+        Raises
+        ------
+        ValueError
+            ``kind`` is already registered.
+        TypeError
+            The class does not subclass the registry's ``base``.
         """
         keys = tuple(keys)
-        if kind in self._kinds:
+        if kind in self._entries:
             raise ValueError(f"{self.what} kind {kind!r} is already registered")
 
         def decorate(cls):
+            if self.base is not None and not (isinstance(cls, type)
+                                              and issubclass(cls, self.base)):
+                raise TypeError(f"{self.what} kind {kind!r}: {cls!r} must subclass "
+                                f"{self.base.__module__}.{self.base.__qualname__}")
             cls.kind = kind
             cls.keys = keys
             if doc:
                 cls.kind_doc = doc
-            self._kinds[kind] = cls
-            return cls
+            return super(KindRegistry, self).register(kind, cls)
         return decorate
-
-    def unregister(self, kind):
-        """Remove a kind (a plug-in withdrawn, a test's own kind); ``KeyError`` if unknown."""
-        del self._kinds[kind]
-
-    def __contains__(self, kind):
-        """Whether ``kind`` is registered."""
-        return kind in self._kinds
-
-    def __getitem__(self, kind):
-        """The class registered as ``kind``."""
-        return self._kinds[kind]
-
-    def __iter__(self):
-        """The registered kinds, in the order of registration."""
-        return iter(self._kinds)
-
-    def __len__(self):
-        """Number of kinds."""
-        return len(self._kinds)
 
     def kind_of(self, table, where):
         """The class a table names; ``ValueError`` naming the choices for an unknown kind."""
         if not isinstance(table, dict):
             raise ValueError(f"{where} must be a table, got {shorten(table)}")
         kind = table.get(self.selector, self.default)
-        if not isinstance(kind, str) or kind not in self._kinds:
-            raise ValueError(f"{where} {self.selector} must be one of {sorted(self._kinds)}, "
+        if not isinstance(kind, str) or kind not in self:
+            raise ValueError(f"{where} {self.selector} must be one of {sorted(self)}, "
                              f"got {shorten(kind)}")
-        return self._kinds[kind]
+        return self[kind]
 
     def read(self, table, context):
         """The class a table names and its checked values."""

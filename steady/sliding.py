@@ -50,12 +50,13 @@ import math
 
 import numpy as np
 
-from .schema import Context, Key, Registry
+from .schema import Context, Key, KindRegistry
 
 __all__ = ["SLIDING", "PinOnDisk", "Rotation", "Translation", "sliding_from_table"]
 
 #: Registered sliding kinematics, by ``[sliding] kind`` (default ``"translation"``).
-SLIDING = Registry("sliding kind", "kind", default="translation")
+SLIDING = KindRegistry("sliding kind", "kind", default="translation",
+                       entry_point_group="runin.sliding")
 
 
 class _Kinematics:

@@ -11,7 +11,7 @@ point to the sweep file as soon as it arrives, so that
   far (each point is written under a temporary name and renamed when
   complete; the file is closed between points);
 - two sweeps on one file share it: the file is created whole and linked
-  into place (:func:`steady.output.atomic_h5`), so that the second never
+  into place (:func:`steady.safe_files.atomic_h5`), so that the second never
   truncates what the first has written, and each point is written under
   HDF5's file lock;
 - running the same sweep again skips the points already in the file
@@ -47,7 +47,7 @@ import time
 import h5py
 import numpy as np
 
-from .output import OutputExistsError, atomic_h5
+from .safe_files import OutputExistsError, atomic_h5
 
 __all__ = [
     "DEFAULT_WORKERS",
@@ -156,7 +156,7 @@ class SweepFile:
     def _create(self):
         """Create the empty file; join it if another sweep created it meanwhile.
 
-        Created whole and linked into place (:func:`steady.output.atomic_h5`):
+        Created whole and linked into place (:func:`steady.safe_files.atomic_h5`):
         a sweep that starts beside another one on the same file never
         truncates the points the other one has written.
         """

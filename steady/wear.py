@@ -59,7 +59,7 @@ import numpy as np
 
 from .labels import validate_labels
 from .pressures import phase_pressures
-from .schema import Context, Key, Registry
+from .schema import Context, Key, KindRegistry
 from .text import shorten
 
 __all__ = ["WEAR_LAWS", "ArchardLaw", "Factorisation", "PowerLaw", "TableLaw", "ThresholdLaw",
@@ -68,7 +68,7 @@ __all__ = ["WEAR_LAWS", "ArchardLaw", "Factorisation", "PowerLaw", "TableLaw", "
            "wear_law_from_table"]
 
 #: Registered wear laws, by ``[wear] law`` (default ``"power"``).
-WEAR_LAWS = Registry("wear law", "law", default="power")
+WEAR_LAWS = KindRegistry("wear law", "law", default="power", entry_point_group="runin.wear_laws")
 
 
 def wear_coefficient_units(exponent):

@@ -40,7 +40,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from steady.output import atomic_h5, file_identity
+from steady.safe_files import atomic_h5, file_identity
 
 __all__ = ["DEFAULT_OUT", "DOCS_FIGURES", "FORMAT_VERSION", "ROOT", "add_output_arguments",
            "figure", "output_paths", "plain_log_ticks", "read_study", "run_study", "save_figure",
@@ -70,7 +70,7 @@ _ANY = object()
 def write_study(path, name, params, datasets, attrs=None):
     """Write a study's numbers to HDF5, replacing an earlier run's file.
 
-    Written atomically (:func:`steady.output.atomic_h5`): an interrupted run
+    Written atomically (:func:`steady.safe_files.atomic_h5`): an interrupted run
     leaves the previous file, not half a file.  Under :func:`run_study`,
     only the file found at ``path`` when the study started is replaced (any
     file with ``--force``): one another process wrote meanwhile is refused.
@@ -94,7 +94,7 @@ def write_study(path, name, params, datasets, attrs=None):
 
     Raises
     ------
-    steady.output.OutputAppearedError
+    steady.safe_files.OutputAppearedError
         (a ``ValueError``) Under :func:`run_study` without ``--force``:
         another process wrote ``path`` since the study started; nothing is
         written.

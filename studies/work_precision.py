@@ -67,8 +67,8 @@ import numpy as np
 import study_io
 
 from steady.outline import Circle
-from steady.output import atomic_h5
 from steady.phases import Voronoi
+from steady.safe_files import atomic_h5
 from steady.scene import Scene
 from steady.wear import PowerLaw
 from transient.comparison import compare_with_steady

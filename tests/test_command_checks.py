@@ -27,7 +27,8 @@ import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
 from steady.cli.common import EXIT_STATUS_EPILOG
 from steady.cli.entry import launch
-from transient.output import lock_path, read_run
+from steady.safe_files import lock_path
+from transient.output import read_run
 
 
 @pytest.fixture

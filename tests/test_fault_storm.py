@@ -32,7 +32,8 @@ import pytest
 from conftest import scene_text, temporaries
 
 from steady.output import read_result
-from transient.output import backup_path, lock_path, read_run
+from steady.safe_files import backup_path, lock_path
+from transient.output import read_run
 from transient.result import HISTORY_UNITS
 
 pytestmark = pytest.mark.slow

@@ -26,7 +26,8 @@ from conftest import one_error_line, run_cli
 import steady.cli.solve as steady_cli
 import transient.__main__ as cli
 from steady.output import read_result
-from transient.output import RunLock, backup_path, lock_path, read_run
+from steady.safe_files import RunLock, backup_path, lock_path
+from transient.output import read_run
 from transient.solver import StageSolver
 
 

@@ -702,7 +702,7 @@ def test_segmentation_figure_draws_image_phases_face_and_histogram(skimage, part
     from matplotlib.figure import Figure
     from matplotlib.image import AxesImage
 
-    from steady.micrograph import segmentation_figure
+    from steady.plotting import segmentation_figure
 
     path, _ = particles_png
     geometry = load_micrograph(path, 3e-3, 2, crop=[[0, 260], [0, 400]], thresholds=[0.62],
@@ -734,7 +734,7 @@ def test_segmentation_figure_draws_image_phases_face_and_histogram(skimage, part
 def test_segmentation_figure_takes_axes_and_refuses_bad_ones(skimage):
     from matplotlib.figure import Figure
 
-    from steady.micrograph import segmentation_figure
+    from steady.plotting import segmentation_figure
 
     geometry = Micrograph(segment(ring(), 2, thresholds=[0.75], fill_holes=True), 1e-3,
                           cover="tile", pixel_size=2e-5)

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from conftest import scene_text
 
-from steady.output import FORMAT, FORMAT_VERSION, atomic_h5, read_result, write_result
+from steady.output import FORMAT, FORMAT_VERSION, read_result, write_result
+from steady.safe_files import atomic_h5
 from steady.scene import parse_scene
 from steady.solution import solve_scene
 

@@ -14,7 +14,7 @@ import pytest
 from conftest import FORCE, K1, RADIUS, problem, scene_text
 
 from steady.outline import OUTLINES, Circle, MaskOutline
-from steady.phases import PHASE_MAPS
+from steady.phases import PHASE_MAPS, PhaseMap
 from steady.scene import SECTIONS, load_scene, parse_scene
 from steady.schema import Key, read_table
 from steady.sliding import SLIDING
@@ -114,7 +114,7 @@ def test_a_section_prefix_is_given_once():
 
 # -- one registration makes a kind ----------------------------------------
 @dataclasses.dataclass(frozen=True)
-class _Halves:
+class _Halves(PhaseMap):
     """Phase 0 left of the face's centre, phase 1 right of it."""
 
     @property

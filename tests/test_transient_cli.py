@@ -11,7 +11,8 @@ import h5py
 import numpy as np
 import pytest
 
-from transient.output import backup_path, history_cf, read_run
+from steady.safe_files import backup_path
+from transient.output import history_cf, read_run
 from transient.result import HISTORY_UNITS
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -30,7 +30,7 @@ from scipy.optimize import brentq
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
 from steady.fit import FaceModel
-from steady.output import OutputExistsError
+from steady.safe_files import OutputExistsError
 from steady.scene import parse_scene
 from steady.solution import solve, solve_scene
 from steady.wear import (

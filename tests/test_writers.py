@@ -25,15 +25,17 @@ import steady.cli.fit as fit_cli
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
 import transient.output
-from steady.output import (
+from steady.output import read_result
+from steady.safe_files import (
     OutputAppearedError,
     OutputExistsError,
     atomic_h5,
+    backup_path,
     file_identity,
-    read_result,
+    lock_path,
 )
 from steady.sweep import SweepFile
-from transient.output import DamagedRunFileError, backup_path, lock_path, read_run
+from transient.output import DamagedRunFileError, read_run
 
 STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
@@ -116,7 +118,7 @@ def test_temporary_files_of_dead_writers_are_removed(tmp_path):
 _LIMITED_WRITE = """
 import resource, signal, sys
 import numpy as np
-from steady.output import atomic_h5
+from steady.safe_files import atomic_h5
 signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
 resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))
 try:

@@ -19,8 +19,9 @@ import steady.cli.solve as steady_cli
 import transient.cli.runin as transient_cli
 from steady import MeasuredFace, fit_face, solve, write_fit
 from steady.outline import Circle
-from steady.output import DIMENSION_SCALE_ATTRIBUTES, read_result, write_result
+from steady.output import read_result, write_result
 from steady.problem import FacePhases, Problem
+from steady.safe_files import DIMENSION_SCALE_ATTRIBUTES, attributes_digest, dataset_digest
 from steady.wear import PowerLaw
 from transient import output as run_output
 from transient.output import read_run, write_run
@@ -161,7 +162,7 @@ def _as_version_2(source, target):
     No coordinates, phase names or dimension scales; every other dataset and
     attribute as written (so the digests are this module's, over the same values).
     """
-    digest, attrs_digest = run_output._dataset_digest, run_output._attrs_digest
+    digest, attrs_digest = dataset_digest, attributes_digest
     with h5py.File(source, "r") as src, h5py.File(target, "w") as dst:
         def copy(name, obj):
             if isinstance(obj, h5py.Group):

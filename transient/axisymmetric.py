@@ -325,7 +325,8 @@ def reference_history(distances_s_star, *, rings=1200, grading=4.0):
         Sliding distances in units of ``s* = a / (k E*)``, non-negative: the
         history is normalised, the same for every cylinder.
     rings : int, optional
-        The finer ring count ``N`` (default 1200).
+        The finer ring count ``N`` (default 1200; its time: docs/benchmarks.md,
+        "Run-in convergence").
     grading : float, optional
         Grading exponent (default 4).
 

@@ -70,14 +70,13 @@ _ROUNDING_PER_ITERATION = 8.0
 # Solves that must reduce the first residual by more than this factor take the
 # preconditioner in double precision (FourierPreconditioner.accurate): the round-off of
 # single-precision transforms puts error into every eigencomponent at about 1e-7 of the
-# residual, which costs a cold flat-punch solve to rtol = 1e-10 up to 40 % more iterations
-# (10 to 14 on a 1:2 rectangle at n = 48); a run-in's warm-started solves start 2 to 20
-# tolerances away and lose none (docs/benchmarks.md, "Contact solve on run-in problems").
+# residual, which costs a cold flat-punch solve to rtol = 1e-10 more iterations; a run-in's
+# warm-started solves start a few tolerances away and lose none (docs/benchmarks.md,
+# "Contact solve on run-in problems").
 _SINGLE_REDUCTION = 1e-4
 # Elements per call of the BLAS axpy behind :func:`_axpy`: OpenBLAS runs a call of at most
-# 10000 on the calling thread; one over a whole 1024 x 1024 array ran threaded and took 4 to
-# 6 ms, against 0.7 ms in blocks and 1.2 ms for numpy's two passes (docs/benchmarks.md,
-# "Contact solve on run-in problems").
+# 10000 on the calling thread; one over a whole large array runs threaded, slower than in
+# blocks and than numpy's two passes (docs/benchmarks.md, "Contact solve on run-in problems").
 _AXPY_BLOCK = 8192
 _daxpy = scipy.linalg.blas.get_blas_funcs("axpy", dtype=np.float64)
 

@@ -565,11 +565,10 @@ class DepthRecorder:
     (docs/files.md, the history of a depth run), :meth:`quasi_steady` the
     rms slope of the current section's steady face.
 
-    A new section's quasi-steady slope cost about one :meth:`FaceEstimator.figures`
-    while its transforms were double precision (measured side by side on a
-    three-phase Voronoi disk: 1.0 times at n = 256, 1.15 times at
-    n = 1024); a section repeats until a pixel crosses an interface and is
-    then read from a cache.
+    A new section's quasi-steady slope is one slope estimate on the
+    section's steady face; a section repeats until a pixel crosses an
+    interface and is then read from a cache (the cost of depth runs:
+    docs/benchmarks.md, "Runs across interfaces").
 
     Parameters
     ----------

@@ -12,7 +12,7 @@ on the 64 x 64 grid, ``flat(Rectangle(4e-3, 12e-3).grid(96))`` the flat
 tread block on its 32 x 96 grid.
 
 Every shape is registered in :data:`INITIAL_FACES` (a
-:class:`steady.schema.Registry`) by the kind the scene section
+:class:`steady.schema.KindRegistry`) by the kind the scene section
 ``[initial_face]`` names, with its keys; :func:`initial_height` builds one
 by kind.  A kind may also give the exact rms slope and rms height of its
 continuous face over the outline (:func:`exact_statistics`), the values the
@@ -26,11 +26,10 @@ import math
 import os
 
 import numpy as np
-import scipy.integrate
 
 from steady.array_files import read_npy
-from steady.outline import Circle, FaceGrid, as_outline
-from steady.schema import Key, Registry
+from steady.outline import FaceGrid, as_outline
+from steady.schema import Key, KindRegistry
 
 __all__ = [
     "INITIAL_FACES",
@@ -48,7 +47,8 @@ __all__ = [
 #: ``build(grid, **parameters)`` with the attributes ``kind``, ``keys`` and
 #: ``statistics`` (``statistics(outline, **parameters)``, the
 #: :class:`ExactStatistics` of the continuous face over an outline, or None).
-INITIAL_FACES = Registry("initial face", "kind", default="flat")
+INITIAL_FACES = KindRegistry("initial face", "kind", default="flat",
+                             entry_point_group="runin.initial_faces")
 
 
 def _register(kind, keys=(), statistics=None, doc=""):
@@ -97,6 +97,7 @@ def exact_statistics(kind, outline, **parameters):
 
     Examples
     --------
+    >>> from steady.outline import Circle
     >>> bool(exact_statistics("tilted", Circle(4e-3), angle=0.01).rms_slope == np.tan(0.01))
     True
     >>> stats = exact_statistics("crowned", Circle(4e-3), sphere_radius=8e-3)
@@ -143,10 +144,10 @@ def initial_height(kind, grid, **parameters):
 
     Examples
     --------
+    >>> from steady.outline import Circle, Rectangle
     >>> h = initial_height("tilted", Circle(4e-3).grid(16), angle=1e-3)
     >>> h.shape, float(h.min()) >= 0.0
     ((16, 16), True)
-    >>> from steady.outline import Rectangle
     >>> initial_height("flat", Rectangle(4e-3, 12e-3).grid(48)).shape
     (16, 48)
     """
@@ -225,30 +226,9 @@ def tilted(grid, angle, azimuth=0.0):
 
 
 def _crowned_statistics(outline, sphere_radius):
-    """Sphere cap ``R - sqrt(R^2 - r^2)`` over the disk ``r < a``; None for other outlines.
-
-    Mean-square slope ``(2/a^2) int_0^a r^3 / (R^2 - r^2) dr
-    = (R/a)^2 (-ln(1 - x) - x)``, ``x = (a/R)^2`` (infinite for ``R = a``);
-    the rms height (the best plane of a radial face is a constant) by
-    adaptive quadrature of the cap, written ``r^2 / (R + sqrt(R^2 - r^2))``
-    to avoid cancellation.
-    """
-    if not isinstance(outline, Circle):
-        return None
-    a, big = outline.radius, float(sphere_radius)
-    x = (a / big) ** 2
-    mean_square = (-math.log1p(-x) - x) / x if x < 1 else math.inf
-
-    def cap(r):
-        return r * r / (big + math.sqrt(max(big * big - r * r, 0.0)))
-
-    def disk_mean(f):
-        return 2.0 / a**2 * scipy.integrate.quad(lambda r: f(r) * r, 0.0, a, epsabs=0.0,
-                                                 epsrel=1e-12)[0]
-
-    mean = disk_mean(cap)
-    variance = disk_mean(lambda r: (cap(r) - mean) ** 2)
-    return ExactStatistics(rms_slope=math.sqrt(mean_square), rms_height=math.sqrt(variance))
+    """The sphere cap's exact statistics over the face (``outline.cap_statistics``), or None."""
+    stats = outline.cap_statistics(sphere_radius)
+    return None if stats is None else ExactStatistics(rms_slope=stats[0], rms_height=stats[1])
 
 
 @_register("crowned", (
@@ -278,10 +258,8 @@ def crowned(grid, sphere_radius):
     outline = grid.outline
     reach = outline.circumradius()
     if sphere_radius is None or not (np.isfinite(sphere_radius) and sphere_radius >= reach):
-        what = (f"the punch radius {outline.radius!r} m" if isinstance(outline, Circle) else
-                f"the largest distance {reach:.6g} m of the {outline.describe()} from its "
-                f"centre")
-        raise ValueError(f"sphere_radius must be finite and at least {what}, got "
+        raise ValueError(f"sphere_radius must be finite and at least the largest distance "
+                         f"{reach:.6g} m of the {outline.describe()} from its centre, got "
                          f"{sphere_radius!r} m")
     X, Y = _coordinates(grid)
     r2 = X**2 + Y**2

@@ -46,7 +46,7 @@ def run_in_memory(n, snapshots=0):
     - every checkpoint's pressure history (six pressures and their
       displacements, handed to the result without a copy, but the warm
       start's next push writes them anew): 96; the file is written as
-      HDF5 writes it, not built in memory (:func:`steady.output.atomic_h5`);
+      HDF5 writes it, not built in memory (:func:`steady.safe_files.atomic_h5`);
     - each snapshot: face and pressure kept (16, shared by every
       checkpoint's result).
 

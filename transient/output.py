@@ -1,10 +1,10 @@
-"""HDF5 run files (layout ``runin.transient``, version 3), their checksums and their lock.
+"""HDF5 run files (layout ``runin.transient``, version 3), checksummed and written by one writer.
 
 A run file holds a run-in, finished or in progress (a checkpoint): the
 state a resumed run needs (:class:`transient.result.RunState`), the
 history, the snapshots, the inputs that identify the run and, once the run
 is steady, its agreement with the steady face.  It is written whole and
-atomically by the project's one HDF5 writer (:func:`steady.output.atomic_h5`),
+atomically by the project's one HDF5 writer (:func:`steady.safe_files.atomic_h5`),
 so a reader never sees half a file and a killed run leaves its last
 checkpoint intact.  It opens in xarray (``xarray.open_dataset(path,
 engine="h5netcdf")``, ``group="history"`` or ``"snapshots"``) as labelled
@@ -80,8 +80,9 @@ Checksums
 ---------
 Every dataset carries the attribute ``sha256``: the SHA-256 of its dtype,
 shape and bytes and of its other attributes (except the dimension scales'
-references, :data:`steady.output.DIMENSION_SCALE_ATTRIBUTES`); every group, the root
-included, carries in ``sha256`` the SHA-256 of its attributes.
+references, :data:`steady.safe_files.DIMENSION_SCALE_ATTRIBUTES`); every group, the
+root included, carries in ``sha256`` the SHA-256 of its attributes
+(:func:`steady.safe_files.dataset_digest`, :func:`~steady.safe_files.attributes_digest`).
 :func:`read_run` verifies all of them, so that a flipped bit anywhere in
 what a resumed run depends on (the state, the pressure, the counters, the
 history, the snapshots, the inputs) is noticed, and raises
@@ -91,26 +92,24 @@ the reason the file cannot be read at all).  A file without a root
 
 Writers
 -------
-A run file has one writer at a time: :class:`RunLock` holds an exclusive
-lock (:func:`fcntl.flock`) on ``RUN.h5.lock`` beside it, which records the
-writer's process id; a second writer is refused at once with
-:class:`RunLockedError`.  The kernel drops the lock of a process that dies,
+A run file has one writer at a time: :class:`steady.safe_files.RunLock`
+holds an exclusive lock (:func:`fcntl.flock`) on ``RUN.h5.lock`` beside it,
+which records the writer's process id; a second writer is refused at once
+with :class:`~steady.safe_files.RunLockedError`.  The kernel drops the lock of a process that dies,
 so a lock file left by a killed run is taken over (its pid is reported).
 ``write_run(..., backup=True)`` keeps the file it replaces as
-``RUN.h5.prev`` (:func:`backup_path`): a checkpoint damaged after it was
+``RUN.h5.prev`` (:func:`steady.safe_files.backup_path`): a checkpoint damaged after it was
 written can be replaced by the one before it.  Without ``force``,
 ``write_run`` replaces only the file it is told it may (``replaces``, the
 identity it returned for the previous checkpoint), so that a file another
 writer put at the run's path meanwhile is refused, not replaced
-(:func:`steady.output.atomic_h5`).
+(:func:`steady.safe_files.atomic_h5`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import math
-import os
 import pathlib
 import types
 
@@ -121,14 +120,20 @@ from steady.depth import DepthColumns
 from steady.load_programme import LoadProgramme
 from steady.outline import Circle
 from steady.output import (
-    DIMENSION_SCALE_ATTRIBUTES,
-    atomic_h5,
     attach_scales,
     describe,
     read_outline,
     write_grid_coordinates,
     write_outline,
     write_phase_names,
+)
+from steady.safe_files import (
+    CHECKSUM_ATTRIBUTE,
+    atomic_h5,
+    attributes_digest,
+    backup_path,
+    dataset_digest,
+    seal_groups,
 )
 from steady.wear import wear_file_attributes
 
@@ -142,23 +147,13 @@ from .result import (
 )
 from .run_in_distance import COATING_EVENTS, coating_distance, distance_table
 
-try:
-    import fcntl
-except ImportError:  # not a POSIX system: runs are not locked
-    fcntl = None
-
 __all__ = [
     "FORMAT",
     "FORMAT_VERSION",
     "DamagedRunFileError",
-    "RunLock",
-    "RunLockedError",
-    "backup_path",
     "history_cf",
-    "lock_path",
     "problem_inputs",
     "read_run",
-    "remove_temporaries",
     "verify_run",
     "write_run",
 ]
@@ -205,9 +200,6 @@ _STATE_NAMES = {"height": "face height (worn depth plus initial face) minus offs
 # State datasets every checkpoint has; the others are None before the first step.
 _REQUIRED_STATE = ("height", "initial_height")
 
-# Attribute holding the SHA-256 of a dataset or of a group's attributes.
-_CHECKSUM = "sha256"
-
 
 class DamagedRunFileError(ValueError):
     """A run file that cannot be trusted: unreadable, truncated, or failing its checksums.
@@ -223,73 +215,8 @@ class DamagedRunFileError(ValueError):
         self.path = pathlib.Path(path)
 
 
-class RunLockedError(ValueError):
-    """Another process is writing the run file (it holds its :class:`RunLock`).
-
-    Attributes
-    ----------
-    pid : int or None
-        The writer's process id, if it has recorded it.
-    """
-
-    def __init__(self, path, pid, message=None):
-        who = "pid not yet recorded" if pid is None else f"pid {pid}"
-        super().__init__(message or f"another run is writing {str(path)!r} ({who})")
-        self.pid = pid
-
-
-def backup_path(path):
-    """``RUN.h5.prev``: where ``write_run(..., backup=True)`` keeps the previous file."""
-    path = pathlib.Path(path)
-    return path.with_name(path.name + ".prev")
-
-
-def lock_path(path):
-    """``RUN.h5.lock``: the lock file of a run file (see :class:`RunLock`)."""
-    path = pathlib.Path(path)
-    return path.with_name(path.name + ".lock")
-
-
-# -- checksums ------------------------------------------------------------
-def _update(h, value):
-    """Feed one attribute value or array, as h5py returns it, to a hash."""
-    if isinstance(value, str):
-        h.update(b"s" + value.encode("utf-8", "surrogatepass"))
-    elif isinstance(value, bytes):
-        h.update(b"b" + value)
-    else:
-        a = np.asarray(value)
-        if a.dtype.hasobject:  # variable-length strings
-            h.update(b"o" + repr(a.tolist()).encode("utf-8", "surrogatepass"))
-        else:
-            h.update(f"a{a.dtype.str}{a.shape}".encode())
-            h.update(np.ascontiguousarray(a).reshape(-1).view(np.uint8))  # no copy
-    h.update(b"\0")
-
-
-def _attrs_digest(attrs):
-    """SHA-256 (hex) of a mapping of attributes, its own ``sha256`` left out."""
-    h = hashlib.sha256()
-    for name in sorted(attrs):
-        # The dimension scales' bookkeeping holds references (object
-        # addresses in the file), not values: structure, left out.
-        if name != _CHECKSUM and name not in DIMENSION_SCALE_ATTRIBUTES:
-            h.update(name.encode("utf-8", "surrogatepass") + b"\0")
-            _update(h, attrs[name])
-    return h.hexdigest()
-
-
-def _dataset_digest(data, attrs):
-    """SHA-256 (hex) of a dataset's values (dtype, shape, bytes) and its other attributes."""
-    h = hashlib.sha256()
-    _update(h, data)
-    h.update(_attrs_digest(attrs).encode())
-    return h.hexdigest()
-
-
-# Snapshots of a finished or stopped run: byte shuffle then deflate (level 1)
-# keeps about 0.59 of a 1024^2 run's snapshots, against 0.69 for deflate
-# (level 4) alone, in about half its time.
+# Snapshots of a finished or stopped run: byte shuffle then deflate (level 1), smaller and
+# quicker than deflate alone (docs/benchmarks.md, "Run-in speed").
 _SNAPSHOT_FILTERS = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 
 
@@ -305,17 +232,9 @@ def _put(group, name, value, unit, long_name=None, *, dims=(), **options):
         data = ds[()]
     else:
         data = np.asarray(value).astype(ds.dtype, copy=False).reshape(ds.shape)
-    ds.attrs[_CHECKSUM] = _dataset_digest(data, dict(ds.attrs))
+    ds.attrs[CHECKSUM_ATTRIBUTE] = dataset_digest(data, dict(ds.attrs))
     attach_scales(ds, *dims)
     return ds
-
-
-def _seal_groups(f):
-    """Store the digest of every group's attributes; the root's last."""
-    groups = []
-    f.visititems(lambda name, obj: groups.append(obj) if isinstance(obj, h5py.Group) else None)
-    for g in groups + [f]:
-        g.attrs[_CHECKSUM] = _attrs_digest(dict(g.attrs))
 
 
 def history_cf(name):
@@ -417,29 +336,29 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     comparison : transient.comparison.SteadyComparison, optional
         Stored in the group ``comparison``.
     backup : bool, optional
-        Keep the file that ``path`` held as :func:`backup_path` (default
+        Keep the file that ``path`` held as :func:`steady.safe_files.backup_path` (default
         False: it is replaced).
     force : bool, optional
         Replace whatever file ``path`` names (default True).  False: only
         the file ``replaces`` names, or none.
-    replaces : steady.output.FileIdentity, optional
+    replaces : steady.safe_files.FileIdentity, optional
         With ``force`` False: the file this one may replace, e.g. the
         identity this function returned for the previous checkpoint.
     checked : bool, optional
         ``path`` was checked before the run: a file found in the place of
         the expected one was written meanwhile (see
-        :func:`steady.output.atomic_h5`).
+        :func:`steady.safe_files.atomic_h5`).
 
     Returns
     -------
-    steady.output.FileIdentity
+    steady.safe_files.FileIdentity
         The identity of the file written.
 
     Raises
     ------
     OSError
         The file cannot be written; the message names ``path``.
-    steady.output.OutputAppearedError
+    steady.safe_files.OutputAppearedError
         (a ``ValueError``) Without ``force``: ``path`` names another file
         than ``replaces`` (another writer wrote it); nothing is written.
     """
@@ -471,7 +390,7 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
         _write_run_in_distances(f, result)
         if comparison is not None:
             _write_comparison(f, comparison, scales[2])
-        _seal_groups(f)
+        seal_groups(f)
     return writer.identity
 
 
@@ -666,19 +585,19 @@ def _write_run_in_distances(f, result):
 
 
 def _write_outline(f, result):
-    """The outline group and the reference slope's attributes; ``radius`` for a disk."""
+    """The outline group, the reference slope's attributes and the outline's root attributes."""
     outline = result.outline
     values = {"reference_slope_error": result.reference_slope_error,
               "scale": outline.scale, "pixel_size": result.pixel_size}
     for name, unit in _REFERENCE_UNITS.items():
         _attribute(f.attrs, name, values[name], unit)
     f.attrs["reference_slope_source"] = result.reference_slope_source
-    if isinstance(outline, Circle):
-        _attribute(f.attrs, "radius", outline.radius, "m")
+    for name, (value, unit) in outline.root_attributes().items():
+        _attribute(f.attrs, name, value, unit)
     group = f.create_group("outline")
     write_outline(group, outline)
     for ds in group.values():  # a mask's pixels: checksummed like every dataset
-        ds.attrs[_CHECKSUM] = _dataset_digest(ds[()], dict(ds.attrs))
+        ds.attrs[CHECKSUM_ATTRIBUTE] = dataset_digest(ds[()], dict(ds.attrs))
 
 
 def _read_outline(path, datasets, groups, root):
@@ -734,12 +653,12 @@ def _load(f):
 def _verify(path, datasets, groups):
     """Raise :class:`DamagedRunFileError` for the first part that fails its checksum."""
     for name, (data, attrs) in sorted(datasets.items()):
-        stored = attrs.get(_CHECKSUM)
-        if stored is None or _dataset_digest(data, attrs) != stored:
+        stored = attrs.get(CHECKSUM_ATTRIBUTE)
+        if stored is None or dataset_digest(data, attrs) != stored:
             raise DamagedRunFileError(path, f"dataset {name!r} does not match its checksum")
     for name, attrs in sorted(groups.items()):
-        stored = attrs.get(_CHECKSUM)
-        if stored is None or _attrs_digest(attrs) != stored:
+        stored = attrs.get(CHECKSUM_ATTRIBUTE)
+        if stored is None or attributes_digest(attrs) != stored:
             what = "the root attributes" if not name else f"the attributes of group {name!r}"
             raise DamagedRunFileError(path, f"{what} do not match their checksum")
 
@@ -771,19 +690,19 @@ def verify_run(path):
         with h5py.File(path, "r") as f:
             if _plain(f.attrs.get("format")) != FORMAT:
                 raise DamagedRunFileError(path, "it is not a run file")
-            if _CHECKSUM not in f.attrs:
+            if CHECKSUM_ATTRIBUTE not in f.attrs:
                 raise DamagedRunFileError(path, "it carries no checksums")
             names = []
             f.visit(names.append)
             for name in ["", *sorted(names)]:
                 obj = f[name] if name else f
                 attrs = dict(obj.attrs)
-                stored = attrs.get(_CHECKSUM)
+                stored = attrs.get(CHECKSUM_ATTRIBUTE)
                 if isinstance(obj, h5py.Dataset):
-                    if stored is None or _dataset_digest(obj[()], attrs) != stored:
+                    if stored is None or dataset_digest(obj[()], attrs) != stored:
                         raise DamagedRunFileError(
                             path, f"dataset {name!r} does not match its checksum")
-                elif stored is None or _attrs_digest(attrs) != stored:
+                elif stored is None or attributes_digest(attrs) != stored:
                     what = "the root attributes" if not name else f"the attributes of group " \
                                                                    f"{name!r}"
                     raise DamagedRunFileError(path, f"{what} do not match their checksum")
@@ -851,7 +770,7 @@ def read_run(path):
             datasets, groups = _load(f)
         except damage as err:
             raise DamagedRunFileError(path, f"cannot be read ({str(err)[:200]})") from None
-    if _CHECKSUM in groups[""]:
+    if CHECKSUM_ATTRIBUTE in groups[""]:
         _verify(path, datasets, groups)
     return _result(path, datasets, groups)
 
@@ -911,8 +830,8 @@ def _result(path, datasets, groups):
     source = attrs.get("reference_slope_source")
     if isinstance(source, bytes):
         source = source.decode("utf-8", "replace")
-    if source is None:
-        source = _DISK_SOURCE if isinstance(outline, Circle) else ""
+    if source is None:  # a file of a disk written before the outlines, or none at all
+        source = _DISK_SOURCE if outline is not None and "outline" not in groups else ""
     result = RunResult(
         **kw, state=RunState(**state, pressure=datasets["pressure"][0]),
         history=types.MappingProxyType(history),
@@ -926,160 +845,3 @@ def _result(path, datasets, groups):
     arrays = {name: value for name, (value, _) in datasets.items()
               if "/" not in name and name not in ("worn_depth", "pressure", "x", "y")}
     return result, attrs, arrays
-
-
-# -- writers ----------------------------------------------------------------
-def remove_temporaries(path):
-    """Remove the temporary files killed writers of ``path`` left beside it.
-
-    Call it only while holding the run's :class:`RunLock` (no other writer
-    can be using them).
-
-    Parameters
-    ----------
-    path : str or path-like
-        The run file.
-
-    Returns
-    -------
-    list of pathlib.Path
-        The files removed (``.<name>.*.tmp`` beside ``path``).
-    """
-    path = pathlib.Path(path)
-    removed = []
-    for tmp in path.parent.glob(f".{path.name}.*.tmp"):
-        try:
-            tmp.unlink()
-        except OSError:
-            continue
-        removed.append(tmp)
-    return removed
-
-
-def _running(pid):
-    """Whether process ``pid`` exists and has not ended (a zombie, not yet reaped, has)."""
-    if pid <= 0:  # os.kill would signal a process group
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    except (OSError, OverflowError, ValueError):  # not a process id
-        return False
-    try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            state = f.read().rpartition(b")")[2].split()[:1]
-    except OSError:  # no /proc: it exists
-        return True
-    return state not in ([b"Z"], [b"X"])
-
-
-class RunLock:
-    """Exclusive lock of a run file, so that two runs never write it at once.
-
-    ``RUN.h5.lock`` beside the run file is opened (created if need be),
-    locked with :func:`fcntl.flock` (``LOCK_EX | LOCK_NB``) and its content
-    replaced by this process's id.  A second writer fails at once with
-    :class:`RunLockedError`, naming the pid.  The kernel releases the lock
-    of a process that dies, so a lock file left by a killed run does not
-    block: it is taken over and :attr:`previous_pid` names the dead writer.
-    A free lock whose file names a process that is still running (a lock
-    file copied, or written on another machine) is refused too: that
-    process may be writing the run.  :meth:`release` removes the file.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The run file (not the lock file).
-
-    Attributes
-    ----------
-    path : pathlib.Path
-        The lock file.
-    previous_pid : int or None
-        Pid found in a lock file left behind by a writer that ended without
-        releasing it (killed), else None.
-
-    Examples
-    --------
-    >>> import pathlib, tempfile
-    >>> run = pathlib.Path(tempfile.mkdtemp()) / "run.h5"
-    >>> with RunLock(run) as lock:
-    ...     try:
-    ...         RunLock(run).acquire()
-    ...     except RunLockedError as err:
-    ...         print("refused:", err.pid == os.getpid())
-    refused: True
-    >>> lock.path.exists()
-    False
-    """
-
-    def __init__(self, path):
-        self.run_path = pathlib.Path(path)
-        self.path = lock_path(path)
-        self.previous_pid = None
-        self._fd = None
-
-    @staticmethod
-    def _pid(fd):
-        os.lseek(fd, 0, os.SEEK_SET)
-        text = os.read(fd, 64).decode("ascii", "replace").strip()
-        return int(text) if text.isdigit() else None
-
-    def acquire(self):
-        """Take the lock or raise :class:`RunLockedError`; returns ``self``."""
-        if fcntl is None:
-            return self
-        while True:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:  # BlockingIOError: held by a live process
-                pid = self._pid(fd)
-                os.close(fd)
-                raise RunLockedError(self.run_path, pid) from None
-            # The holder may have removed the file between our open and flock:
-            # then this lock is on a file nobody else will see; start again.
-            try:
-                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
-            except FileNotFoundError:
-                same = False
-            if same:
-                break
-            os.close(fd)
-        previous = self._pid(fd)
-        self.previous_pid = previous if previous not in (None, os.getpid()) else None
-        if self.previous_pid is not None and _running(self.previous_pid):
-            os.close(fd)
-            raise RunLockedError(self.run_path, previous, (
-                f"the lock {str(self.path)!r} names process {previous}, which is running though "
-                f"it does not hold the lock; if no run is writing {str(self.run_path)!r}, remove "
-                f"the lock file"))
-        os.ftruncate(fd, 0)
-        os.lseek(fd, 0, os.SEEK_SET)
-        os.write(fd, f"{os.getpid()}\n".encode())
-        self._fd = fd
-        return self
-
-    def release(self):
-        """Remove the lock file and drop the lock (idempotent)."""
-        if self._fd is None:
-            return
-        # Unlink while still holding the lock: a waiter that opened the old
-        # file notices it is gone (acquire checks) and starts again.
-        try:
-            self.path.unlink()
-        except OSError:
-            pass
-        os.close(self._fd)
-        self._fd = None
-
-    def __enter__(self):
-        """Acquire."""
-        return self.acquire()
-
-    def __exit__(self, *exc):
-        """Release."""
-        self.release()

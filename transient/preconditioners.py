@@ -33,6 +33,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from steady.registry import Registry
+
 __all__ = [
     "FourierPreconditioner",
     "JacobiPreconditioner",
@@ -45,7 +47,8 @@ __all__ = [
 
 #: Preconditioner factories by name, ``factory(halfspace, face_mask, shift)``
 #: (see :func:`register_preconditioner`); ``"none"`` maps to None.
-PRECONDITIONERS = {"none": None}
+PRECONDITIONERS = Registry("preconditioner", entry_point_group="runin.preconditioners")
+PRECONDITIONERS.register("none", None)
 
 # A shift at least this many times the largest eigenvalue of K on every face
 # pixel makes the operator diagonal to within 10 %: "auto" then takes Jacobi,
@@ -96,10 +99,7 @@ def register_preconditioner(name):
     returns a callable
     ``z = precondition(residual, active)``.
     """
-    def decorate(factory):
-        PRECONDITIONERS[name] = factory
-        return factory
-    return decorate
+    return PRECONDITIONERS.register(name)
 
 
 def make_preconditioner(name, halfspace, face_mask, shift):
@@ -108,13 +108,9 @@ def make_preconditioner(name, halfspace, face_mask, shift):
     Raises
     ------
     ValueError
-        If no preconditioner has that name.
+        If no preconditioner has that name (the message lists the registered ones).
     """
-    try:
-        factory = PRECONDITIONERS[name]
-    except KeyError:
-        raise ValueError(f"preconditioner must be one of {sorted(PRECONDITIONERS)}, "
-                         f"got {name!r}") from None
+    factory = PRECONDITIONERS[name]
     return None if factory is None else factory(halfspace, face_mask, shift)
 
 
@@ -234,8 +230,9 @@ class FourierPreconditioner:
                 spectrum=None)
         return plan
 
-    # scipy.fft's transforms, which return fresh arrays: numpy.fft's into work buffers
-    # took 1.2 to 1.3 times their CPU time here in single precision (n = 1024, two levels).
+    # scipy.fft's transforms, which return fresh arrays: numpy.fft's into work buffers took
+    # more CPU time here in single precision (docs/benchmarks.md, "Contact solve on run-in
+    # problems").
     def _forward(self, field):
         hs = self.halfspace
         if self.padded:
@@ -320,8 +317,8 @@ def _multiplier(symbol, level, dtype, root):
 
     In double precision, rounded once into ``dtype``: the same values as
     ``(1 / sqrt(symbol + level)).astype(dtype)`` through one temporary instead of
-    three fresh arrays (a stage builds its multipliers anew; at n = 1024 a level took
-    1.1 ms instead of 2.3 ms).
+    three fresh arrays (a stage builds its multipliers anew; docs/benchmarks.md,
+    "Contact solve on run-in problems").
     """
     shifted = symbol + level
     if root:

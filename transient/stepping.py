@@ -64,9 +64,9 @@ method on ``w = w0 + c k P(w)^m``: ``k p^m`` is linearised about the last
 pressure iterate ``p0``, ``k p^m ~ k p0^m + k m p0^(m-1) (p - p0)``, which is
 again a shifted contact problem with ``shift = c k m p0^(m-1)`` and height
 ``w0 + c k (1 - m) p0^m``.  The iteration stops when the pressure changes by
-less than ``newton_rtol`` (relative to the mean pressure); measured: about
-three solves per stage for ``m = 2`` and ``m = 0.5`` (Voronoi face, n = 32,
-``k_2/k_1 = 10``), each warm-started from the last.  For ``m < 1``
+less than ``newton_rtol`` (relative to the mean pressure), each solve
+warm-started from the last (solves per stage: docs/benchmarks.md, "Run-in
+stepping").  For ``m < 1``
 the derivative is unbounded at ``p = 0``; ``p0`` is floored at
 ``pressure_floor`` times the mean pressure in the linearisation only.
 """
@@ -77,6 +77,8 @@ import dataclasses
 import math
 
 import numpy as np
+
+from steady.registry import Registry
 
 __all__ = [
     "BDF2",
@@ -92,31 +94,27 @@ __all__ = [
     "register_scheme",
 ]
 
-SCHEMES = {}
-"""Registered integrators by name (see :func:`register_scheme`)."""
+SCHEMES = Registry("scheme", entry_point_group="runin.schemes")
+"""Registered integrators by name, instances of :class:`Scheme` (see :func:`register_scheme`)."""
 
 
 def register_scheme(cls):
     """Class decorator: register an instance of a :class:`Scheme` under its ``name``."""
     if not cls.name:
         raise ValueError(f"scheme {cls.__name__} has no name")
-    SCHEMES[cls.name] = cls()
+    SCHEMES.register(cls.name, cls())
     return cls
 
 
 def get_scheme(name):
-    """The registered scheme called ``name``.
+    """The registered scheme called ``name``: ``SCHEMES[name]``.
 
     Raises
     ------
     ValueError
-        If no scheme has that name.
+        If no scheme has that name (the message lists the registered ones).
     """
-    try:
-        return SCHEMES[name]
-    except KeyError:
-        raise ValueError(f"unknown scheme {name!r}; expected one of "
-                         f"{sorted(SCHEMES)}") from None
+    return SCHEMES[name]
 
 
 @dataclasses.dataclass(frozen=True)

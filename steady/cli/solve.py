@@ -19,7 +19,7 @@ says the result is saved), 2 for bad input (nothing written), 130 when
 interrupted (:mod:`steady.cli.common`).  The suffix of ``--plot`` is
 checked before the solve too (:func:`steady.cli.common.check_png_path`).
 ``--segmentation`` draws the segmentation of a ``micrograph`` phase map
-over its image (:func:`steady.micrograph.segmentation_figure`) before the
+over its image (:func:`steady.plotting.segmentation_figure`) before the
 solve; without ``-o`` it is all the command writes.
 """
 
@@ -31,7 +31,6 @@ import pathlib
 import time
 
 from ..memory import check_memory, keep_freed_memory, steady_memory
-from ..micrograph import Micrograph
 from ..output import write_result
 from ..problem import Problem, default_phase_names
 from ..scene import load_scene
@@ -144,7 +143,7 @@ def run(args):
         if args.segmentation is not None:
             _draw_segmentation(args, scene)
             if args.output is None:
-                print(f"segmentation     {scene.geometry.segmentation.summary()}\n"
+                print(f"segmentation     {scene.geometry.segmented_image().summary()}\n"
                       f"segmentation PNG {args.segmentation}")
                 return EXIT_OK
         started = time.monotonic()
@@ -157,8 +156,9 @@ def run(args):
         if problem.phases.columns is not None:
             lines.insert(1, f"section          {args.depth:.6g} m below the initial surface: "
                             f"the quasi-steady face of this section")
-        if isinstance(scene.geometry, Micrograph):
-            lines.append(f"segmentation     {scene.geometry.segmentation.summary()}")
+        segmentation = scene.geometry.segmented_image()
+        if segmentation is not None:
+            lines.append(f"segmentation     {segmentation.summary()}")
         if args.segmentation is not None:
             lines.append(f"segmentation PNG {args.segmentation}")
         write_result(args.output, result, scene, force=args.force, checked=True)
@@ -184,9 +184,9 @@ def _check(args):
         if path is not None:
             check_png_path(path, what)
     scene = load_scene(args.scene)
-    if args.segmentation is not None and not isinstance(scene.geometry, Micrograph):
+    if args.segmentation is not None and scene.geometry.segmented_image() is None:
         raise ValueError(f"--segmentation needs a phase map of kind \"micrograph\", the "
-                         f"scene's is {getattr(scene.geometry, 'kind', '?')!r}")
+                         f"scene's is {scene.geometry.kind!r}")
     for path, what in ((args.output, "output"), (args.plot, "--plot"),
                        (args.segmentation, "--segmentation")):
         if path is not None:
@@ -210,8 +210,7 @@ def _check(args):
 
 def _draw_segmentation(args, scene):
     """Draw the micrograph's segmentation over its image (before the solve, or alone)."""
-    from ..micrograph import segmentation_figure  # deferred: matplotlib is slow to import
-    from ..plotting import save_png
+    from ..plotting import save_png, segmentation_figure  # deferred: matplotlib is slow
 
     figure = segmentation_figure(scene.geometry, names=scene.phase_names)
     save_png(figure, args.segmentation, force=True)  # the path was checked before

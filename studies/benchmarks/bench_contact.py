@@ -49,8 +49,8 @@ import numpy as np
 from steady import reference
 from steady.halfspace import HalfSpace
 from steady.outline import Circle
-from steady.output import atomic_h5
 from steady.phases import Voronoi
+from steady.safe_files import atomic_h5
 from transient.contact import solve_contact
 
 # -- parameters -------------------------------------------------------------------

@@ -455,7 +455,7 @@ _UNITS = {"seconds": "s", "cpu": "s", "product": "s", "approach": "m", "load": "
 
 def _write_rows(path, rows, figures, **attrs):
     """The rows (one dataset per key) and the summary figures (attributes), HDF5."""
-    from steady.output import atomic_h5
+    from steady.safe_files import atomic_h5
 
     with atomic_h5(path, format="runin.bench_contact_solve", version=1, force=True) as f:
         f.attrs.update(machine=platform.processor() or platform.machine(),

@@ -341,7 +341,7 @@ def _outline_attrs(group, outline):
 
 def write_h5(path, tables, meta):
     """Write every table (a group per face) and the run's metadata."""
-    from steady.output import atomic_h5
+    from steady.safe_files import atomic_h5
 
     with atomic_h5(path, format="runin.bench_outline_slopes", version=1, force=True) as f:
         for key, value in meta.items():

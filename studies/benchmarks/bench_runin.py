@@ -69,7 +69,7 @@ import time
 import numpy as np
 
 from steady.halfspace import HalfSpace
-from steady.output import atomic_h5
+from steady.safe_files import atomic_h5
 from transient.diagnostics import face_rms_slope, shape_rms
 from transient.memory import run_in_memory
 from transient.options import RunOptions

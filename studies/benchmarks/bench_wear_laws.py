@@ -33,7 +33,7 @@ import time
 
 import numpy as np
 
-from steady.output import atomic_h5
+from steady.safe_files import atomic_h5
 from steady.wear import ThresholdLaw
 from transient.problem import WearProblem
 from transient.runin import run_in

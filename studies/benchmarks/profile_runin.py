@@ -51,7 +51,7 @@ import time
 
 import numpy as np
 
-from steady.output import atomic_h5
+from steady.safe_files import atomic_h5
 
 SCENE = (pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
          / "voronoi_transient.toml")

@@ -1,14 +1,14 @@
 """The run file of ``runin-transient``: inputs, checkpoints, backup, resume, settings history.
 
 A run writes its file at a time under the run file's lock
-(:class:`transient.output.RunLock`).  :class:`RunFile` writes every
+(:class:`steady.safe_files.RunLock`).  :class:`RunFile` writes every
 checkpoint atomically with the run's inputs (:func:`run_inputs`); the file
 it replaces is kept as ``RUN.h5.prev`` while the run goes on, and removed
 once the run has ended steady and its final file reads back intact.  A
 checkpoint replaces only the run's own previous checkpoint, or the file
 that was there when the run started (``--resume``, ``--force``): a file
 another writer put at the run's path meanwhile is refused
-(:class:`steady.output.OutputAppearedError`), not replaced.  A resumed
+(:class:`steady.safe_files.OutputAppearedError`), not replaced.  A resumed
 run continues only the run of the same problem (:func:`check_same_inputs`:
 face, grid, load, phases, wear law, initial face), from a file whose
 checksums hold (:func:`read_resume`, which names the previous checkpoint
@@ -30,7 +30,7 @@ import threading
 import numpy as np
 
 from steady.outline import describe_change
-from steady.output import file_identity
+from steady.safe_files import backup_path, file_identity
 from steady.text import shorten
 from steady.wear import same_wear_law, wear_law_from_file
 
@@ -222,7 +222,7 @@ class RunFile:
 
         Raises
         ------
-        steady.output.OutputAppearedError
+        steady.safe_files.OutputAppearedError
             (a ``ValueError``) Another writer put a file at ``path`` since
             the run's previous write (or its start): nothing is written.
         OSError
@@ -244,7 +244,7 @@ class RunFile:
                 backup=self.ours, force=False, replaces=self.replaces, checked=True)
             if not self.ours:
                 # A backup beside a new run belongs to the run this one replaced.
-                output.backup_path(self.path).unlink(missing_ok=True)
+                backup_path(self.path).unlink(missing_ok=True)
             self.ours = True
             previous, self.saved = self.saved, (result.steps, result.distance,
                                                 result.distance_scale)
@@ -253,7 +253,7 @@ class RunFile:
 
     def _drop_backup(self, previous):
         """Remove the backup of a finished run once its final file reads back intact."""
-        backup = output.backup_path(self.path)
+        backup = backup_path(self.path)
         try:
             output.verify_run(self.path)
         except output.DamagedRunFileError as err:
@@ -283,7 +283,7 @@ def read_resume(out):
     try:
         return output.read_run(out)
     except output.DamagedRunFileError as err:
-        backup = output.backup_path(out)
+        backup = backup_path(out)
         try:
             prev = output.read_run(backup)[0] if backup.exists() else None
         except ValueError:

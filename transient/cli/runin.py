@@ -24,7 +24,7 @@ Before the run starts everything that can be checked is: the scene, the
 output paths (missing directories are created; a directory, a device, an
 unwritable place or ``--plot`` naming the run file are refused), the
 memory the grid and the snapshots need (:func:`transient.memory.run_in_memory`) and the
-run file's lock: one writer at a time (:class:`transient.output.RunLock`),
+run file's lock: one writer at a time (:class:`steady.safe_files.RunLock`),
 a second one is refused at once.
 
 The run file is checkpointed atomically right after the first step and
@@ -91,7 +91,7 @@ from steady.cli.common import (
     run_command,
 )
 from steady.memory import check_memory, keep_freed_memory
-from steady.output import OutputAppearedError
+from steady.safe_files import OutputAppearedError
 
 from ..memory import run_in_memory
 from ..options import add_option_flags, options_from_flags
@@ -144,7 +144,7 @@ def _run_in_text(grid, snapshots):
 
 def _check_outputs(args):
     """Refuse what the output paths cannot be, before any work; create missing directories."""
-    from ..output import backup_path, lock_path
+    from steady.safe_files import backup_path, lock_path
 
     out = args.output
     check_distinct([("the scene", args.scene), ("-o", out),
@@ -266,7 +266,8 @@ def _prepare(args, lock, scene, initial, options, checked):
     ``checked`` is the scene's steady problem, built (its map rasterised and
     checked) before the lock was taken.
     """
-    from ..output import backup_path, remove_temporaries
+    from steady.safe_files import backup_path, remove_temporaries
+
     from ..problem import WearProblem
 
     out = args.output
@@ -347,8 +348,8 @@ def _companion_grid(scene_path, scene, initial, n):
 def run(args):
     """Do the work for parsed arguments; return the exit status."""
     from steady.problem import Problem
+    from steady.safe_files import RunLock
 
-    from ..output import RunLock
     from ..scene import load_transient_scene
 
     out = args.output

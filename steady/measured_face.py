@@ -1,0 +1,114 @@
+"""A measured height map of a worn face: heights in metres on a grid of pixels.
+
+:class:`MeasuredFace` is what the wear-ratio fit (:mod:`steady.fit`) takes;
+the readers of measured files (:func:`steady.fit_files.read_measured`)
+return one.  Arrays are indexed ``[i, j]`` with ``i`` along x, like every
+field of the project; a height is the face's elevation towards the
+counter-body (larger = protruding), the sign of the steady face
+``f_inf = K p``; NaN marks a missing pixel.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+__all__ = ["MeasuredFace", "check_pixel_size"]
+
+
+def check_pixel_size(pixel_size, what):
+    """``(dx, dy)`` from a number or a pair; ``ValueError`` unless positive and finite.
+
+    Parameters
+    ----------
+    pixel_size : float or (float, float), m
+        A square pixel's side, or ``(dx, dy)``.
+    what : str
+        What the pixel size is of, for the message.
+
+    Returns
+    -------
+    (float, float), m
+    """
+    values = np.atleast_1d(np.asarray(pixel_size, dtype=float)) if pixel_size is not None \
+        else np.array([])
+    if values.ndim != 1 or values.size not in (1, 2) or not np.all(np.isfinite(values)) \
+            or not np.all(values > 0):
+        raise ValueError(f"{what} must be one or two positive finite lengths (m), got "
+                         f"{pixel_size!r}")
+    return (float(values[0]), float(values[-1]))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class MeasuredFace:
+    """A measured height map of a worn face.
+
+    Parameters
+    ----------
+    heights : array_like, shape (nx, ny), m
+        Face elevation (larger = protruding) at the pixel centres, indexed
+        ``[i, j]`` with ``i`` along x; NaN where the measurement has no
+        value.  Stored as a read-only float array.
+    pixel_size : float or (float, float), m
+        Pixel side, or ``(dx, dy)``.
+    source : str, optional
+        Where the map came from (for messages and the result file).
+
+    Notes
+    -----
+    The map's centre, the middle of its pixel array, is taken as the face's
+    centre (the origin of its outline, the axis of a disk) unless the fit is
+    given or searches a shift.
+    """
+
+    heights: np.ndarray
+    pixel_size: tuple
+    source: str = "array"
+
+    def __post_init__(self):
+        """Check the array and the pixel size; store them read-only."""
+        raw = np.asarray(self.heights)
+        # float() of a complex array keeps the real part with a bare numpy warning,
+        # of a boolean one makes heights of 0 and 1: neither is a measured face.
+        if raw.dtype.kind in "cb":
+            kind = "complex numbers" if raw.dtype.kind == "c" else "booleans"
+            raise ValueError(f"measured map {self.source} holds {kind} ({raw.dtype}); heights "
+                             f"must be real numbers")
+        try:
+            h = np.array(raw, dtype=float)
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"measured map {self.source} must hold real numbers: "
+                             f"{str(err)[:200]}") from None
+        if h.ndim != 2 or min(h.shape) < 2:
+            raise ValueError(f"measured map {self.source} must be a 2-d array of at least 2 x 2 "
+                             f"pixels, got shape {h.shape}")
+        if np.any(np.isinf(h)):
+            raise ValueError(f"measured map {self.source} holds infinite heights")
+        if not np.any(np.isfinite(h)):
+            raise ValueError(f"measured map {self.source} holds no finite height")
+        h.flags.writeable = False
+        object.__setattr__(self, "heights", h)
+        object.__setattr__(self, "pixel_size",
+                           check_pixel_size(self.pixel_size, f"pixel size of {self.source}"))
+
+    @property
+    def shape(self):
+        """``(nx, ny)``, pixels."""
+        return self.heights.shape
+
+    @property
+    def extent(self):
+        """Size of the map ``(nx dx, ny dy)``, m."""
+        return (self.shape[0] * self.pixel_size[0], self.shape[1] * self.pixel_size[1])
+
+    def coordinates(self):
+        """Pixel-centre coordinates from the map's centre.
+
+        Returns
+        -------
+        x : ndarray, shape (nx,), m
+        y : ndarray, shape (ny,), m
+        """
+        (nx, ny), (dx, dy) = self.shape, self.pixel_size
+        return (np.arange(nx) - 0.5 * (nx - 1)) * dx, (np.arange(ny) - 0.5 * (ny - 1)) * dy
