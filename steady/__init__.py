@@ -109,6 +109,7 @@ _MODULE_OF = {
     "parse_scene": "scene",
     "phase_pressures": "pressures",
     "pressure_field": "wear",
+    "problem_of": "scene",
     "read_fit": "fit_files",
     "read_measured": "fit_files",
     "read_result": "output",

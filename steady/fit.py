@@ -64,6 +64,7 @@ from .halfspace import HalfSpace
 from .labels import extend_off_face
 from .measured_face import MeasuredFace
 from .problem import Problem, default_phase_names
+from .scene import problem_of
 
 __all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceBasis", "FaceModel", "FitResult", "fit_face",
            "fit_scene"]
@@ -907,7 +908,7 @@ class FaceModel(FaceBasis):
         (:meth:`steady.scene.Scene.phase_labels`, which names a phase with no
         pixel on the face).
         """
-        return cls(Problem.from_scene(scene, n=n))
+        return cls(problem_of(scene, n=n))
 
     def fit(self, measured, *, shift=(0.0, 0.0), search_shift=False, max_shift=None,
             rim_margin=0.0, reference_phase=0, confidence=0.95,

@@ -13,7 +13,7 @@ The steady solve (:func:`steady.solution.solve`), the run-in
 (:class:`transient.problem.WearProblem`) and the fit of wear ratios
 (:class:`steady.fit.FaceModel`) take a :class:`Problem`; the sweep basis
 (:class:`steady.basis.PhaseBasis`), which varies the wear law and the load,
-takes :class:`FacePhases`.  :meth:`Problem.from_scene` is the one way from
+takes :class:`FacePhases`.  :func:`steady.scene.problem_of` is the one way from
 a scene file (:mod:`steady.scene`) to a problem.
 
 Examples
@@ -510,58 +510,6 @@ class Problem:
             check_scale(float(p), f"the {what} steady pixel pressure under the sliding "
                         f"{sliding.describe()}", "Pa", ("wear", "normal_force", "outline"),
                         names)
-
-    @classmethod
-    def from_scene(cls, scene, *, n=None):
-        """The problem of a scene file (:class:`steady.scene.Scene`), the one factory.
-
-        Parameters
-        ----------
-        scene : steady.scene.Scene
-        n : int, optional
-            Grid size, pixels along the longer side; default ``scene.n``.
-            The phase geometry is rasterised at this size.
-
-        Returns
-        -------
-        Problem
-            Under the scene's load, the last force of a ``[load] programme``
-            (the steady state's) when it has one.
-
-        Raises
-        ------
-        ValueError
-            A grid too coarse for the outline or the geometry, a phase
-            without a pixel on the face at this grid (named, with what to
-            change; for a depth-varying scene, a phase nowhere in the
-            columns), or a scale out of range (:func:`check_scales`, naming
-            the scene's keys).
-
-        Notes
-        -----
-        A depth-varying scene (``[depth]`` or a 3-d map kind,
-        :meth:`steady.scene.Scene.depth_columns`) gives a problem with
-        ``phases.columns``, its labels the surface section:
-        :meth:`section` gives the problem of a deeper one.
-        """
-        grid = scene.grid(n)
-        columns = scene.depth_columns(grid)
-        labels = scene.phase_labels(grid) if columns is None else columns.phase_at(0.0)
-        phases = FacePhases(grid, labels, scene.n_phases, scene.phase_names, columns)
-        # Under a load programme the steady state is the one of its last force.
-        force = scene.final_force
-        names = scene.input_names()
-        if force != scene.normal_force:
-            names["normal_force"] = f"[load] programme force {force!r}"
-        try:
-            checked = scene.checked  # as read from its file (else: checked here)
-            if checked and grid.n != scene.n:  # the scene checked its own grid's pixel
-                check_pixel_scale(scene.outline, grid.n, dict(names, n=f"n = {grid.n!r}"))
-            return cls(phases, scene.wear, force, scene.E_star, scene.sliding,
-                       checked=checked, names=names)
-        except ValueError as err:
-            where = "" if scene.source_path is None else f"{scene.source_path}: "
-            raise ValueError(f"{where}{err}") from None
 
     def section(self, depth):
         """The problem of the section at ``depth``: the quasi-steady problem there.

@@ -58,8 +58,11 @@ from .load_programme import LoadProgramme
 from .outline import FaceGrid, outline_from_table
 from .phases import PHASE_MAPS, Voronoi
 from .problem import (
+    FacePhases,
+    Problem,
     check_load_scales,
     check_phase_names,
+    check_pixel_scale,
     check_rate_scales,
     check_scale,
 )
@@ -69,7 +72,7 @@ from .text import one_line, shorten
 from .wear import wear_law_from_table
 
 __all__ = ["DEPTH_KEYS", "LAYER_KEYS", "MAX_SCENE_BYTES", "OPTIONAL_SECTIONS", "PHASE_KEYS",
-           "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene", "parse_scene"]
+           "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene", "parse_scene", "problem_of"]
 
 #: Largest scene file read, bytes: a scene is a few lines; large data belong in
 #: ``.npy`` files (a 40 MB list would take Python's TOML parser half a minute).
@@ -198,7 +201,7 @@ class Scene:
 
         True for a scene read from a file and not changed since (a scene
         built in Python, or with another grid, load or law, is checked
-        where it enters a problem, :meth:`steady.problem.Problem.from_scene`).
+        where it enters a problem, :func:`steady.scene.problem_of`).
         """
         return self._checked is not None and self._checked == self._inputs()
 
@@ -313,6 +316,66 @@ class Scene:
             raise ValueError(f"{where}[phases] map: phase {phase} has no pixel on the face at "
                              f"n = {n}")
         return labels  # the rest is checked once, where it enters a problem (FacePhases)
+
+
+def problem_of(scene, *, n=None):
+    """The problem of a scene (:class:`steady.problem.Problem`): the one factory from a scene.
+
+    Parameters
+    ----------
+    scene : Scene
+    n : int, optional
+        Grid size, pixels along the longer side; default ``scene.n``.
+        The phase geometry is rasterised at this size.
+
+    Returns
+    -------
+    steady.problem.Problem
+        Under the scene's load, the last force of a ``[load] programme``
+        (the steady state's) when it has one.  The scales the scene checked
+        as it was read are not checked again (:attr:`Scene.checked`).
+
+    Raises
+    ------
+    ValueError
+        A grid too coarse for the outline or the geometry, a phase without
+        a pixel on the face at this grid (named, with what to change; for a
+        depth-varying scene, a phase nowhere in the columns), or a scale out
+        of range (:func:`steady.problem.check_scales`, naming the scene's
+        keys); the message starts with the scene file.
+
+    Notes
+    -----
+    A depth-varying scene (``[depth]`` or a 3-d map kind,
+    :meth:`Scene.depth_columns`) gives a problem with ``phases.columns``,
+    its labels the surface section: :meth:`steady.problem.Problem.section`
+    gives the problem of a deeper one.
+
+    Examples
+    --------
+    >>> from steady import examples
+    >>> problem = problem_of(load_scene(examples.path("voronoi_biphasic")), n=96)
+    >>> problem.n_phases, problem.shape
+    (2, (96, 96))
+    """
+    grid = scene.grid(n)
+    columns = scene.depth_columns(grid)
+    labels = scene.phase_labels(grid) if columns is None else columns.phase_at(0.0)
+    phases = FacePhases(grid, labels, scene.n_phases, scene.phase_names, columns)
+    # Under a load programme the steady state is the one of its last force.
+    force = scene.final_force
+    names = scene.input_names()
+    if force != scene.normal_force:
+        names["normal_force"] = f"[load] programme force {force!r}"
+    try:
+        checked = scene.checked  # as read from its file (else: checked here)
+        if checked and grid.n != scene.n:  # the scene checked its own grid's pixel
+            check_pixel_scale(scene.outline, grid.n, dict(names, n=f"n = {grid.n!r}"))
+        return Problem(phases, scene.wear, force, scene.E_star, scene.sliding,
+                       checked=checked, names=names)
+    except ValueError as err:
+        where = "" if scene.source_path is None else f"{scene.source_path}: "
+        raise ValueError(f"{where}{err}") from None
 
 
 def input_names(outline, normal_force, E_star, n, wear=None):

@@ -37,6 +37,7 @@ from .normalisation import reference_slope
 from .problem import Problem
 from .relief import rms_height
 from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
+from .scene import problem_of
 from .validity import check_rms_slope
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
@@ -339,7 +340,7 @@ def solve_scene(scene, *, n=None, face_only=False, problem=None, estimate=None):
         Skip the rms slope estimate (``rms_slope`` and its error NaN),
         default False.
     problem : steady.problem.Problem, optional
-        ``Problem.from_scene(scene, n=n)``, if the caller has built it (a
+        ``problem_of(scene, n=n)``, if the caller has built it (a
         command that checks the scene's map before the solve): the map is
         then not rasterised again.  Default: built here.
     estimate : steady.rms_slope.SlopeEstimate, optional
@@ -382,7 +383,7 @@ def solve_scene(scene, *, n=None, face_only=False, problem=None, estimate=None):
     """
     # The problem's map is the geometry's at n by construction: no need to check it.
     if problem is None:
-        problem = Problem.from_scene(scene, n=n)
+        problem = problem_of(scene, n=n)
     elif problem.shape != scene.grid(n).shape:
         raise ValueError(f"the problem's grid {problem.shape[0]} x {problem.shape[1]} is not "
                          f"the scene's at n = {scene.n if n is None else n}")

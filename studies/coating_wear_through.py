@@ -78,11 +78,11 @@ def run_2d(scene, n, tol, within):
     passes the thickness, linearly interpolated within the step.
     """
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.run_in_distance import WearThroughMap
     from transient.runin import run_in
+    from transient.scene import wear_problem_of
 
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     face, t = problem.face_mask, scene.depth.thicknesses[0]
     crossing = WearThroughMap(face, t)
     result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=tol), on_step=crossing)

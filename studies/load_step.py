@@ -47,10 +47,10 @@ _KEPT = {"distance": "s*", "force": "N", "rms_slope": "1", "face_deviation": "1"
 def _run(scene, n, scheme, tol, within):
     """One run-in of ``scene`` from flat to steady: its history and run-in distance."""
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.runin import run_in
+    from transient.scene import wear_problem_of
 
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     result = run_in(problem, np.zeros(problem.shape), RunOptions(scheme=scheme, tol=tol))
     if not result.success:
         raise ValueError(f"run-in ended {result.status}: {result.message}")
@@ -70,11 +70,10 @@ def _run(scene, n, scheme, tol, within):
 def compute(path, params):
     """The constant-load run and one run per load factor; write HDF5."""
     from steady.load_programme import LoadProgramme
-    from transient.problem import WearProblem
-    from transient.scene import load_transient_scene
+    from transient.scene import load_transient_scene, wear_problem_of
 
     scene, _, _ = load_transient_scene(study_io.ROOT / "steady" / "examples" / params["scene"])
-    s_star = WearProblem.from_scene(scene, n=params["n"]).distance_scale
+    s_star = wear_problem_of(scene, n=params["n"]).distance_scale
     force = scene.normal_force
     scenes = {"constant": scene}
     for factor in params["factors"]:

@@ -57,9 +57,8 @@ from matplotlib.colors import ListedColormap
 
 from steady.depth_maps import Spheres
 from steady.inclusions import Inclusions
-from steady.problem import Problem
 from steady.reference import fine_grain_rms_slope
-from steady.scene import load_scene
+from steady.scene import load_scene, problem_of
 from steady.solution import solve
 from steady.validity import ValidityWarning
 
@@ -100,11 +99,11 @@ def case_scene(params, ratio):
 def run_case(params, ratio):
     """Wear the sphere punch from flat to the end depth; the history figures, normalised."""
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.runin import run_in
+    from transient.scene import wear_problem_of
 
     scene, f_star, end = case_scene(params, ratio)
-    problem = WearProblem.from_scene(scene)
+    problem = wear_problem_of(scene)
     options = RunOptions(tol=params["tol"], end_depth=end)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ValidityWarning)
@@ -136,7 +135,7 @@ def inclusion_slopes(params):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ValidityWarning)
             n = max(params["n"], geometry.min_grid(scene.outline))
-            solution = solve(Problem.from_scene(dataclasses.replace(scene, geometry=geometry),
+            solution = solve(problem_of(dataclasses.replace(scene, geometry=geometry),
                                                 n=n))
         values.append(solution.normalised_rms_slope)
     return np.asarray(values)

@@ -72,12 +72,12 @@ def run_case(point, *, tol, distances):
     from transient.history import rim_layer_excess
     from transient.initial_face import flat
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.runin import run_in
+    from transient.scene import wear_problem_of
 
     scene = _scene(point["case"])
     n = point["n"]
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     result = run_in(problem, flat(problem.grid), RunOptions(tol=tol, snapshots_s_star=distances))
     if not result.success:
         raise RuntimeError(f"{point}: run-in ended {result.status}: {result.message}")

@@ -55,9 +55,9 @@ def _run(case, n, scheme, tol, band):
     """One run-in from a flat face; its history and run-in distances (``band`` and a tenth)."""
     from transient.initial_face import flat
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.run_in_distance import deviations
     from transient.runin import run_in
+    from transient.scene import wear_problem_of
 
     if case["n_seeds"] == 0:
         geometry, k = Homogeneous(), (1.0,)
@@ -67,7 +67,7 @@ def _run(case, n, scheme, tol, band):
     # a = 1 m, pbar = 1 Pa, E* = 1 Pa: distances come out in units of a / (k E*).
     scene = Scene(outline=Circle(1.0), normal_force=np.pi, E_star=1.0, n=n, wear=PowerLaw(k),
                   geometry=geometry)
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     result = run_in(problem, flat(problem.grid), RunOptions(scheme=scheme, tol=tol))
     if not result.success:
         raise ValueError(f"run-in of {case} ended {result.status}: {result.message}")

@@ -78,12 +78,12 @@ def run_case(point, *, n, n_seeds, fill, seed, tol):
     from transient.comparison import compare_with_steady
     from transient.initial_face import flat
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.runin import run_in
+    from transient.scene import wear_problem_of
     from transient.spatial_error import spatial_error
 
     scene = _scene(point["case"], n, n_seeds, fill, seed)
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     options = RunOptions(tol=tol)
     result = run_in(problem, flat(problem.grid), options)
     if not result.success:

@@ -76,8 +76,8 @@ from transient.contact import solve_contact
 from transient.history import FaceEstimator
 from transient.initial_face import flat
 from transient.options import RunOptions
-from transient.problem import WearProblem
 from transient.runin import run_in
+from transient.scene import wear_problem_of
 from transient.solver import StageSolver
 from transient.spatial_error import spatial_error
 from transient.stepping import SCHEMES
@@ -124,7 +124,7 @@ def scene(n=N):
 
 def build(n):
     """The study's wear problem on the ``n x n`` grid."""
-    return WearProblem.from_scene(scene(n), n=n)
+    return wear_problem_of(scene(n), n=n)
 
 
 def unit_cost(hs, face):

@@ -24,10 +24,9 @@ import pytest
 
 from transient.axisymmetric import CoatedAxisymmetricRunIn
 from transient.options import RunOptions
-from transient.problem import WearProblem
 from transient.run_in_distance import WearThroughMap
 from transient.runin import run_in
-from transient.scene import load_transient_scene
+from transient.scene import load_transient_scene, wear_problem_of
 
 EXAMPLE = "steady/examples/coating_transient.toml"
 #: Coating thickness over ``pbar a / E*`` (pbar = F / (pi a^2)) and ``k_s / k_c``.
@@ -95,7 +94,7 @@ def coated_run(n, tol=TOL):
     passed the thickness, linearly interpolated within the step.
     """
     scene = coated_scene()
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     face, t = problem.face_mask, scene.depth.thicknesses[0]
     crossing = WearThroughMap(face, t)
     result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=tol), on_step=crossing)

@@ -7,19 +7,18 @@ import numpy as np
 from steady.examples import path as example_path
 from transient.contact import solve_contact
 from transient.options import RunOptions
-from transient.problem import WearProblem
 from transient.runin import run_in
-from transient.scene import load_transient_scene
+from transient.scene import load_transient_scene, wear_problem_of
 
 
 def coated(n):
     """The shipped coating scene with a substrate 4 times softer and a coating 0.5 f* thick."""
     scene, _, _ = load_transient_scene(example_path("coating_transient"))
-    f_star = WearProblem.from_scene(scene, n=n).depth_scale
+    f_star = wear_problem_of(scene, n=n).depth_scale
     k_c = scene.wear.coefficients[1]
     wear = dataclasses.replace(scene.wear, coefficients=(4 * k_c, k_c))
     depth = dataclasses.replace(scene.depth, thicknesses=(0.5 * f_star,))
-    return WearProblem.from_scene(dataclasses.replace(scene, wear=wear, depth=depth), n=n)
+    return wear_problem_of(dataclasses.replace(scene, wear=wear, depth=depth), n=n)
 
 
 def test_the_held_pressure_is_the_contact_pressure_of_the_held_face():

@@ -13,7 +13,7 @@ from steady.depth_maps import Spheres, Voxels, columns_from_segments
 from steady.outline import Circle
 from steady.phases import ArrayMap, Voronoi
 from steady.problem import FacePhases, Problem
-from steady.scene import load_scene, parse_scene
+from steady.scene import load_scene, parse_scene, problem_of
 from steady.solution import solve
 from steady.wear import ArchardLaw, PowerLaw, TableLaw, ThresholdLaw
 
@@ -339,13 +339,13 @@ def test_todays_scenes_are_columnar_and_unchanged():
                  "micrograph_steady"):
         s = load_scene(examples.path(name))
         assert s.depth is None and s.depth_columns() is None, name
-        problem = Problem.from_scene(s)
+        problem = problem_of(s)
         assert problem.phases.columns is None, name
         assert np.array_equal(problem.labels, s.geometry.labels(s.grid())), name
 
 
 def test_depth_examples_load_and_their_sections_differ():
-    coating = Problem.from_scene(load_scene(examples.path("coating_transient")))
+    coating = problem_of(load_scene(examples.path("coating_transient")))
     assert coating.phases.counts.tolist() == [0, coating.phases.counts.sum()], "coating on top"
     assert coating.section(3e-4).phases.counts[1] == 0, "the substrate below 0.3 mm"
     stack = load_scene(examples.path("voxel_stack_transient")).depth_columns()
@@ -370,4 +370,4 @@ def test_runin_steady_solves_the_section_it_is_given(tmp_path, capsys):
 def test_a_phase_nowhere_in_the_columns_is_named(tmp_path):
     s = scene(tmp_path, COATING.replace("phase = 1", "phase = 2"), k="[1e-12, 1e-13, 3e-13]")
     with pytest.raises(ValueError, match=r"phase 1 occurs nowhere in the columns at n = 32"):
-        Problem.from_scene(s)
+        problem_of(s)

@@ -27,6 +27,7 @@ from steady.scene import load_scene
 from steady.solution import solve, solve_scene
 from steady.wear import PowerLaw
 from transient.problem import WearProblem
+from transient.scene import wear_problem_of
 
 PRECIOUS = b"a result someone cares about"
 RANGE = "is outside [1e-30, 1e+30]"
@@ -174,12 +175,12 @@ def test_scene_objects_name_their_keys(tmp_path):
     assert str(info.value).startswith(f"{tmp_path / 's.toml'}: [load] normal_force = 1e-300 N "
                                       f"{RANGE} N"), str(info.value)
     with pytest.raises(ValueError, match=r"\[load\] normal_force = 1e-300 N is outside"):
-        WearProblem.from_scene(bad)
+        wear_problem_of(bad)
     stiff = dataclasses.replace(scene, wear=PowerLaw(K50, 50.0))
     with pytest.raises(ValueError, match=r"exponent = 50\.0 and \[load\] normal_force = 10\.0 and "
                                          r"\[punch\] radius = 0\.004 and \[grid\] n = 32: the "
                                          r"wear rate of a pixel"):
-        WearProblem.from_scene(stiff)
+        wear_problem_of(stiff)
 
 
 # -- within the range the units do not matter ----------------------------------------------

@@ -16,12 +16,12 @@ import pytest
 from conftest import run_cli, scene_text
 
 from steady.load_programme import LoadProgramme
-from steady.problem import Problem
-from steady.scene import parse_scene
-from transient import RunOptions, WearProblem, compare_with_steady, run_in
+from steady.scene import parse_scene, problem_of
+from transient import RunOptions, compare_with_steady, run_in
 from transient.cli import runin as runin_cli
 from transient.output import read_run, write_run
 from transient.result import HISTORY_UNITS
+from transient.scene import wear_problem_of
 from transient.stepping import SCHEMES
 
 STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
@@ -43,7 +43,7 @@ def programme_text(programme, **overrides):
 def run(programme=None, *, options=OPTIONS, **kwargs):
     """A run of the gallery scene under ``programme`` (None: none) and its wear problem."""
     text = scene_text("runin") if programme is None else programme_text(programme)
-    problem = WearProblem.from_scene(parse_scene(text, "."))
+    problem = wear_problem_of(parse_scene(text, "."))
     return run_in(problem, np.zeros(problem.shape), options, **kwargs), problem
 
 
@@ -136,7 +136,7 @@ def test_every_scheme_ends_on_the_steady_face_of_the_last_force(name, exponent):
     k = (1.0e-13, 1.0e-12) if exponent == 1.0 else (1.0e-13 / 2.6e5, 1.0e-12 / 2.6e5)
     text = programme_text([(0.05 * S_STAR, 20.0), (0.2 * S_STAR, 5.0)], exponent=exponent,
                           coefficients=k)
-    problem = WearProblem.from_scene(parse_scene(text, "."))
+    problem = wear_problem_of(parse_scene(text, "."))
     result = run_in(problem, np.zeros(problem.shape), RunOptions(tol=1e-3, scheme=name))
     assert result.status == "steady", result.message
     assert result.history["force"][-1] == 5.0, "the run did not end under the last force"
@@ -148,8 +148,8 @@ def test_every_scheme_ends_on_the_steady_face_of_the_last_force(name, exponent):
 
 def _from_steady_face(programme, options):
     """A run under ``programme`` from the steady face of 10 N (eq. 9), and its problem."""
-    problem = WearProblem.from_scene(parse_scene(programme_text(programme), "."))
-    first = WearProblem.from_scene(parse_scene(scene_text("runin"), ".")).solve_steady()
+    problem = wear_problem_of(parse_scene(programme_text(programme), "."))
+    first = wear_problem_of(parse_scene(scene_text("runin"), ".")).solve_steady()
     return run_in(problem, -np.where(problem.face_mask, first.face, 0.0), options)
 
 
@@ -164,7 +164,7 @@ def test_a_load_step_from_the_steady_face_is_the_run_in_from_flat_scaled():
     step = _from_steady_face([(s_b * S_STAR, 20.0)],
                              RunOptions(scheme="bdf2", fixed_step=0.02 * S_STAR,
                              distance_limit=(s_b + 0.4) * S_STAR))
-    problem = WearProblem.from_scene(parse_scene(scene_text("runin", normal_force=20.0), "."))
+    problem = wear_problem_of(parse_scene(scene_text("runin", normal_force=20.0), "."))
     flat = run_in(problem, np.zeros(problem.shape),
                   RunOptions(scheme="bdf2", fixed_step=0.02 * S_STAR, distance_limit=0.4 * S_STAR))
     distance = step.history["distance"]
@@ -196,7 +196,7 @@ def test_steady_problem_of_a_programme_scene_takes_the_last_force():
         (scene.normal_force, scene.final_force)
     assert scene.load_programme == LoadProgramme(10.0, ((0.0, 12.0), (1.0, 7.5))), \
         scene.load_programme
-    assert Problem.from_scene(scene).normal_force == 7.5, "steady problem not at the last force"
+    assert problem_of(scene).normal_force == 7.5, "steady problem not at the last force"
 
 
 def test_resume_across_a_breakpoint_is_bit_for_bit(tmp_path):
@@ -214,7 +214,7 @@ def test_resume_across_a_breakpoint_is_bit_for_bit(tmp_path):
         assert saved.load_programme == checkpoints[index].load_programme, \
             "the run file does not keep the programme"
         text = programme_text(programme)
-        problem = WearProblem.from_scene(parse_scene(text, "."))
+        problem = wear_problem_of(parse_scene(text, "."))
         resumed = run_in(problem, None, RunOptions(tol=1e-3, checkpoint_interval=0.0),
                          resume=saved)
         _same_run(resumed, full, f"resumed from checkpoint {index}")

@@ -67,7 +67,7 @@ before = peak()
 if kind == "steady":
     write_result(d / "r.h5", solve_scene(scene), scene)
 else:
-    problem = WearProblem.from_scene(scene)
+    problem = wear_problem_of(scene)
     options = RunOptions(tol=1e-3, max_steps=k + 3, checkpoint_interval=0,
                          snapshots_s_star=tuple(1e-9 * (i + 1) for i in range(k)))
     result = run_in(problem, problem.face_mask * 0.0, options,

@@ -26,9 +26,9 @@ from transient.axisymmetric import AxisymmetricRunIn
 from transient.initial_face import flat
 from transient.options import RunOptions
 from transient.output import read_run, write_run
-from transient.problem import WearProblem
 from transient.run_in_distance import TOLERANCES, RunInDistance, WearThroughMap
 from transient.runin import run_in
+from transient.scene import wear_problem_of
 from transient.spatial_error import spatial_error
 
 # a = 1 m, pbar = 1 Pa, E* = 1 Pa, k = 1 1/Pa: s* = 1 m and distances come out in s*.
@@ -42,7 +42,7 @@ def disk_scene(n):
 
 def homogeneous_run(n, *, companion=False, options=OPTIONS):
     scene = disk_scene(n)
-    problem = WearProblem.from_scene(scene)
+    problem = wear_problem_of(scene)
     result = run_in(problem, flat(problem.grid), options)
     assert result.status == "steady", result.message
     if companion:
@@ -133,7 +133,7 @@ def test_history_ends_with_the_dynamics(disk64):
 
 
 def test_a_run_stopped_early_has_not_reached_it():
-    problem = WearProblem.from_scene(disk_scene(32))
+    problem = wear_problem_of(disk_scene(32))
     stopped = run_in(problem, flat(Circle(1.0).grid(32)),
                      RunOptions(tol=1e-4, distance_limit=0.5 * problem.distance_scale))
     assert stopped.status == "stopped", stopped.message
@@ -191,7 +191,7 @@ def test_run_file_stores_the_distances_and_the_scale(tmp_path, disk64):
 
 
 def test_a_file_naming_the_scale_run_in_distance_is_read(tmp_path):
-    stopped = run_in(WearProblem.from_scene(disk_scene(32)), flat(Circle(1.0).grid(32)),
+    stopped = run_in(wear_problem_of(disk_scene(32)), flat(Circle(1.0).grid(32)),
                      RunOptions(tol=1e-3, max_steps=3))
     path = tmp_path / "old.h5"
     write_run(path, stopped)
@@ -312,7 +312,7 @@ def test_scene_sliding_speed_is_read_and_checked(tmp_path):
     with_speed = text.replace("normal_force = 10.0\n", "normal_force = 10.0\nsliding_speed = 0.5\n")
     scene = parse_scene(with_speed, tmp_path)
     assert scene.sliding_speed == 0.5
-    assert WearProblem.from_scene(scene).sliding_speed == 0.5, "not carried to the problem"
+    assert wear_problem_of(scene).sliding_speed == 0.5, "not carried to the problem"
     for bad in ("-1.0", "0", '"fast"'):
         with pytest.raises(ValueError, match=r"\[load\] sliding_speed must be a number > 0 "
                                              r"\(m/s\), got "):

@@ -19,7 +19,7 @@ from steady.scene import parse_scene
 from steady.solution import solve_scene
 from transient.comparison import steady_of_run
 from transient.history import FaceEstimator
-from transient.problem import WearProblem
+from transient.scene import wear_problem_of
 
 
 def _same_bits(a, b):
@@ -58,7 +58,7 @@ def _scene(n, extra=""):
 @pytest.mark.parametrize("n", [32, 45])
 def test_estimator_ladder_is_the_steady_commands(n):
     scene = _scene(n)
-    problem = WearProblem.from_scene(scene)
+    problem = wear_problem_of(scene)
     estimator = FaceEstimator.of(problem, np.zeros(problem.shape))
     own = estimator.geometry_estimate
     fresh = estimate_rms_slope(scene.geometry, problem.problem.wear, problem.problem.normal_force,
@@ -74,7 +74,7 @@ def test_estimator_ladder_is_the_steady_commands(n):
 @pytest.mark.parametrize("extra", ["", '[sliding]\nkind = "pin_on_disk"\ntrack_radius = 0.02\n'])
 def test_steady_of_run_is_solve_scene(extra):
     scene = _scene(36, extra)
-    problem = WearProblem.from_scene(scene)
+    problem = wear_problem_of(scene)
     shared = steady_of_run(scene, problem, np.zeros(problem.shape))
     fresh = solve_scene(scene, problem=problem.problem)
     differ = _differences(shared, fresh)

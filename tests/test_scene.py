@@ -245,15 +245,15 @@ def test_phase_labels_name_a_phase_without_face_pixel(tmp_path):
 
 def test_phase_names_reach_the_problem_and_are_checked():
     """``[phases] names`` is one name per phase, distinct; the default numbers from 0."""
-    from steady.problem import Problem
+    from steady.scene import problem_of
     base = (ROOT / "steady/examples/rods_brass_in_steel.toml")
     scene = load_scene(base)
     assert scene.phase_names == ("steel", "brass")
-    problem = Problem.from_scene(scene, n=48)
+    problem = problem_of(scene, n=48)
     assert problem.phase_names == ("steel", "brass")
     text = base.read_text()
     unnamed = parse_scene(text.replace('names = ["steel", "brass"]', ""), base.parent)
-    assert Problem.from_scene(unnamed, n=48).phase_names == ("phase 0", "phase 1")
+    assert problem_of(unnamed, n=48).phase_names == ("phase 0", "phase 1")
     for bad, words in (('["steel"]', "1 phase name(s) given for 2"),
                        ('["steel", "steel"]', "'steel' is given twice"),
                        ('["steel", ""]', "[phases] names must be an array of non-empty strings"),

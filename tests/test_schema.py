@@ -23,7 +23,7 @@ from steady.wear import WEAR_LAWS, ArchardLaw, PowerLaw
 from transient.cli.runin import build_parser
 from transient.initial_face import INITIAL_FACES, initial_height
 from transient.options import RunOptions, option_keys
-from transient.problem import WearProblem
+from transient.scene import wear_problem_of
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -178,8 +178,8 @@ def test_a_wear_law_is_one_registration(tmp_path):
     # The steady face depends on the ratios only; the run-in distance s* = a / (k E*).
     a, b = solve_scene(scaled, face_only=True), solve_scene(plain, face_only=True)
     assert np.allclose(a.face, b.face, rtol=1e-12, equal_nan=True), "steady face"
-    ratio = (WearProblem.from_scene(plain).distance_scale
-             / WearProblem.from_scene(scaled).distance_scale)
+    ratio = (wear_problem_of(plain).distance_scale
+             / wear_problem_of(scaled).distance_scale)
     assert ratio == pytest.approx(4.0, rel=1e-12), f"s* ratio {ratio}"
 
 
@@ -242,7 +242,7 @@ def test_a_phase_without_pixels_is_named_not_counted(tmp_path):
     """A Voronoi phase whose seeds miss every pixel centre: the phase, not the coefficients."""
     text = scene_text("steady", n=16, n_seeds=8, fill_factors=(0.875, 0.125), seed=6)
     scene = parse_scene(text, tmp_path)
-    for build in (lambda: solve_scene(scene), lambda: WearProblem.from_scene(scene)):
+    for build in (lambda: solve_scene(scene), lambda: wear_problem_of(scene)):
         with pytest.raises(ValueError) as err:
             build()
         message = str(err.value)

@@ -13,7 +13,7 @@ from steady.phases import Homogeneous, Rods, Voronoi
 from steady.pressures import phase_pressures
 from steady.problem import FacePhases, Problem
 from steady.rms_slope import estimate_rms_slope
-from steady.scene import load_scene
+from steady.scene import load_scene, problem_of
 from steady.solution import solve, solve_scene
 from steady.wear import PowerLaw, pressure_field
 
@@ -313,7 +313,7 @@ def test_solve_and_solve_scene_give_the_same_corrected_rms_slope():
     1.3431 against 1.6138 grad_f0 at n = 128), is only ever ``rms_slope_plain``.
     """
     scene = load_scene(SCENES / "voronoi_biphasic.toml")
-    problem = Problem.from_scene(scene, n=128)
+    problem = problem_of(scene, n=128)
     bare, by_scene = solve(problem), solve_scene(scene, n=128)
     with_geometry = solve(problem, geometry=scene.geometry)
     assert bare.rms_slope == by_scene.rms_slope == with_geometry.rms_slope, \
@@ -375,7 +375,7 @@ def test_a_given_problem_and_map_leave_the_result_unchanged(scene_file, n):
     """``solve_scene(problem=)`` and the ladder's given map give the same numbers, bit by bit."""
     scene = load_scene(scene_file("steady", n=n, n_seeds=100))
     built = solve_scene(scene)
-    given = solve_scene(scene, problem=Problem.from_scene(scene))
+    given = solve_scene(scene, problem=problem_of(scene))
     for name in ("rms_slope", "rms_slope_error", "rms_slope_plain", "rms_height"):
         assert getattr(given, name) == getattr(built, name), name
     np.testing.assert_array_equal(given.face, built.face, err_msg="face")
@@ -385,4 +385,4 @@ def test_a_given_problem_and_map_leave_the_result_unchanged(scene_file, n):
                                                         built.rms_slope_error), "ladder"
     with pytest.raises(ValueError, match=r"the problem's grid 32 x 32 is not the scene's at "
                                          rf"n = {n}"):
-        solve_scene(scene, problem=Problem.from_scene(scene, n=32))
+        solve_scene(scene, problem=problem_of(scene, n=32))

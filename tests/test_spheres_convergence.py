@@ -28,8 +28,8 @@ from steady.depth_maps import Spheres, Voxels, load_voxels
 from steady.scene import load_scene
 from steady.validity import ValidityWarning
 from transient.options import RunOptions
-from transient.problem import WearProblem
 from transient.runin import run_in
+from transient.scene import wear_problem_of
 
 SCENE = pathlib.Path(__file__).resolve().parent.parent / "steady" / "examples" / \
     "spheres_transient.toml"
@@ -54,7 +54,7 @@ def run(scene, n):
     rms slope's discretisation error / grad_f0), and ``worn`` (worn depth
     fields / f*, shape (3, n, n), NaN off the face).
     """
-    problem = WearProblem.from_scene(dataclasses.replace(scene, n=n))
+    problem = wear_problem_of(dataclasses.replace(scene, n=n))
     options = RunOptions(tol=1e-3, snapshots_s_star=SNAPSHOTS,
                          distance_limit=SNAPSHOTS[-1] * problem.distance_scale)
     with warnings.catch_warnings():

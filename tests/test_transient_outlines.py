@@ -56,6 +56,7 @@ from transient.output import read_run, write_run
 from transient.problem import WearProblem
 from transient.result import HISTORY_UNITS
 from transient.runin import RunOptions, run_in
+from transient.scene import wear_problem_of
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 FAST = RunOptions(tol=1e-3, snapshots_s_star=(0.01, 0.1, 1.0))
@@ -282,7 +283,7 @@ def test_shipped_outline_scenes_run_in_to_the_steady_scene(name):
     from transient.scene import load_transient_scene
 
     scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" / f"{name}.toml")
-    problem = WearProblem.from_scene(scene)
+    problem = wear_problem_of(scene)
     result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-4))
     assert result.status == "steady", result.message
     with warnings.catch_warnings():
@@ -383,14 +384,14 @@ def test_scene_problem_uses_the_scene_outline_and_grid(scene_file):
     from transient.scene import load_transient_scene
 
     scene, _, initial = load_transient_scene(path)
-    problem = WearProblem.from_scene(scene)
+    problem = wear_problem_of(scene)
     assert problem.outline == BLOCK and problem.shape == (24, 48) and problem.n == 48
     assert np.array_equal(problem.labels, scene.phase_labels()), "the scene's phase map"
     assert problem.halfspace.h == scene.grid().h
     assert initial.height(problem.grid).shape == (24, 48)
     assert initial.height(scene.outline.grid(48)).shape == (24, 48)
     with pytest.raises(ValueError, match=r"n = 12, the minimum is n = 16"):
-        WearProblem.from_scene(scene, n=12)
+        wear_problem_of(scene, n=12)
 
 
 @pytest.mark.parametrize("make, match", [

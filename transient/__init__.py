@@ -102,6 +102,7 @@ _MODULE_OF = {
     "run_in": "runin",
     "solve_contact": "contact",
     "tilted": "initial_face",
+    "wear_problem_of": "scene",
     "wear_rate_spread": "diagnostics",
     "write_run": "output",
 }

@@ -190,7 +190,7 @@ def steady_of_run(scene, problem, initial_height):
     ----------
     scene : steady.scene.Scene
         The scene the problem was built from
-        (:meth:`transient.problem.WearProblem.from_scene`, its grid).
+        (:func:`transient.scene.wear_problem_of`, its grid).
     problem : transient.problem.WearProblem
     initial_height : ndarray, shape (nx, ny), m
         The run's initial face (its estimator is shared, see

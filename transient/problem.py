@@ -8,7 +8,7 @@ variable (the face height, or across interfaces its wear work).  It holds
 no state of a run: the contact solves, their counters, the warm start, the
 force of the current distance and the section the face has worn down to
 belong to the run's :class:`transient.solver.StageSolver`.
-:meth:`WearProblem.from_scene` is the one way from a scene file to a
+:func:`transient.scene.wear_problem_of` is the one way from a scene file to a
 problem; every caller (command line, studies, tests) goes through it or
 through the constructor, which takes a phase map, never a per-pixel
 coefficient field built by hand.
@@ -199,55 +199,6 @@ class WearProblem:
         """Refuse: a problem is fixed (a run's state belongs to its solver)."""
         raise AttributeError(f"a WearProblem is fixed: cannot set {name!r} (the state of a run "
                              f"belongs to its transient.solver.StageSolver)")
-
-    @classmethod
-    def from_scene(cls, scene, *, n=None, problem=None):
-        """The wear problem of a scene file, the one factory every caller uses.
-
-        Parameters
-        ----------
-        scene : steady.scene.Scene
-            As read by :func:`steady.scene.load_scene` or
-            :func:`transient.scene.load_transient_scene`.
-        n : int, optional
-            Grid size; default ``scene.n``.  The phase geometry is rasterised
-            at this size.
-        problem : steady.problem.Problem, optional
-            ``Problem.from_scene(scene, n=n)``, if the caller has built it
-            (a command that checks the scene's map before the run): the map
-            is then not rasterised again.
-
-        Returns
-        -------
-        WearProblem
-            On the grid ``scene.grid(n)`` of the scene's outline.
-
-        Raises
-        ------
-        ValueError
-            A grid too coarse for the outline or the phase geometry (the
-            message names ``n`` and the minimum), a phase without a pixel
-            on the face at this grid, or a scale out of range
-            (:func:`check_run_in_scales`, naming the scene's keys).
-
-        Examples
-        --------
-        >>> from transient.scene import load_transient_scene
-        >>> scene, options, initial = load_transient_scene(
-        ...     "steady/examples/voronoi_transient.toml")
-        >>> problem = WearProblem.from_scene(scene, n=40)
-        >>> problem.n, problem.n_phases
-        (40, 2)
-        """
-        if problem is None:
-            problem = Problem.from_scene(scene, n=n)
-        try:
-            return cls(problem, load_programme=scene.load_programme,
-                       sliding_speed=scene.sliding_speed, geometry=scene.geometry,
-                       names=scene.input_names())
-        except ValueError as err:
-            where = "" if scene.source_path is None else f"{scene.source_path}: "
-            raise ValueError(f"{where}{err}") from None
 
     @property
     def n_phases(self):

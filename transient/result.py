@@ -285,10 +285,10 @@ class RunResult:
 
         Examples
         --------
-        >>> from transient import RunOptions, WearProblem, run_in
-        >>> from transient.scene import load_transient_scene
+        >>> from transient import RunOptions, run_in
+        >>> from transient.scene import load_transient_scene, wear_problem_of
         >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
-        >>> problem = WearProblem.from_scene(scene, n=40)
+        >>> problem = wear_problem_of(scene, n=40)
         >>> result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-3))
         >>> one, tenth = result.run_in_distance(0.01), result.run_in_distance(0.001)
         >>> one.reached and tenth.reached and one.distance_m < tenth.distance_m

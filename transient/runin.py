@@ -594,11 +594,11 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     A biphasic Voronoi punch worn from flat to the steady state, with a
     loose step tolerance; the final face is the closed-form one (eq. 9).
 
-    >>> from transient import RunOptions, WearProblem, compare_with_steady, run_in
-    >>> from transient.scene import load_transient_scene
+    >>> from transient import RunOptions, compare_with_steady, run_in
+    >>> from transient.scene import load_transient_scene, wear_problem_of
     >>> scene, settings, initial = load_transient_scene(
     ...     "steady/examples/voronoi_transient.toml")
-    >>> problem = WearProblem.from_scene(scene, n=40)
+    >>> problem = wear_problem_of(scene, n=40)
     >>> result = run_in(problem, initial.height(problem.grid),
     ...                 RunOptions(tol=1e-2))
     >>> result.status

@@ -33,18 +33,20 @@ import types
 import numpy as np
 
 from steady.array_files import npy_header
-from steady.scene import RUN_IN_SECTIONS, load_scene
+from steady.scene import RUN_IN_SECTIONS, load_scene, problem_of
 from steady.schema import Context
 from steady.text import one_line
 
 from .initial_face import INITIAL_FACES, initial_height
 from .options import RunOptions, options_from_table
+from .problem import WearProblem
 
 __all__ = [
     "InitialFace",
     "load_transient_scene",
     "parse_initial_face",
     "parse_transient",
+    "wear_problem_of",
 ]
 
 
@@ -159,6 +161,56 @@ def _distance_scale(scene):
         constants = wear.rate_constant(wear.coefficient_field(np.arange(wear.n_phases)),
                                        scene.final_force / scene.outline.area)
         return float(scene.outline.scale / (np.min(constants) * scene.E_star))
+
+
+def wear_problem_of(scene, *, n=None, problem=None):
+    """The wear problem of a scene (:class:`transient.problem.WearProblem`), the one factory.
+
+    Parameters
+    ----------
+    scene : steady.scene.Scene
+        As read by :func:`steady.scene.load_scene` or
+        :func:`load_transient_scene`.
+    n : int, optional
+        Grid size; default ``scene.n``.  The phase geometry is rasterised
+        at this size.
+    problem : steady.problem.Problem, optional
+        ``problem_of(scene, n=n)`` (:func:`steady.scene.problem_of`), if the
+        caller has built it (a command that checks the scene's map before
+        the run): the map is then not rasterised again.
+
+    Returns
+    -------
+    transient.problem.WearProblem
+        On the grid ``scene.grid(n)`` of the scene's outline, with the
+        scene's load programme, sliding speed and phase geometry.
+
+    Raises
+    ------
+    ValueError
+        A grid too coarse for the outline or the phase geometry (the
+        message names ``n`` and the minimum), a phase without a pixel on
+        the face at this grid, or a scale out of range
+        (:func:`transient.problem.check_run_in_scales`, naming the scene's
+        keys); the message starts with the scene file.
+
+    Examples
+    --------
+    >>> scene, options, initial = load_transient_scene(
+    ...     "steady/examples/voronoi_transient.toml")
+    >>> problem = wear_problem_of(scene, n=40)
+    >>> problem.n, problem.n_phases
+    (40, 2)
+    """
+    if problem is None:
+        problem = problem_of(scene, n=n)
+    try:
+        return WearProblem(problem, load_programme=scene.load_programme,
+                           sliding_speed=scene.sliding_speed, geometry=scene.geometry,
+                           names=scene.input_names())
+    except ValueError as err:
+        where = "" if scene.source_path is None else f"{scene.source_path}: "
+        raise ValueError(f"{where}{err}") from None
 
 
 def load_transient_scene(path):

@@ -24,8 +24,8 @@ import numpy as np
 from steady.outline import FaceGrid
 from steady.rms_slope import ladder_error
 
-from .problem import WearProblem
 from .runin import run_in
+from .scene import wear_problem_of
 
 __all__ = ["SpatialError", "companion_grid", "spatial_error"]
 
@@ -176,11 +176,11 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None):
 
     Examples
     --------
-    >>> from transient import RunOptions, WearProblem, run_in
-    >>> from transient.scene import load_transient_scene
+    >>> from transient import RunOptions, run_in
+    >>> from transient.scene import load_transient_scene, wear_problem_of
     >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
     >>> options = RunOptions(tol=1e-2)
-    >>> problem = WearProblem.from_scene(scene, n=64)
+    >>> problem = wear_problem_of(scene, n=64)
     >>> result = run_in(problem, initial.height(problem.grid), options)
     >>> companion = spatial_error(scene, initial, options, result)
     >>> result = companion.attach(result)
@@ -194,7 +194,7 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None):
     if not 2 <= m < n:
         raise ValueError(f"companion grid must lie in [2, {n}), got {m}")
     build = initial.height if hasattr(initial, "height") else initial
-    problem = WearProblem.from_scene(scene, n=m)
+    problem = wear_problem_of(scene, n=m)
     logger.info("companion run on n = %d (main run n = %d)", m, n)
     coarse = run_in(problem, build(problem.grid), options, on_step=on_step)
     if not coarse.success:

@@ -25,12 +25,11 @@ import matplotlib.pyplot as plt
 from steady import examples
 from transient.output import write_run
 from transient.plotting import plot_history
-from transient.problem import WearProblem
 from transient.runin import run_in
-from transient.scene import load_transient_scene
+from transient.scene import load_transient_scene, wear_problem_of
 
 scene, options, initial = load_transient_scene(examples.path("voronoi_transient"))
-problem = WearProblem.from_scene(scene, n=48)
+problem = wear_problem_of(scene, n=48)
 result = run_in(problem, initial.height(problem.grid), options)
 print(f"{result.status}: {result.steps} steps; the dynamics end at "
       f"{result.history['distance'][-1]:.4g} m")

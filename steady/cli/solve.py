@@ -30,9 +30,11 @@ import math
 import pathlib
 import time
 
+from steady.scene import problem_of
+
 from ..memory import check_memory, keep_freed_memory, steady_memory
 from ..output import write_result
-from ..problem import Problem, default_phase_names
+from ..problem import default_phase_names
 from ..scene import load_scene
 from ..solution import solve_scene
 from .common import (
@@ -199,7 +201,7 @@ def _check(args):
     if not (math.isfinite(args.depth) and args.depth >= 0):
         raise ValueError(f"--depth must be a finite depth >= 0 (m), got {args.depth!r}")
     # Names a phase without a face pixel before the solve; the solve takes its map.
-    problem = Problem.from_scene(scene)
+    problem = problem_of(scene)
     if problem.phases.columns is not None:
         problem = problem.section(args.depth)
     elif args.depth > 0:

@@ -262,15 +262,14 @@ def overlap(directory, *, rounds=ROUNDS):
     """
     from transient import contact
     from transient.history import FaceEstimator
-    from transient.problem import WearProblem
-    from transient.scene import load_transient_scene
+    from transient.scene import load_transient_scene, wear_problem_of
 
     paths = sorted(pathlib.Path(directory).glob("problem_*.npz"))
     if not paths:
         raise ValueError(f"no problem_*.npz in {directory}")
     problems = [dict(np.load(path)) for path in paths]
     scene, _, _ = load_transient_scene(SCENE)
-    problem = WearProblem.from_scene(scene, n=int(problems[0]["shape"][0]))
+    problem = wear_problem_of(scene, n=int(problems[0]["shape"][0]))
     estimator = FaceEstimator(problem, np.zeros(problem.halfspace.shape))
     estimator.workers, estimator.threaded = 1, True  # as the run sets them
     solve = getattr(contact, _entry(contact))

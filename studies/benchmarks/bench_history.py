@@ -43,14 +43,13 @@ def measure(n, distance):
     """Timings on one grid (s): estimator call and build, warm shifted solve, run fractions."""
     from transient import history
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.runin import run_in
-    from transient.scene import load_transient_scene
+    from transient.scene import load_transient_scene, wear_problem_of
     from transient.solver import StageSolver
 
     scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" /
                                              "voronoi_transient.toml")
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     h0 = initial.height(problem.grid)
     build = _median(lambda: history.FaceEstimator(problem, h0), 3)
     estimator = history.FaceEstimator(problem, h0)
@@ -76,7 +75,7 @@ def measure(n, distance):
 
     history.FaceEstimator.figures = timed
     try:
-        fresh = WearProblem.from_scene(scene, n=n)
+        fresh = wear_problem_of(scene, n=n)
         t = time.perf_counter()
         result = run_in(fresh, h0, RunOptions(tol=1e-4, distance_limit=distance * s_star,
                                               jump_spread=0.0))

@@ -75,9 +75,8 @@ from transient.memory import run_in_memory
 from transient.options import RunOptions
 from transient.output import read_run
 from transient.preconditioners import FourierPreconditioner
-from transient.problem import WearProblem
 from transient.runin import run_in
-from transient.scene import load_transient_scene
+from transient.scene import load_transient_scene, wear_problem_of
 from transient.stepping import SCHEMES
 
 # -- parameters -------------------------------------------------------------------
@@ -131,7 +130,7 @@ def problem_of(scene, n, ratio=None):
         k = scene.wear.coefficients
         scene = dataclasses.replace(scene, wear=dataclasses.replace(
             scene.wear, coefficients=(k[0], k[0] * ratio)))
-    return WearProblem.from_scene(scene, n=n)
+    return wear_problem_of(scene, n=n)
 
 
 def _peak_rss():

@@ -30,16 +30,15 @@ import numpy as np
 
 from steady.sliding import PinOnDisk
 from steady.solution import solve
-from transient.problem import WearProblem
 from transient.runin import run_in
-from transient.scene import load_transient_scene
+from transient.scene import load_transient_scene, wear_problem_of
 
 SCENE = "steady/examples/voronoi_transient.toml"
 
 
 def measure(scene, options, initial, n):
     """One run-in: its counters, wall time and the face's distance to the closed form."""
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     start = time.perf_counter()
     result = run_in(problem, initial.height(problem.grid), options)
     wall = time.perf_counter() - start

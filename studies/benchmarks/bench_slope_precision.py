@@ -42,13 +42,12 @@ REPEATS = 7
 def run_states(n):
     """The problem, its flat initial face and the pressures and faces of a run-in, at n."""
     from transient.options import RunOptions
-    from transient.problem import WearProblem
     from transient.runin import run_in
-    from transient.scene import load_transient_scene
+    from transient.scene import load_transient_scene, wear_problem_of
     from transient.solver import StageSolver
 
     scene, _, initial = load_transient_scene(SCENE)
-    problem = WearProblem.from_scene(scene, n=n)
+    problem = wear_problem_of(scene, n=n)
     h0 = initial.height(problem.grid)
     result = run_in(problem, h0, RunOptions(
         tol=1e-4, snapshots_s_star=SNAPSHOTS,

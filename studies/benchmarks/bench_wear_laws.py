@@ -35,9 +35,8 @@ import numpy as np
 
 from steady.safe_files import atomic_h5
 from steady.wear import ThresholdLaw
-from transient.problem import WearProblem
 from transient.runin import run_in
-from transient.scene import load_transient_scene
+from transient.scene import load_transient_scene, wear_problem_of
 
 # -- parameters -------------------------------------------------------------------
 SCENE = (pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
@@ -58,7 +57,7 @@ def laws(scene):
 
 def run_row(scene, options, initial, n, name, law):
     """One run to the steady state and its work, a dict."""
-    problem = WearProblem.from_scene(dataclasses.replace(scene, wear=law), n=n)
+    problem = wear_problem_of(dataclasses.replace(scene, wear=law), n=n)
     t = time.perf_counter()
     result = run_in(problem, initial.height(problem.grid), options)
     wall = time.perf_counter() - t

@@ -268,7 +268,7 @@ def _prepare(args, lock, scene, initial, options, checked):
     """
     from steady.safe_files import backup_path, remove_temporaries
 
-    from ..problem import WearProblem
+    from ..scene import wear_problem_of
 
     out = args.output
     if lock.previous_pid is not None:  # RunLock refuses the lock of a process still running
@@ -283,7 +283,7 @@ def _prepare(args, lock, scene, initial, options, checked):
         raise ValueError(f"{str(out)!r} does not exist but its backup "
                          f"{str(backup_path(out))!r} does: rename it to {str(out)!r} to "
                          f"continue from it, or use --force to start over")
-    problem = WearProblem.from_scene(scene, problem=checked)
+    problem = wear_problem_of(scene, problem=checked)
     try:
         h0 = initial.height(problem.grid)
     except ValueError as err:  # "[initial_face]: ...": the scene file first, as when loading
@@ -347,8 +347,8 @@ def _companion_grid(scene_path, scene, initial, n):
 
 def run(args):
     """Do the work for parsed arguments; return the exit status."""
-    from steady.problem import Problem
     from steady.safe_files import RunLock
+    from steady.scene import problem_of
 
     from ..scene import load_transient_scene
 
@@ -364,7 +364,7 @@ def run(args):
                      args.memory_limit)
         # Names a phase without a face pixel, or a scale out of range, before the run; the
         # run's problem takes its map (rasterised once).
-        checked = Problem.from_scene(scene)
+        checked = problem_of(scene)
     except KeyboardInterrupt:
         raise CommandError(not_started, EXIT_INTERRUPTED) from None
 
