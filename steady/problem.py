@@ -193,7 +193,7 @@ def check_rate_scales(wear, outline, normal_force, names):
     the natural sliding distances.
     """
     pbar = float(normal_force) / outline.area
-    k = np.asarray(wear.coefficient_field(np.arange(wear.n_phases)), dtype=float)
+    k = np.asarray(wear.wear_field(np.arange(wear.n_phases)), dtype=float)
     with np.errstate(all="ignore"):
         rate_constants = np.asarray(wear.rate_constant(k, np.float64(pbar)), dtype=float)
     for i, kappa in enumerate(np.atleast_1d(rate_constants)):
@@ -209,7 +209,7 @@ def check_phase_scales(wear, counts, normal_force, pixel_area, names):
     with ``counts`` face pixels each (of area ``pixel_area``, m^2), and
     their common wear rate, must be numbers in range.
     """
-    k = np.asarray(wear.coefficient_field(np.arange(wear.n_phases)), dtype=float)
+    k = np.asarray(wear.wear_field(np.arange(wear.n_phases)), dtype=float)
     with np.errstate(all="ignore"):
         pressures = np.asarray(wear.phase_pressures(counts, float(normal_force), pixel_area),
                                dtype=float)
@@ -437,7 +437,7 @@ class Problem:
         default None, a translation (the paper's uniform speed), which a
         :class:`~steady.sliding.Translation` also becomes.  Another kind
         multiplies the coefficient field by ``v / v_ref``
-        (:meth:`coefficient_field`) and makes the steady pressure vary
+        (:meth:`wear_field`) and makes the steady pressure vary
         within each phase (:meth:`steady_pressure`); it needs a wear law with
         a factorisation ``k_i g(p)`` (:attr:`steady.wear.WearLaw.factor`).
     checked : bool, optional, keyword
@@ -644,12 +644,12 @@ class Problem:
         (:meth:`steady.wear.Factorisation.pixel_pressures`).
         """
         if self.sliding is not None:
-            return self.wear.factor.pixel_pressures(self.coefficient_field(), self.normal_force,
+            return self.wear.factor.pixel_pressures(self.wear_field(), self.normal_force,
                                                     self.pixel_area)
         # Label -1 (off the face) picks the trailing zero.
         return np.append(self.phase_pressures(), 0.0)[self.labels]
 
-    def coefficient_field(self):
+    def wear_field(self):
         """The wear law's coefficient of every pixel, zero off the face, shape (nx, ny).
 
         Under non-uniform sliding, times the speed ratio ``v / v_ref``
@@ -657,5 +657,5 @@ class Problem:
         wear per unit sliding distance of the reference point.
         """
         if self.sliding is not None:
-            return self.wear.coefficient_field(self.labels) * self.speed_ratio
-        return self.wear.coefficient_field(self.labels)
+            return self.wear.wear_field(self.labels) * self.speed_ratio
+        return self.wear.wear_field(self.labels)

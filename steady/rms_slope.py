@@ -895,7 +895,7 @@ def _steady_pressure(labels, wear, normal_force, grid, sliding, *, checked=False
     if sliding is None:
         p = wear.phase_pressures(counts, normal_force, grid.pixel_area)
         return np.append(p, 0.0)[labels]  # label -1 (off the face) picks the trailing zero
-    coefficients = wear.coefficient_field(labels) * sliding.speed_ratio(grid)
+    coefficients = wear.wear_field(labels) * sliding.speed_ratio(grid)
     return wear.factor.pixel_pressures(coefficients, normal_force, grid.pixel_area)
 
 

@@ -15,7 +15,7 @@ which class it is.
   :meth:`WearLaw.phase_pressures` inverts it; :meth:`WearLaw.restrict` is
   the law of some of the phases (a section of a depth-varying map).
 - The run-in (:mod:`transient`): the per-pixel field of a phase map
-  (:meth:`WearLaw.coefficient_field`), the rate of every pixel
+  (:meth:`WearLaw.wear_field`), the rate of every pixel
   (:meth:`WearLaw.rate`), the linearisation of an implicit stage about a
   pressure (:meth:`WearLaw.linearisation`), the largest ``g'`` that bounds an
   explicit step (:meth:`WearLaw.largest_rate_slope`) and the rate constant
@@ -108,7 +108,7 @@ def _plain(value):
 class Factorisation(abc.ABC):
     """A law whose rate is ``k_i g(p)``: a coefficient per phase times one function of ``p``.
 
-    Such a law's per-pixel field (:meth:`WearLaw.coefficient_field`) is the
+    Such a law's per-pixel field (:meth:`WearLaw.wear_field`) is the
     coefficient ``k`` itself, so a factor on it -- the sliding speed
     ``v / v_ref``, the coefficients of the section a pixel has worn down to
     -- is again a field the law takes.
@@ -336,7 +336,7 @@ class WearLaw(abc.ABC):
 
     # -- the run-in, pixel by pixel ------------------------------------------
     @abc.abstractmethod
-    def coefficient_field(self, labels):
+    def wear_field(self, labels):
         """The law's per-pixel field of a phase map (``labels < 0`` off the face: 0 there).
 
         Whatever :meth:`rate` and the other run-in methods take: ``k`` of the
@@ -352,32 +352,32 @@ class WearLaw(abc.ABC):
         """
 
     @abc.abstractmethod
-    def rate(self, pressure, coefficient_field):
+    def rate(self, pressure, wear_field):
         """Wear rate ``g(p)`` of every pixel, m/m; zero off the face and for ``p <= 0``.
 
         Parameters
         ----------
         pressure : ndarray, shape (nx, ny), Pa
-        coefficient_field : ndarray, shape (nx, ny)
-            :meth:`coefficient_field`.
+        wear_field : ndarray, shape (nx, ny)
+            :meth:`wear_field`.
         """
 
     @abc.abstractmethod
-    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
-        """The implicit stage ``w = height + c g(P(w))`` linearised about ``pressure``.
+    def linearisation(self, recession, c, pressure, wear_field, face_mask, floor):
+        """The implicit stage ``w = recession + c g(P(w))`` linearised about ``pressure``.
 
         ``g(p) ~ g(p0) + g'(p0) (p - p0)`` turns the stage into the contact
-        problem with the shift ``c g'(p0)`` and the height
-        ``height + c (g(p0) - g'(p0) p0)``.
+        problem with the shift ``c g'(p0)`` and the recession
+        ``recession + c (g(p0) - g'(p0) p0)``.
 
         Parameters
         ----------
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         c : float, m
             Sliding distance multiplying the implicit rate.
         pressure : ndarray, shape (nx, ny), Pa
             The linearisation point ``p0``.
-        coefficient_field : ndarray, shape (nx, ny)
+        wear_field : ndarray, shape (nx, ny)
         face_mask : ndarray of bool, shape (nx, ny)
         floor : float, Pa
             Least linearisation pressure where ``g'`` is infinite at 0.
@@ -385,7 +385,7 @@ class WearLaw(abc.ABC):
         Returns
         -------
         shift : ndarray, shape (nx, ny), m/Pa
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         """
 
     @abc.abstractmethod
@@ -396,7 +396,7 @@ class WearLaw(abc.ABC):
         ----------
         pressure : ndarray, Pa
         coefficients : ndarray
-            Their :meth:`coefficient_field` entries, the same shape.
+            Their :meth:`wear_field` entries, the same shape.
         floor : float, Pa
             Least pressure taken where ``g'`` is infinite at 0.
         """
@@ -408,8 +408,8 @@ class WearLaw(abc.ABC):
         The rate at which a pressure difference wears the face flat; with
         ``E*`` and a length it sets the natural sliding distances
         (``s* = L / (g'(pbar) E*)``).  ``field`` holds
-        :meth:`coefficient_field` entries (one per phase:
-        ``coefficient_field(np.arange(P))``).
+        :meth:`wear_field` entries (one per phase:
+        ``wear_field(np.arange(P))``).
         """
 
 
@@ -540,7 +540,7 @@ class PowerLaw(WearLaw):
                                exponent=self.exponent)
 
     # -- the run-in, pixel by pixel ------------------------------------
-    def coefficient_field(self, labels):
+    def wear_field(self, labels):
         """``k`` of every pixel's phase, zero off the face (``labels < 0``), 1/Pa.
 
         Parameters
@@ -554,36 +554,36 @@ class PowerLaw(WearLaw):
         k = np.asarray(self.coefficients)
         return np.where(labels >= 0, k[np.maximum(labels, 0)], 0.0)
 
-    def rate(self, pressure, coefficient_field):
+    def rate(self, pressure, wear_field):
         """Wear rate ``k p^m`` of every pixel, dimensionless (m/m); zero where ``k`` is.
 
         Parameters
         ----------
         pressure : ndarray, shape (nx, ny), Pa
             Negative values count as 0.
-        coefficient_field : ndarray, shape (nx, ny), 1/Pa
-            :meth:`coefficient_field`.
+        wear_field : ndarray, shape (nx, ny), 1/Pa
+            :meth:`wear_field`.
         """
         p = np.maximum(pressure, 0.0)
         if self.linear:
-            return coefficient_field * p
-        return coefficient_field * p ** self.exponent
+            return wear_field * p
+        return wear_field * p ** self.exponent
 
-    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
-        """The implicit stage ``w = height + c g(P(w))`` linearised about ``pressure``.
+    def linearisation(self, recession, c, pressure, wear_field, face_mask, floor):
+        """The implicit stage ``w = recession + c g(P(w))`` linearised about ``pressure``.
 
         ``g(p) ~ g(p0) + g'(p0) (p - p0)`` turns the stage into the contact
-        problem with the shift ``c g'(p0)`` and the height
-        ``height + c (g(p0) - g'(p0) p0)``.
+        problem with the shift ``c g'(p0)`` and the recession
+        ``recession + c (g(p0) - g'(p0) p0)``.
 
         Parameters
         ----------
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         c : float, m
             Sliding distance multiplying the implicit rate.
         pressure : ndarray, shape (nx, ny), Pa
             The linearisation point ``p0``.
-        coefficient_field : ndarray, shape (nx, ny), 1/Pa
+        wear_field : ndarray, shape (nx, ny), 1/Pa
         face_mask : ndarray of bool, shape (nx, ny)
         floor : float, Pa
             Least linearisation pressure where ``g'`` is infinite at 0
@@ -592,14 +592,14 @@ class PowerLaw(WearLaw):
         Returns
         -------
         shift : ndarray, shape (nx, ny), m/Pa
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         """
         m = self.exponent
         floor = floor if m < 1.0 else 0.0
         # Off the face the wear coefficient is 0; 1 keeps p^(m-1) finite there.
         pl = np.where(face_mask, np.maximum(pressure, floor), 1.0)
-        shift = c * coefficient_field * m * pl ** (m - 1.0)
-        h_lin = height + c * coefficient_field * (1.0 - m) * pl ** m
+        shift = c * wear_field * m * pl ** (m - 1.0)
+        h_lin = recession + c * wear_field * (1.0 - m) * pl ** m
         return shift, h_lin
 
     def largest_rate_slope(self, pressure, coefficients, floor):
@@ -813,7 +813,7 @@ class ThresholdLaw(WearLaw):
         return p_th + phase_pressures(counts, self.coefficients, excess, pixel_area,
                                       exponent=self.exponent)
 
-    def coefficient_field(self, labels):
+    def wear_field(self, labels):
         """The per-pixel key of the law: phase + 1, 0 off the face (``labels < 0``).
 
         Parameters
@@ -827,22 +827,22 @@ class ThresholdLaw(WearLaw):
         return _phase_keys(labels)
 
     def _fields(self, field):
-        """``k`` and ``p_th`` of the pixels of a :meth:`coefficient_field` (k = 0 off the face)."""
+        """``k`` and ``p_th`` of the pixels of a :meth:`wear_field` (k = 0 off the face)."""
         phase = _phase_of(field)
         k = np.append(0.0, self.coefficients)[phase]
         return k, np.append(0.0, self.thresholds)[phase]
 
-    def rate(self, pressure, coefficient_field):
+    def rate(self, pressure, wear_field):
         """Wear rate ``k max(p - p_th, 0)^m`` of every pixel, m/m; zero off the face."""
-        k, p_th = self._fields(coefficient_field)
+        k, p_th = self._fields(wear_field)
         q = np.maximum(np.asarray(pressure, dtype=float) - p_th, 0.0)
         return k * q if self.exponent == 1.0 else k * q ** self.exponent
 
-    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
+    def linearisation(self, recession, c, pressure, wear_field, face_mask, floor):
         """The implicit stage linearised about ``pressure`` (see :meth:`PowerLaw.linearisation`).
 
         Below its threshold (``p0 < p_th``) a pixel's rate and slope are 0: no
-        shift and the height unchanged.  At or above it
+        shift and the recession unchanged.  At or above it
         ``g ~ k q^m + k m q^(m-1) (p - p_th - q)`` with ``q = p0 - p_th``,
         floored at ``floor`` for ``m < 1``; for ``m < 1`` and a threshold
         the chord ``g ~ k q^(m-1) (p - p_th)`` instead.  With every threshold
@@ -851,11 +851,11 @@ class ThresholdLaw(WearLaw):
         Returns
         -------
         shift : ndarray, shape (nx, ny), m/Pa
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         """
         m = self.exponent
         floor = floor if m < 1.0 else 0.0
-        k, p_th = self._fields(coefficient_field)
+        k, p_th = self._fields(wear_field)
         above = face_mask & (pressure >= p_th)
         # Off the face and below the threshold k is taken as 0; 1 keeps q^(m-1) finite.
         k = np.where(above, k, 0.0)
@@ -866,9 +866,9 @@ class ThresholdLaw(WearLaw):
             # threshold, which pressures crossing it make Newton's iterates
             # jump across (a Kachanov-type iteration: slower, but it holds).
             shift = c * k * q ** (m - 1.0)
-            return shift, height - shift * p_th
+            return shift, recession - shift * p_th
         shift = c * k * m * q ** (m - 1.0)
-        h_lin = height + c * k * (1.0 - m) * q ** m - shift * p_th
+        h_lin = recession + c * k * (1.0 - m) * q ** m - shift * p_th
         return shift, h_lin
 
     def largest_rate_slope(self, pressure, coefficients, floor):
@@ -963,7 +963,7 @@ class TableLaw(WearLaw):
     Examples
     --------
     >>> law = TableLaw(((0, 1e5, 2e5), (0, 1e5)), ((0, 1e-9, 4e-9), (0, 1e-8)))
-    >>> law.rate(np.array([1e5, 3e5, 2e5]), law.coefficient_field(np.array([0, 0, 1])))
+    >>> law.rate(np.array([1e5, 3e5, 2e5]), law.wear_field(np.array([0, 0, 1])))
     array([1.e-09, 8.e-09, 2.e-08])
     """
 
@@ -1098,7 +1098,7 @@ class TableLaw(WearLaw):
         return p
 
     # -- the run-in, pixel by pixel ------------------------------------
-    def coefficient_field(self, labels):
+    def wear_field(self, labels):
         """The per-pixel key of the law: phase + 1, 0 off the face (``labels < 0``)."""
         return _phase_keys(labels)
 
@@ -1113,20 +1113,20 @@ class TableLaw(WearLaw):
                 out[mine] = method(i, p[mine])
         return out
 
-    def rate(self, pressure, coefficient_field):
+    def rate(self, pressure, wear_field):
         """Wear rate ``g_i(p)`` of every pixel, m/m; zero off the face."""
-        return self._by_phase(self.phase_rate, pressure, coefficient_field)
+        return self._by_phase(self.phase_rate, pressure, wear_field)
 
-    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
+    def linearisation(self, recession, c, pressure, wear_field, face_mask, floor):
         """The implicit stage linearised about ``pressure``: shift ``c g'(p0)``.
 
-        The height is ``height + c (g(p0) - g'(p0) p0)``; ``floor`` is not
+        The recession is ``recession + c (g(p0) - g'(p0) p0)``; ``floor`` is not
         used (the interpolant's slopes are finite).
         """
-        field = np.where(face_mask, coefficient_field, 0.0)
+        field = np.where(face_mask, wear_field, 0.0)
         slope = self._by_phase(self.phase_slope, pressure, field)
         g = self._by_phase(self.phase_rate, pressure, field)
-        return c * slope, height + c * (g - slope * np.where(face_mask, pressure, 0.0))
+        return c * slope, recession + c * (g - slope * np.where(face_mask, pressure, 0.0))
 
     def largest_rate_slope(self, pressure, coefficients, floor):
         """``max g'(p)`` over the pixels given, 1/Pa."""

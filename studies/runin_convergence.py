@@ -88,7 +88,7 @@ def run_case(point, *, tol, distances):
     energy = SlopeEnergy(n, problem.halfspace.h, problem.halfspace.E_star)
     face = problem.face_mask
     uncorrected, excess = [], []
-    growth = (problem.coefficient_field * problem.halfspace.E_star / problem.halfspace.h)[
+    growth = (problem.wear_field * problem.halfspace.E_star / problem.halfspace.h)[
         _rim(face)]
     for d, p in zip(distances, result.snapshot_pressure, strict=True):
         integrals = energy(p, face)

@@ -177,7 +177,7 @@ def run_scheme(n, scheme, tol, distances, *, companion=False):
         i = int(np.argmin(np.abs(s - d * result.distance_scale)))
         assert abs(s[i] / (d * result.distance_scale) - 1) < 1e-9, (s[i], d)
         at.append(i)
-    face_end = result.snapshot_height[-1]
+    face_end = result.snapshot_recession[-1]
     out = dict(wall=wall, solves=result.solves, iterations=result.iterations,
                steps=result.steps, rejected=result.rejected,
                slopes=result.history["rms_slope"][at], errors=result.history["rms_slope_error"][at],
@@ -197,7 +197,7 @@ def run_scheme(n, scheme, tol, distances, *, companion=False):
 def run_baseline(n, distances, end):
     """The loop users write: fixed-step explicit Euler around a contact solve."""
     problem = build(n)
-    hs, face, wear = problem.halfspace, problem.face_mask, problem.coefficient_field
+    hs, face, wear = problem.halfspace, problem.face_mask, problem.wear_field
     s_star = problem.distance_scale
     p = solve_contact(hs, face, np.zeros((n, n)), FORCE, rtol=CONTACT_RTOL).pressure
     limit = StageSolver(problem).stable_step(p) / s_star

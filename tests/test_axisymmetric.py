@@ -73,7 +73,7 @@ def test_exact_in_distance_against_a_matrix_exponential(model):
     generator[:n, n] = model.wear_coefficient * model._c
     s = 0.05 * model.distance_scale
     w = scipy.linalg.expm(generator * s)[:n, n]
-    shape = w - model.height(s)
+    shape = w - model.recession(s)
     # Measured: 1.5e-9 of the relief (the scaling and squaring of a stiff generator).
     assert np.ptp(shape) < 1e-8 * np.ptp(w), \
         f"heights differ by {np.ptp(shape):.2e} beyond a constant (relief {np.ptp(w):.2e})"

@@ -435,8 +435,8 @@ def test_zero_force_gives_zero_pressure():
     (dict(normal_force=-1.0), "normal_force"),
     (dict(normal_force=np.nan), "normal_force"),
     (dict(normal_force=np.inf), "normal_force"),
-    (dict(height=np.full((9, 9), np.nan)), "height"),
-    (dict(height=np.zeros((8, 9))), "height"),
+    (dict(recession=np.full((9, 9), np.nan)), "recession"),
+    (dict(recession=np.zeros((8, 9))), "recession"),
     (dict(face_mask=np.ones((9, 8), bool)), "face_mask"),
     (dict(face_mask=np.ones((9, 9))), "face_mask"),
     (dict(face_mask=np.zeros((9, 9), bool)), "face has no pixel"),
@@ -454,12 +454,12 @@ def test_zero_force_gives_zero_pressure():
 def test_bad_input_raises(change, match):
     n = 9
     hs, face = setup(n)
-    args = dict(halfspace=hs, face_mask=face, height=np.zeros((n, n)), normal_force=1.0)
+    args = dict(halfspace=hs, face_mask=face, recession=np.zeros((n, n)), normal_force=1.0)
     args.update(change)
     kwargs = {k: args.pop(k) for k in list(args) if k not in
-              ("halfspace", "face_mask", "height", "normal_force")}
+              ("halfspace", "face_mask", "recession", "normal_force")}
     with pytest.raises(ValueError, match=match):
-        solve_contact(args["halfspace"], args["face_mask"], args["height"],
+        solve_contact(args["halfspace"], args["face_mask"], args["recession"],
                       args["normal_force"], **kwargs)
 
 

@@ -47,7 +47,7 @@ def test_a_residual_moves_face_and_pressure_within_the_bounds(c_over_s_star):
     rng = np.random.default_rng(7)
     height = np.where(face, 0.05 * problem.depth_scale * rng.standard_normal((n, n)), 0.0)
     c = c_over_s_star * problem.distance_scale
-    shift = c * problem.coefficient_field
+    shift = c * problem.wear_field
     lam = problem.compliance_floor
     # A loose tolerance, about what a regular step leaves its solves.
     atol = 1e-7 * problem.depth_scale
@@ -84,11 +84,11 @@ def test_run_keeps_the_history_of_tight_solves(monkeypatch):
     face, f_star = problem.face_mask, loose.depth_scale
     bound = loose.solves * SOLVE_ERROR_SHARE * options.tol
     assert np.array_equal(loose.snapshot_distance, tight.snapshot_distance)
-    for a, b, s in zip(loose.snapshot_height, tight.snapshot_height, loose.snapshot_distance,
+    for a, b, s in zip(loose.snapshot_recession, tight.snapshot_recession, loose.snapshot_distance,
                        strict=True):
         diff = shape_rms(np.where(face, a - b, 0.0), face) / f_star
         assert diff < bound, f"faces at {s / loose.distance_scale:g} s* differ by {diff:.3g} f*"
-    final = shape_rms(np.where(face, loose.height - tight.height, 0.0), face) / f_star
+    final = shape_rms(np.where(face, loose.recession - tight.recession, 0.0), face) / f_star
     assert final < 1e-9, f"final faces differ by {final:.3g} f*"
     # The history ends with the dynamics; the final state (after the jump) is steady.
     assert wear_rate_spread(problem.rate, loose.pressure, problem.face_mask) < \

@@ -96,21 +96,21 @@ class ExponentialLaw(WearLaw):
         log_rate = brentq(excess, hi - 60.0, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps)
         return self.pressures_at(math.exp(log_rate))
 
-    def coefficient_field(self, labels):
+    def wear_field(self, labels):
         k = np.asarray(self.coefficients)
         return np.where(labels >= 0, k[np.maximum(labels, 0)], 0.0)
 
-    def rate(self, pressure, coefficient_field):
-        return coefficient_field * np.expm1(np.maximum(pressure, 0.0) / self.pressure_scale)
+    def rate(self, pressure, wear_field):
+        return wear_field * np.expm1(np.maximum(pressure, 0.0) / self.pressure_scale)
 
     def _slope(self, pressure, field):
         return field / self.pressure_scale * np.exp(np.maximum(pressure, 0.0)
                                                     / self.pressure_scale)
 
-    def linearisation(self, height, c, pressure, coefficient_field, face_mask, floor):
+    def linearisation(self, height, c, pressure, wear_field, face_mask, floor):
         p0 = np.where(face_mask, np.maximum(pressure, 0.0), 0.0)
-        slope = self._slope(p0, coefficient_field)
-        return c * slope, height + c * (self.rate(p0, coefficient_field) - slope * p0)
+        slope = self._slope(p0, wear_field)
+        return c * slope, height + c * (self.rate(p0, wear_field) - slope * p0)
 
     def largest_rate_slope(self, pressure, coefficients, floor):
         return float(np.max(self._slope(pressure, coefficients)))
@@ -220,7 +220,7 @@ def test_an_unregistered_law_is_not_read_back(exponential_law, scene_file, tmp_p
 
 def test_the_contract_is_complete():
     abstract = sorted(WearLaw.__abstractmethods__)
-    assert abstract == ["coefficient_field", "describe", "from_values", "largest_rate_slope",
-                        "linearisation", "n_phases", "phase_pressures", "rate",
-                        "rate_constant", "scene_values"], abstract
+    assert abstract == ["describe", "from_values", "largest_rate_slope", "linearisation",
+                        "n_phases", "phase_pressures", "rate", "rate_constant",
+                        "scene_values", "wear_field"], abstract
     assert dataclasses.is_dataclass(WEAR_LAWS["power"]), "the shipped laws are frozen values"

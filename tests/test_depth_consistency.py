@@ -32,7 +32,7 @@ def test_the_held_pressure_is_the_contact_pressure_of_the_held_face():
     worst = []
 
     def check(run):
-        fresh = solve_contact(problem.halfspace.with_own_buffers(), face, run.height,
+        fresh = solve_contact(problem.halfspace.with_own_buffers(), face, run.recession,
                               run.solver.force, rtol=1e-12).pressure
         worst.append(np.max(np.abs(fresh - run.pressure)[face]) / run.pressure[face].mean())
 

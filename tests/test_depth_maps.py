@@ -309,7 +309,7 @@ def test_the_closed_form_of_a_section_without_a_phase(law):
     p, counts, F = result.phase_pressures, problem.phases.counts, problem.normal_force
     balance = float(np.dot(counts, p)) * problem.pixel_area
     assert abs(balance - F) <= 1e-12 * F, f"load balance {balance} for {F} N"
-    k = law.coefficient_field(np.arange(3))
+    k = law.wear_field(np.arange(3))
     rates = law.rate(p, k)
     assert abs(rates[0] - rates[1]) <= 1e-9 * rates[0], f"wear rates {rates}"
     assert math.isfinite(result.rms_slope) and math.isfinite(result.rms_slope_error)

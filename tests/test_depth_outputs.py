@@ -61,7 +61,7 @@ def swapped(columnar):
     """The same punch whose labels 0 and 1 swap at a depth the run passes at its middle."""
     problem = three_phases()
     labels = problem.labels
-    worn = columnar.snapshot_height[2] - columnar.initial_height
+    worn = columnar.snapshot_recession[2] - columnar.initial_recession
     depth = float(np.median(worn[problem.face_mask]))
     below = np.where(labels == 0, 1, np.where(labels == 1, 0, labels))
     interfaces = np.where(problem.face_mask, depth, np.inf)[None]
@@ -74,7 +74,7 @@ def coated(columnar):
     """A coating of phase 1, thinner towards -x, over the three-phase map."""
     problem = three_phases()
     grid = problem.grid
-    worn = columnar.snapshot_height[1] - columnar.initial_height
+    worn = columnar.snapshot_recession[1] - columnar.initial_recession
     t0 = float(np.median(worn[problem.face_mask]))
     thickness = t0 * (1.0 + 0.5 * grid.x[:, None] / RADIUS) + 0.0 * grid.y[None, :]
     face = problem.face_mask
@@ -135,7 +135,7 @@ def test_phase_fractions_and_crossings(swapped):
     passed = []
     for j, s in enumerate(result.snapshot_distance):
         i = int(np.flatnonzero(distance == s)[0])
-        worn = result.snapshot_height[j] - result.initial_height
+        worn = result.snapshot_recession[j] - result.initial_recession
         past = int(np.count_nonzero(worn[result.face_mask] >= depth))
         passed.append(past)
         assert total[i] == past, f"snapshot {j}: {total[i]} crossings, {past} pixels past"
@@ -180,7 +180,7 @@ def test_coating_distances(coated):
     face = result.face_mask
     for j, s in enumerate(result.snapshot_distance):
         i = int(np.flatnonzero(distance == s)[0])
-        worn = (result.snapshot_height[j] - result.initial_height)[face]
+        worn = (result.snapshot_recession[j] - result.initial_recession)[face]
         assert h["coating_overshoot"][i] == np.max(worn - thickness[face]), f"snapshot {j}"
         contact = result.snapshot_pressure[j][face] > 0
         assert h["coating_contact_remaining"][i] == np.max((thickness[face] - worn)[contact])
@@ -254,7 +254,7 @@ def test_run_file_layout(tmp_path, coated):
             assert f[f"history/{name}"].attrs["units"] == "m", name
         assert f["history/crossings"].attrs["units"] == "1"
         section = f["snapshots/section"]
-        assert section.dtype == np.int8 and section.shape == result.snapshot_height.shape
+        assert section.dtype == np.int8 and section.shape == result.snapshot_recession.shape
         assert "phase map of the section" in section.attrs["long_name"] or \
             "section" in section.attrs["long_name"]
         np.testing.assert_array_equal(section[()], result.snapshot_sections)

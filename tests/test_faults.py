@@ -201,7 +201,7 @@ def test_interrupt_after_checkpoints_then_resume(tmp_path, scene, capsys, monkey
         and line.endswith("can be continued with --resume"), line
     assert saved.steps > 0 and not lock_path(out).exists(), "checkpoint kept, lock released"
     with h5py.File(out) as f:  # rewritten at every checkpoint: stored plain
-        assert [f[f"snapshots/{name}"].compression for name in ("height", "pressure")] \
+        assert [f[f"snapshots/{name}"].compression for name in ("recession", "pressure")] \
             == [None, None], "a checkpoint's snapshots are not compressed"
     monkeypatch.undo()
     status, _, err = run_cli(cli, [scene, "-o", out, "--resume", "--checkpoint-interval", "0"],
@@ -210,7 +210,7 @@ def test_interrupt_after_checkpoints_then_resume(tmp_path, scene, capsys, monkey
     assert read_run(out)[0].status == "steady", "the resumed run must finish"
     with h5py.File(out) as f:
         filters = [(f[f"snapshots/{name}"].compression, f[f"snapshots/{name}"].shuffle)
-                   for name in ("height", "pressure")]
+                   for name in ("recession", "pressure")]
         assert filters == [("gzip", True)] * 2, f"a finished run's snapshot filters: {filters}"
 
 
@@ -324,7 +324,7 @@ def _offset(path, name):
 
 
 def _damage_state(path):
-    flip_bit(path, _offset(path, "state/height") + 8 * (16 * 32 + 16) + 3)
+    flip_bit(path, _offset(path, "state/recession") + 8 * (16 * 32 + 16) + 3)
 
 
 def _damage_attribute(path):
@@ -345,7 +345,7 @@ def _garbage(path):
 
 
 @pytest.mark.parametrize("damage, fragment", [
-    (_damage_state, "dataset 'state/height' does not match its checksum"),
+    (_damage_state, "dataset 'state/recession' does not match its checksum"),
     (_damage_attribute, "the root attributes do not match their checksum"),
     (_truncate, "cannot be opened (Unable to synchronously open file (truncated file"),
     (lambda p: p.write_bytes(b""), "the file is empty (0 bytes)"),

@@ -166,7 +166,7 @@ def test_companion_run_gives_the_spatial_error(scene_file, tmp_path):
 
     scene, options, initial = load_transient_scene(scene_file("runin", n=48))
     problem = wear_problem(scene.geometry, (1.0, 10.0), 48)
-    result = run_in(problem, initial.height(problem.grid), FAST)
+    result = run_in(problem, initial.recession(problem.grid), FAST)
     companion = spatial_error(scene, initial, FAST, result)
     assert companion.grid == 24 and companion.run.success, \
         f"companion on n = {companion.grid}: {companion.run.status}"
@@ -183,7 +183,7 @@ def test_companion_run_gives_the_spatial_error(scene_file, tmp_path):
     assert np.array_equal(back.history["rms_slope_spatial_error"], error), "round trip"
     with pytest.raises(ValueError, match="not the same run"):
         companion.attach(run_in(wear_problem(scene.geometry, (1.0, 10.0), 48),
-                                initial.height(problem.grid), dataclasses.replace(
+                                initial.recession(problem.grid), dataclasses.replace(
                                     FAST, max_steps=2)))
 
 
@@ -224,7 +224,7 @@ def test_single_precision_figures_are_the_double_ones(n):
     assert single.map_error == double.map_error, "the map's error is double precision"
     result = run_in(problem, h0, dataclasses.replace(
         FAST, snapshots_s_star=(0.1,), distance_limit=0.1 * problem.distance_scale))
-    height = np.where(problem.face_mask, result.snapshot_height[0], 0.0)
+    height = np.where(problem.face_mask, result.snapshot_recession[0], 0.0)
     states = [(result.snapshot_distance[0], height, result.snapshot_pressure[0])]
     first = StageSolver(problem).contact(h0)
     states.append((1e-5 * result.distance_scale, h0, first.pressure))

@@ -1,4 +1,4 @@
-"""Initial height fields of the punch face."""
+"""Initial recession fields of the punch face."""
 
 import numpy as np
 import pytest

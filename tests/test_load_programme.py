@@ -50,7 +50,7 @@ def run(programme=None, *, options=OPTIONS, **kwargs):
 def _same_run(a, b, what):
     assert a.status == b.status and a.steps == b.steps, \
         f"{what}: {a.status} in {a.steps} steps against {b.status} in {b.steps}"
-    assert np.array_equal(a.height, b.height, equal_nan=True), f"{what}: face differs"
+    assert np.array_equal(a.recession, b.recession, equal_nan=True), f"{what}: face differs"
     assert np.array_equal(a.pressure, b.pressure), f"{what}: pressure differs"
     assert a.distance == b.distance and a.offset == b.offset, f"{what}: distance or offset"
     for name in HISTORY_UNITS:

@@ -72,7 +72,7 @@ else:
                          snapshots_s_star=tuple(1e-9 * (i + 1) for i in range(k)))
     result = run_in(problem, problem.face_mask * 0.0, options,
                     on_checkpoint=lambda r: write_run(d / "run.h5", r))
-    assert result.snapshot_height.shape[0] == k
+    assert result.snapshot_recession.shape[0] == k
     write_run(d / "run.h5", result)
 after = peak()
 print(json.dumps(after - before))

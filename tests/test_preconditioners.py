@@ -268,7 +268,7 @@ def test_galerkin_warm_start_is_exact_on_the_span():
     n = 48
     problem = wear_problem("voronoi", (1.0, 10.0), n)
     hs, face = problem.halfspace, problem.face_mask
-    shift = 0.05 * problem.distance_scale * problem.coefficient_field
+    shift = 0.05 * problem.distance_scale * problem.wear_field
     r, _ = np.meshgrid(np.arange(n) - n / 2, np.arange(n) - n / 2, indexing="ij")
     heights = [np.zeros((n, n)), 2e-4 * (r / n) ** 2]   # m, a third of f*
     solves = [solve_contact(hs, face, h, FORCE, shift=shift, rtol=1e-12) for h in heights]
@@ -302,7 +302,7 @@ def test_history_restored_from_its_pressures_predicts_bit_for_bit():
     assert len(history) == 3, f"{len(history)} pressures kept, expected 3"
     again = WarmStart(problem, size=3, pressures=history.pressures())
     height = 1e-7 * rng.random((n, n))
-    shift = 1e-3 * problem.distance_scale * problem.coefficient_field
+    shift = 1e-3 * problem.distance_scale * problem.wear_field
     for a, b in zip(history.predict(height, shift), again.predict(height, shift), strict=True):
         assert np.array_equal(a, b), "restored history predicts differently"
 
@@ -360,7 +360,7 @@ def test_kept_gram_matrices_give_the_galerkin_combination():
     base = np.where(face, 1e5, 0.0)
     height = 1e-7 * rng.random((n, n))
     c = 1e-3 * problem.distance_scale
-    shift = c * problem.coefficient_field
+    shift = c * problem.wear_field
     for step in range(7):
         history.push(base * (1 + 0.01 * step + 1e-3 * rng.random((n, n))))
         if len(history) < 2:

@@ -43,7 +43,7 @@ def test_run_in_library_example(tmp_path, monkeypatch):
     result, stored = ns["result"], ns["stored"]
     assert result.success, f"run ended {result.status}: {result.message}"
     assert ns["comparison"].face_error < 1e-6, f"face error {ns['comparison'].face_error}"
-    assert stored.steps == result.steps and ns["attrs"]["format_version"] == 3, \
+    assert stored.steps == result.steps and ns["attrs"]["format_version"] == 4, \
         f"run file: {stored.steps} steps, attributes {ns['attrs']}"
     assert (tmp_path / "out" / "run.png").stat().st_size > 10_000, "figure not drawn"
 

@@ -13,6 +13,8 @@ the two error bars.
 
 import dataclasses
 import math
+import pathlib
+import shutil
 
 import numpy as np
 import pytest
@@ -182,7 +184,7 @@ def test_full_run_in_at_n_128():
 
 def _same_result(a, b):
     assert a.status == b.status and a.steps == b.steps, (a.status, a.steps, b.status, b.steps)
-    assert np.array_equal(a.height, b.height, equal_nan=True), "face differs"
+    assert np.array_equal(a.recession, b.recession, equal_nan=True), "face differs"
     assert np.array_equal(a.pressure, b.pressure), "pressure differs"
     assert a.offset == b.offset and a.distance == b.distance, "offset or distance differs"
     for name in HISTORY_UNITS:
@@ -203,7 +205,8 @@ def test_resume_from_any_checkpoint_is_bitwise_identical(tmp_path):
         fresh = wear_problem(VORONOI, (1.0, 10.0), 32)
         resumed = run_in(fresh, None, options, resume=saved)
         _same_result(full, resumed)
-        assert np.array_equal(full.snapshot_height, resumed.snapshot_height, equal_nan=True), \
+        assert np.array_equal(full.snapshot_recession, resumed.snapshot_recession,
+                              equal_nan=True), \
             f"snapshots differ after resuming from checkpoint {index}"
 
 
@@ -261,14 +264,14 @@ def test_run_file_round_trip(tmp_path):
               comparison=cmp)
     back, attrs, arrays = read_run(path)
     _same_result(result, back)
-    assert attrs["format"] == "runin.transient" and attrs["format_version"] == 3, \
+    assert attrs["format"] == "runin.transient" and attrs["format_version"] == 4, \
         f"layout {attrs['format']!r} version {attrs['format_version']!r}, expected " \
-        "'runin.transient' version 3"
+        "'runin.transient' version 4"
     assert back.snapshot_distance.tolist() == pytest.approx(
         [0.0, 0.1 * result.distance_scale, result.distance_scale], rel=1e-12), \
         "snapshots not at the requested distances"
-    assert back.snapshot_height.shape == (3, 32, 32), \
-        "expected back.snapshot_height.shape == (3, 32, 32)"
+    assert back.snapshot_recession.shape == (3, 32, 32), \
+        "expected back.snapshot_recession.shape == (3, 32, 32)"
     assert "phase" in arrays, "expected 'phase' in arrays"
     import h5py
 
@@ -359,3 +362,35 @@ def test_stopped_run_resumes_to_steady():
 def test_bad_options_are_named(field, value, match):
     with pytest.raises(ValueError, match=match):
         RunOptions(**{field: value})
+
+
+# -- files of the earlier layout ----------------------------------------------------------
+LAYOUT3 = pathlib.Path(__file__).parent / "data"
+
+
+def test_a_layout_3_run_file_reads_and_resumes_to_the_uninterrupted_run(tmp_path, capsys):
+    # tests/data/run_layout3.h5: the scene tests/data/run_layout3.toml stopped after five
+    # steps by the code of layout 3, whose face's recession is the dataset "height".
+    import h5py
+
+    from transient.cli import runin as cli
+
+    scene = tmp_path / "scene.toml"
+    shutil.copy(LAYOUT3 / "run_layout3.toml", scene)
+    old = tmp_path / "run.h5"
+    shutil.copy(LAYOUT3 / "run_layout3.h5", old)
+    with h5py.File(old) as f:
+        assert f.attrs["format_version"] == 3 and "height" in f["state"], "a layout-3 file"
+        stored_height = f["state/height"][()]
+    back, _, _ = read_run(old)
+    assert back.steps == 5 and np.array_equal(back.recession, stored_height, equal_nan=True), \
+        "the recession read from the dataset height"
+    assert cli.main([str(scene), "-o", str(old), "--resume"]) == 0, capsys.readouterr().err
+    straight = tmp_path / "straight.h5"
+    assert cli.main([str(scene), "-o", str(straight)]) == 0, capsys.readouterr().err
+    resumed, _, _ = read_run(old)
+    uninterrupted, attrs, _ = read_run(straight)
+    _same_result(uninterrupted, resumed)
+    with h5py.File(old) as f:
+        assert f.attrs["format_version"] == 4 and "recession" in f["state"], \
+            "a resumed file is written in the new layout"

@@ -21,7 +21,7 @@ from steady.sliding import SLIDING
 from steady.solution import solve, solve_scene
 from steady.wear import WEAR_LAWS, ArchardLaw, PowerLaw
 from transient.cli.runin import build_parser
-from transient.initial_face import INITIAL_FACES, initial_height
+from transient.initial_face import INITIAL_FACES, initial_recession
 from transient.options import RunOptions, option_keys
 from transient.scene import wear_problem_of
 
@@ -231,7 +231,7 @@ def test_an_initial_face_kind_is_one_registration():
     INITIAL_FACES.register("dimple", keys)(dimple)
     dimple.statistics = None
     try:
-        h = initial_height("dimple", Circle(RADIUS).grid(16), depth=1e-6)
+        h = initial_recession("dimple", Circle(RADIUS).grid(16), depth=1e-6)
     finally:
         INITIAL_FACES.unregister("dimple")
     assert h.max() == 1e-6 and h.min() == 0.0, "the registered face"
@@ -266,7 +266,7 @@ def test_equal_masks_are_one_outline():
     b = MaskOutline(mask.copy(), 1e-3, source="'b.png'")
     assert a == b and hash(a) == hash(b), "equal pixels and pixel size: one face"
     assert a != MaskOutline(mask, 2e-3), "another pixel size is another face"
-    assert initial_height("flat", a.grid(8)).shape == b.grid(8).shape == (4, 8), \
+    assert initial_recession("flat", a.grid(8)).shape == b.grid(8).shape == (4, 8), \
         "a grid of one mask serves the other"
     shifted = mask.copy()
     shifted[0, 2] = False

@@ -16,7 +16,7 @@ from steady.sliding import SLIDING, PinOnDisk, Rotation, Translation
 from steady.solution import solve
 from steady.wear import PowerLaw
 from transient import RunOptions, WearProblem, run_in
-from transient.initial_face import initial_height
+from transient.initial_face import initial_recession
 
 
 def _with(prob, sliding):
@@ -95,7 +95,7 @@ def test_a_translation_leaves_the_problem_bit_for_bit():
     base = problem(GEOMETRIES["voronoi"], [K1, 10 * K1], n=32)
     same = _with(base, Translation())
     assert same.sliding is None, "a translation is stored as None (the default path)"
-    assert np.array_equal(base.coefficient_field(), same.coefficient_field())
+    assert np.array_equal(base.wear_field(), same.wear_field())
     assert np.array_equal(base.steady_pressure(), same.steady_pressure())
     assert base.speed_ratio is None
 
@@ -108,7 +108,7 @@ def test_steady_pressure_wears_every_pixel_at_one_rate_and_carries_the_load(expo
     prob = _with(base, PinOnDisk(1.5 * RADIUS))
     p = prob.steady_pressure()
     mask = prob.face_mask
-    rate = prob.coefficient_field()[mask] * p[mask] ** exponent
+    rate = prob.wear_field()[mask] * p[mask] ** exponent
     assert np.ptp(rate) <= 1e-13 * rate.mean(), f"rates spread {np.ptp(rate) / rate.mean():.3g}"
     load = p.sum() * prob.pixel_area
     assert abs(load - FORCE) <= 1e-13 * FORCE, f"load {load} N, not {FORCE} N"
@@ -184,7 +184,7 @@ def test_fit_refuses_non_uniform_sliding():
 # -- the run-in ---------------------------------------------------------------
 def _run(prob, tol=1e-4):
     wear = WearProblem(prob)
-    flat = initial_height("flat", wear.grid)
+    flat = initial_recession("flat", wear.grid)
     return wear, run_in(wear, flat, RunOptions(tol=tol))
 
 
@@ -219,8 +219,8 @@ def test_run_in_with_large_track_radius_reproduces_the_translation():
 def test_stage_shift_is_the_speed_weighted_coefficient_field():
     prob = _with(problem(GEOMETRIES["voronoi"], [K1, 10 * K1], n=32), PinOnDisk(0.02))
     wear = WearProblem(prob)
-    expected = prob.wear.coefficient_field(prob.labels) * prob.speed_ratio
-    assert np.array_equal(wear.coefficient_field, expected)
+    expected = prob.wear.wear_field(prob.labels) * prob.speed_ratio
+    assert np.array_equal(wear.wear_field, expected)
     pressure = np.where(prob.face_mask, 1e5, 0.0)
     assert np.allclose(wear.rate(pressure), expected * 1e5, rtol=1e-15, atol=0)
     assert dataclasses.is_dataclass(prob.sliding)

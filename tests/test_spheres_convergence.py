@@ -69,7 +69,7 @@ def run(scene, n):
             "slope": np.asarray(h["rms_slope"])[at] / grad,
             "quasi": np.asarray(h["quasi_steady_rms_slope"])[at] / grad,
             "error": np.asarray(h["rms_slope_error"])[at] / grad,
-            "worn": (result.snapshot_height - result.initial_height[None]) / f_star}
+            "worn": (result.snapshot_recession - result.initial_recession[None]) / f_star}
 
 
 def voxel_scene(scene, n, dz, directory):

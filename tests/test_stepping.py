@@ -78,7 +78,7 @@ def exact():
     G = np.linalg.inv(K)
     G1 = G.sum(axis=1)
     c = G1.sum()
-    D = problem.coefficient_field.ravel()[idx]
+    D = problem.wear_field.ravel()[idx]
     A = D[:, None] * (np.outer(G1, G1) / c - G)
     b = D * G1 * FORCE / (hs.h ** 2 * c)
     M = np.zeros((size + 1, size + 1))
@@ -92,7 +92,7 @@ def exact():
 
 def shape_error(result, idx, w_exact):
     """Rms over the face of the error of the face, best constant removed, / f*."""
-    w = (result.height + result.offset).ravel()[idx]
+    w = (result.recession + result.offset).ravel()[idx]
     d = w - w_exact
     return float(np.sqrt(np.mean((d - d.mean()) ** 2))) / result.depth_scale
 
@@ -131,7 +131,7 @@ def test_adaptive_scheme_matches_exact_run_in(name, exact):
     bound = ADAPTIVE_BOUND[SCHEMES[name].order]
     assert err < bound, f"{name}: shape error {err:.3g} f* above {bound:g} ({result.steps} steps)"
     # The rigid part is integrated too: worn volume = F-weighted wear, no drift.
-    w = (result.height + result.offset).ravel()[idx]
+    w = (result.recession + result.offset).ravel()[idx]
     offset_err = abs(np.mean(w - w_exact)) / result.depth_scale
     assert offset_err < bound, f"{name}: offset error {offset_err:.3g} f*"
     assert np.all(np.isfinite(result.history["rms_slope"])), f"{name}: non-finite history"
@@ -273,7 +273,7 @@ def fine_run(scheme, steps, exponent):
                            distance_limit=FINE_DISTANCE * s_star, spread_tol=1e-300,
                            shape_tol=1e-300))
     assert r.status == "stopped", r.message
-    return (r.height + r.offset)[problem.face_mask], r.depth_scale
+    return (r.recession + r.offset)[problem.face_mask], r.depth_scale
 
 
 # Fixed step counts of the fine-step test; ESDIRK3 from 32 steps, where its

@@ -46,7 +46,7 @@ def test_run_writes_result_and_agreement(tmp_path, write_scene):
         "expected 'face shape error' in proc.stdout and 'rms slope' in proc.stdout"
     assert png.stat().st_size > 10000, "no figure"
     with h5py.File(out) as f:
-        assert f.attrs["format"] == "runin.transient" and f.attrs["format_version"] == 3, \
+        assert f.attrs["format"] == "runin.transient" and f.attrs["format_version"] == 4, \
             f"layout {f.attrs['format']!r} version {f.attrs['format_version']!r}"
         assert f.attrs["status"] == "steady", "expected f.attrs['status'] == 'steady'"
         assert f["worn_depth"].attrs["units"] == "m", \
@@ -59,7 +59,7 @@ def test_run_writes_result_and_agreement(tmp_path, write_scene):
             attrs = f[f"history/{name}"].attrs
             assert attrs.get("units") == unit and attrs["long_name"] == long_name, \
                 f"history/{name}: units {attrs.get('units')!r}, expected {unit!r}"
-        assert f["snapshots/height"].shape == (2, 32, 32), \
+        assert f["snapshots/recession"].shape == (2, 32, 32), \
             "expected f['snapshots/height'].shape == (2, 32, 32)"
         cmp = f["comparison"].attrs
         assert cmp["face_error"] < 1e-3 and abs(cmp["rms_slope_error"]) < 5e-3, \

@@ -194,7 +194,7 @@ def plane_residual(result, steady, problem):
 def test_two_phase_rectangle_runs_in_to_the_steady_face(case, n):
     geometry, ratios = {"voronoi": (VORONOI, (1.0, 10.0)), "rods": (BLOCK_RODS, (1.0, 1.7))}[case]
     problem, result, steady = run_to_steady(BLOCK, geometry, ratios, n)
-    assert result.height.shape == (n // 2, n), result.height.shape
+    assert result.recession.shape == (n // 2, n), result.recession.shape
     cmp = compare_with_steady(result, steady, problem)
     # Measured 0.93e-8 .. 1.3e-8 (both cases, both grids): the final jump's s*/ds.
     assert cmp.face_error < 1e-6, f"face error {cmp.face_error:.3g} of the steady relief"
@@ -284,7 +284,7 @@ def test_shipped_outline_scenes_run_in_to_the_steady_scene(name):
 
     scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" / f"{name}.toml")
     problem = wear_problem_of(scene)
-    result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-4))
+    result = run_in(problem, initial.recession(problem.grid), RunOptions(tol=1e-4))
     assert result.status == "steady", result.message
     with warnings.catch_warnings():
         # The aggregate chip's face lies beyond the small slopes (0.445 rad): the comparison
@@ -347,7 +347,7 @@ def test_disk_as_a_radius_or_a_circle_runs_bit_for_bit_the_same():
         assert np.array_equal(problem.face_mask, grid.mask), "the disk's face"
         runs.append(run_in(problem, initial_face.flat(problem.grid), FAST))
     a, b = runs
-    assert a.steps == b.steps and np.array_equal(a.height, b.height, equal_nan=True)
+    assert a.steps == b.steps and np.array_equal(a.recession, b.recession, equal_nan=True)
     for name in HISTORY_UNITS:
         assert np.array_equal(a.history[name], b.history[name], equal_nan=True), name
     ref = reference_slope(Circle(RADIUS), FORCE, E_STAR)
@@ -388,8 +388,8 @@ def test_scene_problem_uses_the_scene_outline_and_grid(scene_file):
     assert problem.outline == BLOCK and problem.shape == (24, 48) and problem.n == 48
     assert np.array_equal(problem.labels, scene.phase_labels()), "the scene's phase map"
     assert problem.halfspace.h == scene.grid().h
-    assert initial.height(problem.grid).shape == (24, 48)
-    assert initial.height(scene.outline.grid(48)).shape == (24, 48)
+    assert initial.recession(problem.grid).shape == (24, 48)
+    assert initial.recession(scene.outline.grid(48)).shape == (24, 48)
     with pytest.raises(ValueError, match=r"n = 12, the minimum is n = 16"):
         wear_problem_of(scene, n=12)
 
@@ -424,7 +424,7 @@ def test_tilted_block_touches_at_its_leading_edge():
         "a plane receding towards +x, zero at the edge x = -width/2"
     # Towards the diagonal: zero at the corner (-Lx, -Ly).
     c, s = math.cos(1.0), math.sin(1.0)
-    h = initial_face.initial_height("tilted", BLOCK.grid(48), angle=angle, azimuth=1.0)
+    h = initial_face.initial_recession("tilted", BLOCK.grid(48), angle=angle, azimuth=1.0)
     lx, ly = BLOCK.half_extent
     corner_pixel = math.tan(angle) * ((grid.x[0] + lx) * c + (grid.y[0] + ly) * s)
     assert h[0, 0] == pytest.approx(corner_pixel, rel=1e-12) and h.min() == h[0, 0]
@@ -459,11 +459,11 @@ def test_file_initial_face_of_a_rectangle(tmp_path, scene_file):
     punch = {"shape": "rectangle", "width": 0.004, "length": 0.008}
     scene, _, initial = load_transient_scene(
         scene_file(punch=punch, n=48, initial_face={"kind": "file", "path": "face.npy"}))
-    assert initial.height(scene.grid()).shape == (24, 48)
+    assert initial.recession(scene.grid()).shape == (24, 48)
     scene, _, initial = load_transient_scene(
         scene_file(punch=punch, n=48, initial_face={"kind": "file", "path": "square.npy"}))
     with pytest.raises(ValueError, match=r"shape \(48, 48\); \(24, 48\) is needed"):
-        initial.height(scene.grid())
+        initial.recession(scene.grid())
 
 
 # -- run files, resume, figures ----------------------------------------------------------
@@ -477,7 +477,7 @@ def test_rectangle_run_file_round_trip_and_resume(tmp_path):
     write_run(path, stopped, attrs={"radius": None, "n": 32})
     saved, attrs, _ = read_run(path)
     assert saved.outline == BLOCK and saved.shape == (16, 32)
-    assert saved.snapshot_height.shape[1:] == (16, 32)
+    assert saved.snapshot_recession.shape[1:] == (16, 32)
     assert "radius" not in attrs, "a rectangle has no radius"
     assert attrs["scale"] == 4e-3 and attrs["pixel_size"] == pytest.approx(2 * 4e-3 / 32)
     assert saved.reference_slope_source == problem.reference.source
@@ -489,7 +489,7 @@ def test_rectangle_run_file_round_trip_and_resume(tmp_path):
     straight = run_in(problem_on(BLOCK, VORONOI, (1.0, 10.0), 32), h0, FAST)
     assert resumed.status == straight.status == "steady"
     assert resumed.steps == straight.steps
-    assert np.array_equal(resumed.height, straight.height, equal_nan=True), "resume differs"
+    assert np.array_equal(resumed.recession, straight.recession, equal_nan=True), "resume differs"
     for name in HISTORY_UNITS:
         assert np.array_equal(resumed.history[name], straight.history[name], equal_nan=True), name
 
@@ -556,7 +556,7 @@ def test_command_line_runs_a_rectangle_and_names_its_reference_slope(tmp_path, s
     assert "grad_f0 = " in proc.stdout and "Love's closed-form gradient" in proc.stdout, \
         proc.stdout
     with h5py.File(out) as f:
-        assert f["phase"].shape == (24, 48) and f["snapshots/height"].shape == (1, 24, 48)
+        assert f["phase"].shape == (24, 48) and f["snapshots/recession"].shape == (1, 24, 48)
         assert "radius" not in f.attrs and f["outline"].attrs["kind"] == "rectangle"
         assert "Love" in f.attrs["reference_slope_source"]
         assert f["comparison"].attrs["face_error"] < 1e-6

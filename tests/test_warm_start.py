@@ -41,8 +41,8 @@ def test_prediction_is_galerkin_orthogonal_across_blocks(history, kind):
     problem, history, height = history
     face = problem.face_mask
     c = 1e-3 * problem.distance_scale
-    shift = {"shift_scale": c * problem.coefficient_field,
-             "shift": 2 * c * problem.coefficient_field[::-1], "none": 0.0}[kind]
+    shift = {"shift_scale": c * problem.wear_field,
+             "shift": 2 * c * problem.wear_field[::-1], "none": 0.0}[kind]
     if kind == "shift_scale":
         x, kx = history.predict(height, shift_scale=c)
     else:

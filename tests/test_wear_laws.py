@@ -87,7 +87,7 @@ def test_threshold_steady_pressures_solve_the_phase_balance(exponent):
     expected = p_th + (c / k) ** (1 / exponent)
     assert np.allclose(p, expected, rtol=1e-12, atol=0), f"{p} against {expected}"
     assert np.dot(counts * area, p) == pytest.approx(F, rel=1e-14), "load"
-    rates = law.rate(p, law.coefficient_field(np.arange(2)))
+    rates = law.rate(p, law.wear_field(np.arange(2)))
     assert rates[0] == pytest.approx(rates[1], rel=1e-12), f"equal wear rates {rates}"
 
 
@@ -108,7 +108,7 @@ def test_threshold_zero_runs_in_as_the_power_law():
             for law in (PowerLaw(k, 2.0), ThresholdLaw(k, (0.0, 0.0), 2.0))]
     assert runs[0].steps == runs[1].steps, f"steps {runs[0].steps} and {runs[1].steps}"
     assert runs[0].distance == runs[1].distance, f"distance {runs[0].distance}, {runs[1].distance}"
-    assert np.array_equal(runs[0].state.height, runs[1].state.height, equal_nan=True), "face"
+    assert np.array_equal(runs[0].state.recession, runs[1].state.recession, equal_nan=True), "face"
     # m = 1: Archard's linear path against Newton's, both to the steady face.
     assert_reaches_steady(ThresholdLaw((K1, 10 * K1), (0.0, 0.0)), "threshold 0, m=1")
 

@@ -121,7 +121,7 @@ def test_run_file_opens_as_labelled_arrays(files):
                 assert hist[name].dims == ("distance",), f"history/{name} dims {hist[name].dims}"
         assert hist.attrs["distance_scale"] == run.distance_scale, "s* beside the history"
     with xr.open_dataset(files["run"], engine="h5netcdf", group="snapshots") as snaps:
-        assert snaps["height"].dims == ("distance", "x", "y"), f"{snaps['height'].dims}"
+        assert snaps["recession"].dims == ("distance", "x", "y"), f"{snaps['recession'].dims}"
         assert np.array_equal(snaps["distance"].values, run.snapshot_distance), "snapshots"
 
 

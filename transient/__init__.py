@@ -91,7 +91,7 @@ _MODULE_OF = {
     "from_array": "initial_face",
     "from_file": "initial_face",
     "get_scheme": "stepping",
-    "initial_height": "initial_face",
+    "initial_recession": "initial_face",
     "load_transient_scene": "scene",
     "make_preconditioner": "preconditioners",
     "parse_initial_face": "scene",

@@ -24,7 +24,7 @@ Method
   entries nearest to it.
 - *Dynamics.* The punch stays in full contact (the pressure of a worn
   homogeneous face is positive everywhere), so ``A p = d - w`` with the load
-  ``sum_j A_j p_j = F`` gives ``p = c - B w``, affine in the height ``w``,
+  ``sum_j A_j p_j = F`` gives ``p = c - B w``, affine in the recession ``w``,
   and the run-in ``dw/ds = k p`` is the linear system
   ``dw/ds = -k B w + k c``.  It is integrated *exactly* in the distance:
   with ``-k B = V diag(mu) V^-1``,
@@ -212,13 +212,13 @@ class AxisymmetricRunIn:
         self._mu = mu.real
         self._vectors = vectors.real
         self._forcing = np.linalg.solve(self._vectors, self.wear_coefficient * self._c)
-        # The zero eigenvalue belongs to a uniform height (B 1 = 0): the rigid
+        # The zero eigenvalue belongs to a uniform recession (B 1 = 0): the rigid
         # wear, which moves the face and the approach together.  Leaving it
-        # out keeps the heights of the size of the relief at any distance.
+        # out keeps the recessions of the size of the relief at any distance.
         self._forcing[np.argmin(np.abs(self._mu))] = 0.0
 
     # -- states ----------------------------------------------------------
-    def height(self, distance):
+    def recession(self, distance):
         """Height ``w`` worn off each ring after ``distance`` (m) of sliding, m, shape (N,).
 
         Up to a constant: the rigid part of the wear is left out.
@@ -243,7 +243,7 @@ class AxisymmetricRunIn:
         RuntimeError
             A ring lost contact (not expected for this punch).
         """
-        w = self.height(distance)
+        w = self.recession(distance)
         pressure = self._c - self._b @ w
         if np.any(pressure <= 0):
             raise RuntimeError(f"ring pressure not positive at s = {distance!r} m: the "
@@ -355,10 +355,10 @@ def reference_history(distances_s_star, *, rings=1200, grading=4.0):
                        / (model.reference_slope * model.radius)))
     (slope_c, height_c), (slope_f, height_f) = values
     slope = slope_f + (slope_f - slope_c) / 3.0
-    height = height_f + (height_f - height_c) / 3.0
+    recession = height_f + (height_f - height_c) / 3.0
     return ReferenceHistory(distance_s_star=s, rms_slope=slope,
                             rms_slope_error=np.abs(slope - slope_f),
-                            rms_height=height, rms_height_error=np.abs(height - height_f),
+                            rms_height=recession, rms_height_error=np.abs(recession - height_f),
                             rings=counts)
 
 
@@ -557,10 +557,10 @@ class CoatedAxisymmetricRunIn(AxisymmetricRunIn):
             self._advance_to(last.start + span)
 
     # -- results ---------------------------------------------------------
-    def height(self, distance):
+    def recession(self, distance):
         """Depth ``w`` worn off each ring after ``distance`` (m) of sliding, m, shape (N,).
 
-        Unlike :meth:`AxisymmetricRunIn.height` this is the absolute worn
+        Unlike :meth:`AxisymmetricRunIn.recession` this is the absolute worn
         depth from the flat face, rigid wear included: it decides the phase.
         """
         s = float(distance)
@@ -580,7 +580,7 @@ class CoatedAxisymmetricRunIn(AxisymmetricRunIn):
         RuntimeError
             A ring lost contact: the full-contact model does not hold.
         """
-        w = self.height(distance)
+        w = self.recession(distance)
         s = float(distance)
         pressure = self._c - self._b @ w
         if np.any(pressure <= 0):

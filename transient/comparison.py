@@ -141,15 +141,15 @@ def compare_with_steady(result, steady, problem):
     mid = 0.5 * (diff.max() + diff.min())
     face_error = float(np.max(np.abs(diff - mid)) / relief)
     face_rms = float(np.sqrt(np.mean((diff - diff.mean()) ** 2)) / relief)
-    height = np.where(face_mask, result.height, 0.0)
-    plain = face_rms_slope(problem.halfspace, face_mask, height, result.pressure,
+    recession = np.where(face_mask, result.recession, 0.0)
+    plain = face_rms_slope(problem.halfspace, face_mask, recession, result.pressure,
                            result.approach)
-    estimator = FaceEstimator.of(problem, np.where(face_mask, result.initial_height, 0.0))
+    estimator = FaceEstimator.of(problem, np.where(face_mask, result.initial_recession, 0.0))
     # A state a jump reached is the steady face at no particular distance: its rim layer is
     # fully worn (the distance of the history's end would measure it as barely worn, or, for a
     # jump at s = 0, as the initial face).
     jumped = result.state.jumps > 0 and result.status == "steady"
-    final = estimator.figures(math.inf if jumped else result.distance, height, result.pressure,
+    final = estimator.figures(math.inf if jumped else result.distance, recession, result.pressure,
                               result.approach)
     if math.isfinite(steady.rms_slope_error):
         steady_rms, steady_error = float(steady.rms_slope), float(steady.rms_slope_error)
@@ -175,7 +175,7 @@ def compare_with_steady(result, steady, problem):
         phase_pressure_error=float(np.max(np.abs(pp / steady.phase_pressures - 1.0))))
 
 
-def steady_of_run(scene, problem, initial_height):
+def steady_of_run(scene, problem, initial_recession):
     """The steady result of ``runin-steady`` for a run's scene, on the run's own problem.
 
     :func:`steady.solution.solve_scene` with its error bar, on the run's
@@ -192,7 +192,7 @@ def steady_of_run(scene, problem, initial_height):
         The scene the problem was built from
         (:func:`transient.scene.wear_problem_of`, its grid).
     problem : transient.problem.WearProblem
-    initial_height : ndarray, shape (nx, ny), m
+    initial_recession : ndarray, shape (nx, ny), m
         The run's initial face (its estimator is shared, see
         :meth:`transient.history.FaceEstimator.of`).
 
@@ -200,6 +200,6 @@ def steady_of_run(scene, problem, initial_height):
     -------
     steady.solution.SteadyResult
     """
-    estimator = FaceEstimator.of(problem, initial_height)
+    estimator = FaceEstimator.of(problem, initial_recession)
     shared = estimator.geometry_estimate if problem.problem.sliding is None else None
     return solve_scene(scene, problem=problem.problem, estimate=shared)

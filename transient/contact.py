@@ -1,6 +1,6 @@
 """Unilateral normal contact of the punch face on the elastic half-space, load control.
 
-The face can carry pressure on the pixels of ``face_mask``; its height field
+The face can carry pressure on the pixels of ``face_mask``; its recession field
 ``h(x)`` (m, larger = recessed, farther from the counter-body) holds the
 worn depth plus the initial shape.  Under the normal force ``F`` the
 pressure ``p`` and the rigid approach ``d`` solve the linear
@@ -156,26 +156,26 @@ class _Operator:
         return u
 
 
-def _initial_pressure(height, on_face, force, halfspace):
+def _initial_pressure(recession, on_face, force, halfspace):
     """Cold start: Hertz-like pressure on the pixels a rigid estimate puts in contact.
 
     For a sphere, the contact region ``dh < d / 2`` (``dh = h - min h``)
     has the radius ``c`` with ``d = 3 F / (4 E* c)`` (Hertz), and
-    ``p ~ sqrt(d / 2 - dh)``.  The same construction on the sorted heights
+    ``p ~ sqrt(d / 2 - dh)``.  The same construction on the sorted recessions
     of any face gives a start of the right extent; for a flat face it is
     uniform.  Unnormalised.
     """
-    dh_face = height[on_face] - height[on_face].min()
+    dh_face = recession[on_face] - recession[on_face].min()
     if not dh_face.any():
         return on_face.astype(float)
     dh = np.sort(dh_face)
     count = np.arange(1, dh.size + 1)
     c = np.sqrt(count * halfspace.h**2 / np.pi)
     half_approach = 0.375 * force / (halfspace.E_star * c)
-    # First set size whose half-approach does not reach the next pixel's height.
+    # First set size whose half-approach does not reach the next pixel's recession.
     k = min(int(np.argmax(half_approach <= np.append(dh[1:], np.inf))), dh.size - 1)
     level = max(float(half_approach[k]), float(dh[k]))
-    excess = np.where(on_face, level - (height - height[on_face].min()), 0.0)
+    excess = np.where(on_face, level - (recession - recession[on_face].min()), 0.0)
     if np.all(excess[on_face] >= 0.5 * level):
         return on_face.astype(float)
     return np.sqrt(np.maximum(excess, 0.0))
@@ -188,7 +188,7 @@ def _check_field(name, value, shape):
     return arr
 
 
-def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=None,
+def solve_contact(halfspace, face_mask, recession, normal_force, *, shift=None, x0=None,
                   x0_displacement=None, rtol=1e-8, atol=0.0, maxiter=None,
                   preconditioner="auto", callback=None):
     r"""Contact pressure and rigid approach of the face under a normal force.
@@ -202,7 +202,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
         The elastic half-space operator on the ``nx x ny`` grid.
     face_mask : ndarray of bool, shape (nx, ny)
         Pixels of the face, which can carry pressure; at least one.
-    height : ndarray, shape (nx, ny), m
+    recession : ndarray, shape (nx, ny), m
         Height of the face, larger = farther from the counter-body (worn
         depth plus initial shape).  Must be finite on the face; values off
         the face are ignored.  Only differences matter.
@@ -251,7 +251,7 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     Raises
     ------
     ValueError
-        On a wrong shape, a non-finite height on the face, a negative or
+        On a wrong shape, a non-finite recession on the face, a negative or
         non-finite force, a negative or non-finite shift, an empty face,
         bad tolerances or an unknown preconditioner.
 
@@ -291,14 +291,14 @@ def solve_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=
     >>> print(f"{res.approach / reference.flat_punch_approach(force, a, E_star):.3f}")
     1.002
     """
-    on_face, n_face, height, force, shift, x0, maxiter = _checked_inputs(
-        halfspace, face_mask, height, normal_force, shift, x0, rtol, atol, maxiter,
+    on_face, n_face, recession, force, shift, x0, maxiter = _checked_inputs(
+        halfspace, face_mask, recession, normal_force, shift, x0, rtol, atol, maxiter,
         preconditioner)
-    return _solve(halfspace, on_face, n_face, height, force, shift, x0, x0_displacement,
+    return _solve(halfspace, on_face, n_face, recession, force, shift, x0, x0_displacement,
                   rtol, atol, maxiter, preconditioner, callback)
 
 
-def solve_trusted_contact(halfspace, face_mask, height, normal_force, *, shift=None, x0=None,
+def solve_trusted_contact(halfspace, face_mask, recession, normal_force, *, shift=None, x0=None,
                           x0_displacement=None, rtol=1e-8, atol=0.0, maxiter=None,
                           preconditioner="auto"):
     """:func:`solve_contact` on arguments its caller guarantees, without their checks.
@@ -307,7 +307,7 @@ def solve_trusted_contact(halfspace, face_mask, height, normal_force, *, shift=N
     built itself, and the checks of :func:`solve_contact` (several passes
     over the grid's arrays) cost a few per cent of a solve.  The caller
     guarantees what those checks would establish: arrays of the grid's shape
-    (float), ``face_mask`` boolean with at least one pixel, ``height`` and
+    (float), ``face_mask`` boolean with at least one pixel, ``recession`` and
     ``x0`` finite on the face, ``normal_force`` finite and non-negative,
     ``shift`` (m/Pa) finite, non-negative and zero off the face, tolerances
     and ``maxiter`` valid, ``preconditioner`` a registered name or a callable.
@@ -319,16 +319,16 @@ def solve_trusted_contact(halfspace, face_mask, height, normal_force, *, shift=N
     on_face = face_mask
     if maxiter is None:
         maxiter = max(200, 10 * max(halfspace.shape))
-    return _solve(halfspace, on_face, int(np.count_nonzero(on_face)), height,
+    return _solve(halfspace, on_face, int(np.count_nonzero(on_face)), recession,
                   float(normal_force), shift, x0, x0_displacement, rtol, atol, int(maxiter),
                   preconditioner, None)
 
 
-def _solve(halfspace, on_face, n_face, height, force, shift, x0, x0_displacement, rtol, atol,
+def _solve(halfspace, on_face, n_face, recession, force, shift, x0, x0_displacement, rtol, atol,
            maxiter, preconditioner, callback):
     """The iteration of :func:`solve_contact` on checked arguments."""
     operator = _Operator(halfspace, shift)
-    h_face = np.where(on_face, height, 0.0)
+    h_face = np.where(on_face, recession, 0.0)
     if force == 0.0:
         return _zero_load_result(h_face, on_face)
     if not callable(preconditioner):
@@ -341,7 +341,7 @@ def _solve(halfspace, on_face, n_face, height, force, shift, x0, x0_displacement
 
 # -- input checks ------------------------------------------------------------------------------
 
-def _checked_inputs(halfspace, face_mask, height, normal_force, shift, x0, rtol, atol, maxiter,
+def _checked_inputs(halfspace, face_mask, recession, normal_force, shift, x0, rtol, atol, maxiter,
                     preconditioner):
     """The arguments of :func:`solve_contact`, checked (see its Raises) and converted.
 
@@ -350,7 +350,7 @@ def _checked_inputs(halfspace, face_mask, height, normal_force, shift, x0, rtol,
     on_face : ndarray of bool, shape (nx, ny)
     n_face : int
         Face pixels, at least one.
-    height : ndarray, shape (nx, ny), m
+    recession : ndarray, shape (nx, ny), m
     force : float, N
     shift : ndarray, shape (nx, ny), m/Pa, or None
         Zero off the face; None if zero everywhere.
@@ -359,10 +359,10 @@ def _checked_inputs(halfspace, face_mask, height, normal_force, shift, x0, rtol,
     """
     shape = tuple(halfspace.shape)
     on_face, n_face = _checked_face(face_mask, shape)
-    height = _check_field("height", height, shape)
-    if not np.all(np.isfinite(height[on_face])):
-        bad = int((~np.isfinite(height[on_face])).sum())
-        raise ValueError(f"height must be finite on the face, got {bad} non-finite values")
+    recession = _check_field("recession", recession, shape)
+    if not np.all(np.isfinite(recession[on_face])):
+        bad = int((~np.isfinite(recession[on_face])).sum())
+        raise ValueError(f"recession must be finite on the face, got {bad} non-finite values")
     if not isinstance(normal_force, numbers.Real) and np.ndim(normal_force) != 0:
         raise ValueError(f"normal_force must be a scalar in N, got {normal_force!r}")
     force = float(normal_force)
@@ -375,7 +375,7 @@ def _checked_inputs(halfspace, face_mask, height, normal_force, shift, x0, rtol,
         if not np.all(np.isfinite(x0[on_face])):
             raise ValueError("x0 must be finite on the face")
     maxiter = _checked_controls(rtol, atol, maxiter, preconditioner, shape)
-    return on_face, n_face, height, force, shift, x0, maxiter
+    return on_face, n_face, recession, force, shift, x0, maxiter
 
 
 def _checked_face(face_mask, shape):
@@ -441,7 +441,7 @@ class _Problem:
         1.0 on the face pixels, 0.0 off them.
     n_face : int
         Face pixels.
-    height : ndarray, shape (nx, ny), m
+    recession : ndarray, shape (nx, ny), m
         ``h`` on the face, 0 off it.
     force : float, N
         Normal force, positive.
@@ -455,7 +455,7 @@ class _Problem:
     operator: _Operator
     face: np.ndarray
     n_face: int
-    height: np.ndarray
+    recession: np.ndarray
     force: float
     area: float
     precondition: object
@@ -489,7 +489,7 @@ def _start(problem, on_face, x0, x0_displacement):
         if p.min() < 0:
             np.maximum(p, 0.0, out=p)
     if p.sum() <= 0:
-        p = _initial_pressure(problem.height, on_face, problem.force, operator.halfspace)
+        p = _initial_pressure(problem.recession, on_face, problem.force, operator.halfspace)
         x0_displacement = None
     c = problem.force / (problem.area * p.sum())
     # (compared before the scaling: the same test as ``c p == c x0`` without its product)
@@ -669,7 +669,7 @@ def _gap(problem, state, active, u, g, r):
     else:
         np.multiply(shift, state.p, out=u)
         u += state.v
-    np.add(u, problem.height, out=g)
+    np.add(u, problem.recession, out=g)
     d = _dot(g, active.weight) / active.count
     g -= d
     np.multiply(g, active.weight, out=r)
@@ -858,7 +858,7 @@ def _result(problem, state, d, nit, residual, history, success, message):
             active = p > 0
             if active.any():
                 u = state.v + (0.0 if operator.shift is None else operator.shift * p)
-                d = float((u + problem.height)[active].mean())
+                d = float((u + problem.recession)[active].mean())
     else:
         logger.debug("contact solver: %s (%d operator products)", message, operator.products)
     v, shift = state.v, operator.shift

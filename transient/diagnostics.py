@@ -59,7 +59,7 @@ def masked_gradient(field, face_mask, h):
     return out
 
 
-def face_rms_slope(halfspace, face_mask, height, pressure, approach, *, gradient=None):
+def face_rms_slope(halfspace, face_mask, recession, pressure, approach, *, gradient=None):
     """Plain pixel rms slope of the worn face over the face pixels, dimensionless.
 
     On the contact the face is ``d - w = K p``, whose gradient is the exact
@@ -82,9 +82,9 @@ def face_rms_slope(halfspace, face_mask, height, pressure, approach, *, gradient
     ----------
     halfspace : steady.halfspace.HalfSpace
     face_mask : ndarray of bool, shape (nx, ny)
-    height : ndarray, shape (nx, ny), m
+    recession : ndarray, shape (nx, ny), m
     pressure : ndarray, shape (nx, ny), Pa
-        Contact pressure of ``height``.
+        Contact pressure of ``recession``.
     approach : float, m
     gradient : tuple of ndarray, optional
         ``halfspace.gradient(pressure)``, when the caller has it already.
@@ -100,7 +100,7 @@ def face_rms_slope(halfspace, face_mask, height, pressure, approach, *, gradient
     contact = pressure > 0
     if np.any(face_mask & ~contact):
         kp = halfspace.displacement_q(pressure_q)
-        gap = np.where(face_mask, height - (approach - kp), 0.0)
+        gap = np.where(face_mask, recession - (approach - kp), 0.0)
         gap = np.where(contact, 0.0, np.maximum(gap, 0.0))
         dx, dy = masked_gradient(gap, face_mask, halfspace.h)
         gx = gx - dx

@@ -142,7 +142,7 @@ def rim_layer_excess(rho):
 
 @dataclasses.dataclass(frozen=True)
 class FaceStatistics:
-    """Rms slope and rms height of a smooth face from its pixel heights.
+    """Rms slope and rms height of a smooth face from its pixel recessions.
 
     Attributes
     ----------
@@ -152,7 +152,7 @@ class FaceStatistics:
         ``|S_h - S_2h|``, the same on every other pixel with differences
         over ``2h``: zero for a plane, whose differences are exact.
     rms_height : float, m
-        Rms of the height about its least-squares plane
+        Rms of the recession about its least-squares plane
         (:func:`steady.relief.rms_height`).
     """
 
@@ -220,7 +220,7 @@ class FaceEstimator:
     Parameters
     ----------
     problem : transient.problem.WearProblem
-    initial_height : ndarray, shape (nx, ny), m
+    initial_recession : ndarray, shape (nx, ny), m
         Initial face (larger = recessed), as given to
         :func:`transient.runin.run_in`.
     precision : {"single", "double"}, optional
@@ -278,8 +278,8 @@ class FaceEstimator:
     """
 
     @classmethod
-    def of(cls, problem, initial_height, **options):
-        """The estimator of ``problem`` from ``initial_height``, built once and then reused.
+    def of(cls, problem, initial_recession, **options):
+        """The estimator of ``problem`` from ``initial_recession``, built once and then reused.
 
         The run (:func:`transient.runin.run_in`) and the comparison of its
         end with the steady face (:func:`transient.comparison.compare_with_steady`)
@@ -288,7 +288,7 @@ class FaceEstimator:
         ``options`` of the constructor apply when it is built).  Not to be
         applied from two threads at once.
         """
-        h0 = np.where(problem.face_mask, np.asarray(initial_height, dtype=float), 0.0)
+        h0 = np.where(problem.face_mask, np.asarray(initial_recession, dtype=float), 0.0)
         kept = _ESTIMATORS.get(problem)
         if kept is not None and np.array_equal(kept[0], h0):
             return kept[1]
@@ -296,7 +296,7 @@ class FaceEstimator:
         _ESTIMATORS[problem] = (h0, estimator)
         return estimator
 
-    def __init__(self, problem, initial_height, *, precision="single", contact_rtol=1e-10):
+    def __init__(self, problem, initial_recession, *, precision="single", contact_rtol=1e-10):
         hs = problem.halfspace
         self.problem = problem
         self.contact_rtol = float(contact_rtol)
@@ -310,13 +310,13 @@ class FaceEstimator:
         self._threaded = False
         self._plane = PlaneFit(self.face_mask, hs.h)
         self.reference_slope = problem.reference_slope
-        h0 = np.where(self.face_mask, np.asarray(initial_height, dtype=float), 0.0)
+        h0 = np.where(self.face_mask, np.asarray(initial_recession, dtype=float), 0.0)
         self.initial = face_statistics(-h0, self.face_mask, hs.h)
         padded = np.pad(self.face_mask, 1)
         interior = (padded[2:, 1:-1] & padded[:-2, 1:-1] & padded[1:-1, 2:]
                     & padded[1:-1, :-2])
         self.rim = self.face_mask & ~interior
-        rate = problem.wear.rate_constant(problem.coefficient_field[self.rim],
+        rate = problem.wear.rate_constant(problem.wear_field[self.rim],
                                           problem.pixel_mean_pressure)
         # Layer width per unit sliding distance, in pixels.
         self._rim_growth = rate * hs.E_star / hs.h
@@ -404,19 +404,19 @@ class FaceEstimator:
         """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels."""
         return float(np.min(self._rim_growth)) * distance
 
-    def figures(self, distance, height, pressure, approach, *, rim_layers=None):
+    def figures(self, distance, recession, pressure, approach, *, rim_layers=None):
         """The history's figures of the face at one point of the run.
 
         Parameters
         ----------
         distance : float, m
             Sliding distance; at 0 the slope figures are the initial face's.
-        height : ndarray, shape (nx, ny), m
-            Face height (larger = recessed), any constant offset.
+        recession : ndarray, shape (nx, ny), m
+            Face recession (larger = recessed), any constant offset.
         pressure : ndarray, shape (nx, ny), Pa
-            Contact pressure of ``height``.
+            Contact pressure of ``recession``.
         approach : float, m
-            Rigid approach in the frame of ``height``.
+            Rigid approach in the frame of ``recession``.
         rim_layers : sequence of (float, float), optional
             Under a load programme, one rim layer per rise of the force: the
             distance (m) slid since the rise and its weight ``(dF / F_N)^2``
@@ -431,8 +431,8 @@ class FaceEstimator:
         """
         face_mask = self.face_mask
         hs = self._halfspace()
-        height = np.where(face_mask, height, 0.0)
-        face = np.where(face_mask, approach - height, 0.0)
+        recession = np.where(face_mask, recession, 0.0)
+        face = np.where(face_mask, approach - recession, 0.0)
         pressure = np.where(face_mask, pressure, 0.0)
         integrals = self._step_energy(pressure, face_mask)
         off = face_mask & ~(pressure > 0)
@@ -440,7 +440,7 @@ class FaceEstimator:
         # share the exact-kernel gradient of K p; in full contact the plain
         # value is the estimator's own face sum.
         gradient = hs.gradient(pressure) if off.any() else None
-        plain = (face_rms_slope(hs, face_mask, height, pressure, approach, gradient=gradient)
+        plain = (face_rms_slope(hs, face_mask, recession, pressure, approach, gradient=gradient)
                  if off.any() else math.sqrt(integrals.face_sum / integrals.face_area))
         out = {"rms_slope_plain": plain, "rim_layer_pixels": self.rim_layer_pixels(distance),
                "rms_height": self._plane(face)}

@@ -1,6 +1,6 @@
-"""Initial height fields of the punch face.
+"""Initial recession fields of the punch face.
 
-Every function returns the height ``h(x)`` of the face at the pixel centres
+Every function returns the recession ``h(x)`` of the face at the pixel centres
 of the grid of a face outline (:class:`steady.outline.FaceGrid`:
 ``outline.grid(n)``, ``n`` pixels along the longer side of its bounding
 box), in metres, with the convention of
@@ -13,7 +13,7 @@ tread block on its 32 x 96 grid.
 
 Every shape is registered in :data:`INITIAL_FACES` (a
 :class:`steady.schema.KindRegistry`) by the kind the scene section
-``[initial_face]`` names, with its keys; :func:`initial_height` builds one
+``[initial_face]`` names, with its keys; :func:`initial_recession` builds one
 by kind.  A kind may also give the exact rms slope and rms height of its
 continuous face over the outline (:func:`exact_statistics`), the values the
 run-in history starts from (docs/model.md, "The run-in history").
@@ -39,7 +39,7 @@ __all__ = [
     "flat",
     "from_array",
     "from_file",
-    "initial_height",
+    "initial_recession",
     "tilted",
 ]
 
@@ -93,7 +93,7 @@ def exact_statistics(kind, outline, **parameters):
     ExactStatistics or None
         None for a kind without a closed form (``"file"``; ``"crowned"`` on
         a face other than a disk): the run-in then measures its pixel
-        heights (:func:`transient.history.face_statistics`).
+        recessions (:func:`transient.history.face_statistics`).
 
     Examples
     --------
@@ -126,8 +126,8 @@ def _grid(grid):
     return grid
 
 
-def initial_height(kind, grid, **parameters):
-    """Initial face height of a registered kind, checked.
+def initial_recession(kind, grid, **parameters):
+    """Initial face recession of a registered kind, checked.
 
     Parameters
     ----------
@@ -145,10 +145,10 @@ def initial_height(kind, grid, **parameters):
     Examples
     --------
     >>> from steady.outline import Circle, Rectangle
-    >>> h = initial_height("tilted", Circle(4e-3).grid(16), angle=1e-3)
+    >>> h = initial_recession("tilted", Circle(4e-3).grid(16), angle=1e-3)
     >>> h.shape, float(h.min()) >= 0.0
     ((16, 16), True)
-    >>> initial_height("flat", Rectangle(4e-3, 12e-3).grid(48)).shape
+    >>> initial_recession("flat", Rectangle(4e-3, 12e-3).grid(48)).shape
     (16, 48)
     """
     build = _kind(kind)
@@ -286,19 +286,19 @@ def from_array(values, grid):
     grid = _grid(grid)
     values = np.array(values, dtype=float)
     if values.shape != grid.shape:
-        raise ValueError(f"height field must have shape {grid.shape}, got {values.shape}")
+        raise ValueError(f"recession field must have shape {grid.shape}, got {values.shape}")
     bad = ~np.isfinite(values[grid.mask])
     if bad.any():
-        raise ValueError(f"height field must be finite on the face, got {int(bad.sum())} "
+        raise ValueError(f"recession field must be finite on the face, got {int(bad.sum())} "
                          "non-finite values")
     return values
 
 
 @_register("file", (Key("path", "path", required=True,
-                         doc=".npy height field, m, on the grid (n x n for a disk)"),),
-           doc="a height field read from a .npy file")
+                         doc=".npy recession field, m, on the grid (n x n for a disk)"),),
+           doc="a recession field read from a .npy file")
 def from_file(grid, path):
-    """Height field (m) read from a ``.npy`` file; see :func:`from_array`.
+    """Recession field (m, larger = recessed) read from a ``.npy`` file; see :func:`from_array`.
 
     The file is checked before its data are read
     (:func:`steady.array_files.read_npy`: a wrong shape, an empty or
@@ -318,6 +318,6 @@ def from_file(grid, path):
     grid = _grid(grid)
     path = os.fspath(path)
     if not path.endswith(".npy"):
-        raise ValueError(f"height file must be a .npy file, got {path!r}")
+        raise ValueError(f"recession file must be a .npy file, got {path!r}")
     values = read_npy(path, what="initial face file", shape=grid.shape, square=False)
     return from_array(values, grid)

@@ -39,7 +39,7 @@ Layout (root group)::
     worn_depth    (nx, ny) m, NaN off the face
     pressure      (nx, ny) Pa
     phase         (nx, ny) the phase map, and the caller's input datasets
-    state/        height, initial_height, previous_height, previous_rate,
+    state/        recession, initial_recession, previous_recession, previous_rate,
                   pressure_history, pressure_history_displacement
     history/      one dataset per :data:`transient.result.HISTORY_UNITS` name,
                   along the dimension scale ``distance`` (m); attribute
@@ -47,7 +47,7 @@ Layout (root group)::
                   :data:`transient.result.DEPTH_HISTORY_UNITS` (phase_fraction
                   also along ``phase_name``) and, under a coating,
                   :data:`transient.result.COATING_HISTORY_UNITS`
-    snapshots/    distance (k,) m (a dimension scale), height (k, nx, ny) m,
+    snapshots/    distance (k,) m (a dimension scale), recession (k, nx, ny) m,
                   pressure (k, nx, ny) Pa (byte shuffle and deflate, except
                   in a checkpoint); for a depth run section (k, nx, ny)
                   int8, the phase map of the section at the worn depth
@@ -161,10 +161,11 @@ __all__ = [
 #: ``format`` attribute of a run file.
 FORMAT = "runin.transient"
 #: Layout version of a run file (``format_version`` attribute).
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 #: Versions :func:`read_run` reads (2: without coordinates, phase names and
-#: the problem's inputs).
-_READABLE_VERSIONS = (2, 3)
+#: the problem's inputs; 2 and 3: the face's recession under the name
+#: ``height``, :data:`_FORMER_DATASETS`).  A run of any of them resumes.
+_READABLE_VERSIONS = (2, 3, 4)
 
 # Root scalar attributes and their units.
 _SCALARS = {
@@ -177,6 +178,12 @@ _SCALARS = {
 # speed of NaN is none: None).  Files that name the distance scale run_in_distance are read too.
 _LATER_SCALARS = {"steady_rms_slope": "1", "steady_rms_slope_error": "1", "sliding_speed": "m s-1"}
 _FORMER_NAMES = {"run_in_distance": "distance_scale"}
+# Datasets of layout versions 2 and 3 under the names layout 4 gives them: the face's
+# recession (larger = deeper) was called its height.
+_FORMER_DATASETS = {"state/height": "state/recession",
+                    "state/initial_height": "state/initial_recession",
+                    "state/previous_height": "state/previous_recession",
+                    "snapshots/height": "snapshots/recession"}
 # Root attributes of the state (RunState); a step absent is stored as NaN.
 _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
 # Root attributes of the state that files written before them lack: read as these defaults.
@@ -188,17 +195,20 @@ _DISK_SOURCE = "disk: 4 pbar / (pi E*) (eq. 12)"
 _STATE_SCALARS = ("offset", "approach")
 _INTEGERS = ("steps", "rejected", "failures", "solves", "iterations")
 _STRINGS = ("status", "message", "scheme")
-_STATE_UNITS = {"height": "m", "initial_height": "m", "previous_height": "m",
+_STATE_UNITS = {"recession": "m", "initial_recession": "m", "previous_recession": "m",
                 "previous_rate": "1", "pressure_history": "Pa",
                 "pressure_history_displacement": "m"}
-_STATE_NAMES = {"height": "face height (worn depth plus initial face) minus offset",
-                "initial_height": "the face the run started from, NaN off the face",
-                "previous_height": "face height at the previous step",
+_STATE_NAMES = {"recession": "recession of the face (worn depth plus the initial face's "
+                             "recession; larger = deeper), minus offset",
+                "initial_recession": "recession of the face the run started from (larger = "
+                                     "deeper), NaN off the face",
+                "previous_recession": "recession of the face at the previous step, minus "
+                                      "offset (larger = deeper)",
                 "previous_rate": "wear rate at the previous step (m of wear per m of sliding)",
                 "pressure_history": "recent contact pressures (warm start of the contact solve)",
                 "pressure_history_displacement": "their surface displacements K p"}
 # State datasets every checkpoint has; the others are None before the first step.
-_REQUIRED_STATE = ("height", "initial_height")
+_REQUIRED_STATE = ("recession", "initial_recession")
 
 
 class DamagedRunFileError(ValueError):
@@ -486,8 +496,9 @@ def _write_snapshots(f, result, grid_scales):
     # A checkpoint is rewritten whole every few seconds: compressing its
     # snapshots each time would cost more than the rest of the file.
     packed = {} if result.status == "running" else _SNAPSHOT_FILTERS
-    _put(snaps, "height", result.snapshot_height, "m", "worn depth plus the initial face, "
-         "NaN off the face", dims=(distance, *grid_scales), **packed)
+    _put(snaps, "recession", result.snapshot_recession, "m", "recession of the face: worn depth "
+         "plus the initial face's recession (larger = deeper), NaN off the face",
+         dims=(distance, *grid_scales), **packed)
     _put(snaps, "pressure", result.snapshot_pressure, "Pa", "contact pressure",
          dims=(distance, *grid_scales), **packed)
     sections = result.snapshot_sections
@@ -781,7 +792,10 @@ def _result(path, datasets, groups):
     for old, new in _FORMER_NAMES.items():
         if new not in root and old in root:
             root[new] = root[old]
-    needed = ["pressure", "history/distance", "snapshots/distance", "snapshots/height",
+    for old, new in _FORMER_DATASETS.items():
+        if new not in datasets and old in datasets:
+            datasets[new] = datasets.pop(old)
+    needed = ["pressure", "history/distance", "snapshots/distance", "snapshots/recession",
               "snapshots/pressure"] + [f"state/{name}" for name in _REQUIRED_STATE]
     missing = [name for name in needed if name not in datasets]
     missing += [name for name in (*_SCALARS, *_OPTIONAL_SCALARS) if name not in root]
@@ -836,7 +850,7 @@ def _result(path, datasets, groups):
         **kw, state=RunState(**state, pressure=datasets["pressure"][0]),
         history=types.MappingProxyType(history),
         snapshot_distance=datasets["snapshots/distance"][0],
-        snapshot_height=datasets["snapshots/height"][0],
+        snapshot_recession=datasets["snapshots/recession"][0],
         snapshot_pressure=datasets["snapshots/pressure"][0],
         outline=outline, reference_slope_error=ref_error,
         reference_slope_source=str(source),

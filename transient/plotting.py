@@ -589,7 +589,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
         count = len(result.snapshot_distance)
         if not -count <= snapshot < count:
             raise ValueError(f"snapshot {snapshot} out of range: the run has {count}")
-        face = -np.asarray(result.snapshot_height[snapshot], dtype=float)
+        face = -np.asarray(result.snapshot_recession[snapshot], dtype=float)
     mask = result.face_mask & np.isfinite(face)
     height = relief(face, mask, h, remove=remove)
     field, scale = ((height * 1e6, "µm") if units == "um"

@@ -4,7 +4,7 @@
 integration"): the half-space operator, the phase map and the wear law's
 field of every pixel, the load (and its programme), the natural scales of
 the run-in, the steady state it tends to and the hooks of the integration
-variable (the face height, or across interfaces its wear work).  It holds
+variable (the face recession, or across interfaces its wear work).  It holds
 no state of a run: the contact solves, their counters, the warm start, the
 force of the current distance and the section the face has worn down to
 belong to the run's :class:`transient.solver.StageSolver`.
@@ -68,7 +68,7 @@ def check_run_in_scales(problem, names=None, force=None):
              else names)
     h = problem.grid.h
     wear = problem.wear
-    phases = wear.coefficient_field(np.arange(wear.n_phases))
+    phases = wear.wear_field(np.arange(wear.n_phases))
     mean = F / (float(problem.face_mask.sum()) * h * h)
     with np.errstate(all="ignore"):
         # In numpy's floats: an underflow to 0 divides to inf rather than raising.
@@ -130,9 +130,9 @@ class WearProblem:
         disk).
     face_mask : ndarray of bool, shape (nx, ny)
         Pixels of the punch face (``labels >= 0``).
-    coefficient_field : ndarray, shape (nx, ny)
+    wear_field : ndarray, shape (nx, ny)
         The wear law's field of each pixel at the initial surface
-        (:meth:`steady.problem.Problem.coefficient_field`), zero off the face.
+        (:meth:`steady.problem.Problem.wear_field`), zero off the face.
     normal_force : float, N
         The problem's force (a programme's last).
     columns : steady.depth.DepthColumns or None
@@ -157,7 +157,7 @@ class WearProblem:
     >>> grid = Circle(4e-3).grid(32)
     >>> phases = FacePhases(grid, Voronoi(64, (0.7, 0.3), seed=2029).labels(grid), 2)
     >>> problem = WearProblem(Problem(phases, [1e-13, 1e-12], 10.0, 1.3e6))
-    >>> problem.n_phases, float(problem.coefficient_field[problem.face_mask].min())
+    >>> problem.n_phases, float(problem.wear_field[problem.face_mask].min())
     (2, 1e-13)
     """
 
@@ -188,7 +188,7 @@ class WearProblem:
             problem=problem, wear=problem.wear, halfspace=problem.halfspace,
             outline=grid.outline, grid=grid, shape=grid.shape, n=grid.n,
             labels=problem.labels, counts=problem.phases.counts, face_mask=problem.face_mask,
-            coefficient_field=problem.coefficient_field(), normal_force=problem.normal_force,
+            wear_field=problem.wear_field(), normal_force=problem.normal_force,
             load_programme=load_programme, sliding_speed=sliding_speed, geometry=geometry,
             area=float(problem.face_mask.sum()) * problem.halfspace.h ** 2, columns=columns,
             work_depth=work_depth)
@@ -254,7 +254,7 @@ class WearProblem:
 
     def _rate_constants(self):
         """The law's rate constant of each phase at the pixel mean pressure, 1/Pa, shape (P,)."""
-        phases = self.wear.coefficient_field(np.arange(self.n_phases))
+        phases = self.wear.wear_field(np.arange(self.n_phases))
         return np.asarray(self.wear.rate_constant(phases, self.pixel_mean_pressure), dtype=float)
 
     @functools.cached_property
@@ -320,31 +320,31 @@ class WearProblem:
         """Wear rate of the law, m/m, shape (nx, ny); zero off the face.
 
         ``field`` is the law's per-pixel field (default
-        :attr:`coefficient_field`, the initial surface's; a run's solver
+        :attr:`wear_field`, the initial surface's; a run's solver
         passes the section it has worn down to).
         """
-        return self.wear.rate(pressure, self.coefficient_field if field is None else field)
+        return self.wear.rate(pressure, self.wear_field if field is None else field)
 
     # -- the integration variable (docs/model.md, "Wear across interfaces") --
-    # A columnar problem integrates the height itself, and every hook below is
+    # A columnar problem integrates the recession itself, and every hook below is
     # the identity; across interfaces the run integrates the wear work R.
     @staticmethod
-    def worn_depth(height, offset, initial_height):
-        """Worn depth of a run state, ``height + offset - initial_height``, m, shape (nx, ny)."""
-        return height + offset - initial_height
+    def worn_depth(recession, offset, initial_recession):
+        """Worn depth of a run state, ``recession + offset - initial_recession``, m."""
+        return recession + offset - initial_recession
 
-    def variable(self, height, origin):
-        """The integration variable of the face ``height`` (m): the height, or its wear work.
+    def variable(self, recession, origin):
+        """The integration variable of the face ``recession`` (m): the recession, or its wear work.
 
-        ``origin`` (m, shape (nx, ny)) is the height of zero worn depth,
-        ``initial_height - offset``; unused for a columnar problem.
+        ``origin`` (m, shape (nx, ny)) is the recession of zero worn depth,
+        ``initial_recession - offset``; unused for a columnar problem.
         """
         if self.work_depth is None:
-            return height
-        return self.work_depth.work(np.where(self.face_mask, height - origin, 0.0))
+            return recession
+        return self.work_depth.work(np.where(self.face_mask, recession - origin, 0.0))
 
     def face(self, variable, origin):
-        """The face height (m) of an integration variable; see :meth:`variable`."""
+        """The face recession (m) of an integration variable; see :meth:`variable`."""
         if self.work_depth is None:
             return variable
         return origin + self.work_depth.depth(variable)
@@ -369,7 +369,7 @@ class WearProblem:
             The segment of every pixel
             (:meth:`steady.depth.DepthColumns.segment_at`); None for a
             problem without interfaces, whose field is
-            :attr:`coefficient_field` at every depth.
+            :attr:`wear_field` at every depth.
         field : ndarray, shape (nx, ny), or None
             ``k`` of every pixel's segment (times the speed ratio).
         """

@@ -3,7 +3,7 @@
 :class:`RunRecord` belongs to the run's loop (:func:`transient.runin.run_in`):
 at every accepted point the loop hands it the point, and it appends the
 history's figures (:data:`transient.result.HISTORY_UNITS`): those of the
-contact at once, those of the face's rms slope and height
+contact at once, those of the face's rms slope and recession
 (:class:`transient.history.FaceEstimator`) on a worker thread while the
 run goes on -- they do not steer it -- and, across interfaces, the depth
 figures (:class:`transient.history.DepthRecorder`).  It also stores the
@@ -36,13 +36,13 @@ def frozen(array):
     return array
 
 
-def _depth_figures(estimator, depth, worn, distance, height, face_state):
+def _depth_figures(estimator, depth, worn, distance, recession, face_state):
     """The face's figures and the rms slope of the section's quasi-steady face (history thread).
 
     ``depth`` is ``(recorder, labels)`` of :meth:`RunRecord._record_depth`.
     """
     rim_layers, pressure, approach = face_state
-    figures = estimator.figures(distance, height, pressure, approach, rim_layers=rim_layers)
+    figures = estimator.figures(distance, recession, pressure, approach, rim_layers=rim_layers)
     recorder, labels = depth
     figures["quasi_steady_rms_slope"] = recorder.quasi_steady(worn, labels)
     return figures
@@ -108,7 +108,7 @@ class RunRecord:
             for name in _LATER_HISTORY:
                 self.history.setdefault(name, [math.nan] * len(self.history["distance"]))
             self.snap_d = list(resume.snapshot_distance.tolist())
-            self.snap_h = frozen(np.array(resume.snapshot_height, dtype=float))
+            self.snap_h = frozen(np.array(resume.snapshot_recession, dtype=float))
             self.snap_p = frozen(np.array(resume.snapshot_pressure, dtype=float))
         self.snap_index = len(self.snap_d)
         self._depth = None  # the depth figures' recorder, built at the first point recorded
@@ -143,16 +143,16 @@ class RunRecord:
             self._estimator_workers, self.estimator.workers = self.estimator.workers, 1
             self.estimator.threaded = True
         index = len(hist["distance"])
-        worn = run.height + run.offset - run.initial_height
+        worn = run.recession + run.offset - run.initial_recession
         depth = self._record_depth(run, worn, index)
         # Not copied: the run replaces its face and pressure, never writes into them.
         if depth is None:
             self._pending.append((index, self._worker.submit(
-                self.estimator.figures, run.s, run.height, face_state[1], face_state[2],
+                self.estimator.figures, run.s, run.recession, face_state[1], face_state[2],
                 rim_layers=face_state[0])))
         else:
             self._pending.append((index, self._worker.submit(
-                _depth_figures, self.estimator, depth, worn, run.s, run.height,
+                _depth_figures, self.estimator, depth, worn, run.s, run.recession,
                 face_state)))
         hist["distance"].append(run.s)
         hist["step"].append(step)
@@ -166,7 +166,7 @@ class RunRecord:
         hist["worn_volume"].append(float(np.sum(worn[face_mask])) * p.halfspace.h ** 2)
         hist["solves"].append(run.solver.solves)
         hist["rim_worn_depth"].append(float(worn[self.estimator.rim].mean()))
-        diff = (run.approach - run.height - self.steady_face)[face_mask]
+        diff = (run.approach - run.recession - self.steady_face)[face_mask]
         hist["face_deviation"].append(
             float(np.sqrt(np.mean((diff - diff.mean()) ** 2))) / self.steady_relief)
         step_error = slope_error = 0.0
@@ -197,8 +197,8 @@ class RunRecord:
         if recorder is None:
             recorder = self._depth = DepthRecorder(self.problem, columns, self.estimator,
                                                    self.estimator.rim)
-        previous = (None if run.prev_height is None or index == 0
-                    else run.prev_height + run.offset - run.initial_height)
+        previous = (None if run.prev_recession is None or index == 0
+                    else run.prev_recession + run.offset - run.initial_recession)
         # The stepping counted the last step's crossings (none before the first step).
         figures, labels = recorder.figures(worn, run.pressure, previous,
                                            crossed=run.crossings if index else None)
@@ -253,8 +253,8 @@ class RunRecord:
         return self.snapshots[self.snap_index] if self.snap_index < len(self.snapshots) \
             else None
 
-    def take_due_snapshots(self, s, height, pressure):
-        """Store the face (``height``, worn depth + initial shape) and pressure at ``s`` (m).
+    def take_due_snapshots(self, s, recession, pressure):
+        """Store the face (``recession``, worn depth + initial shape) and pressure at ``s`` (m).
 
         Once for every requested snapshot at or before ``s``.
         """
@@ -263,6 +263,6 @@ class RunRecord:
                and self.snapshots[self.snap_index] <= s * (1 + 1e-12)):
             self.snap_d.append(s)
             self.snap_h = frozen(np.concatenate(
-                [self.snap_h, np.where(face_mask, height, np.nan)[None]]))
+                [self.snap_h, np.where(face_mask, recession, np.nan)[None]]))
             self.snap_p = frozen(np.concatenate([self.snap_p, pressure[None]]))
             self.snap_index += 1

@@ -101,18 +101,18 @@ class RunState:
 
     Attributes
     ----------
-    height : ndarray, shape (nx, ny), m
-        Face height (worn depth + initial shape) minus ``offset``.
+    recession : ndarray, shape (nx, ny), m
+        Face recession (worn depth + initial shape) minus ``offset``.
     offset : float, m
-        Constant removed from ``height`` (the rigid part of the wear).
+        Constant removed from ``recession`` (the rigid part of the wear).
     pressure : ndarray, shape (nx, ny), Pa
         Contact pressure of the face.
     approach : float, m
-        Rigid approach, in the frame of ``height``.
-    initial_height : ndarray, shape (nx, ny), m
+        Rigid approach, in the frame of ``recession``.
+    initial_recession : ndarray, shape (nx, ny), m
         The face the run started from.
-    previous_height : ndarray, shape (nx, ny), m, or None
-        ``height`` at the previous accepted point, in the frame of the
+    previous_recession : ndarray, shape (nx, ny), m, or None
+        ``recession`` at the previous accepted point, in the frame of the
         current ``offset`` (BDF2's second point); None before the first step.
     previous_rate : ndarray, shape (nx, ny), 1, or None
         Rate of the integration variable at the previous accepted point,
@@ -136,12 +136,12 @@ class RunState:
         :data:`transient.control.MAX_JUMPS` the run stops as stagnating.
     """
 
-    height: np.ndarray
+    recession: np.ndarray
     offset: float
     pressure: np.ndarray
     approach: float
-    initial_height: np.ndarray
-    previous_height: np.ndarray | None = None
+    initial_recession: np.ndarray
+    previous_recession: np.ndarray | None = None
     previous_rate: np.ndarray | None = None
     previous_step: float | None = None
     next_step: float | None = None
@@ -155,8 +155,8 @@ class RunResult:
     """A run-in, finished or in progress (a checkpoint is a ``"running"`` result).
 
     The face, its pressure and everything else a resumed run needs are in
-    :attr:`state`; :attr:`height`, :attr:`offset`, :attr:`pressure`,
-    :attr:`approach` and :attr:`initial_height` read them from there.
+    :attr:`state`; :attr:`recession`, :attr:`offset`, :attr:`pressure`,
+    :attr:`approach` and :attr:`initial_recession` read them from there.
 
     Attributes
     ----------
@@ -187,7 +187,7 @@ class RunResult:
         ``rms_slope_spatial_error`` is empty (shape (0,)) unless
         :meth:`transient.spatial_error.SpatialError.attach` filled it.
     snapshot_distance : ndarray, shape (k,), m
-    snapshot_height : ndarray, shape (k, nx, ny), m
+    snapshot_recession : ndarray, shape (k, nx, ny), m
         ``worn depth + initial shape`` at the snapshots (NaN off the face).
     snapshot_pressure : ndarray, shape (k, nx, ny), Pa
     depth_scale, distance_scale, fast_distance, pixel_mean_pressure,
@@ -244,7 +244,7 @@ class RunResult:
     wall_time: float
     history: types.MappingProxyType
     snapshot_distance: np.ndarray
-    snapshot_height: np.ndarray
+    snapshot_recession: np.ndarray
     snapshot_pressure: np.ndarray
     depth_scale: float
     distance_scale: float
@@ -289,7 +289,7 @@ class RunResult:
         >>> from transient.scene import load_transient_scene, wear_problem_of
         >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
         >>> problem = wear_problem_of(scene, n=40)
-        >>> result = run_in(problem, initial.height(problem.grid), RunOptions(tol=1e-3))
+        >>> result = run_in(problem, initial.recession(problem.grid), RunOptions(tol=1e-3))
         >>> one, tenth = result.run_in_distance(0.01), result.run_in_distance(0.001)
         >>> one.reached and tenth.reached and one.distance_m < tenth.distance_m
         True
@@ -341,18 +341,18 @@ class RunResult:
         """Phase maps of the sections at the snapshots, shape (k, nx, ny); None when columnar."""
         if self.columns is None:
             return None
-        worn = np.nan_to_num(self.snapshot_height - self.initial_height[None], nan=0.0)
+        worn = np.nan_to_num(self.snapshot_recession - self.initial_recession[None], nan=0.0)
         return np.stack([self.columns.phase_at(w) for w in worn]) if len(worn) else \
             np.empty((0, *self.shape), dtype=self.columns.phases.dtype)
 
     @property
-    def height(self):
-        """Face height (worn depth + initial shape) minus :attr:`offset`, m, shape (nx, ny)."""
-        return self.state.height
+    def recession(self):
+        """Face recession (worn depth + initial shape) minus :attr:`offset`, m, shape (nx, ny)."""
+        return self.state.recession
 
     @property
     def offset(self):
-        """Constant removed from :attr:`height` (the rigid part of the wear), m."""
+        """Constant removed from :attr:`recession` (the rigid part of the wear), m."""
         return self.state.offset
 
     @property
@@ -362,13 +362,13 @@ class RunResult:
 
     @property
     def approach(self):
-        """Rigid approach in the frame of :attr:`height`, m."""
+        """Rigid approach in the frame of :attr:`recession`, m."""
         return self.state.approach
 
     @property
-    def initial_height(self):
+    def initial_recession(self):
         """The face the run started from, m, shape (nx, ny); NaN off the face."""
-        return self.state.initial_height
+        return self.state.initial_recession
 
     @property
     def success(self):
@@ -383,7 +383,7 @@ class RunResult:
     @property
     def shape(self):
         """``(nx, ny)`` of the grid."""
-        return self.height.shape
+        return self.recession.shape
 
     @property
     def pixel_size(self):
@@ -400,12 +400,12 @@ class RunResult:
     @property
     def worn_depth(self):
         """Depth worn off since the start, m, shape (nx, ny); NaN off the face."""
-        return self.height + self.offset - self.initial_height
+        return self.recession + self.offset - self.initial_recession
 
     @property
     def face(self):
-        """Face height ``d - w`` in the convention of the steady face ``f_inf = K p``, m.
+        """Face elevation ``d - w`` in the convention of the steady face ``f_inf = K p``, m.
 
         Equals ``K p`` on the contact; defined up to a constant; NaN off the face.
         """
-        return self.approach - self.height
+        return self.approach - self.recession

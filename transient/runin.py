@@ -97,14 +97,14 @@ __all__ = ["run_in"]
 logger = logging.getLogger(__name__)
 
 
-def _initial_face(problem, initial_height):
-    """``initial_height`` (m) checked, on the problem's grid, zero off the face."""
+def _initial_face(problem, initial_recession):
+    """``initial_recession`` (m) checked, on the problem's grid, zero off the face."""
     face_mask = problem.face_mask
-    h0 = np.where(face_mask, np.asarray(initial_height, dtype=float), 0.0)
+    h0 = np.where(face_mask, np.asarray(initial_recession, dtype=float), 0.0)
     if h0.shape != problem.shape:
-        raise ValueError(f"initial_height must have shape {problem.shape}, got {h0.shape}")
+        raise ValueError(f"initial_recession must have shape {problem.shape}, got {h0.shape}")
     if not np.all(np.isfinite(h0[face_mask])):
-        raise ValueError("initial_height must be finite on the face")
+        raise ValueError("initial_recession must be finite on the face")
     return h0
 
 
@@ -123,8 +123,8 @@ class _Run:
       snapshots, the steady face);
     - the state a checkpoint stores (:class:`transient.result.RunState`,
       arrays zero off the face), advanced by :meth:`accept`:
-      ``initial_height``, ``height``, ``offset``, ``pressure``, ``approach``,
-      ``prev_height``, ``prev_rate``, ``prev_step``, ``next_step``,
+      ``initial_recession``, ``recession``, ``offset``, ``pressure``, ``approach``,
+      ``prev_recession``, ``prev_rate``, ``prev_step``, ``next_step``,
       ``jumps`` and the solver's warm start;
     - the progress: ``s`` (m), ``steps``, ``rejected``, ``failures``,
       ``wall_time`` (s, before this call), ``t0`` (monotonic clock at its
@@ -142,13 +142,13 @@ class _Run:
     ----------
     problem : transient.problem.WearProblem
     options : RunOptions
-    initial_height : ndarray, shape (nx, ny), m, or None
+    initial_recession : ndarray, shape (nx, ny), m, or None
         The initial face of a new run (ignored when resuming).
     resume : RunResult or None
         The result to continue from.
     """
 
-    def __init__(self, problem, options, initial_height, resume):
+    def __init__(self, problem, options, initial_recession, resume):
         self.t0 = time.monotonic()
         self.problem = problem
         self.options = options
@@ -167,15 +167,15 @@ class _Run:
             solver.force = self.programme.force_at(
                 0.0 if resume is None else float(resume.distance))
         if resume is None:
-            h0 = _initial_face(problem, initial_height)
+            h0 = _initial_face(problem, initial_recession)
             estimator = FaceEstimator.of(problem, h0, contact_rtol=options.contact_rtol)
             state = self._first_state(h0)
         else:
             state = resume.state
-            if state.height.shape != problem.shape:
-                raise ValueError(f"checkpoint grid {state.height.shape} does not match the "
+            if state.recession.shape != problem.shape:
+                raise ValueError(f"checkpoint grid {state.recession.shape} does not match the "
                                  f"problem's {problem.shape}")
-            estimator = FaceEstimator.of(problem, np.where(face_mask, state.initial_height, 0.0),
+            estimator = FaceEstimator.of(problem, np.where(face_mask, state.initial_recession, 0.0),
                                          contact_rtol=options.contact_rtol)
             solver.solves, solver.iterations = resume.solves, resume.iterations
         self.record = RunRecord(problem, estimator, options.snapshots(self.s_star),
@@ -184,12 +184,12 @@ class _Run:
         def clean(a):
             return None if a is None else np.where(face_mask, a, 0.0)
 
-        self.initial_height = clean(state.initial_height)
-        self.height = clean(state.height)
+        self.initial_recession = clean(state.initial_recession)
+        self.recession = clean(state.recession)
         self.offset = float(state.offset)
         self.pressure = np.array(state.pressure, dtype=float)
         self.approach = float(state.approach)
-        self.prev_height = clean(state.previous_height)
+        self.prev_recession = clean(state.previous_recession)
         self.prev_rate = clean(state.previous_rate)
         self.prev_step = state.previous_step
         self.next_step = state.next_step
@@ -227,7 +227,7 @@ class _Run:
 
     def worn_depth(self):
         """Worn depth at the current point, m, shape (nx, ny) (:meth:`WearProblem.worn_depth`)."""
-        return self.problem.worn_depth(self.height, self.offset, self.initial_height)
+        return self.problem.worn_depth(self.recession, self.offset, self.initial_recession)
 
     def mean_depth(self):
         """Mean worn depth over the face, m (None unless the run ends at a depth)."""
@@ -245,10 +245,10 @@ class _Run:
         p = self.problem
         face_mask = p.face_mask
         offset = float(h0[face_mask].mean())
-        height = np.where(face_mask, h0 - offset, 0.0)
-        res = self.solver.contact(height)
-        return RunState(height=height, offset=offset, pressure=res.pressure,
-                        approach=float(res.approach), initial_height=h0,
+        recession = np.where(face_mask, h0 - offset, 0.0)
+        res = self.solver.contact(recession)
+        return RunState(recession=recession, offset=offset, pressure=res.pressure,
+                        approach=float(res.approach), initial_recession=h0,
                         next_step=self.controller.first_step(p.halfspace.h, p.scale))
 
     def _jump_point(self):
@@ -258,14 +258,14 @@ class _Run:
         after it, so that a resumed run judges the same figures.
         """
         face_mask = self.problem.face_mask
-        change = shape_rms(self.height - self.prev_height, face_mask)
+        change = shape_rms(self.recession - self.prev_recession, face_mask)
         return (wear_rate_spread(self.solver.rate, self.pressure, face_mask),
                 change / self.f_star / (self.prev_step / self.s_star))
 
     def begin(self):
         """Record the starting point of a new run: history at ``s = 0``, snapshots due there."""
         self.latest = self.record.record(self, 0.0, math.inf)
-        self.record.take_due_snapshots(self.s, self.height + self.offset, self.pressure)
+        self.record.take_due_snapshots(self.s, self.recession + self.offset, self.pressure)
 
     # -- the load programme ----------------------------------------------------
     def pending_target(self):
@@ -306,10 +306,10 @@ class _Run:
             return None
         before = (self.rim_layers(before_change=True), self.pressure, self.approach)
         logger.info("load %.6g N -> %.6g N at s = %.6g m", self.solver.force, force, self.s)
-        res = self.solver.change_force(force, self.height, self.pressure)
+        res = self.solver.change_force(force, self.recession, self.pressure)
         self.pressure = res.pressure
         self.approach = float(res.approach)
-        self.prev_height = self.prev_rate = self.prev_step = None
+        self.prev_recession = self.prev_rate = self.prev_step = None
         return before
 
     def plan(self, jump, target):
@@ -346,7 +346,7 @@ class _Run:
         ``ds`` (m).
         """
         p = self.problem
-        work = p.variable(self.height, self.initial_height - self.offset)
+        work = p.variable(self.recession, self.initial_recession - self.offset)
         rate = self.solver.variable_rate(self.pressure)[p.face_mask]
         left = p.work_depth.remaining(work)[p.face_mask]
         moving = rate > 0
@@ -367,15 +367,15 @@ class _Run:
                                      p.compliance_floor, solver.force / p.area)
         origin = None
         if p.work_depth is not None:
-            origin = self.initial_height - self.offset
-        state = StepState(self.height, p.steady_pressure() if jump else self.pressure,
-                          self.approach, self.prev_height, self.prev_rate, self.prev_step,
+            origin = self.initial_recession - self.offset
+        state = StepState(self.recession, p.steady_pressure() if jump else self.pressure,
+                          self.approach, self.prev_recession, self.prev_rate, self.prev_step,
                           warm=not jump, contact_atol=atol, origin=origin)
         trial = scheme.step(solver, state, ds)
         err = shape_rms(trial.error, face_mask) / (self.options.tol * self.f_star)
-        if not (math.isfinite(err) and np.all(np.isfinite(trial.height[face_mask]))):
+        if not (math.isfinite(err) and np.all(np.isfinite(trial.recession[face_mask]))):
             raise StepFailure("non-finite face or error estimate")
-        if shape_rms(trial.height, face_mask) > DIVERGENCE_RELIEF * self.f_star:
+        if shape_rms(trial.recession, face_mask) > DIVERGENCE_RELIEF * self.f_star:
             raise StepFailure(f"face relief above {DIVERGENCE_RELIEF:g} f*: divergence")
         return trial, err
 
@@ -383,7 +383,7 @@ class _Run:
         """Where to land instead of a trial that went past ``end_depth`` (m), or None."""
         if self.options.end_depth is None:
             return None
-        after = self.problem.worn_depth(trial.height, self.offset, self.initial_height)
+        after = self.problem.worn_depth(trial.recession, self.offset, self.initial_recession)
         return self.stop.depth_landing(self.s, ds, self.mean_depth(),
                                        float(after[self.problem.face_mask].mean()))
 
@@ -393,29 +393,29 @@ class _Run:
         A jump's state is the steady face at no particular distance: it
         advances neither the distance nor the rigid wear, and stays out of
         the history (its figures go to ``latest``).  Across interfaces the
-        height is not re-centred (``offset`` stays): the worn depth, which
-        sets the phases, is then the height minus one fixed origin, free of
+        recession is not re-centred (``offset`` stays): the worn depth, which
+        sets the phases, is then the recession minus one fixed origin, free of
         the round-off a moving offset would add at every step; a jump there
         (below every interface) drops its least increment.
         """
         p = self.problem
         face_mask = p.face_mask
-        new_height = np.where(face_mask, trial.height, 0.0)
+        new_recession = np.where(face_mask, trial.recession, 0.0)
         c = 0.0
         if p.work_depth is None:
-            c = float(new_height[face_mask].mean())
+            c = float(new_recession[face_mask].mean())
         elif jump:
             # The jump's wear less its least increment: no pixel rises above the
             # depth it had reached (below every interface).
-            c = float(np.min((new_height - self.height)[face_mask]))
+            c = float(np.min((new_recession - self.recession)[face_mask]))
         if c:
-            new_height = np.where(face_mask, new_height - c, 0.0)
-        change = shape_rms(new_height - self.height, face_mask)
+            new_recession = np.where(face_mask, new_recession - c, 0.0)
+        change = shape_rms(new_recession - self.recession, face_mask)
         shape_rate = change / self.f_star / (ds / self.s_star)
-        self.prev_height = np.where(face_mask, self.height - c, 0.0)
+        self.prev_recession = np.where(face_mask, self.recession - c, 0.0)
         self.prev_rate = self.solver.variable_rate(self.pressure)
         self.prev_step = ds
-        self.height = new_height
+        self.recession = new_recession
         self.pressure = trial.pressure
         self.approach = trial.approach - c
         self.steps += 1
@@ -433,7 +433,7 @@ class _Run:
             self.s = self.programme.snap(self.s)
             face_state = self.change_load()
         self.latest = self.record.record(self, ds, shape_rate, trial.error, face_state)
-        self.record.take_due_snapshots(self.s, self.height + self.offset, self.pressure)
+        self.record.take_due_snapshots(self.s, self.recession + self.offset, self.pressure)
 
     def loop(self, on_step, on_checkpoint):
         """Step until a stop test says the run is over; return ``(status, message)``.
@@ -519,10 +519,10 @@ def _state_of(run):
         return None if a is None else frozen(a.view())
 
     return RunState(
-        height=np.where(face_mask, run.height, np.nan), offset=run.offset,
+        recession=np.where(face_mask, run.recession, np.nan), offset=run.offset,
         pressure=shared(run.pressure), approach=run.approach,
-        initial_height=np.where(face_mask, run.initial_height, np.nan),
-        previous_height=shared(run.prev_height), previous_rate=shared(run.prev_rate),
+        initial_recession=np.where(face_mask, run.initial_recession, np.nan),
+        previous_recession=shared(run.prev_recession), previous_rate=shared(run.prev_rate),
         previous_step=run.prev_step, next_step=run.next_step,
         pressure_history=None if warm is None else warm.pressures(),
         pressure_history_displacement=None if warm is None else warm.displacements(),
@@ -542,7 +542,7 @@ def _result_of(run, status, message):
                                                      else np.int64)
                                         for k_, v in record.history.items()}),
         snapshot_distance=np.array(record.snap_d, dtype=float),
-        snapshot_height=record.snap_h, snapshot_pressure=record.snap_p,
+        snapshot_recession=record.snap_h, snapshot_pressure=record.snap_p,
         depth_scale=run.f_star, distance_scale=run.s_star,
         fast_distance=problem.fast_distance, pixel_mean_pressure=problem.pixel_mean_pressure,
         reference_slope=run.grad_f0, state=_state_of(run), outline=problem.outline,
@@ -552,21 +552,21 @@ def _result_of(run, status, message):
         load_programme=run.programme, columns=problem.columns)
 
 
-def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
+def run_in(problem, initial_recession, options=None, *, resume=None, on_step=None,
            on_checkpoint=None):
-    """Wear the face from ``initial_height`` until the wear rates equalise.
+    """Wear the face from ``initial_recession`` until the wear rates equalise.
 
     Parameters
     ----------
     problem : transient.problem.WearProblem
-    initial_height : ndarray, shape (nx, ny), m
+    initial_recession : ndarray, shape (nx, ny), m
         Initial face (larger = recessed) on the problem's grid; see
         :mod:`transient.initial_face`.
     options : RunOptions, optional
     resume : RunResult, optional
         A checkpoint (or a stopped run) to continue from: its
         :attr:`RunResult.state`, distance, counters, history and snapshots;
-        ``initial_height`` is then taken from it.
+        ``initial_recession`` is then taken from it.
     on_step : callable, optional
         ``on_step(run)`` after each accepted step, with attributes ``s``,
         ``s_star``, ``steps``, ``history``, ``latest`` (``(spread,
@@ -599,7 +599,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     >>> scene, settings, initial = load_transient_scene(
     ...     "steady/examples/voronoi_transient.toml")
     >>> problem = wear_problem_of(scene, n=40)
-    >>> result = run_in(problem, initial.height(problem.grid),
+    >>> result = run_in(problem, initial.recession(problem.grid),
     ...                 RunOptions(tol=1e-2))
     >>> result.status
     'steady'
@@ -611,7 +611,7 @@ def run_in(problem, initial_height, options=None, *, resume=None, on_step=None,
     True
     """
     options = RunOptions() if options is None else options
-    run = _Run(problem, options, initial_height, resume)
+    run = _Run(problem, options, initial_recession, resume)
     try:
         if resume is None:
             run.begin()

@@ -37,7 +37,7 @@ from steady.scene import RUN_IN_SECTIONS, load_scene, problem_of
 from steady.schema import Context
 from steady.text import one_line
 
-from .initial_face import INITIAL_FACES, initial_height
+from .initial_face import INITIAL_FACES, initial_recession
 from .options import RunOptions, options_from_table
 from .problem import WearProblem
 
@@ -52,7 +52,7 @@ __all__ = [
 
 @dataclasses.dataclass(frozen=True)
 class InitialFace:
-    """The ``[initial_face]`` section: how to build the initial height field.
+    """The ``[initial_face]`` section: how to build the initial recession field.
 
     Attributes
     ----------
@@ -69,8 +69,8 @@ class InitialFace:
     parameters: types.MappingProxyType = dataclasses.field(
         default_factory=lambda: types.MappingProxyType({}))
 
-    def height(self, grid):
-        """Initial height on the grid of a face outline.
+    def recession(self, grid):
+        """Initial recession on the grid of a face outline.
 
         Parameters
         ----------
@@ -90,7 +90,7 @@ class InitialFace:
         """
         path = self.parameters.get("path")
         try:
-            return initial_height(self.kind, grid, **self.parameters)
+            return initial_recession(self.kind, grid, **self.parameters)
         except (OSError, EOFError) as err:  # the file changed since the scene was read
             raise ValueError(f"[initial_face]: cannot read {str(path)!r}: {err}") from None
         except ValueError as err:
@@ -158,7 +158,7 @@ def _distance_scale(scene):
     """
     wear = scene.wear
     with np.errstate(all="ignore"):
-        constants = wear.rate_constant(wear.coefficient_field(np.arange(wear.n_phases)),
+        constants = wear.rate_constant(wear.wear_field(np.arange(wear.n_phases)),
                                        scene.final_force / scene.outline.area)
         return float(scene.outline.scale / (np.min(constants) * scene.E_star))
 
@@ -232,7 +232,7 @@ def load_transient_scene(path):
     Examples
     --------
     >>> scene, options, initial = load_transient_scene("steady/examples/tilted_transient.toml")
-    >>> initial.kind, initial.height(scene.grid()).shape
+    >>> initial.kind, initial.recession(scene.grid()).shape
     ('tilted', (64, 64))
     """
     scene = load_scene(path, extra_sections=RUN_IN_SECTIONS)

@@ -9,7 +9,7 @@ from one solve to the next -- the solver's tolerances, the warm start
 (:class:`transient.warm_start.WarmStart`), the preconditioner of the linear
 law's stages, the counters, the force of a load programme at the current
 distance (:attr:`StageSolver.force`) and the coefficients of the section the
-face has worn down to (:attr:`StageSolver.coefficient_field`).  The run
+face has worn down to (:attr:`StageSolver.wear_field`).  The run
 (:func:`transient.runin.run_in`) owns one; the integrators
 (:mod:`transient.stepping`) step through it.
 """
@@ -62,7 +62,7 @@ class StageSolver:
     force : float, N
         The force of the solves: the problem's ``normal_force`` unless a
         load programme's run sets the force of its current distance.
-    coefficient_field : ndarray, shape (nx, ny)
+    wear_field : ndarray, shape (nx, ny)
         The wear law's field of every pixel (:meth:`at_depth`): the
         problem's, or across interfaces that of the section the face has
         worn down to.
@@ -97,7 +97,7 @@ class StageSolver:
         self.newton_maxiter = int(newton_maxiter)
         self.pressure_floor = float(pressure_floor)
         self.force = problem.normal_force
-        self.coefficient_field = problem.coefficient_field
+        self.wear_field = problem.wear_field
         self.solves = self.iterations = 0
         self.stage_solves = self.most_stage_solves = 0
         self.warm_start = None
@@ -118,7 +118,7 @@ class StageSolver:
         """
         segments, field = self.problem.section_field(worn_depth)
         if segments is not None:
-            self.coefficient_field = field
+            self.wear_field = field
             self._stage_shift = None
         return segments
 
@@ -133,15 +133,15 @@ class StageSolver:
                            WarmStart(self.problem, pressures=pressures,
                                      displacements=displacements))
 
-    def change_force(self, force, height, pressure):
-        """Take the force ``force`` (N) for the next solves: the contact of ``height`` under it.
+    def change_force(self, force, recession, pressure):
+        """Take the force ``force`` (N) for the next solves: the contact of ``recession`` under it.
 
         Solved from ``pressure`` (the old load's, which the solver scales
         to the new one); the warm start, whose pressures carry the old load,
         is dropped and restarts as at the start of a run.
         """
         self.force = force
-        res = self.contact(height, x0=pressure)
+        res = self.contact(recession, x0=pressure)
         self.drop_warm_start()
         return res
 
@@ -157,7 +157,7 @@ class StageSolver:
 
     def rate(self, pressure):
         """Wear rate of the law at the current section, m/m, shape (nx, ny); zero off the face."""
-        return self.problem.rate(pressure, self.coefficient_field)
+        return self.problem.rate(pressure, self.wear_field)
 
     def variable_rate(self, pressure):
         """Rate of the integration variable (:meth:`transient.problem.WearProblem.variable`).
@@ -179,18 +179,18 @@ class StageSolver:
         """
         face = self.problem.face_mask
         slope = self.problem.wear.largest_rate_slope(
-            pressure[face], self.coefficient_field[face],
+            pressure[face], self.wear_field[face],
             self.pressure_floor * self.problem.pixel_mean_pressure)
         return 2.0 * self.problem.compliance_floor / slope
 
     # -- contact solves ----------------------------------------------------------
-    def contact(self, height, *, shift=None, x0=None, x0_displacement=None, atol=0.0,
+    def contact(self, recession, *, shift=None, x0=None, x0_displacement=None, atol=0.0,
                 preconditioner="auto"):
         """One contact solve under :attr:`force`, counted; :class:`StepFailure` on failure.
 
         Parameters
         ----------
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         shift : ndarray, shape (nx, ny), m/Pa, optional
         x0 : ndarray, shape (nx, ny), Pa, optional
             Warm start.
@@ -210,12 +210,12 @@ class StageSolver:
         transient.contact.ContactResult
         """
         problem = self.problem
-        if not np.all(np.isfinite(height[problem.face_mask])):
-            raise StepFailure("non-finite face height")
+        if not np.all(np.isfinite(recession[problem.face_mask])):
+            raise StepFailure("non-finite face recession")
         predicted, self._predicted = self._predicted, None
         if x0_displacement is None and predicted is not None and predicted[0] is x0:
             x0_displacement = predicted[1]
-        res = solve_trusted_contact(problem.halfspace, problem.face_mask, height, self.force,
+        res = solve_trusted_contact(problem.halfspace, problem.face_mask, recession, self.force,
                                     shift=shift, x0=x0, x0_displacement=x0_displacement,
                                     rtol=self.contact_rtol, atol=atol,
                                     maxiter=self.contact_maxiter, preconditioner=preconditioner)
@@ -228,13 +228,13 @@ class StageSolver:
             raise StepFailure("contact solve returned non-finite pressure")
         return res
 
-    def _rebuild(self, height, c, res, coefficients=None):
-        """Face and contact of an implicit stage ``w = height + c g(P(w))``.
+    def _rebuild(self, recession, c, res, coefficients=None):
+        """Face and contact of an implicit stage ``w = recession + c g(P(w))``.
 
         On the contact the face is rebuilt as ``d - K p``, with the solver's
         own ``K p`` (kept apart from the shift's part, so exact to the
         round-off of ``K p`` whatever the shift) and ``d`` the mean of
-        ``height + c g(p) + K p`` there: the solver's residual, which scales
+        ``recession + c g(p) + K p`` there: the solver's residual, which scales
         with the shifted operator and so with ``c``, is projected out of the
         shape (it would reach ``rtol * ds / s*`` of ``f*`` after a jump),
         while the rigid part keeps the exact mean of the update.
@@ -242,9 +242,9 @@ class StageSolver:
         p = res.pressure
         contact = self.problem.face_mask & (p > 0)
         if coefficients is None:
-            w = height + c * self.rate(p)
+            w = recession + c * self.rate(p)
         else:
-            w = height + c * self.problem.wear.rate(p, coefficients)
+            w = recession + c * self.problem.wear.rate(p, coefficients)
         kp = res.elastic_displacement
         if not contact.any():
             return w, res
@@ -252,23 +252,23 @@ class StageSolver:
         w = np.where(contact, d - kp, w)
         return w, dataclasses.replace(res, approach=d)
 
-    def _linearisation(self, height, c, p0, field=None):
-        """Shift and height of the stage linearised about ``p0`` (:meth:`WearLaw.linearisation`)."""
+    def _linearisation(self, recession, c, p0, field=None):
+        """Shift and recession of the stage linearised about ``p0`` (the law's linearisation)."""
         problem = self.problem
         return problem.wear.linearisation(
-            height, c, p0, self.coefficient_field if field is None else field,
+            recession, c, p0, self.wear_field if field is None else field,
             problem.face_mask, self.pressure_floor * problem.pixel_mean_pressure)
 
-    def implicit(self, height, c, x0, *, warm=True, atol=0.0, origin=None):
-        """Solve the implicit stage ``w = height + c g(P(w))`` for ``w``.
+    def implicit(self, recession, c, x0, *, warm=True, atol=0.0, origin=None):
+        """Solve the implicit stage ``w = recession + c g(P(w))`` for ``w``.
 
         Across interfaces (:attr:`transient.problem.WearProblem.work_depth`)
-        ``height`` and ``w`` are wear works and the stage is
-        ``R = height + c g(P(origin + D(R)))`` (:meth:`_implicit_work`).
+        ``recession`` and ``w`` are wear works and the stage is
+        ``R = recession + c g(P(origin + D(R)))`` (:meth:`_implicit_work`).
 
         Parameters
         ----------
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         c : float, m
             Sliding distance multiplying the implicit rate (``ds``, ``gamma ds``...).
         x0 : ndarray, shape (nx, ny), Pa
@@ -285,7 +285,7 @@ class StageSolver:
             its test compares successive pressures to ``newton_rtol``, so the
             caller keeps it 0 there.
         origin : ndarray, shape (nx, ny), m, optional
-            The height of zero worn depth
+            The recession of zero worn depth
             (:meth:`transient.problem.WearProblem.variable`); needed across
             interfaces only.
 
@@ -297,41 +297,41 @@ class StageSolver:
         """
         history = self.warm_start if warm else None
         if self.problem.work_depth is not None:
-            return self._implicit_work(height, c, x0, history, atol, origin)
+            return self._implicit_work(recession, c, x0, history, atol, origin)
         if self.problem.wear.linear:
-            res = self._linear_stage(height, c, x0, history, atol)
+            res = self._linear_stage(recession, c, x0, history, atol)
         else:
-            res = self._newton_stage(height, c, x0, history, atol)
-        w, res = self._rebuild(height, c, res)
+            res = self._newton_stage(recession, c, x0, history, atol)
+        w, res = self._rebuild(recession, c, res)
         if history is not None:
             history.push(res.pressure, res.elastic_displacement)
         return w, res
 
-    def _linear_stage(self, height, c, x0, history, atol):
+    def _linear_stage(self, recession, c, x0, history, atol):
         """The stage of the linear law: one solve with the shift ``c k``."""
-        field = self.coefficient_field
+        field = self.wear_field
         shift = c * field
         if history is not None and len(history):
-            x0, kx0 = history.predict(height, shift_scale=c)
+            x0, kx0 = history.predict(recession, shift_scale=c)
             self._predicted = (x0, kx0)
         if self._stage_shift is None:
             self._stage_shift = ScaledShift(self.problem.halfspace, self.problem.face_mask,
                                             field)
-        return self.contact(height, shift=shift, x0=x0, atol=atol,
+        return self.contact(recession, shift=shift, x0=x0, atol=atol,
                             preconditioner=self._stage_shift.preconditioner(c, shift))
 
-    def _newton_stage(self, height, c, x0, history, atol):
+    def _newton_stage(self, recession, c, x0, history, atol):
         """The stage of a nonlinear law: Newton's method, a shifted solve per iteration."""
         pbar = self.problem.pixel_mean_pressure
         p0 = np.asarray(x0, dtype=float)
         if history is not None and len(history):
             # The stage linearised about the newest pressure predicts the
             # first linearisation point.
-            shift, h_lin = self._linearisation(height, c, history.newest())
+            shift, h_lin = self._linearisation(recession, c, history.newest())
             p0, kx0 = history.predict(h_lin, shift)
             self._predicted = (p0, kx0)
         for _ in range(self.newton_maxiter):
-            shift, h_lin = self._linearisation(height, c, p0)
+            shift, h_lin = self._linearisation(recession, c, p0)
             res = self.contact(h_lin, shift=shift, x0=p0, atol=atol)
             change = float(np.max(np.abs(res.pressure - p0))) / pbar
             p0 = res.pressure

@@ -154,10 +154,10 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None):
         The scene of the main run (its phase geometry is rasterised at the
         companion's grid).
     initial : transient.scene.InitialFace or callable
-        The initial face: an object with ``height(grid)`` (the scene's
+        The initial face: an object with ``recession(grid)`` (the scene's
         ``[initial_face]``), or ``initial(grid) -> ndarray`` (``grid`` the
         companion's :class:`steady.outline.FaceGrid`).  It
-        must exist on the companion's grid: a height file of the main grid
+        must exist on the companion's grid: a recession file of the main grid
         (``kind = "file"``) does not, and raises ``ValueError``.
     options : transient.options.RunOptions
         The main run's options (the same distances, tolerance, scheme).
@@ -181,19 +181,19 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None):
     >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
     >>> options = RunOptions(tol=1e-2)
     >>> problem = wear_problem_of(scene, n=64)
-    >>> result = run_in(problem, initial.height(problem.grid), options)
+    >>> result = run_in(problem, initial.recession(problem.grid), options)
     >>> companion = spatial_error(scene, initial, options, result)
     >>> result = companion.attach(result)
     >>> error = result.history["rms_slope_spatial_error"]
     >>> companion.grid, error.shape == result.history["distance"].shape
     (40, True)
     """
-    n = max(result.height.shape)
+    n = max(result.recession.shape)
     outline = scene.outline
     m = companion_grid(scene.geometry, n, outline) if grid is None else int(grid)
     if not 2 <= m < n:
         raise ValueError(f"companion grid must lie in [2, {n}), got {m}")
-    build = initial.height if hasattr(initial, "height") else initial
+    build = initial.recession if hasattr(initial, "recession") else initial
     problem = wear_problem_of(scene, n=m)
     logger.info("companion run on n = %d (main run n = %d)", m, n)
     coarse = run_in(problem, build(problem.grid), options, on_step=on_step)

@@ -4,7 +4,7 @@ The discretised run-in is the system (docs/model.md, "Wear and time integration"
 
     dw/ds = k p^m,        p = P(w),
 
-where ``w`` (m, shape (nx, ny)) is the height of the punch face -- worn depth
+where ``w`` (m, shape (nx, ny)) is the recession of the punch face -- worn depth
 plus initial shape, larger = recessed, defined up to a constant (the run
 keeps its face mean in a separate offset) --, ``k`` the wear coefficient of
 each pixel's phase (1/Pa for ``m = 1``, Pa^-m in general), ``m`` the wear
@@ -51,18 +51,18 @@ changes during a step the solution is only Lipschitz in ``s`` and every
 scheme drops to first order locally.
 
 Across interfaces (phases that change with depth below the face) the
-schemes integrate the wear work ``R`` of the face instead of its height,
+schemes integrate the wear work ``R`` of the face instead of its recession,
 ``dR/ds = P(w)^m`` with ``w = w0 + D(R)`` (docs/model.md, "Wear across
 interfaces"), through the problem's hooks
 :meth:`~transient.problem.WearProblem.variable`, ``face`` and
 ``depth_error`` and the solver's ``variable_rate``, which are the identity
 (the wear rate) for a columnar problem; the state's ``origin`` is the
-height of zero worn depth.
+recession of zero worn depth.
 
 Power-law wear (``m != 1``) is treated in every implicit stage by Newton's
 method on ``w = w0 + c k P(w)^m``: ``k p^m`` is linearised about the last
 pressure iterate ``p0``, ``k p^m ~ k p0^m + k m p0^(m-1) (p - p0)``, which is
-again a shifted contact problem with ``shift = c k m p0^(m-1)`` and height
+again a shifted contact problem with ``shift = c k m p0^(m-1)`` and recession
 ``w0 + c k (1 - m) p0^m``.  The iteration stops when the pressure changes by
 less than ``newton_rtol`` (relative to the mean pressure), each solve
 warm-started from the last (solves per stage: docs/benchmarks.md, "Run-in
@@ -123,13 +123,13 @@ class StepState:
 
     Attributes
     ----------
-    height : ndarray, shape (nx, ny), m
-        Face height ``w`` (worn depth + initial shape, up to a constant).
+    recession : ndarray, shape (nx, ny), m
+        Face recession ``w`` (worn depth + initial shape, up to a constant).
     pressure : ndarray, shape (nx, ny), Pa
         ``P(w)``, the contact pressure of that face.
     approach : float, m
-        Rigid approach of that contact (same constant as ``height``).
-    previous_height : ndarray, shape (nx, ny), m, or None
+        Rigid approach of that contact (same constant as ``recession``).
+    previous_recession : ndarray, shape (nx, ny), m, or None
         Face at the previous accepted point (multistep schemes, shape-change test).
     previous_rate : ndarray, shape (nx, ny), or None
         ``k p^m`` there.
@@ -149,16 +149,16 @@ class StepState:
         (:func:`transient.control.contact_tolerance`).  Default 0: every
         solve to ``contact_rtol``.
     origin : ndarray, shape (nx, ny), m, or None
-        Height of zero worn depth (``initial_height - offset``), in the frame
-        of ``height`` and ``previous_height``: across interfaces the scheme
+        Height of zero worn depth (``initial_recession - offset``), in the frame
+        of ``recession`` and ``previous_recession``: across interfaces the scheme
         integrates the wear work of the face
         (:meth:`transient.problem.WearProblem.variable`); None: columnar.
     """
 
-    height: np.ndarray
+    recession: np.ndarray
     pressure: np.ndarray
     approach: float
-    previous_height: np.ndarray | None = None
+    previous_recession: np.ndarray | None = None
     previous_rate: np.ndarray | None = None
     previous_step: float | None = None
     warm: bool = True
@@ -172,7 +172,7 @@ class Trial:
 
     Attributes
     ----------
-    height : ndarray, shape (nx, ny), m
+    recession : ndarray, shape (nx, ny), m
         New face ``w+``.
     pressure : ndarray, shape (nx, ny), Pa
         ``P(w+)``.
@@ -182,7 +182,7 @@ class Trial:
         Local error estimate of ``w+``.
     """
 
-    height: np.ndarray
+    recession: np.ndarray
     pressure: np.ndarray
     approach: float
     contact_fraction: float
@@ -243,7 +243,7 @@ class Scheme:
 def _trial(solver, state, variable, res, error):
     """The trial of a step that ended at ``variable`` with local error ``error`` of it."""
     problem = solver.problem
-    return Trial(height=problem.face(variable, state.origin), pressure=res.pressure,
+    return Trial(recession=problem.face(variable, state.origin), pressure=res.pressure,
                  approach=float(res.approach), contact_fraction=float(res.contact_fraction),
                  error=problem.depth_error(error, variable))
 
@@ -254,9 +254,9 @@ def _implicit(solver, state, base, c, x0):
                            origin=state.origin)
 
 
-def _variable(solver, state, height):
-    """The integration variable of the face ``height`` (m) in the frame of ``state``."""
-    return solver.problem.variable(height, state.origin)
+def _variable(solver, state, recession):
+    """The integration variable of the face ``recession`` (m) in the frame of ``state``."""
+    return solver.problem.variable(recession, state.origin)
 
 
 @register_scheme
@@ -280,7 +280,7 @@ class ExplicitEuler(Scheme):
             raise ValueError(f"explicit Euler step {ds!r} m exceeds its stability limit "
                              f"{limit:.6g} m (2 lambda_min(K) / max k m p^(m-1))")
         f0 = solver.variable_rate(state.pressure)
-        y = _variable(solver, state, state.height) + ds * f0
+        y = _variable(solver, state, state.recession) + ds * f0
         res = solver.contact(solver.problem.face(y, state.origin), x0=state.pressure,
                              atol=state.contact_atol)
         error = 0.5 * ds * (solver.variable_rate(res.pressure) - f0)
@@ -301,7 +301,7 @@ class ImplicitEuler(Scheme):
         The error estimate is ``ds/2`` times the change of the rate over the step.
         """
         f0 = solver.variable_rate(state.pressure)
-        y, res = _implicit(solver, state, _variable(solver, state, state.height), ds,
+        y, res = _implicit(solver, state, _variable(solver, state, state.recession), ds,
                            state.pressure)
         error = 0.5 * ds * (solver.variable_rate(res.pressure) - f0)
         return _trial(solver, state, y, res, error)
@@ -329,12 +329,12 @@ class BDF2(Scheme):
     def step(self, solver, state, ds):
         """One BDF2 step, or implicit Euler without a previous point (see :meth:`Scheme.step`)."""
         f0 = solver.variable_rate(state.pressure)
-        if state.previous_height is None:
+        if state.previous_recession is None:
             return SCHEMES["implicit_euler"].step(solver, state, ds)
         omega = ds / state.previous_step
-        y0 = _variable(solver, state, state.height)
+        y0 = _variable(solver, state, state.recession)
         base = ((1 + omega) ** 2 * y0
-                - omega ** 2 * _variable(solver, state, state.previous_height)
+                - omega ** 2 * _variable(solver, state, state.previous_recession)
                 ) / (1 + 2 * omega)
         beta = (1 + omega) / (1 + 2 * omega)
         y, res = _implicit(solver, state, base, beta * ds, state.pressure)
@@ -360,7 +360,7 @@ class SDIRK2(Scheme):
     def step(self, solver, state, ds):
         """One SDIRK2 step, two shifted contact solves (see :meth:`Scheme.step`)."""
         g = self.gamma
-        y0 = _variable(solver, state, state.height)
+        y0 = _variable(solver, state, state.recession)
         _, res1 = _implicit(solver, state, y0, g * ds, state.pressure)
         f1 = solver.variable_rate(res1.pressure)
         base = y0 + (1 - g) * ds * f1
@@ -416,7 +416,7 @@ class ESDIRK3(Scheme):
     def step(self, solver, state, ds):
         """One ESDIRK3 step, three shifted contact solves (see :meth:`Scheme.step`)."""
         rates = [solver.variable_rate(state.pressure)]
-        y0 = _variable(solver, state, state.height)
+        y0 = _variable(solver, state, state.recession)
         x0 = state.pressure
         for i in range(1, 4):
             base = y0 + ds * sum(self.a[i, j] * rates[j] for j in range(i))

@@ -205,12 +205,12 @@ class WarmStart:
                 row[j] += _dot(d[:m], kd[j, :m])
         return row
 
-    def _stage_products(self, height, weight, scale, k, pairs):
+    def _stage_products(self, recession, weight, scale, k, pairs):
         """The sums :meth:`predict` needs, in one pass over the pressures, block by block.
 
         Parameters
         ----------
-        height : ndarray, shape (nx ny,), m
+        recession : ndarray, shape (nx ny,), m
         weight : ndarray, shape (nx ny,), m/Pa, or None
             The shift (zero off the face) divided by ``scale``.
         scale : float
@@ -222,7 +222,7 @@ class WarmStart:
         Returns
         -------
         gradient : ndarray, shape (k,)
-            ``<d_i, g>``, ``g = K v_0 + scale weight v_0 + height`` less its
+            ``<d_i, g>``, ``g = K v_0 + scale weight v_0 + recession`` less its
             mean over the face (the load's multiplier, summed first from its
             three terms: it is most of ``g``, which is nearly uniform on the
             contact, and taken off after the products it would cancel in them).
@@ -237,25 +237,25 @@ class WarmStart:
         """
         values, products = self._values, self._products
         face = self.problem.face_mask.ravel()
-        mean = float(np.add.reduce(products[0], where=face) + np.add.reduce(height, where=face))
+        mean = float(np.add.reduce(products[0], where=face) + np.add.reduce(recession, where=face))
         if weight is not None:
             mean += scale * _dot(weight, values[0])  # the pressures vanish off the face
         mean /= np.count_nonzero(face)
         rows = sorted({i for i, _ in pairs})
         gradient, weighted = np.zeros(k), np.zeros(len(pairs))
-        g = np.empty(min(_BLOCK, height.size))
+        g = np.empty(min(_BLOCK, recession.size))
         d = np.empty((k, g.size))
         w = np.empty((len(rows), g.size))
-        for block in _blocks(height.size):
+        for block in _blocks(recession.size):
             m = block.stop - block.start
             gb = g[:m]
             if weight is None:
-                np.add(products[0][block], height[block], out=gb)
+                np.add(products[0][block], recession[block], out=gb)
             else:
                 np.multiply(weight[block], scale, out=gb)
                 gb *= values[0][block]
                 gb += products[0][block]
-                gb += height[block]
+                gb += recession[block]
             gb -= mean
             for i in range(k):
                 np.subtract(values[i][block], values[i + 1][block], out=d[i, :m])
@@ -267,16 +267,16 @@ class WarmStart:
                 weighted[p] += _dot(w[rows.index(i), :m], d[j, :m])
         return gradient, weighted
 
-    def predict(self, height, shift=None, *, shift_scale=None):
-        """Warm start of the contact problem ``(K + diag(shift)) p = d - height``.
+    def predict(self, recession, shift=None, *, shift_scale=None):
+        """Warm start of the contact problem ``(K + diag(shift)) p = d - recession``.
 
         Parameters
         ----------
-        height : ndarray, shape (nx, ny), m
+        recession : ndarray, shape (nx, ny), m
         shift : ndarray, shape (nx, ny), m/Pa, optional
         shift_scale : float, m, optional
             The shift is ``shift_scale`` times the wear coefficients
-            (:attr:`transient.problem.WearProblem.coefficient_field`), the linear wear law's
+            (:attr:`transient.problem.WearProblem.wear_field`), the linear wear law's
             stage: the Gram matrix of that part is then kept from one call to
             the next instead of summed again.  Not with ``shift``.
 
@@ -301,7 +301,7 @@ class WarmStart:
             # vanish off the face, so the sums run over the face.
             everything = [(i, j) for i in range(k) for j in range(i, k)]
             if shift_scale is not None:  # the kept Gram matrix, its missing entries
-                weight, scale, gram_k = (self.problem.coefficient_field.ravel(), shift_scale,
+                weight, scale, gram_k = (self.problem.wear_field.ravel(), shift_scale,
                                          self._gram_k)
                 pairs = [(i, j) for i, j in everything if np.isnan(gram_k[i, j])]
             elif shift is not None:
@@ -310,7 +310,7 @@ class WarmStart:
                 pairs = everything
             else:
                 weight, scale, pairs = None, 1.0, []
-            rhs, sums = self._stage_products(np.ravel(height), weight, scale, k, pairs)
+            rhs, sums = self._stage_products(np.ravel(recession), weight, scale, k, pairs)
             gram = self._gram[:k, :k].copy()
             if weight is not None:
                 for (i, j), value in zip(pairs, sums, strict=True):

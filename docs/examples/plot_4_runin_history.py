@@ -30,7 +30,7 @@ from transient.scene import load_transient_scene, wear_problem_of
 
 scene, options, initial = load_transient_scene(examples.path("voronoi_transient"))
 problem = wear_problem_of(scene, n=48)
-result = run_in(problem, initial.height(problem.grid), options)
+result = run_in(problem, initial.recession(problem.grid), options)
 print(f"{result.status}: {result.steps} steps; the dynamics end at "
       f"{result.history['distance'][-1]:.4g} m")
 

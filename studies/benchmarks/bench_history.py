@@ -50,17 +50,17 @@ def measure(n, distance):
     scene, _, initial = load_transient_scene(ROOT / "steady" / "examples" /
                                              "voronoi_transient.toml")
     problem = wear_problem_of(scene, n=n)
-    h0 = initial.height(problem.grid)
+    h0 = initial.recession(problem.grid)
     build = _median(lambda: history.FaceEstimator(problem, h0), 3)
     estimator = history.FaceEstimator(problem, h0)
     # A state in the middle of the run-in: 0.1 s*.
     s_star = problem.distance_scale
     mid = run_in(problem, h0, RunOptions(tol=1e-4, snapshots_s_star=(0.1,),
                                          distance_limit=0.1 * s_star, jump_spread=0.0))
-    height, pressure = np.where(problem.face_mask, mid.height, 0.0), mid.pressure
+    height, pressure = np.where(problem.face_mask, mid.recession, 0.0), mid.pressure
     call = _median(lambda: estimator.figures(0.1 * mid.distance_scale, height, pressure,
                                              mid.approach), REPEATS)
-    shift = 1e-2 * mid.distance_scale * problem.coefficient_field
+    shift = 1e-2 * mid.distance_scale * problem.wear_field
     solver = StageSolver(problem)
     solve = _median(lambda: solver.contact(height, shift=shift, x0=pressure), 3)
     # A whole run with the estimator's calls timed.

@@ -164,7 +164,7 @@ def grid_table(scene_path, sizes, tol):
     rows = []
     for n in sizes:
         problem = problem_of(scene, n)
-        result, row = run_counted(problem, initial.height(problem.grid), options)
+        result, row = run_counted(problem, initial.recession(problem.grid), options)
         row.update(n=n, scheme=options.scheme, tol=tol)
         rows.append(row)
         logger.info("n = %d: %s", n, row)
@@ -216,7 +216,7 @@ def memory_table(scene_path, sizes, checkpoint_interval=None):
                 argv += ["--checkpoint-interval", repr(float(checkpoint_interval))]
             wall, peak = command_peak(argv)
             result = read_run(out)[0]
-            snapshots = int(result.snapshot_height.shape[0])
+            snapshots = int(result.snapshot_recession.shape[0])
             out.unlink()
             estimate = run_in_memory(n, snapshots)
             rows.append(dict(n=n, steps=result.steps, snapshots=snapshots, wall=wall,
@@ -229,14 +229,14 @@ def history(result, problem):
     """Plain pixel rms slope of the face at the snapshots, and the last face (m)."""
     hs, face = problem.halfspace, problem.face_mask
     slopes = []
-    for height, pressure in zip(result.snapshot_height, result.snapshot_pressure,
+    for height, pressure in zip(result.snapshot_recession, result.snapshot_pressure,
                                 strict=True):
         height = np.where(face, height, 0.0)
         kp = hs.displacement(pressure)
         contact = face & (pressure > 0)
         approach = float(np.mean((height + kp)[contact]))
         slopes.append(face_rms_slope(hs, face, height, pressure, approach))
-    return np.array(slopes), np.where(face, result.snapshot_height[-1], 0.0)
+    return np.array(slopes), np.where(face, result.snapshot_recession[-1], 0.0)
 
 
 def scheme_table(scene_path, n, ratio, ladders, reference=REFERENCE):

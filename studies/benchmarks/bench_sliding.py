@@ -40,7 +40,7 @@ def measure(scene, options, initial, n):
     """One run-in: its counters, wall time and the face's distance to the closed form."""
     problem = wear_problem_of(scene, n=n)
     start = time.perf_counter()
-    result = run_in(problem, initial.height(problem.grid), options)
+    result = run_in(problem, initial.recession(problem.grid), options)
     wall = time.perf_counter() - start
     mask = problem.face_mask
     steady = solve(problem.problem, face_only=True).face

@@ -48,14 +48,14 @@ def run_states(n):
 
     scene, _, initial = load_transient_scene(SCENE)
     problem = wear_problem_of(scene, n=n)
-    h0 = initial.height(problem.grid)
+    h0 = initial.recession(problem.grid)
     result = run_in(problem, h0, RunOptions(
         tol=1e-4, snapshots_s_star=SNAPSHOTS,
         distance_limit=SNAPSHOTS[-1] * problem.distance_scale))
     mask = problem.face_mask
     start = StageSolver(problem).contact(np.where(mask, h0, 0.0))
     states = [(0.0, np.where(mask, h0, 0.0), start.pressure)]
-    for d, height, pressure in zip(result.snapshot_distance, result.snapshot_height,
+    for d, height, pressure in zip(result.snapshot_distance, result.snapshot_recession,
                                    result.snapshot_pressure, strict=True):
         states.append((float(d), np.where(mask, height, 0.0), np.where(mask, pressure, 0.0)))
     return problem, h0, states

@@ -59,7 +59,7 @@ def run_row(scene, options, initial, n, name, law):
     """One run to the steady state and its work, a dict."""
     problem = wear_problem_of(dataclasses.replace(scene, wear=law), n=n)
     t = time.perf_counter()
-    result = run_in(problem, initial.height(problem.grid), options)
+    result = run_in(problem, initial.recession(problem.grid), options)
     wall = time.perf_counter() - t
     return dict(n=n, law=name, status=result.status, steps=result.steps,
                 rejected=result.rejected, failures=result.failures, solves=result.solves,

@@ -86,7 +86,7 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
     face_mask = arrays["phase"] >= 0
-    if not np.array_equal(stored.initial_height[face_mask], h0[face_mask]):
+    if not np.array_equal(stored.initial_recession[face_mask], h0[face_mask]):
         raise ValueError(f"{str(path)!r} was run from another initial face; use --force")
 
 

@@ -161,7 +161,7 @@ def _check_outputs(args):
 
 def _first_solve_failed(err, job, scene_path):
     """The message of a run whose initial contact solve fails, naming the likely cause."""
-    face = job.initial_height[job.problem.face_mask]
+    face = job.initial_recession[job.problem.face_mask]
     relief = float(np.ptp(face)) if np.all(np.isfinite(face)) else math.inf
     relief_f = relief / job.problem.depth_scale
     rtol = job.options.contact_rtol
@@ -248,7 +248,7 @@ class _Job:
     scene: object
     initial: object
     problem: object
-    initial_height: np.ndarray
+    initial_recession: np.ndarray
     options: object
     resume: object
     run_file: RunFile
@@ -285,7 +285,7 @@ def _prepare(args, lock, scene, initial, options, checked):
                          f"continue from it, or use --force to start over")
     problem = wear_problem_of(scene, problem=checked)
     try:
-        h0 = initial.height(problem.grid)
+        h0 = initial.recession(problem.grid)
     except ValueError as err:  # "[initial_face]: ...": the scene file first, as when loading
         raise ValueError(f"{args.scene}: {err}") from None
     attrs, arrays = run_inputs(scene, problem)
@@ -338,7 +338,7 @@ def _companion_grid(scene_path, scene, initial, n):
     except ValueError as err:
         raise ValueError(f"{scene_path}: --spatial-error: {err}") from None
     try:
-        initial.height(scene.grid(m))
+        initial.recession(scene.grid(m))
     except ValueError as err:  # "[initial_face]: ...": the scene file first
         raise ValueError(f"{scene_path}: --spatial-error needs the initial face on the companion "
                          f"grid n = {m}: {err}") from None
@@ -420,7 +420,7 @@ def _run(job):
     finished = job.finished  # a finished run lacking its spatial error is not: it gets it
     bar = Progress(0 if resume is None else resume.steps, log=job.verbose)
     try:
-        result = run_in(problem, job.initial_height, job.options, resume=resume, on_step=bar,
+        result = run_in(problem, job.initial_recession, job.options, resume=resume, on_step=bar,
                         on_checkpoint=None if finished else job.run_file.write)
     except StepFailure as err:  # every later failure is retried inside the run
         raise _StepFailureAtStart() from err
@@ -430,7 +430,7 @@ def _run(job):
     if result.success:
         # The steady result of runin-steady (solve_scene), its error bar included, on the
         # run's own map, operator and ladder: none of them computed a second time.
-        initial = np.where(problem.face_mask, result.initial_height, 0.0)
+        initial = np.where(problem.face_mask, result.initial_recession, 0.0)
         comparison = compare_with_steady(result, steady_of_run(job.scene, problem, initial),
                                          problem)
         if job.companion_grid is not None and not finished:
