@@ -44,7 +44,7 @@ import numpy as np
 from scipy import ndimage
 
 from .array_files import input_file_size, npy_header, read_png
-from .outline import MIN_SIDE_PIXELS, Circle, FaceGrid, as_outline
+from .outline import MIN_SIDE_PIXELS, FaceGrid, as_outline
 from .phases import PHASE_MAPS, PhaseMap, check_resolution
 from .schema import Key
 from .text import shorten
@@ -612,8 +612,7 @@ def _placement(shape, outline, pixel_size, cover, offset, source):
         slack = 1.0 + _COVER_SLACK
         if (abs(offset[0]) + half_x > 0.5 * width * slack
                 or abs(offset[1]) + half_y > 0.5 * height * slack):
-            box = ("(diameter 2a)" if isinstance(outline, Circle)
-                   else "(the face's bounding box)")
+            box = "(the face's bounding box)"
             raise ValueError(
                 f"micrograph {source!r} covers {_mm(width)} x {_mm(height)} ({cols} x {rows} "
                 f"pixels of {pixel_size:.6g} m) but the face needs {_mm(2 * half_x)} x "

@@ -105,10 +105,22 @@ class PhaseMap:
     and answers, with the defaults here for a kind that has nothing to say,
 
     - :meth:`file_record`: what a result file records of it;
-    - :meth:`segmented_image`: the segmentation of the image it was made from.
+    - :meth:`segmented_image`: the segmentation of the image it was made from;
+    - :meth:`empty_phase_words`: why a phase can have no pixel on a grid.
 
     Callers ask these, never which kind a map is.
     """
+
+    def empty_phase_words(self, phase, n):
+        """Why ``phase`` has no pixel on the face at ``n``, for the refusal (default: none).
+
+        Parameters
+        ----------
+        phase : int
+        n : int
+            Pixels along the longer side of the grid.
+        """
+        return f"phase {phase} has no pixel on the face at n = {n}"
 
     def file_record(self):
         """Groups of attributes a result file records of this map (default: none).
@@ -329,6 +341,12 @@ class Voronoi(PhaseMap):
     def n_phases(self):
         """Number of phases, ``len(fill_factors)``."""
         return len(self.fill_factors)
+
+    def empty_phase_words(self, phase, n):
+        """Why ``phase`` has no pixel at ``n``: its seeds lie off the face, or between pixels."""
+        return (f"phase {phase} has no pixel on the face with these {self.n_seeds} seeds "
+                f"(seed = {self.seed}) at n = {n}: its seeds lie off the face or their cells "
+                f"fall between pixel centres; use more seeds, another seed or a finer grid")
 
     @functools.lru_cache(maxsize=4)  # noqa: B019 -- frozen, hashable; a few boxes at most
     def _seeds(self, box=(1.0, 1.0)):

@@ -56,7 +56,7 @@ except ModuleNotFoundError:  # Python 3.10
 from .depth_maps import DepthLayers, LayerPhase
 from .load_programme import LoadProgramme
 from .outline import FaceGrid, outline_from_table
-from .phases import PHASE_MAPS, Voronoi
+from .phases import PHASE_MAPS
 from .problem import (
     FacePhases,
     Problem,
@@ -306,15 +306,8 @@ class Scene:
         if empty.size:
             phase = int(empty[0])
             where = "" if self.source_path is None else f"{self.source_path}: "
-            if isinstance(self.geometry, Voronoi):
-                g = self.geometry
-                raise ValueError(
-                    f"{where}[phases] map: phase {phase} has no pixel on the face with these "
-                    f"{g.n_seeds} seeds (seed = {g.seed}) at n = {n}: its seeds lie off the "
-                    f"face or their cells fall between pixel centres; use more seeds, another "
-                    f"seed or a finer grid")
-            raise ValueError(f"{where}[phases] map: phase {phase} has no pixel on the face at "
-                             f"n = {n}")
+            raise ValueError(f"{where}[phases] map: "
+                             f"{self.geometry.empty_phase_words(phase, n)}")
         return labels  # the rest is checked once, where it enters a problem (FacePhases)
 
 
