@@ -64,6 +64,8 @@ FLOORS = {
     # The stage solver and its warm start; the integrators, step control and run options.
     "stepping": ("transient.warm_start", "transient.solver", "transient.stepping",
                  "transient.control", "transient.options"),
+    # The run-in's scene sections and its factory from a scene (above the problem it builds).
+    "run-in scenes": ("transient.scene",),
     # The friction proxy along a run: what is recorded of a face, the history's estimator.
     "history": ("transient.diagnostics", "transient.history"),
     # The run: the loop, what it records, its result and the result's run-in distance.
@@ -71,8 +73,8 @@ FLOORS = {
             "transient.run_in_distance"),
     # Runs compared: with the steady face, with a coarser grid.
     "comparison": ("transient.comparison", "transient.spatial_error"),
-    # Run files, the scene sections, figures.
-    "run files": ("transient.output", "transient.scene", "transient.plotting"),
+    # Run files and figures.
+    "run files": ("transient.output", "transient.plotting"),
     # transient's public names.
     "transient names": ("transient",),
     # The commands of both packages, which no library module imports.
