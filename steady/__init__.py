@@ -2,49 +2,43 @@
 
 The steady state of run-in wear has a closed form (paper eq. 7, 9): constant
 pressure on each phase and the half-space displacement under it.  The face
-is a disk (the paper's cylinder) or any other outline.  Modules, from the
-bottom floor up:
+is a disk (the paper's cylinder) or any other outline.  Modules, by the
+floors they stand on, from the bottom up (``FLOORS`` in tests/test_layers.py;
+a module imports only from its floor and below):
 
-- :mod:`steady.text`, :mod:`steady.memory` -- message text; memory
-  estimates and the memory available;
-- :mod:`steady.registry` -- registries of named entries, filled by decorators;
+- base: :mod:`steady.text`, :mod:`steady.memory` -- message text, memory
+  estimates; :mod:`steady.registry` -- registries of named entries;
   :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
-- :mod:`steady.halfspace` -- the elastic half-space operator (eq. 8);
-- :mod:`steady.array_files` -- ``.npy`` and PNG inputs, checked before
-  their data are read; :mod:`steady.safe_files` -- atomic writes, file
-  identity, backups, checksums and the writers' lock;
-- :mod:`steady.outline` -- face outlines (disk, rectangle, ellipse, annulus,
-  pixel mask) and the grid over each one's bounding box;
-- :mod:`steady.labels` -- rasterised phase maps: checks, fill factors;
-- :mod:`steady.phases`, :mod:`steady.inclusions`, :mod:`steady.micrograph`
-  -- phase geometries rasterised at any grid size (micrographs need the
-  extra ``runin[micrograph]``);
-- :mod:`steady.depth`, :mod:`steady.depth_maps` -- phase maps that change
-  with depth: columns of segments, voxel stacks, spheres, layers;
-- :mod:`steady.pressures`, :mod:`steady.wear` -- eq. 7, and the local wear
-  laws;
-- :mod:`steady.sliding` -- the sliding kinematics (``[sliding]``): the local
-  sliding speed over the face;
-- :mod:`steady.load_programme` -- a normal force that steps along the
-  sliding distance (``[load] programme``);
+- fields, arrays that know no outline: :mod:`steady.halfspace` -- the
+  elastic half-space operator (eq. 8); :mod:`steady.array_files` -- ``.npy``
+  and PNG inputs, checked before their data are read; :mod:`steady.labels`
+  -- rasterised phase maps; :mod:`steady.pressures` -- eq. 7;
+  :mod:`steady.depth` -- columns of segments below the face;
+  :mod:`steady.relief` -- rms heights; :mod:`steady.validity` -- where the
+  model holds; :mod:`steady.measured_face` -- a measured height map;
+  :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
+- the face: :mod:`steady.outline` -- face outlines and their grids;
+  :mod:`steady.phases` (the :class:`~steady.phases.PhaseMap` contract),
+  :mod:`steady.inclusions`, :mod:`steady.micrograph`,
+  :mod:`steady.depth_maps` -- phase geometries, in the plane and in depth;
+  :mod:`steady.wear` -- the local wear laws (the
+  :class:`~steady.wear.WearLaw` contract); :mod:`steady.sliding` -- the
+  sliding kinematics; :mod:`steady.load_programme` -- a stepping load;
+- estimators: :mod:`steady.rms_slope` -- the energy-corrected rms slope and
+  its error bar; :mod:`steady.normalisation` -- the reference slope;
 - :mod:`steady.problem` -- the one checked problem definition;
-- :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
-- :mod:`steady.rms_slope` -- the energy-corrected rms slope and its error
-  bar; :mod:`steady.normalisation` -- the reference slope of each outline;
-  :mod:`steady.relief` -- rms heights;
-- :mod:`steady.validity` -- where the model holds (small slopes) and the
-  warning beyond;
-- :mod:`steady.scene` -- TOML scene files; :mod:`steady.examples` -- the
-  example scenes shipped with the package;
-- :mod:`steady.solution` -- the steady solve; :mod:`steady.basis` --
-  per-phase fields for sweeps over wear coefficients;
-  :mod:`steady.profiles` -- cross sections and differential profiles;
-- :mod:`steady.output` -- HDF5 result files and the helpers every layout shares;
-  :mod:`steady.plotting` -- figures;
-- :mod:`steady.sweep`, :mod:`steady.voronoi_sweep` -- resumable parameter
-  sweeps; :mod:`steady.design` -- the design table and the fill factor for
-  a target rms slope; :mod:`steady.measured_face`, :mod:`steady.fit`,
-  :mod:`steady.fit_files` -- wear ratios from a measured worn face;
+- scenes: :mod:`steady.scene` -- TOML scene files and the factory
+  ``problem_of``; :mod:`steady.examples` -- the shipped scenes;
+  :mod:`steady.safe_files` -- atomic writes, identity, checksums, locks;
+- the steady features: :mod:`steady.solution` -- the steady solve;
+  :mod:`steady.basis` -- per-phase fields for sweeps; :mod:`steady.profiles`
+  -- cross sections and differential profiles; :mod:`steady.fit` -- wear
+  ratios from a measured worn face;
+- results: :mod:`steady.output` -- HDF5 result files and the helpers every
+  layout shares; :mod:`steady.plotting` -- figures;
+- studies: :mod:`steady.sweep`, :mod:`steady.voronoi_sweep` -- resumable
+  parameter sweeps; :mod:`steady.design` -- the design table;
+  :mod:`steady.fit_files` -- the fit's files;
 - :mod:`steady.cli` -- the commands ``runin-steady`` (``python -m
   steady``), ``runin-fit``, ``runin-design`` and ``runin-examples``, and
   what every command shares.

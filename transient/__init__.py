@@ -2,43 +2,40 @@
 
 From an initial face, the punch wears by the local law ``dw/ds = k_i p^m``
 while the contact pressure follows the worn shape, until the wear rates
-equalise and the face reaches the steady state of :mod:`steady`.  Modules:
+equalise and the face reaches the steady state of :mod:`steady`.  Modules, by
+the floors they stand on, from the bottom up (``FLOORS`` in
+tests/test_layers.py):
 
-- :mod:`transient.contact` -- unilateral contact under load control (also
-  the implicit wear step, with a diagonal shift);
-- :mod:`transient.preconditioners` -- registered preconditioners of the
-  contact solver;
-- :mod:`transient.initial_face` -- registered initial face shapes;
-- :mod:`transient.problem` -- the discretised wear problem (fixed) and its
-  factory from a scene;
-- :mod:`transient.solver` -- the stage solver: the contact solves of a run
-  and the state they carry (tolerances, counters, the force and section of
-  the current point); :mod:`transient.warm_start` -- the warm start of its
-  implicit stages;
-- :mod:`transient.depth` -- the worn depth as a function of the wear work,
-  across the interfaces of phases that change with depth;
-- :mod:`transient.stepping` -- the registered time integrators;
-- :mod:`transient.control` -- step control and stop tests;
-- :mod:`transient.diagnostics` -- what the history records of the face;
-- :mod:`transient.history` -- the friction proxy along the run: the rms
-  slope with its error bar, the rms height;
-- :mod:`transient.spatial_error` -- the history's spatial error bar from
-  the same run on a coarser grid;
-- :mod:`transient.axisymmetric` -- the axisymmetric run-in of the
-  homogeneous cylinder, the reference of the history;
-- :mod:`transient.runin` -- the run loop and its checkpoints;
-  :mod:`transient.recording` -- the history and the snapshots it records;
-  :mod:`transient.result` -- its result and the state a resumed run needs;
-- :mod:`transient.run_in_distance` -- the run-in distance within a tolerance
-  of the steady state, with its uncertainty;
-- :mod:`transient.comparison` -- agreement with the steady face;
-- :mod:`transient.output` -- HDF5 run files;
-- :mod:`transient.options` -- the run options, each declared once for the
-  library, the scene and the command line;
+- contact: :mod:`transient.contact` -- unilateral contact under load control
+  (also the implicit wear step, with a diagonal shift);
+  :mod:`transient.preconditioners` -- its registered preconditioners;
+  :mod:`transient.depth` -- the worn depth as a function of the wear work,
+  across interfaces; :mod:`transient.initial_face` -- registered initial
+  faces; :mod:`transient.axisymmetric` -- the axisymmetric run-in of the
+  homogeneous and the coated cylinder, the references of the history;
+  :mod:`transient.memory` -- the memory a run-in needs;
+- :mod:`transient.problem` -- the discretised wear problem, fixed data;
+- stepping: :mod:`transient.solver` -- the stage solver, the contact solves
+  of a run and the state they carry; :mod:`transient.warm_start` -- the
+  warm start of its implicit stages; :mod:`transient.stepping` -- the
+  registered time integrators; :mod:`transient.control` -- step control and
+  stop tests; :mod:`transient.options` -- the run options, each declared
+  once for the library, the scene and the command line;
 - :mod:`transient.scene` -- the ``[transient]`` and ``[initial_face]`` scene
-  sections;
-- :mod:`transient.memory` -- the memory a run-in needs;
-- :mod:`transient.plotting` -- figures of run files (imported on demand: it
+  sections, and the factory ``wear_problem_of``;
+- history: :mod:`transient.diagnostics` -- what the history records of the
+  face; :mod:`transient.history` -- the friction proxy along the run: the
+  rms slope with its error bar, the rms height;
+- the run: :mod:`transient.runin` -- the loop and its checkpoints;
+  :mod:`transient.recording` -- the history and snapshots it records;
+  :mod:`transient.result` -- its result and the state a resumed run needs;
+  :mod:`transient.run_in_distance` -- the run-in distance within a
+  tolerance of the steady state, with its uncertainty;
+- comparisons: :mod:`transient.comparison` -- agreement with the steady
+  face; :mod:`transient.spatial_error` -- the history's spatial error bar
+  from the same run on a coarser grid;
+- run files and figures: :mod:`transient.output` -- HDF5 run files;
+  :mod:`transient.plotting` -- figures of run files (imported on demand: it
   loads matplotlib).
 
 The command ``runin-transient`` (``python -m transient``,
