@@ -45,8 +45,8 @@ from steady.scene import load_scene
 from steady.solution import solve_scene
 from steady.output import write_result
 from transient.output import write_run
-from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
+from transient.scene import wear_problem_of
 from transient.comparison import compare_with_steady
 kind, n, k = {kind!r}, {n}, {k}
 d = pathlib.Path(tempfile.mkdtemp())
