@@ -9,7 +9,7 @@ import pytest
 from steady import examples
 from steady.cli.solve import main as steady_main
 from steady.depth import DepthColumns
-from steady.depth_maps import Spheres, Voxels, columns_from_segments
+from steady.depth_maps import DepthLayers, LayerPhase, Spheres, Voxels, columns_from_segments
 from steady.outline import Circle
 from steady.phases import ArrayMap, Voronoi
 from steady.problem import FacePhases, Problem
@@ -285,6 +285,26 @@ def test_bad_layers_are_named(tmp_path, old, new, fragment):
     assert old in COATING, f"test setup: {old!r}"
     with pytest.raises(ValueError, match=fragment):
         scene(tmp_path, COATING.replace(old, new, 1))
+
+
+@pytest.mark.parametrize("build, fragment", [
+    (lambda: Spheres(-0.1, 0.3, 3, 0.5), "sphere radius must be a number > 0 (m), got -0.1"),
+    (lambda: Spheres(0.1, 0.6, 3, 0.5),
+     "sphere volume_fraction must be a number in (0, 0.5] (1), got 0.6"),
+    (lambda: Spheres(0.1, 0.3, -3, 0.5), "sphere seed must be an integer >= 0, got -3"),
+    (lambda: Spheres(0.1, 0.3, 3, math.inf), "sphere depth must be a number > 0 (m), got inf"),
+    (lambda: Spheres(0.1, 0.3, 3, 0.5, spread=1.0),
+     "sphere spread must be a number in [0, 1) (1), got 1.0"),
+    (lambda: Spheres(0.1, 0.3, 3, 0.5, matrix_phase=True),
+     "sphere matrix_phase must be an integer >= 0, got True"),
+    (lambda: Voxels(_stack(), -0.1), "voxel_depth must be a number > 0 (m), got -0.1"),
+    (lambda: DepthLayers((1e-4, 0.0), (LayerPhase(0), LayerPhase(1)), LayerPhase(0)),
+     "[depth] layers[1] thickness must be a number > 0 (m), got 0.0"),
+])
+def test_maps_built_in_python_are_checked_by_their_scene_keys(build, fragment):
+    with pytest.raises(ValueError) as err:
+        build()
+    assert fragment in str(err.value), f"{err.value!r} lacks {fragment!r}"
 
 
 # -- problems, sections and the closed form --------------------------------------------------
