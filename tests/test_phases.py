@@ -241,6 +241,8 @@ def test_labels_validation():
         validate_labels(labels, 1)
     with pytest.raises(ValueError, match="phase 2 has no pixel"):
         validate_labels(labels, 3)
+    with pytest.raises(ValueError, match="n_phases must be an integer >= 1, got 0"):
+        validate_labels(labels, 0)
     inside = labels.copy()
     inside[16, 16] = -1
     with pytest.raises(ValueError, match="label -1 found on the face"):
