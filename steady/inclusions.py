@@ -98,7 +98,8 @@ _RADIUS_SPREAD = Key("radius_spread", "number", unit="1", low=0.0, low_open=Fals
 
 
 @PHASE_MAPS.register("inclusions", (_RADIUS, _SEED, _FILL_FACTOR, _COUNT, _RADIUS_SPREAD),
-                     doc="random non-overlapping circular inclusions (phase 1) in a matrix (phase 0)")
+                     doc="random non-overlapping circular inclusions (phase 1) in a matrix "
+                         "(phase 0)")
 @dataclasses.dataclass(frozen=True)
 class Inclusions(PhaseMap):
     """Random non-overlapping circular inclusions (phase 1) in a matrix (phase 0).

@@ -191,6 +191,7 @@ _LENGTH = Key("length", "number", unit="m", low=0.0)
 _HALF_WIDTH = Key("half_width", "number", unit="m", low=0.0)
 _HALF_LENGTH = Key("half_length", "number", unit="m", low=0.0)
 _E_STAR = Key("E_star", "number", unit="Pa", low=0.0)
+_RATIO = Key("ratio", "number", unit="1", low=0.0, low_open=False, high=1.0)
 
 
 def _distance(r):
@@ -451,9 +452,7 @@ def annulus_rms_slope(ratio):
     >>> print(f"{annulus_rms_slope(0.5):.12f}")
     1.217400850059
     """
-    rho = float(ratio)
-    if not 0.0 <= rho < 1.0:
-        raise ValueError(f"ratio must lie in [0, 1), got {ratio!r}")
+    rho = _RATIO.parse(ratio, "")
     span = 1.0 - rho
 
     def integral(level):

@@ -384,7 +384,7 @@ def test_runin_steady_solves_the_section_it_is_given(tmp_path, capsys):
     assert "phase pressures  substrate 198265 Pa; no pixel in this section: coating" in out, out
     assert steady_main([str(path), "-o", str(tmp_path / "b.h5"), "--depth", "-1"]) == 2
     err = capsys.readouterr().err
-    assert "--depth must be a finite depth >= 0 (m), got -1.0" in err and "Traceback" not in err
+    assert "--depth must be a number >= 0 (m), got -1.0" in err and "Traceback" not in err
 
 
 def test_a_phase_nowhere_in_the_columns_is_named(tmp_path):
