@@ -132,12 +132,16 @@ def _stack_columns(stack, tops, n_phases):
     return columns_from_segments(z, stack, n_phases)
 
 
+_VOXEL_DEPTH = Key("voxel_depth", "number", unit="m", low=0.0, required=True,
+                   doc="depth of one slice; below the last slice the last slice continues "
+                       "(columnar)")
+
+
 @PHASE_MAPS.register("voxels", (
     Key("file", "path", required=True,
         doc=".npy of integer phase indices, shape (nx, ny, nz): nz slices from the surface "
             "down, each a map of the face's grid at n or a divisor of it; 0..P-1 on the face"),
-    Key("voxel_depth", "number", unit="m", low=0.0, required=True,
-        doc="depth of one slice; below the last slice the last slice continues (columnar)")),
+    _VOXEL_DEPTH),
     doc="a voxel stack: slice k covers the depths [k d, (k + 1) d), the last one for ever")
 @dataclasses.dataclass(frozen=True, eq=False)
 class Voxels(PhaseMap):
@@ -183,10 +187,7 @@ class Voxels(PhaseMap):
             raise ValueError(f"{what} must hold integers, got dtype {a.dtype}")
         if min(a.shape) == 0:
             raise ValueError(f"{what} is empty: an array of shape {a.shape}")
-        d = float(self.voxel_depth)
-        if not (math.isfinite(d) and d > 0):
-            raise ValueError(f"voxel_depth must be positive and finite (m), got "
-                             f"{self.voxel_depth!r}")
+        d = _VOXEL_DEPTH.parse(self.voxel_depth, "", scale=False)  # its range: against L below
         L = outline.scale
         if d > L:
             raise ValueError(f"{what}: voxel_depth {d:.6g} m is deeper than the face scale L = "
@@ -296,7 +297,8 @@ def load_voxels(path, *, max_side=None):
     return np.load(path, allow_pickle=False)
 
 
-@PHASE_MAPS.register("spheres", (
+# The keys of a scene's map, and the checks of the same parameters given in Python.
+_SPHERE_KEYS = (
     Key("radius", "number", unit="m", low=0.0, required=True, doc="mean sphere radius"),
     Key("volume_fraction", "number", unit="1", low=0.0, high=MAX_VOLUME_FRACTION,
         high_open=False, required=True, doc="volume fraction of the spheres"),
@@ -310,8 +312,12 @@ def load_voxels(path, *, max_side=None):
     Key("matrix_phase", "integer", low=0, low_open=False, default=0,
         doc="phase of the matrix (default 0)"),
     Key("particle_phase", "integer", low=0, low_open=False, default=1,
-        doc="phase of the spheres (default 1)")),
-    doc="random non-overlapping spheres (phase 1) in a matrix (phase 0), down to a depth")
+        doc="phase of the spheres (default 1)"))
+
+
+@PHASE_MAPS.register("spheres", _SPHERE_KEYS,
+                     doc="random non-overlapping spheres (phase 1) in a matrix (phase 0), down "
+                         "to a depth")
 @dataclasses.dataclass(frozen=True)
 class Spheres(PhaseMap):
     """Random non-overlapping spheres in a matrix, from above the surface down to ``depth``.
@@ -372,25 +378,16 @@ class Spheres(PhaseMap):
 
     def __post_init__(self):
         """Check the parameters."""
-        for name in ("radius", "depth"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not (math.isfinite(float(v)) and float(v) > 0):
-                raise ValueError(f"sphere {name} must be positive and finite (m), got {v!r}")
-        phi = float(self.volume_fraction)
-        if not 0.0 < phi <= MAX_VOLUME_FRACTION:
-            raise ValueError(f"sphere volume_fraction = {self.volume_fraction!r} is outside "
-                             f"(0, {MAX_VOLUME_FRACTION}]")
-        if not 0.0 <= float(self.spread) < 1.0:
-            raise ValueError(f"sphere spread = {self.spread!r} is outside [0, 1)")
-        if self.matrix_phase == self.particle_phase or min(self.matrix_phase,
-                                                           self.particle_phase) < 0:
+        # The scale range of the lengths is a problem's to check.
+        for key in _SPHERE_KEYS:
+            object.__setattr__(self, key.name, key.parse(getattr(self, key.name), "sphere",
+                                                         scale=False))
+        if self.matrix_phase == self.particle_phase:
             raise ValueError(f"matrix_phase = {self.matrix_phase} and particle_phase = "
-                             f"{self.particle_phase} must be distinct non-negative integers")
+                             f"{self.particle_phase} must be distinct")
         if max(self.matrix_phase, self.particle_phase) > 1:
             raise ValueError(f"matrix_phase = {self.matrix_phase} and particle_phase = "
                              f"{self.particle_phase}: the two phases must be 0 and 1")
-        for name in ("radius", "volume_fraction", "depth", "spread"):
-            object.__setattr__(self, name, float(getattr(self, name)))
 
     @classmethod
     def from_values(cls, values, context):
@@ -660,6 +657,11 @@ def _place(radii, low, period, rng, stalled, batch=16):
     return centres[:-1].copy()
 
 
+#: A layer's thickness, as ``[[depth.layers]] thickness`` holds it.
+_THICKNESS = Key("thickness", "number", unit="m", low=0.0, required=True,
+                 doc="thickness of the layer")
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class DepthLayers:
     """Layers from the surface down over a substrate (``[depth] kind = "layers"``).
@@ -683,9 +685,9 @@ class DepthLayers:
 
     def __post_init__(self):
         """Check the thicknesses."""
-        for i, t in enumerate(self.thicknesses):
-            if not (math.isfinite(t) and t > 0):
-                raise ValueError(f"[depth] layers[{i}] thickness must be > 0 (m), got {t!r}")
+        thicknesses = tuple(_THICKNESS.parse(t, f"[depth] layers[{i}]", scale=False)
+                            for i, t in enumerate(self.thicknesses))
+        object.__setattr__(self, "thicknesses", thicknesses)
         if len(self.thicknesses) != len(self.maps) or not self.maps:
             raise ValueError("[depth] needs at least one layer, each with a thickness and a map")
 

@@ -45,6 +45,7 @@ import numpy as np
 from scipy import interpolate, optimize
 
 from .safe_files import atomic_h5
+from .schema import Key
 from .text import one_line, shorten
 from .validity import check_rms_slope
 
@@ -62,6 +63,10 @@ TABLE_VERSION = 1
 #: The table shipped as package data (``python studies/design_table.py``
 #: builds it): a :class:`pathlib.Path` in an installed package.
 DEFAULT_TABLE = importlib.resources.files("steady") / "data" / "design_table.h5"
+
+#: A design's load, ``pbar / E*``, and its target steady rms slope.
+_PBAR_OVER_ESTAR = Key("pbar_over_estar", "number", unit="1", low=0.0)
+_TARGET_SLOPE = Key("target_slope", "number", unit="1", low=0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -345,8 +350,7 @@ class DesignTable:
             outside the range of the linear half-space.
         """
         g0 = _reference(pbar_over_estar)
-        if not (np.isfinite(target_slope) and target_slope > 0):
-            raise ValueError(f"target rms slope must be positive, got {target_slope!r}")
+        target_slope = _TARGET_SLOPE.parse(target_slope, "")
         t = target_slope / g0
         col = self._column(ratio)
         rho = np.linspace(self.fill_factors[0], self.fill_factors[-1], 4001)
@@ -388,6 +392,5 @@ class DesignTable:
 
 
 def _reference(pbar_over_estar):
-    if not (np.isfinite(pbar_over_estar) and pbar_over_estar > 0):
-        raise ValueError(f"pbar/E* must be positive, got {pbar_over_estar!r}")
-    return 4.0 * pbar_over_estar / np.pi
+    """The reference slope ``4 pbar / (pi E*)`` of a checked ``pbar / E*``."""
+    return 4.0 * _PBAR_OVER_ESTAR.parse(pbar_over_estar, "") / np.pi

@@ -65,6 +65,7 @@ from .labels import extend_off_face
 from .measured_face import MeasuredFace
 from .problem import Problem, default_phase_names
 from .scene import problem_of
+from .schema import Key
 
 __all__ = ["DEFAULT_MIN_PHASE_PIXELS", "FaceBasis", "FaceModel", "FitResult", "fit_face",
            "fit_scene"]
@@ -95,15 +96,9 @@ _SEARCH_PIXELS = 8000
 _MIN_PIXELS_ACROSS = 8
 
 
-def _positive(value, name, unit, *, zero=False):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    if not (math.isfinite(v) and (v >= 0 if zero else v > 0)):
-        kind = "non-negative" if zero else "positive"
-        raise ValueError(f"{name} must be a {kind} finite number ({unit}), got {value!r}")
-    return v
+# Options of a fit, lengths >= 0: any length is taken (the scale range is a problem's).
+_RIM_MARGIN = Key("rim_margin", "number", unit="m", low=0.0, low_open=False)
+_MAX_SHIFT = Key("max_shift", "number", unit="m", low=0.0, low_open=False)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -1019,9 +1014,9 @@ class FaceModel(FaceBasis):
         start = np.asarray(shift, dtype=float)
         if start.shape != (2,) or not np.all(np.isfinite(start)):
             raise ValueError(f"shift must be two finite lengths (m), got {shift!r}")
-        rim_margin = _positive(rim_margin, "rim_margin", "m", zero=True)
+        rim_margin = _RIM_MARGIN.parse(rim_margin, "", scale=False)
         max_shift = (_DEFAULT_MAX_SHIFT * self.outline.scale if max_shift is None
-                     else _positive(max_shift, "max_shift", "m", zero=True))
+                     else _MAX_SHIFT.parse(max_shift, "", scale=False))
         confidence = float(confidence)
         if not 0 < confidence < 1:
             raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")

@@ -80,7 +80,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 import pathlib
 
 import h5py
@@ -100,6 +99,7 @@ from .output import (
 )
 from .problem import check_phase_names, default_phase_names
 from .safe_files import atomic_h5
+from .schema import Key
 
 __all__ = [
     "FIT_FORMAT",
@@ -123,6 +123,9 @@ _READABLE_VERSIONS = (1, 2)
 #: Suffixes read as plain text grids (anything else but ``.npy`` goes to
 #: SurfaceTopography).
 TEXT_SUFFIXES = (".txt", ".csv", ".dat", ".asc")
+
+#: Metres per height unit of a measured map's file.
+_HEIGHT_SCALE = Key("height_scale", "number", unit="m per file unit", low=0.0)
 
 _SURFACE_HINT = ("install the optional extra with pip install 'runin[surface]' "
                  "(SurfaceTopography), or give a .npy or text grid")
@@ -224,7 +227,7 @@ def _surface_topography(path, pixel_size):
             if pixel_size is None:
                 raise ValueError(f"{str(path)!r} does not give its pixel size: give it "
                                  f"(--pixel-size, m)")
-            dx, dy = check_pixel_size(pixel_size, "pixel size")
+            dx, dy = check_pixel_size(pixel_size)
             nx, ny = channel.nb_grid_pts
             kwargs["physical_sizes"] = (nx * dx, ny * dy)
         if channel.unit is None:
@@ -247,7 +250,7 @@ def _surface_topography(path, pixel_size):
     file_pixel = tuple(float(s) / int(g) for s, g in zip(topography.physical_sizes,
                                                         topography.nb_grid_pts, strict=True))
     if pixel_size is not None and "physical_sizes" not in kwargs:
-        given = check_pixel_size(pixel_size, "pixel size")
+        given = check_pixel_size(pixel_size)
         if not np.allclose(given, file_pixel, rtol=1e-6):
             raise ValueError(f"pixel size {given} m given, but {str(path)!r} says "
                              f"{file_pixel} m")
@@ -299,13 +302,7 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
     """
     path = pathlib.Path(path)
     input_file_size(path, "measured map")  # exists, a regular file, not empty
-    try:
-        scale = float(height_scale)
-    except (TypeError, ValueError):
-        scale = math.nan
-    if not (math.isfinite(scale) and scale > 0):
-        raise ValueError(f"height scale must be a positive finite number (m per file unit), "
-                         f"got {height_scale!r}")
+    scale = _HEIGHT_SCALE.parse(height_scale, "")
     suffix = path.suffix.lower()
     if suffix == ".npy" or suffix in TEXT_SUFFIXES:
         if pixel_size is None:

@@ -36,9 +36,15 @@ import threading
 import numpy as np
 import scipy.fft
 
+from .schema import Key
+
 __all__ = ["HalfSpace", "grid_shape", "pixel_integral", "pixel_integral_gradient"]
 
 logger = logging.getLogger(__name__)
+
+# The operator's inputs; their scale range is a problem's to check.
+_PIXEL = Key("h", "number", unit="m", low=0.0, doc="pixel size")
+_E_STAR = Key("E_star", "number", unit="Pa", low=0.0, doc="effective modulus")
 
 # Whether numpy.fft writes into a given array (NumPy 2); else the product's
 # transforms are scipy.fft's, into fresh arrays.
@@ -282,13 +288,9 @@ class HalfSpace:
 
     def __init__(self, shape, h, E_star, *, workers=-1):
         self.shape = grid_shape(shape)
-        if not (np.isfinite(h) and h > 0):
-            raise ValueError(f"pixel size h must be positive and finite, got {h!r} m")
-        if not (np.isfinite(E_star) and E_star > 0):
-            raise ValueError(f"E_star must be positive and finite, got {E_star!r} Pa")
         nx, ny = self.shape
-        self.h = float(h)
-        self.E_star = float(E_star)
+        self.h = _PIXEL.parse(h, "pixel size", scale=False)
+        self.E_star = _E_STAR.parse(E_star, "", scale=False)
         self.workers = workers
         self._corners = _corner_asinh(self.shape, self.h)
         self._influence_q = self._even_spectrum(self.influence_quadrant)

@@ -55,23 +55,6 @@ _MAX_TRIES = 20_000
 _TAIL = 3.0
 
 
-def _float(value, name):
-    """``value`` as a float; ``ValueError`` naming ``name`` if it is not a number."""
-    if isinstance(value, (bool, str, bytes)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-
-
-def _positive(value, name):
-    v = _float(value, name)
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    return v
-
-
 def _log_params(radius, spread):
     """``mu, sigma`` of the log-normal radii of mean ``radius`` and relative sd ``spread``."""
     sigma = math.sqrt(math.log1p(spread ** 2))
@@ -102,17 +85,21 @@ def _box_area(radius, spread):
     return (2.0 * (1.0 + _max_radius(radius, spread))) ** 2
 
 
-@PHASE_MAPS.register("inclusions", (
-    Key("radius", "number", unit="m", low=0.0, required=True, doc="mean inclusion radius"),
-    Key("seed", "integer", low=0, low_open=False, required=True,
-        doc="seed of the random generator"),
-    Key("fill_factor", "number", unit="1", low=0.0,
-        doc="expected area fraction of the inclusions, at most 0.5"),
-    Key("count", "number", unit="1", low=0.0,
-        doc="expected inclusion centres on the face, instead of fill_factor"),
-    Key("radius_spread", "number", unit="1", low=0.0, low_open=False,
-        doc="relative standard deviation of the radii, log-normal (default 0)")),
-    doc="random non-overlapping circular inclusions (phase 1) in a matrix (phase 0)")
+# The keys of a scene's map, and the checks of the same parameters given in Python.
+_RADIUS = Key("radius", "number", unit="m", low=0.0, required=True, doc="mean inclusion radius")
+_SEED = Key("seed", "integer", low=0, low_open=False, required=True,
+            doc="seed of the random generator")
+_FILL_FACTOR = Key("fill_factor", "number", unit="1", low=0.0, high=1.0,
+                   doc="expected area fraction of the inclusions, at most 0.5")
+_COUNT = Key("count", "number", unit="1", low=0.0,
+             doc="expected inclusion centres on the face, instead of fill_factor")
+_RADIUS_SPREAD = Key("radius_spread", "number", unit="1", low=0.0, low_open=False,
+                     doc="relative standard deviation of the radii, log-normal (default 0)")
+
+
+@PHASE_MAPS.register("inclusions", (_RADIUS, _SEED, _FILL_FACTOR, _COUNT, _RADIUS_SPREAD),
+                     doc="random non-overlapping circular inclusions (phase 1) in a matrix "
+                         "(phase 0)")
 @dataclasses.dataclass(frozen=True)
 class Inclusions(PhaseMap):
     """Random non-overlapping circular inclusions (phase 1) in a matrix (phase 0).
@@ -175,27 +162,20 @@ class Inclusions(PhaseMap):
 
     def __post_init__(self):
         """Check the parameters; store them as floats and ints."""
-        radius = _positive(self.radius, "inclusion radius (m)")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) \
-                or self.seed < 0:
-            raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
-        spread = _float(self.radius_spread, "radius_spread")
-        if not (math.isfinite(spread) and spread >= 0):
-            raise ValueError(f"radius_spread must be finite and >= 0, got "
-                             f"{self.radius_spread!r}")
+        # The radius's scale range is a problem's to check; its size against a face,
+        # check_outline's.
+        radius = _RADIUS.parse(self.radius, "inclusion", scale=False)
         object.__setattr__(self, "radius", radius)
-        object.__setattr__(self, "radius_spread", spread)
-        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "seed", _SEED.parse(self.seed, "inclusion"))
+        object.__setattr__(self, "radius_spread",
+                           _RADIUS_SPREAD.parse(self.radius_spread, "inclusion"))
         if (self.fill_factor is None) == (self.count is None):
             raise ValueError("give exactly one of fill_factor and count, got "
                              f"fill_factor={self.fill_factor!r}, count={self.count!r}")
         if self.count is not None:
-            object.__setattr__(self, "count",
-                               _positive(self.count, "count (expected inclusions on the face)"))
+            object.__setattr__(self, "count", _COUNT.parse(self.count, "inclusion"))
             return
-        fill = _float(self.fill_factor, "fill_factor")
-        if not (math.isfinite(fill) and 0.0 < fill < 1.0):
-            raise ValueError(f"fill_factor must lie in (0, 1), got {self.fill_factor!r}")
+        fill = _FILL_FACTOR.parse(self.fill_factor, "inclusion")
         object.__setattr__(self, "fill_factor", fill)
         if fill > MAX_FILL:
             raise ValueError(self._impossible(f"fill factor {fill:g}"))

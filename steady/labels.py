@@ -13,11 +13,16 @@ import math
 import numpy as np
 from scipy import ndimage
 
+from .schema import Key
+
 __all__ = ["apportion", "check_fill_factors", "extend_off_face", "realised_fill_factors",
            "validate_labels"]
 
 #: Tolerance on the sum of the fill factors.
 _FILL_SUM_TOL = 1e-9
+
+#: Phases a phase map is checked against.
+_N_PHASES = Key("n_phases", "integer", low=1, low_open=False)
 
 
 def validate_labels(labels, n_phases, *, face_mask=None):
@@ -50,9 +55,7 @@ def validate_labels(labels, n_phases, *, face_mask=None):
         raise ValueError(f"phase labels must be a 2-d array, got shape {labels.shape}")
     if not np.issubdtype(labels.dtype, np.integer):
         raise ValueError(f"phase labels must be integers, got dtype {labels.dtype}")
-    n_phases = int(n_phases)
-    if n_phases < 1:
-        raise ValueError(f"n_phases must be at least 1, got {n_phases}")
+    n_phases = _N_PHASES.parse(n_phases, "")
     mask = labels >= 0 if face_mask is None else np.asarray(face_mask)
     if mask.shape != labels.shape:
         raise ValueError(f"face mask of shape {mask.shape} for labels of shape {labels.shape}")

@@ -22,11 +22,15 @@ from __future__ import annotations
 
 import bisect
 import dataclasses
-import math
 
+from .schema import Key
 from .text import shorten
 
 __all__ = ["BREAKPOINT_SLACK", "LoadProgramme", "check_programme"]
+
+#: A pair of a programme: the distance from which its force acts, and the force.
+_DISTANCE = Key("distance", "number", unit="m", low=0.0, low_open=False)
+_FORCE = Key("force", "number", unit="N", low=0.0)
 
 #: Relative slack with which a distance counts as reached (round-off of summed steps).
 BREAKPOINT_SLACK = 1e-12
@@ -47,15 +51,13 @@ def check_programme(pairs, where="[load] programme"):
     -------
     tuple of (float, float)
     """
-    pairs = tuple((float(s), float(f)) for s, f in pairs)
+    # The forces' scale range is checked with the problem's (steady.scene).
+    pairs = tuple((_DISTANCE.parse(s, f"{where} pair {i}", scale=False),
+                   _FORCE.parse(f, f"{where} pair {i}", scale=False))
+                  for i, (s, f) in enumerate(pairs))
     if not pairs:
         raise ValueError(f"{where} must hold at least one [distance, force] pair, got []")
-    for i, (s, f) in enumerate(pairs):
-        if not (math.isfinite(s) and s >= 0.0):
-            raise ValueError(f"{where}: distance {s!r} m of pair {i} must be a finite "
-                             f"number >= 0")
-        if not (math.isfinite(f) and f > 0.0):
-            raise ValueError(f"{where}: force {f!r} N of pair {i} must be a finite number > 0")
+    for i, (s, _) in enumerate(pairs):
         if i and s <= pairs[i - 1][0]:
             raise ValueError(f"{where}: distances must increase, got {s!r} m after "
                              f"{pairs[i - 1][0]!r} m (pairs {shorten([list(p) for p in pairs])})")

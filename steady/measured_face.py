@@ -14,30 +14,38 @@ import dataclasses
 
 import numpy as np
 
+from .schema import Key
+from .text import shorten
+
 __all__ = ["MeasuredFace", "check_pixel_size"]
 
 
-def check_pixel_size(pixel_size, what):
-    """``(dx, dy)`` from a number or a pair; ``ValueError`` unless positive and finite.
+#: The side of a measured map's pixels, along x or y.
+_PIXEL_SIZE = Key("pixel_size", "number", unit="m", low=0.0)
+
+
+def check_pixel_size(pixel_size, where=""):
+    """``(dx, dy)`` from a number or a pair, each a length > 0; ``ValueError`` otherwise.
 
     Parameters
     ----------
     pixel_size : float or (float, float), m
         A square pixel's side, or ``(dx, dy)``.
-    what : str
-        What the pixel size is of, for the message.
+    where : str, optional
+        What the pixel size is of, for the message (``"measured map 'face.npy'"``).
 
     Returns
     -------
     (float, float), m
     """
-    values = np.atleast_1d(np.asarray(pixel_size, dtype=float)) if pixel_size is not None \
-        else np.array([])
-    if values.ndim != 1 or values.size not in (1, 2) or not np.all(np.isfinite(values)) \
-            or not np.all(values > 0):
-        raise ValueError(f"{what} must be one or two positive finite lengths (m), got "
-                         f"{pixel_size!r}")
-    return (float(values[0]), float(values[-1]))
+    values = pixel_size.tolist() if isinstance(pixel_size, np.ndarray) else pixel_size
+    if not isinstance(values, (list, tuple)):
+        values = [values]
+    if len(values) not in (1, 2):
+        name = f"{where} pixel_size" if where else "pixel_size"
+        raise ValueError(f"{name} must be one or two lengths (m), got {shorten(pixel_size)}")
+    # Any length a measurement gives is taken: the scale range is a problem's to check.
+    return tuple(_PIXEL_SIZE.parse(v, where, scale=False) for v in (values[0], values[-1]))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -90,7 +98,7 @@ class MeasuredFace:
         h.flags.writeable = False
         object.__setattr__(self, "heights", h)
         object.__setattr__(self, "pixel_size",
-                           check_pixel_size(self.pixel_size, f"pixel size of {self.source}"))
+                           check_pixel_size(self.pixel_size, f"measured map {self.source}"))
 
     @property
     def shape(self):

@@ -100,24 +100,15 @@ def _is_number(value):
                                                               np.floating))
 
 
-def _check_n_phases(n_phases):
-    if not _is_integer(n_phases) or n_phases < 2:
-        raise ValueError(f"n_phases must be an integer of at least 2, got {shorten(n_phases)}")
-    return int(n_phases)
-
-
-def _check_smoothing(smoothing):
-    if not _is_number(smoothing) or not math.isfinite(smoothing) or smoothing < 0:
-        raise ValueError(f"smoothing must be a finite number >= 0 (Gaussian sigma, pixels), "
-                         f"got {shorten(smoothing)}")
-    return float(smoothing)
-
-
-def _check_min_speck(min_speck):
-    if not _is_integer(min_speck) or min_speck < 0:
-        raise ValueError(f"min_speck must be an integer >= 0 (pixels), got "
-                         f"{shorten(min_speck)}")
-    return int(min_speck)
+# Keys of a scene's micrograph map, also the checks of the same arguments given in Python.
+_N_PHASES = Key("n_phases", "integer", low=2, low_open=False, required=True,
+                doc="phases, by multi-level Otsu thresholds (phase 0 darkest)")
+_SMOOTHING = Key("smoothing", "number", unit="pixels", low=0.0, low_open=False,
+                 doc="Gaussian sigma before thresholding (default 0)")
+_MIN_SPECK = Key("min_speck", "integer", unit="pixels", low=0, low_open=False,
+                 doc="patches below this are relabelled to the surrounding phase (default 0)")
+_PIXEL_SIZE = Key("pixel_size", "number", unit="m", low=0.0,
+                  doc="side of an image pixel (default: a square image spans the face's box)")
 
 
 def _check_thresholds(thresholds, n_phases):
@@ -483,9 +474,9 @@ def segment(image, n_phases, *, smoothing=0.0, min_speck=0, thresholds=None, fil
     >>> segment(ring, 2, thresholds=[0.75], fill_holes=True).fill_factors
     (0.75, 0.25)
     """
-    n_phases = _check_n_phases(n_phases)
-    smoothing = _check_smoothing(smoothing)
-    min_speck = _check_min_speck(min_speck)
+    n_phases = _N_PHASES.parse(n_phases, "")
+    smoothing = _SMOOTHING.parse(smoothing, "")
+    min_speck = _MIN_SPECK.parse(min_speck, "")
     given = _check_thresholds(thresholds, n_phases)
     fill_phases = _check_fill(fill_holes, fill_phases, n_phases)
     crop = _check_crop(crop)
@@ -603,10 +594,8 @@ def _placement(shape, outline, pixel_size, cover, offset, source):
                              f"pixel_size it must be square and so must the face's bounding "
                              f"box (the image then spans it)")
         pixel_size = 2.0 * half_x / cols
-    elif not _is_number(pixel_size) or not math.isfinite(pixel_size) or pixel_size <= 0:
-        raise ValueError(f"pixel_size must be a positive finite number (m), got "
-                         f"{shorten(pixel_size)}")
-    pixel_size = float(pixel_size)
+    else:  # its scale range is a problem's to check
+        pixel_size = _PIXEL_SIZE.parse(pixel_size, "", scale=False)
     if cover == "crop":
         width, height = cols * pixel_size, rows * pixel_size
         slack = 1.0 + _COVER_SLACK
@@ -623,22 +612,18 @@ def _placement(shape, outline, pixel_size, cover, offset, source):
 
 @PHASE_MAPS.register("micrograph", (
     Key("path", "path", required=True, doc="grey-level image, .png or .npy"),
-    Key("n_phases", "integer", low=2, low_open=False, required=True,
-        doc="phases, by multi-level Otsu thresholds (phase 0 darkest)"),
+    _N_PHASES,
     Key("thresholds", "numbers", unit="grey level",
         doc="n_phases - 1 increasing grey levels instead of Otsu's (PNG: 0 black to 1 white)"),
     Key("crop", "pairs", unit="pixels", low=0.0, low_open=False,
         doc="[[row0, row1], [col0, col1]]: the part of the image used (row 0 at the top)"),
-    Key("smoothing", "number", unit="pixels", low=0.0, low_open=False,
-        doc="Gaussian sigma before thresholding (default 0)"),
+    _SMOOTHING,
     Key("fill_holes", "boolean",
         doc="darker patches enclosed by a phase take that phase (default false)"),
     Key("fill_phases", "integers", low=1, low_open=False,
         doc="the phases whose holes are filled (default: all but phase 0)"),
-    Key("min_speck", "integer", unit="pixels", low=0, low_open=False,
-        doc="patches below this are relabelled to the surrounding phase (default 0)"),
-    Key("pixel_size", "number", unit="m", low=0.0,
-        doc="side of an image pixel (default: a square image spans the face's box)"),
+    _MIN_SPECK,
+    _PIXEL_SIZE,
     Key("cover", "string", choices=COVERS, doc="crop (default) or tile"),
     Key("offset", "pair", unit="m", doc="face centre relative to the image centre")),
     doc="a grey-level micrograph segmented into phases and placed on the face")
@@ -900,8 +885,9 @@ def load_micrograph(path, outline, n_phases, *, thresholds=None, crop=None, smoo
     """
     path = pathlib.Path(path)
     source = str(path)
-    n_phases = _check_n_phases(n_phases)
-    options = dict(smoothing=_check_smoothing(smoothing), min_speck=_check_min_speck(min_speck),
+    n_phases = _N_PHASES.parse(n_phases, "")
+    options = dict(smoothing=_SMOOTHING.parse(smoothing, ""),
+                   min_speck=_MIN_SPECK.parse(min_speck, ""),
                    thresholds=_check_thresholds(thresholds, n_phases), crop=_check_crop(crop),
                    fill_holes=fill_holes, fill_phases=fill_phases)
     _check_fill(fill_holes, fill_phases, n_phases)

@@ -88,18 +88,13 @@ OUTLINES = KindRegistry("face outline", "shape", default="circle",
                         entry_point_group="runin.outlines")
 
 
-def _length(value, name):
-    """A positive finite length in m (``int`` accepted, ``bool`` and strings not)."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
-        raise ValueError(f"{name} must be a number (m), got {shorten(value)}")
-    v = float(value)
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number (m), got {shorten(value)}")
-    return v
-
-
 def _length_key(name, doc):
-    """A required ``[punch]`` length, m, positive."""
+    """A required ``[punch]`` length, m, positive.
+
+    An outline built in Python checks its lengths through the keys of its
+    scene table (``key.parse(value, "", scale=False)``); the scale range is
+    a problem's to check (:func:`steady.problem.check_input_scales`).
+    """
     return Key(name, "number", unit="m", low=0.0, required=True, doc=doc)
 
 
@@ -487,7 +482,10 @@ class _Outline:
                       if key.required})
 
 
-@OUTLINES.register("circle", (_length_key("radius", "the disk's radius a"),),
+_RADIUS = _length_key("radius", "the disk's radius a")
+
+
+@OUTLINES.register("circle", (_RADIUS,),
                    doc="the disk of radius a: the paper's cylinder")
 @dataclasses.dataclass(frozen=True)
 class Circle(_Outline):
@@ -508,7 +506,7 @@ class Circle(_Outline):
 
     def __post_init__(self):
         """Check the radius."""
-        object.__setattr__(self, "radius", _length(self.radius, "radius"))
+        object.__setattr__(self, "radius", _RADIUS.parse(self.radius, "", scale=False))
 
     @classmethod
     def from_values(cls, values, context):
@@ -598,8 +596,11 @@ class Circle(_Outline):
         return math.sqrt(mean_square), math.sqrt(variance)
 
 
-@OUTLINES.register("rectangle", (_length_key("width", "side along x"),
-                                 _length_key("length", "side along y")),
+_WIDTH = _length_key("width", "side along x")
+_LENGTH = _length_key("length", "side along y")
+
+
+@OUTLINES.register("rectangle", (_WIDTH, _LENGTH),
                    doc="a rectangle, e.g. a tread block")
 @dataclasses.dataclass(frozen=True)
 class Rectangle(_Outline):
@@ -630,8 +631,8 @@ class Rectangle(_Outline):
 
     def __post_init__(self):
         """Check the sides."""
-        object.__setattr__(self, "width", _length(self.width, "width"))
-        object.__setattr__(self, "length", _length(self.length, "length"))
+        for key in (_WIDTH, _LENGTH):
+            object.__setattr__(self, key.name, key.parse(getattr(self, key.name), "", scale=False))
 
     @classmethod
     def from_values(cls, values, context):
@@ -692,8 +693,11 @@ class Rectangle(_Outline):
         return np.minimum(bx - np.abs(x), by - np.abs(y))
 
 
-@OUTLINES.register("ellipse", (_length_key("semi_axis_x", "semi-axis along x"),
-                               _length_key("semi_axis_y", "semi-axis along y")),
+_SEMI_AXIS_X = _length_key("semi_axis_x", "semi-axis along x")
+_SEMI_AXIS_Y = _length_key("semi_axis_y", "semi-axis along y")
+
+
+@OUTLINES.register("ellipse", (_SEMI_AXIS_X, _SEMI_AXIS_Y),
                    doc="an ellipse")
 @dataclasses.dataclass(frozen=True)
 class Ellipse(_Outline):
@@ -714,8 +718,8 @@ class Ellipse(_Outline):
 
     def __post_init__(self):
         """Check the semi-axes."""
-        object.__setattr__(self, "semi_axis_x", _length(self.semi_axis_x, "semi_axis_x"))
-        object.__setattr__(self, "semi_axis_y", _length(self.semi_axis_y, "semi_axis_y"))
+        for key in (_SEMI_AXIS_X, _SEMI_AXIS_Y):
+            object.__setattr__(self, key.name, key.parse(getattr(self, key.name), "", scale=False))
 
     @classmethod
     def from_values(cls, values, context):
@@ -756,8 +760,11 @@ class Ellipse(_Outline):
         return {"semi_axis_x": (self.semi_axis_x, "m"), "semi_axis_y": (self.semi_axis_y, "m")}
 
 
-@OUTLINES.register("annulus", (_length_key("inner_radius", "radius of the inner circle"),
-                               _length_key("outer_radius", "radius of the outer circle")),
+_INNER_RADIUS = _length_key("inner_radius", "radius of the inner circle")
+_OUTER_RADIUS = _length_key("outer_radius", "radius of the outer circle")
+
+
+@OUTLINES.register("annulus", (_INNER_RADIUS, _OUTER_RADIUS),
                    doc="a ring, e.g. a seal face")
 @dataclasses.dataclass(frozen=True)
 class Annulus(_Outline):
@@ -787,8 +794,8 @@ class Annulus(_Outline):
 
     def __post_init__(self):
         """Check the radii."""
-        inner = _length(self.inner_radius, "inner_radius")
-        outer = _length(self.outer_radius, "outer_radius")
+        inner = _INNER_RADIUS.parse(self.inner_radius, "", scale=False)
+        outer = _OUTER_RADIUS.parse(self.outer_radius, "", scale=False)
         if not inner < outer:
             raise ValueError(f"inner_radius must be smaller than outer_radius, got "
                              f"{inner!r} m and {outer!r} m")
@@ -860,12 +867,14 @@ class Annulus(_Outline):
         return np.minimum(self.outer_radius - r, r - self.inner_radius)
 
 
+_MASK_PIXEL_SIZE = _length_key("pixel_size", "side of the mask's pixels")
+
+
 @OUTLINES.register("mask", (Key("path", "path", required=True,
                                 doc=".npy: booleans, True on the face, or integers: only 0 "
                                     "and 1 (1 on the face), or -1 off the face and values "
                                     ">= 0 on it; .png: the non-transparent pixels"),
-                            Key("pixel_size", "number", unit="m", low=0.0, required=True,
-                                doc="side of the mask's pixels")),
+                            _MASK_PIXEL_SIZE),
                    doc="any face, as pixels")
 @dataclasses.dataclass(frozen=True, eq=False)
 class MaskOutline(_Outline):
@@ -915,7 +924,8 @@ class MaskOutline(_Outline):
         m = np.array(m, dtype=bool)
         m.flags.writeable = False
         object.__setattr__(self, "mask", m)
-        object.__setattr__(self, "pixel_size", _length(self.pixel_size, "pixel_size"))
+        object.__setattr__(self, "pixel_size",
+                           _MASK_PIXEL_SIZE.parse(self.pixel_size, "", scale=False))
 
     @classmethod
     def from_values(cls, values, context):
@@ -1049,7 +1059,7 @@ def as_outline(outline):
         return outline
     if isinstance(outline, (bool, np.bool_)) or not isinstance(outline, (int, float, np.number)):
         raise ValueError(f"an outline or a radius (m) is needed, got {shorten(outline)}")
-    return Circle(_length(outline, "radius"))
+    return Circle(outline)
 
 
 def as_grid(grid):

@@ -70,6 +70,7 @@ from .array_files import array_suffix, read_npy, read_png
 from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size, grid_size_text
 from .schema import Key, KindRegistry
+from .text import shorten
 
 __all__ = [
     "PHASE_MAPS",
@@ -276,13 +277,18 @@ class Homogeneous(PhaseMap):
         return np.where(as_grid(grid).mask, 0, -1)
 
 
+# The keys of a scene's map; a map built in Python checks its parameters through them too.
+_N_SEEDS = Key("n_seeds", "integer", low=1, low_open=False, required=True,
+               doc="seeds, uniform in the face's bounding box")
+_SEED = Key("seed", "integer", low=0, low_open=False, required=True,
+            doc="seed of the random generator")
+
+
 @PHASE_MAPS.register("voronoi", (
-    Key("n_seeds", "integer", low=1, low_open=False, required=True,
-        doc="seeds, uniform in the face's bounding box"),
+    _N_SEEDS,
     Key("fill_factors", "numbers", unit="1", low=0.0, high=1.0, required=True,
         doc="share of the seeds of each phase, summing to 1"),
-    Key("seed", "integer", low=0, low_open=False, required=True,
-        doc="seed of the random generator")),
+    _SEED),
     doc="Voronoi cells of random seeds; exactly round(rho_i n_seeds) seeds (largest "
         "remainder) get phase i, in random order")
 @dataclasses.dataclass(frozen=True)
@@ -316,20 +322,16 @@ class Voronoi(PhaseMap):
 
     def __post_init__(self):
         """Check the parameters; store the integers as ints, the fill factors as floats."""
-        if (isinstance(self.n_seeds, bool) or not isinstance(self.n_seeds, (int, np.integer))
-                or self.n_seeds < 1):
-            raise ValueError(f"n_seeds must be a positive integer, got {self.n_seeds!r}")
-        if (isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer))
-                or self.seed < 0):
-            raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        n_seeds = _N_SEEDS.parse(self.n_seeds, "")
+        seed = _SEED.parse(self.seed, "")
         fill = check_fill_factors(self.fill_factors)
-        counts = apportion(fill, int(self.n_seeds))
+        counts = apportion(fill, n_seeds)
         if np.any(counts == 0):
             raise ValueError(
-                f"{self.n_seeds} seeds are too few for fill factors {list(fill)}: phase "
+                f"{n_seeds} seeds are too few for fill factors {list(fill)}: phase "
                 f"{int(np.flatnonzero(counts == 0)[0])} would get no seed")
-        object.__setattr__(self, "n_seeds", int(self.n_seeds))
-        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "n_seeds", n_seeds)
+        object.__setattr__(self, "seed", seed)
         object.__setattr__(self, "fill_factors", fill)
 
     @classmethod
@@ -421,14 +423,17 @@ class Voronoi(PhaseMap):
         return out
 
 
-@PHASE_MAPS.register("rods", (
-    Key("centres", "pairs", unit="m", required=True, doc="rod centres [x, y]"),
-    Key("radii", "numbers", unit="m", low=0.0, required=True, doc="rod radii"),
-    Key("matrix_phase", "integer", low=0, low_open=False, default=0,
-        doc="phase outside the rods"),
-    Key("rod_phases", "integers", low=0, low_open=False,
-        doc="phase of each rod (default 1 for every rod)")),
-    doc="circular rods inside the face, not overlapping")
+# The keys of a scene's map; rods built in Python check their parameters through them too.
+_CENTRES = Key("centres", "pairs", unit="m", required=True, doc="rod centres [x, y]")
+_RADII = Key("radii", "numbers", unit="m", low=0.0, required=True, doc="rod radii")
+_MATRIX_PHASE = Key("matrix_phase", "integer", low=0, low_open=False, default=0,
+                    doc="phase outside the rods")
+_ROD_PHASES = Key("rod_phases", "integers", low=0, low_open=False,
+                  doc="phase of each rod (default 1 for every rod)")
+
+
+@PHASE_MAPS.register("rods", (_CENTRES, _RADII, _MATRIX_PHASE, _ROD_PHASES),
+                     doc="circular rods inside the face, not overlapping")
 @dataclasses.dataclass(frozen=True)
 class Rods(PhaseMap):
     """Circular rods of one phase in a matrix of another (paper Fig. 7-8).
@@ -472,35 +477,23 @@ class Rods(PhaseMap):
 
     def __post_init__(self):
         """Check the rods; store centres and radii as tuples of floats, phases as ints."""
-        try:
-            centres = tuple((float(c[0]), float(c[1])) for c in self.centres)
-            bad_len = [c for c in self.centres if len(c) != 2]
-        except (TypeError, ValueError, IndexError):
-            raise ValueError(f"rod centres must be pairs of numbers (m), got "
-                             f"{self.centres!r}") from None
-        if bad_len:
-            raise ValueError(f"rod centres must be pairs of numbers (m), got {self.centres!r}")
-        try:
-            radii = tuple(float(r) for r in self.radii)
-        except (TypeError, ValueError):
-            raise ValueError(f"rod radii must be numbers (m), got {self.radii!r}") from None
+        try:  # a scene's arrays are lists; from Python, any sequences
+            centres, radii = [list(c) for c in self.centres], list(self.radii)
+            rod_phases = [1] * len(centres) if self.rod_phases is None else list(self.rod_phases)
+        except TypeError:
+            raise ValueError(f"rods need sequences of centres [x, y], radii and rod phases, got "
+                             f"{shorten(self.centres)}, {shorten(self.radii)} and "
+                             f"{shorten(self.rod_phases)}") from None
         if not centres:
             raise ValueError("at least one rod is needed")
         if len(radii) != len(centres):
             raise ValueError(f"{len(centres)} rod centres but {len(radii)} radii")
-        for r in radii:
-            if not (np.isfinite(r) and r > 0):
-                raise ValueError(f"rod radii must be positive and finite (m), got {list(radii)}")
-        for c in centres:
-            if not all(np.isfinite(c)):
-                raise ValueError(f"rod centres must be finite (m), got {list(centres)}")
-        rod_phases = (1,) * len(centres) if self.rod_phases is None else self.rod_phases
-        phases = (self.matrix_phase, *rod_phases)
-        if any(isinstance(p, bool) or not isinstance(p, (int, np.integer)) or p < 0
-               for p in phases):
-            raise ValueError(f"matrix_phase and rod_phases must be non-negative integers, got "
-                             f"{self.matrix_phase!r} and {self.rod_phases!r}")
-        rod_phases = tuple(int(p) for p in rod_phases)
+        # The scale range of the radii is a problem's to check.
+        centres = _CENTRES.parse(centres, "rod")
+        radii = _RADII.parse(radii, "rod", scale=False)
+        matrix_phase = _MATRIX_PHASE.parse(self.matrix_phase, "")
+        rod_phases = _ROD_PHASES.parse(rod_phases, "")
+        phases = (matrix_phase, *rod_phases)
         if len(rod_phases) != len(centres):
             raise ValueError(f"{len(centres)} rods but {len(rod_phases)} rod phases")
         for k in range(len(centres)):
@@ -517,7 +510,7 @@ class Rods(PhaseMap):
                              f"(matrix_phase={self.matrix_phase}, rod_phases={list(rod_phases)})")
         object.__setattr__(self, "centres", centres)
         object.__setattr__(self, "radii", radii)
-        object.__setattr__(self, "matrix_phase", int(self.matrix_phase))
+        object.__setattr__(self, "matrix_phase", matrix_phase)
         object.__setattr__(self, "rod_phases", rod_phases)
 
     @classmethod

@@ -16,8 +16,13 @@ from scipy import ndimage
 
 from .labels import extend_off_face
 from .outline import FaceGrid, as_outline
+from .schema import Key
 
 __all__ = ["cross_section", "differential_profile", "ring_average"]
+
+#: Samples along a cross section, and rings of a ring average.
+_N_POINTS = Key("n_points", "integer", low=2, low_open=False)
+_N_BINS = Key("n_bins", "integer", low=1, low_open=False)
 
 
 def _grid_of(field, outline):
@@ -75,13 +80,12 @@ def cross_section(field, outline, start, end, n_points):
 
 def _line(start, end, n_points):
     """Distance from ``start`` (n_points,) and points (2, n_points) of a sampled line, m."""
-    if isinstance(n_points, bool) or int(n_points) != n_points or n_points < 2:
-        raise ValueError(f"n_points must be an integer >= 2, got {n_points!r}")
+    n_points = _N_POINTS.parse(n_points, "")
     start = np.asarray(start, dtype=float)
     end = np.asarray(end, dtype=float)
     if start.shape != (2,) or end.shape != (2,):
         raise ValueError(f"start and end must be (x, y) pairs in m, got {start!r} and {end!r}")
-    t = np.linspace(0.0, 1.0, int(n_points))
+    t = np.linspace(0.0, 1.0, n_points)
     points = start[:, None] + (end - start)[:, None] * t[None, :]
     return t * np.linalg.norm(end - start), points
 
@@ -109,9 +113,7 @@ def ring_average(field, outline, n_bins):
         a ring that holds no pixel centre.
     """
     field, grid = _grid_of(field, outline)
-    if int(n_bins) != n_bins or n_bins < 1:
-        raise ValueError(f"n_bins must be a positive integer, got {n_bins!r}")
-    n_bins = int(n_bins)
+    n_bins = _N_BINS.parse(n_bins, "")
     radius = grid.outline.circumradius()
     on_face = grid.mask
     ring = np.minimum((grid.radii[on_face] / radius * n_bins).astype(int), n_bins - 1)

@@ -11,6 +11,7 @@ import numpy as np
 from scipy import integrate, special
 
 from .pressures import phase_pressures
+from .schema import Key
 
 __all__ = [
     "annulus_face",
@@ -179,17 +180,18 @@ def fine_grain_rms_slope(fill_factors, wear_coefficients, *, exponent=1.0):
 # eq. 12).  The factors are the normalisations of the rms slopes of faces that
 # are not disks.
 
-def _positive_length(value, name):
-    """``value`` as a float, checked positive and finite (m)."""
-    if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be positive and finite, got {value!r} m")
-    return float(value)
-
-
-def _positive_modulus(E_star):
-    if not (np.isfinite(E_star) and E_star > 0):
-        raise ValueError(f"E_star must be positive and finite, got {E_star!r} Pa")
-    return float(E_star)
+# The closed forms check their lengths and modulus through these keys; the
+# scale range is a problem's to check (any consistent lengths give the
+# rms-slope factors).
+_RADIUS = Key("radius", "number", unit="m", low=0.0)
+_INNER_RADIUS = Key("inner_radius", "number", unit="m", low=0.0)
+_OUTER_RADIUS = Key("outer_radius", "number", unit="m", low=0.0)
+_WIDTH = Key("width", "number", unit="m", low=0.0)
+_LENGTH = Key("length", "number", unit="m", low=0.0)
+_HALF_WIDTH = Key("half_width", "number", unit="m", low=0.0)
+_HALF_LENGTH = Key("half_length", "number", unit="m", low=0.0)
+_E_STAR = Key("E_star", "number", unit="Pa", low=0.0)
+_RATIO = Key("ratio", "number", unit="1", low=0.0, low_open=False, high=1.0)
 
 
 def _distance(r):
@@ -269,9 +271,9 @@ def disk_face(r, radius, pressure, E_star):
     [2.         1.27323954 0.51731581 0.002     ]
     """
     r = _distance(r)
-    a = _positive_length(radius, "radius")
+    a = _RADIUS.parse(radius, "", scale=False)
     # The rim value; inside, eq. 10 as written.
-    rim = 4 * pressure * a / (np.pi * _positive_modulus(E_star))
+    rim = 4 * pressure * a / (np.pi * _E_STAR.parse(E_star, "", scale=False))
     inside = r <= a
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.where(inside, r / a, a / r)
@@ -317,8 +319,8 @@ def disk_face_slope(r, radius, pressure, E_star):
     [ 0.         -0.43657629        -inf -0.21828815]
     """
     r = _distance(r)
-    a = _positive_length(radius, "radius")
-    scale = 4.0 * pressure / (np.pi * _positive_modulus(E_star))
+    a = _RADIUS.parse(radius, "", scale=False)
+    scale = 4.0 * pressure / (np.pi * _E_STAR.parse(E_star, "", scale=False))
     inside = r <= a
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.where(inside, r / a, a / r)
@@ -397,8 +399,8 @@ def annulus_face_slope(r, inner_radius, outer_radius, pressure, E_star):
 
 
 def _annulus_radii(inner_radius, outer_radius):
-    c = _positive_length(inner_radius, "inner_radius")
-    a = _positive_length(outer_radius, "outer_radius")
+    c = _INNER_RADIUS.parse(inner_radius, "", scale=False)
+    a = _OUTER_RADIUS.parse(outer_radius, "", scale=False)
     if not c < a:
         raise ValueError(f"inner_radius must be smaller than outer_radius, got {c!r} m and "
                          f"{a!r} m")
@@ -450,9 +452,7 @@ def annulus_rms_slope(ratio):
     >>> print(f"{annulus_rms_slope(0.5):.12f}")
     1.217400850059
     """
-    rho = float(ratio)
-    if not 0.0 <= rho < 1.0:
-        raise ValueError(f"ratio must lie in [0, 1), got {ratio!r}")
+    rho = _RATIO.parse(ratio, "")
     span = 1.0 - rho
 
     def integral(level):
@@ -497,8 +497,8 @@ def _times(t, value):
 
 
 def _rectangle_offsets(x, y, half_width, half_length):
-    a = _positive_length(half_width, "half_width")
-    b = _positive_length(half_length, "half_length")
+    a = _HALF_WIDTH.parse(half_width, "", scale=False)
+    b = _HALF_LENGTH.parse(half_length, "", scale=False)
     x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
     return x + a, x - a, y + b, y - b, a, b
 
@@ -569,7 +569,7 @@ def rectangle_face(x, y, half_width, half_length, pressure, E_star):
                 - _times(xm, _asinh_difference(xm, yp, ym, 2 * b))
                 + _times(yp, _asinh_difference(yp, xp, xm, 2 * a))
                 - _times(ym, _asinh_difference(ym, xp, xm, 2 * a)))
-    return pressure / (np.pi * _positive_modulus(E_star)) * integral
+    return pressure / (np.pi * _E_STAR.parse(E_star, "", scale=False)) * integral
 
 
 def rectangle_face_gradient(x, y, half_width, half_length, pressure, E_star):
@@ -620,7 +620,7 @@ def rectangle_face_gradient(x, y, half_width, half_length, pressure, E_star):
     """
     xp, xm, yp, ym, a, b = _rectangle_offsets(x, y, half_width, half_length)
     gx, gy = _love_gradient(xp, xm, yp, ym, a, b)
-    scale = pressure / (np.pi * _positive_modulus(E_star))
+    scale = pressure / (np.pi * _E_STAR.parse(E_star, "", scale=False))
     return scale * gx, scale * gy
 
 
@@ -673,8 +673,8 @@ def rectangle_rms_slope(width, length=1.0):
     >>> print(f"{rectangle_rms_slope(1.0):.12f} {rectangle_rms_slope(2e-3, 6e-3):.12f}")
     1.264064510709 1.235270727398
     """
-    w = _positive_length(width, "width")
-    ln = _positive_length(length, "length")
+    w = _WIDTH.parse(width, "", scale=False)
+    ln = _LENGTH.parse(length, "", scale=False)
     # Scale-invariant and symmetric: half sides 1 and beta >= 1.
     beta = max(w, ln) / min(w, ln)
     return _rectangle_rms_slope(beta)

@@ -46,7 +46,6 @@ True
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
@@ -125,11 +124,15 @@ class Translation(_Kinematics):
         """Any face slides uniformly."""
 
 
-@SLIDING.register("pin_on_disk", (
-    Key("track_radius", "number", unit="m", low=0.0, required=True,
-        doc="distance of the face's centre from the disk's axis, which lies at "
-            "(x, y) = (-track_radius, 0)"),),
-    doc="a pin on a rotating disk: v = omega |x - x_axis|, v_ref at the face's centre")
+#: The pin on disk's key; a PinOnDisk built in Python checks its radius through it too.
+_TRACK_RADIUS = Key("track_radius", "number", unit="m", low=0.0, required=True,
+                    doc="distance of the face's centre from the disk's axis, which lies at "
+                        "(x, y) = (-track_radius, 0)")
+
+
+@SLIDING.register("pin_on_disk", (_TRACK_RADIUS,),
+                  doc="a pin on a rotating disk: v = omega |x - x_axis|, v_ref at the face's "
+                      "centre")
 @dataclasses.dataclass(frozen=True)
 class PinOnDisk(_Kinematics):
     """A pin on a rotating disk whose axis lies at ``(-track_radius, 0)``.
@@ -147,11 +150,9 @@ class PinOnDisk(_Kinematics):
 
     def __post_init__(self):
         """Check the radius."""
-        r = self.track_radius
-        if isinstance(r, bool) or not isinstance(r, (int, float, np.floating)) or \
-                not (math.isfinite(float(r)) and float(r) > 0):
-            raise ValueError(f"track_radius must be a positive finite number (m), got {r!r}")
-        object.__setattr__(self, "track_radius", float(r))
+        # Its scale range is a problem's to check; its reach, check_outline's.
+        object.__setattr__(self, "track_radius",
+                           _TRACK_RADIUS.parse(self.track_radius, "", scale=False))
 
     @classmethod
     def from_values(cls, values, context):

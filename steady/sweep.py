@@ -48,6 +48,7 @@ import h5py
 import numpy as np
 
 from .safe_files import OutputExistsError, atomic_h5
+from .schema import Key
 
 __all__ = [
     "DEFAULT_WORKERS",
@@ -72,6 +73,9 @@ LOCK_WAIT = 60.0
 #: Local worker processes by default: at most two (the machines these
 #: sweeps are meant for share their cores).
 DEFAULT_WORKERS = 2
+
+#: Local worker processes asked for.
+_WORKERS = Key("workers", "integer", low=1, low_open=False)
 
 
 def point_key(point):
@@ -285,9 +289,8 @@ def open_executor(*, workers=None, scheduler=None):
     concurrent.futures.Executor
     """
     if scheduler is None:
-        n = workers or min(DEFAULT_WORKERS, os.cpu_count() or 1)
-        if n < 1:
-            raise ValueError(f"workers must be a positive integer, got {workers!r}")
+        n = (min(DEFAULT_WORKERS, os.cpu_count() or 1) if workers is None
+             else _WORKERS.parse(workers, ""))
         with concurrent.futures.ProcessPoolExecutor(max_workers=n) as executor:
             yield executor
         return

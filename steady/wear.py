@@ -413,12 +413,33 @@ class WearLaw(abc.ABC):
         """
 
 
-@WEAR_LAWS.register("power", (
-    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True, per_phase=True,
-        doc="k_i = k_wear,i / sigma_0,i, one per phase (Pa^-m for an exponent m != 1)"),
-    Key("exponent", "number", unit="1", low=0.0, default=1.0,
-        doc="m in dw/ds = k p^m (default 1: Archard)")),
-    doc="dw/ds = k_i p^m: Archard's law for m = 1, the paper's")
+def _per_phase(values, key):
+    """The values of a per-phase ``key`` given in Python, checked through the key.
+
+    ``values`` may be any sequence or array, or a number for one phase; the
+    scale range (of a threshold pressure) is a problem's to check.
+    """
+    try:
+        array = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        array = None
+    if array is None or array.ndim != 1 or not array.size:
+        raise ValueError(f"wear {key.name} must be {key.describe()}, one per phase, got "
+                         f"{shorten(values)}")
+    return key.parse(array.tolist(), "wear", scale=False)
+
+
+#: The power law's keys; a law built in Python checks its values through them too.
+_COEFFICIENTS = Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True,
+                    per_phase=True,
+                    doc="k_i = k_wear,i / sigma_0,i, one per phase (Pa^-m for an exponent "
+                        "m != 1)")
+_EXPONENT = Key("exponent", "number", unit="1", low=0.0, default=1.0,
+                doc="m in dw/ds = k p^m (default 1: Archard)")
+
+
+@WEAR_LAWS.register("power", (_COEFFICIENTS, _EXPONENT),
+                    doc="dw/ds = k_i p^m: Archard's law for m = 1, the paper's")
 @dataclasses.dataclass(frozen=True)
 class PowerLaw(WearLaw):
     """The power law ``dw/ds = k_i p^m`` of each phase (Archard's for ``m = 1``).
@@ -442,28 +463,8 @@ class PowerLaw(WearLaw):
 
     def __post_init__(self):
         """Check the coefficients and the exponent; store them as floats."""
-        try:
-            k = tuple(float(v) for v in np.atleast_1d(np.asarray(self.coefficients,
-                                                                 dtype=float)).ravel())
-            shape = np.shape(self.coefficients)
-        except (TypeError, ValueError):
-            raise ValueError(f"wear coefficients must be numbers (1/Pa), got "
-                             f"{shorten(self.coefficients)}") from None
-        if len(shape) > 1 or not k:
-            raise ValueError(f"wear coefficients must be a list of numbers, one per phase, got "
-                             f"{shorten(self.coefficients)}")
-        if not all(math.isfinite(v) and v > 0 for v in k):
-            raise ValueError(f"wear coefficients must be positive and finite (1/Pa), got "
-                             f"{shorten(list(k))}")
-        if isinstance(self.exponent, bool):
-            raise ValueError(f"wear exponent must be a number, got {self.exponent!r}")
-        try:
-            m = float(self.exponent)
-        except (TypeError, ValueError):
-            raise ValueError(f"wear exponent must be a number, got "
-                             f"{shorten(self.exponent)}") from None
-        if not (math.isfinite(m) and m > 0):
-            raise ValueError(f"wear exponent must be positive and finite, got {shorten(m)}")
+        k = _per_phase(self.coefficients, _COEFFICIENTS)
+        m = _EXPONENT.parse(self.exponent, "wear")
         object.__setattr__(self, "coefficients", k)
         object.__setattr__(self, "exponent", m)
 
@@ -673,25 +674,15 @@ def _phase_of(field):
     return np.rint(np.asarray(field, dtype=float)).astype(np.intp)
 
 
-def _numbers(values, name, unit):
-    """A flat tuple of finite floats, one per phase; ``ValueError`` naming ``name``."""
-    try:
-        array = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers ({unit}), got {shorten(values)}") from None
-    if array.ndim != 1 or not array.size or not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} must be a list of finite numbers ({unit}), one per phase, "
-                         f"got {shorten(values)}")
-    return tuple(float(v) for v in array)
+#: The threshold law's own key; a law built in Python checks its thresholds through it.
+_THRESHOLDS = Key("thresholds", "numbers", unit="Pa", low=0.0, low_open=False, required=True,
+                  per_phase=True, doc="p_th,i >= 0, one per phase: no wear at or below it")
 
 
 @WEAR_LAWS.register("threshold", (
-    Key("coefficients", "numbers", unit="1/Pa", low=0.0, required=True, per_phase=True,
-        doc="k_i, one per phase (Pa^-m for an exponent m != 1)"),
-    Key("thresholds", "numbers", unit="Pa", required=True, per_phase=True,
-        doc="p_th,i >= 0, one per phase: no wear at or below it"),
-    Key("exponent", "number", unit="1", low=0.0, default=1.0,
-        doc="m in dw/ds = k max(p - p_th, 0)^m (default 1)")),
+    dataclasses.replace(_COEFFICIENTS, doc="k_i, one per phase (Pa^-m for an exponent m != 1)"),
+    _THRESHOLDS,
+    dataclasses.replace(_EXPONENT, doc="m in dw/ds = k max(p - p_th, 0)^m (default 1)")),
     doc="dw/ds = k_i max(p - p_th,i, 0)^m: no wear up to a threshold pressure")
 @dataclasses.dataclass(frozen=True)
 class ThresholdLaw(WearLaw):
@@ -730,9 +721,7 @@ class ThresholdLaw(WearLaw):
     def __post_init__(self):
         """Check the values (through :class:`PowerLaw`) and the thresholds."""
         power = PowerLaw(self.coefficients, self.exponent)
-        p_th = _numbers(self.thresholds, "wear thresholds", "Pa")
-        if min(p_th) < 0:
-            raise ValueError(f"wear thresholds must be >= 0 (Pa), got {shorten(list(p_th))}")
+        p_th = _per_phase(self.thresholds, _THRESHOLDS)
         if len(p_th) != power.n_phases:
             raise ValueError(f"wear thresholds {shorten(list(p_th))} must be one per phase: "
                              f"{power.n_phases} coefficients {shorten(list(power.coefficients))}")

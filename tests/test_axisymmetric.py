@@ -110,8 +110,25 @@ def test_reference_history_extrapolates():
     assert np.all(ref.rms_slope_error[1:] < 1e-4), ref.rms_slope_error
 
 
-def test_bad_input_is_named():
-    with pytest.raises(ValueError, match="rings must be an integer"):
-        AxisymmetricRunIn(rings=2)
-    with pytest.raises(ValueError, match="distance must be"):
-        AxisymmetricRunIn(rings=20).state(-1.0)
+@pytest.mark.parametrize("build, fragment", [
+    (lambda: AxisymmetricRunIn(rings=2), "rings must be an integer >= 4, got 2"),
+    (lambda: AxisymmetricRunIn(rings=20, grading=0.5),
+     "grading must be a number >= 1 (1), got 0.5"),
+    (lambda: AxisymmetricRunIn(rings=20, radius=-1.0), "radius must be a number > 0 (m), got -1.0"),
+    (lambda: AxisymmetricRunIn(rings=20, E_star=math.inf),
+     "E_star must be a number > 0 (Pa), got inf"),
+    (lambda: AxisymmetricRunIn(rings=20, normal_force=0.0),
+     "normal_force must be a number > 0 (N), got 0.0"),
+    (lambda: AxisymmetricRunIn(rings=20, wear_coefficient=math.nan),
+     "wear_coefficient must be a number > 0 (1/Pa), got nan"),
+    (lambda: AxisymmetricRunIn(rings=20).state(-1.0),
+     "distance must be a number >= 0 (m), got -1.0"),
+    (lambda: reference_history([0.0, -1.0], rings=20),
+     "distances_s_star must be an array of numbers each >= 0 (s*), got [0.0, -1.0]"),
+    (lambda: reference_history([[0.0], [1.0, 2.0]], rings=20),
+     "distances_s_star must be an array of numbers each >= 0 (s*), got [[0.0], [1.0, 2.0]]"),
+])
+def test_bad_input_is_named(build, fragment):
+    with pytest.raises(ValueError) as err:
+        build()
+    assert fragment in str(err.value), f"{err.value!r} lacks {fragment!r}"

@@ -176,12 +176,16 @@ def test_reference_history_error_bars():
 
 
 def test_bad_input_is_named():
-    with pytest.raises(ValueError, match="thickness must be positive"):
+    with pytest.raises(ValueError, match=r"thickness must be a number > 0 \(m\), got 0.0"):
         CoatedAxisymmetricRunIn(20, thickness=0.0, substrate_coefficient=1.0)
-    with pytest.raises(ValueError, match="substrate_coefficient must be positive.*nan"):
+    with pytest.raises(ValueError, match=r"substrate_coefficient must be a number > 0 \(1/Pa\), "
+                                         r"got nan"):
         CoatedAxisymmetricRunIn(20, thickness=1.0, substrate_coefficient=float("nan"))
     with pytest.raises(ValueError, match="distance must be"):
         CoatedAxisymmetricRunIn(20, thickness=1.0, substrate_coefficient=2.0).state(-1.0)
+    with pytest.raises(ValueError, match=r"distances_s_star must be an array of numbers each "
+                                         r">= 0 \(s\*\), got \[-0.1\]"):
+        coated_reference_history([-0.1], thickness_f_star=0.1, ratio=10.0, rings=20)
 
 
 @pytest.mark.slow

@@ -9,7 +9,7 @@ import pytest
 from steady import examples
 from steady.cli.solve import main as steady_main
 from steady.depth import DepthColumns
-from steady.depth_maps import Spheres, Voxels, columns_from_segments
+from steady.depth_maps import DepthLayers, LayerPhase, Spheres, Voxels, columns_from_segments
 from steady.outline import Circle
 from steady.phases import ArrayMap, Voronoi
 from steady.problem import FacePhases, Problem
@@ -287,6 +287,26 @@ def test_bad_layers_are_named(tmp_path, old, new, fragment):
         scene(tmp_path, COATING.replace(old, new, 1))
 
 
+@pytest.mark.parametrize("build, fragment", [
+    (lambda: Spheres(-0.1, 0.3, 3, 0.5), "sphere radius must be a number > 0 (m), got -0.1"),
+    (lambda: Spheres(0.1, 0.6, 3, 0.5),
+     "sphere volume_fraction must be a number in (0, 0.5] (1), got 0.6"),
+    (lambda: Spheres(0.1, 0.3, -3, 0.5), "sphere seed must be an integer >= 0, got -3"),
+    (lambda: Spheres(0.1, 0.3, 3, math.inf), "sphere depth must be a number > 0 (m), got inf"),
+    (lambda: Spheres(0.1, 0.3, 3, 0.5, spread=1.0),
+     "sphere spread must be a number in [0, 1) (1), got 1.0"),
+    (lambda: Spheres(0.1, 0.3, 3, 0.5, matrix_phase=True),
+     "sphere matrix_phase must be an integer >= 0, got True"),
+    (lambda: Voxels(_stack(), -0.1), "voxel_depth must be a number > 0 (m), got -0.1"),
+    (lambda: DepthLayers((1e-4, 0.0), (LayerPhase(0), LayerPhase(1)), LayerPhase(0)),
+     "[depth] layers[1] thickness must be a number > 0 (m), got 0.0"),
+])
+def test_maps_built_in_python_are_checked_by_their_scene_keys(build, fragment):
+    with pytest.raises(ValueError) as err:
+        build()
+    assert fragment in str(err.value), f"{err.value!r} lacks {fragment!r}"
+
+
 # -- problems, sections and the closed form --------------------------------------------------
 def _three_phase(law):
     """A Voronoi face of phases 0 and 1 over phase 2 from 1 um down: the surface lacks 2."""
@@ -364,7 +384,7 @@ def test_runin_steady_solves_the_section_it_is_given(tmp_path, capsys):
     assert "phase pressures  substrate 198265 Pa; no pixel in this section: coating" in out, out
     assert steady_main([str(path), "-o", str(tmp_path / "b.h5"), "--depth", "-1"]) == 2
     err = capsys.readouterr().err
-    assert "--depth must be a finite depth >= 0 (m), got -1.0" in err and "Traceback" not in err
+    assert "--depth must be a number >= 0 (m), got -1.0" in err and "Traceback" not in err
 
 
 def test_a_phase_nowhere_in_the_columns_is_named(tmp_path):

@@ -125,7 +125,7 @@ def test_unreachable_target_names_the_range():
         table.fill_factor_for(0.08, 1e-6, 0.5)
     with pytest.raises(ValueError, match="outside the table's range"):
         table.rms_slope(0.08, 1e-2, 0.999)
-    with pytest.raises(ValueError, match="pbar/E"):
+    with pytest.raises(ValueError, match=r"pbar_over_estar must be a number > 0 \(1\), got -1.0"):
         table.rms_slope(-1.0, 1e-2, 0.1)
 
 
@@ -250,7 +250,8 @@ def test_command_line_bad_table(tmp_path, capsys, make, fragment):
 
 @pytest.mark.parametrize("args, fragment", [
     (["--pbar-over-estar", "abc"], "argument --pbar-over-estar: invalid float value: 'abc'"),
-    (["--pbar-over-estar", "nan"], "pbar/E* must be positive, got nan"),
+    (["--pbar-over-estar", "nan"], "pbar_over_estar must be a number > 0 (1), got nan"),
+    (["--target-slope", "-1"], "target_slope must be a number > 0 (1), got -1.0"),
     (["--wear-ratio", "inf"], "wear ratio inf is outside the table's range"),
     (["--fill-factor", "nan"], "fill factor must be finite, got nan"),
     (["--target-slope", "1", "--fill-factor", "0.1"], "not allowed with argument"),

@@ -300,7 +300,7 @@ def test_errors_name_the_problem():
         fit_face(MeasuredFace(face, h), fit_problem(labels), reference_phase=2)
     with pytest.raises(ValueError, match="confidence must lie in"):
         fit_face(MeasuredFace(face, h), fit_problem(labels), confidence=95)
-    with pytest.raises(ValueError, match="rim_margin must be a non-negative"):
+    with pytest.raises(ValueError, match=r"rim_margin must be a number >= 0 \(m\), got -0.0001"):
         fit_face(MeasuredFace(face, h), fit_problem(labels), rim_margin=-1e-4)
     with pytest.raises(ValueError, match="nothing left to fit"):
         fit_face(MeasuredFace(face, h), fit_problem(labels), rim_margin=RADIUS)
@@ -308,8 +308,12 @@ def test_errors_name_the_problem():
         MeasuredFace(face[0], h)
     with pytest.raises(ValueError, match="no finite height"):
         MeasuredFace(np.full((4, 4), np.nan), h)
-    with pytest.raises(ValueError, match="pixel size of array must be one or two positive"):
+    with pytest.raises(ValueError, match=r"measured map array pixel_size must be a number > 0 "
+                                         r"\(m\), got -"):
         MeasuredFace(face, -h)
+    with pytest.raises(ValueError, match=r"measured map array pixel_size must be one or two "
+                                         r"lengths \(m\), got \(1, 2, 3\)"):
+        MeasuredFace(face, (1, 2, 3))
 
 
 def test_collinear_phase_is_undetermined():
@@ -344,7 +348,8 @@ def test_readers(tmp_path):
         read_measured(tmp_path / "m.npy")
     with pytest.raises(ValueError, match="does not exist"):
         read_measured(tmp_path / "nope.npy", pixel_size=1e-4)
-    with pytest.raises(ValueError, match="height scale must be a positive"):
+    with pytest.raises(ValueError, match=r"height_scale must be a number > 0 \(m per file unit\), "
+                                         r"got 0"):
         read_measured(tmp_path / "m.npy", pixel_size=1e-4, height_scale=0)
 
 

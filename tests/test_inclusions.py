@@ -88,17 +88,21 @@ def test_lognormal_mean_square_radius():
 
 
 @pytest.mark.parametrize("options, message", [
-    ({"radius": 0.05, "seed": 3, "fill_factor": 0.0}, "must lie in (0, 1)"),
-    ({"radius": 0.05, "seed": 3, "fill_factor": 1.2}, "must lie in (0, 1)"),
-    ({"radius": 0.05, "seed": 3, "fill_factor": float("nan")}, "must lie in (0, 1)"),
+    ({"radius": 0.05, "seed": 3, "fill_factor": 0.0},
+     "inclusion fill_factor must be a number in (0, 1) (1), got 0.0"),
+    ({"radius": 0.05, "seed": 3, "fill_factor": 1.2}, "must be a number in (0, 1) (1), got 1.2"),
+    ({"radius": 0.05, "seed": 3, "fill_factor": float("nan")}, "in (0, 1) (1), got nan"),
     ({"radius": 0.05, "seed": 3, "fill_factor": "0.2"}, "must be a number"),
     ({"radius": 0.05, "seed": 3, "fill_factor": True}, "must be a number"),
     ({"radius": 0.05, "seed": 3, "fill_factor": 0.6}, "impossible packing"),
-    ({"radius": -0.1, "seed": 3, "fill_factor": 0.1}, "positive"),
+    ({"radius": -0.1, "seed": 3, "fill_factor": 0.1},
+     "inclusion radius must be a number > 0 (m), got -0.1"),
     ({"radius": 0.05, "seed": 3}, "exactly one"),
     ({"radius": 0.05, "seed": 3, "fill_factor": 0.1, "count": 10}, "exactly one"),
-    ({"radius": 0.05, "seed": -1, "fill_factor": 0.1}, "seed"),
-    ({"radius": 0.05, "seed": 3, "fill_factor": 0.1, "radius_spread": -0.1}, "radius_spread"),
+    ({"radius": 0.05, "seed": -1, "fill_factor": 0.1},
+     "inclusion seed must be an integer >= 0, got -1"),
+    ({"radius": 0.05, "seed": 3, "fill_factor": 0.1, "radius_spread": -0.1},
+     "inclusion radius_spread must be a number >= 0 (1), got -0.1"),
 ])
 def test_bad_parameters_are_refused(options, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):

@@ -257,6 +257,8 @@ def test_a_crop_that_cannot_cover_the_face_names_the_sizes():
                                          r"but the face needs 8 mm x 8 mm.*tile"):
         Micrograph(seg, RADIUS, 5e-5)
     Micrograph(seg, RADIUS, 5e-5, cover="tile")  # tiling covers any face
+    with pytest.raises(ValueError, match=r"pixel_size must be a number > 0 \(m\), got -5e-05"):
+        Micrograph(seg, RADIUS, -5e-5, cover="tile")
     Micrograph(seg, RADIUS, 8e-5)                 # 9.6 mm x 8 mm: exactly enough
     Micrograph(seg, RADIUS, 8e-5, offset=(8e-4, 0.0))  # 0.8 mm of spare width
     with pytest.raises(ValueError, match=r"offset \(0 mm, 0.1 mm\)"):
@@ -630,6 +632,10 @@ def test_given_thresholds_need_no_scikit_image(monkeypatch):
     (dict(fill_holes=True, fill_phases=[1, 1], n_phases=3), "fill_phases = [1, 1] must list"),
     (dict(fill_holes=True, fill_phases=[3], n_phases=3), "fill_phases = [3] must list distinct "
                                                           "phases 1 to 2"),
+    (dict(n_phases=1), "n_phases must be an integer >= 2, got 1"),
+    (dict(smoothing=-1.0), "smoothing must be a number >= 0 (pixels), got -1.0"),
+    (dict(smoothing=float("inf")), "smoothing must be a number >= 0 (pixels), got inf"),
+    (dict(min_speck=2.5), "min_speck must be an integer >= 0 (pixels), got 2.5"),
 ])
 def test_bad_segmentation_options_are_named(skimage, options, fragment):
     options = {"n_phases": 2, **options}

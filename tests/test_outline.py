@@ -172,7 +172,7 @@ def test_outline_from_table_and_errors():
             outline_from_table(table, base_dir="/nonexistent")
         assert fragment in str(err.value), f"{table}: {err.value!r} lacks {fragment!r}"
     assert as_outline(0.004) == Circle(0.004), "a number is a disk's radius"
-    with pytest.raises(ValueError, match="radius must be a positive finite number"):
+    with pytest.raises(ValueError, match=r"radius must be a number > 0 \(m\), got -1.0"):
         as_outline(-1.0)
 
 

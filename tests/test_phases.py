@@ -124,6 +124,18 @@ def test_bad_fill_factors(fill, fragment):
     assert str(list(fill)[0]) in str(err.value), f"message {err.value!r} must name the values"
 
 
+@pytest.mark.parametrize("n_seeds, seed, fragment", [
+    (0, 2024, "n_seeds must be an integer >= 1, got 0"),
+    (100.0, 2024, "n_seeds must be an integer >= 1, got 100.0"),
+    (100, -1, "seed must be an integer >= 0, got -1"),
+    (100, True, "seed must be an integer >= 0, got True"),
+])
+def test_bad_seeds(n_seeds, seed, fragment):
+    with pytest.raises(ValueError) as err:
+        Voronoi(n_seeds, (0.5, 0.5), seed)
+    assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
+
+
 def test_too_few_seeds_for_a_phase():
     with pytest.raises(ValueError, match="phase 1 would get no seed"):
         Voronoi(10, (0.99, 0.01), 2024)
@@ -151,9 +163,17 @@ def test_array_map_needs_multiple_of_its_size():
 
 @pytest.mark.parametrize("kwargs, fragment", [
     (dict(centres=((0.0, 0.0), (0.3, 0.0)), radii=(0.2, 0.2)), "rods 0 and 1 overlap"),
-    (dict(centres=((0.0, 0.0),), radii=(-0.1,)), "positive"),
+    (dict(centres=((0.0, 0.0),), radii=(-0.1,)),
+     "rod radii must be an array of numbers each > 0 (m), got [-0.1]"),
+    (dict(centres=((0.0, math.nan),), radii=(0.1,)),
+     "rod centres must be an array of [x, y] pairs (m), got [[0.0, nan]]"),
+    (dict(centres=((0.0, 0.0),), radii=(0.1,), matrix_phase=-1),
+     "matrix_phase must be an integer >= 0, got -1"),
+    (dict(centres=((0.0, 0.0),), radii=(0.1,), rod_phases=(1.0,)),
+     "rod_phases must be an array of integers each >= 0, got [1.0]"),
     (dict(centres=((0.0, 0.0),), radii=(0.2,), rod_phases=(2,)), "phase 1 is used by neither"),
     (dict(centres=(), radii=()), "at least one rod"),
+    (dict(centres=0.0, radii=(0.1,)), "rods need sequences of centres [x, y]"),
 ])
 def test_bad_rods(kwargs, fragment):
     with pytest.raises(ValueError) as err:
@@ -221,6 +241,8 @@ def test_labels_validation():
         validate_labels(labels, 1)
     with pytest.raises(ValueError, match="phase 2 has no pixel"):
         validate_labels(labels, 3)
+    with pytest.raises(ValueError, match="n_phases must be an integer >= 1, got 0"):
+        validate_labels(labels, 0)
     inside = labels.copy()
     inside[16, 16] = -1
     with pytest.raises(ValueError, match="label -1 found on the face"):

@@ -71,8 +71,9 @@ def test_bad_arguments():
     field = np.zeros((16, 16))
     with pytest.raises(ValueError, match="n_points must be an integer >= 2, got 1"):
         cross_section(field, RADIUS, (0, 0), (0.001, 0), 1)
-    with pytest.raises(ValueError, match=r"radius must be a positive finite number \(m\), "
-                                         r"got -1.0"):
+    with pytest.raises(ValueError, match="n_bins must be an integer >= 1, got 0"):
+        ring_average(field, RADIUS, 0)
+    with pytest.raises(ValueError, match=r"radius must be a number > 0 \(m\), got -1.0"):
         ring_average(field, -1.0, 4)
     with pytest.raises(ValueError, match=r"field of shape \(16, 17\) is not on a grid of the "
                                          r"circle face"):

@@ -437,19 +437,27 @@ def test_annulus_whole_plane_identity(ratio):
 
 # -- inputs -------------------------------------------------------------------
 
-@pytest.mark.parametrize("call", [
-    lambda: reference.rectangle_face(0.0, 0.0, 0.0, 1.0, 1.0, 1.0),
-    lambda: reference.rectangle_face_gradient(0.0, 0.0, 1.0, -1.0, 1.0, 1.0),
-    lambda: reference.rectangle_face(0.0, 0.0, 1.0, 1.0, 1.0, 0.0),
-    lambda: reference.rectangle_rms_slope(1.0, np.inf),
-    lambda: reference.rectangle_rms_slope(0.0),
-    lambda: reference.disk_face(-1.0, 1.0, 1.0, 1.0),
-    lambda: reference.disk_face_slope(1.0, 0.0, 1.0, 1.0),
-    lambda: reference.annulus_face(1.0, 2.0, 1.0, 1.0, 1.0),
-    lambda: reference.annulus_face_slope(1.0, 0.0, 1.0, 1.0, 1.0),
-    lambda: reference.annulus_rms_slope(1.0),
-    lambda: reference.annulus_rms_slope(-0.1),
+@pytest.mark.parametrize("call, fragment", [
+    (lambda: reference.rectangle_face(0.0, 0.0, 0.0, 1.0, 1.0, 1.0),
+     "half_width must be a number > 0 (m), got 0.0"),
+    (lambda: reference.rectangle_face_gradient(0.0, 0.0, 1.0, -1.0, 1.0, 1.0),
+     "half_length must be a number > 0 (m), got -1.0"),
+    (lambda: reference.rectangle_face(0.0, 0.0, 1.0, 1.0, 1.0, 0.0),
+     "E_star must be a number > 0 (Pa), got 0.0"),
+    (lambda: reference.rectangle_rms_slope(1.0, np.inf),
+     "length must be a number > 0 (m), got inf"),
+    (lambda: reference.rectangle_rms_slope(0.0), "width must be a number > 0 (m), got 0.0"),
+    (lambda: reference.disk_face(-1.0, 1.0, 1.0, 1.0), "r is a distance from the centre"),
+    (lambda: reference.disk_face_slope(1.0, 0.0, 1.0, 1.0),
+     "radius must be a number > 0 (m), got 0.0"),
+    (lambda: reference.annulus_face(1.0, 2.0, 1.0, 1.0, 1.0),
+     "inner_radius must be smaller than outer_radius"),
+    (lambda: reference.annulus_face_slope(1.0, 0.0, 1.0, 1.0, 1.0),
+     "inner_radius must be a number > 0 (m), got 0.0"),
+    (lambda: reference.annulus_rms_slope(1.0), "ratio must be a number in [0, 1) (1), got 1.0"),
+    (lambda: reference.annulus_rms_slope(-0.1), "ratio must be a number in [0, 1) (1), got -0.1"),
 ])
-def test_bad_inputs_raise(call):
-    with pytest.raises(ValueError):
+def test_bad_inputs_raise(call, fragment):
+    with pytest.raises(ValueError) as err:
         call()
+    assert fragment in str(err.value), f"{err.value!r} lacks {fragment!r}"

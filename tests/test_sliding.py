@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -89,6 +90,13 @@ def test_scene_refuses_bad_kinematics_naming_the_value(extra, fragment):
     with pytest.raises(ValueError) as err:
         parse_scene(scene_text("steady") + extra, ".")
     assert fragment in str(err.value), f"message {str(err.value)!r} lacks {fragment!r}"
+
+
+@pytest.mark.parametrize("radius", [-1.0, 0, math.nan, True, "2 cm"])
+def test_a_pin_on_disk_built_in_python_is_refused_as_in_a_scene(radius):
+    with pytest.raises(ValueError) as err:
+        PinOnDisk(radius)
+    assert f"track_radius must be a number > 0 (m), got {radius!r}" in str(err.value), err.value
 
 
 def test_a_translation_leaves_the_problem_bit_for_bit():

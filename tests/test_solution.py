@@ -228,14 +228,15 @@ def test_plain_grid_rms_of_fine_grains_grows_under_refinement():
     (dict(normal_force=-1.0), "normal_force must be a number > 0 (N), got -1.0"),
     (dict(normal_force=0.0), "got 0.0"),
     (dict(normal_force=math.inf), "got inf"),
-    (dict(wear_coefficients=[1e-13, 0.0]), "got [1e-13, 0.0]"),
+    (dict(wear_coefficients=[1e-13, 0.0]),
+     "wear coefficients must be an array of numbers each > 0 (1/Pa), got [1e-13, 0.0]"),
     (dict(wear_coefficients=[1e-13, -2e-13]), "got [1e-13, -2e-13]"),
     (dict(wear_coefficients=[1e-13, math.nan]), "got [1e-13, nan]"),
     (dict(wear_coefficients=[1e-13]),
      "is for 1 phase(s) (Archard's law dw/ds = k p, k = [1e-13] 1/Pa), the phase map has 2"),
     (dict(wear_coefficients=[1e-13] * 3), "is for 3 phase(s) (Archard's law dw/ds = k p, "
      "k = [1e-13, 1e-13, 1e-13] 1/Pa), the phase map has 2"),
-    (dict(exponent=0.0), "exponent must be positive and finite, got 0.0"),
+    (dict(exponent=0.0), "wear exponent must be a number > 0 (1), got 0.0"),
     (dict(exponent=math.nan), "got nan"),
 ])
 def test_bad_input(kwargs, fragment):

@@ -86,9 +86,10 @@ def test_other_settings_refused(tmp_path):
     (tmp_path / "foreign.h5").write_bytes(b"not hdf5")
     with pytest.raises(ValueError, match="cannot open"):
         SweepFile(tmp_path / "foreign.h5", SETTINGS)
-    with pytest.raises(ValueError, match="workers"):
-        with open_executor(workers=-1):
-            pass
+    for bad in (-1, 0, 1.5):
+        with pytest.raises(ValueError, match=f"workers must be an integer >= 1, got {bad}"):
+            with open_executor(workers=bad):
+                pass
 
 
 def test_process_pool_matches_direct_evaluation(tmp_path):

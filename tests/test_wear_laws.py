@@ -226,9 +226,13 @@ def test_scene_keys_build_the_laws(tmp_path):
     with pytest.raises(ValueError, match=r"\[wear\] thresholds must be an array of numbers"):
         wear_law_from_table({"law": "threshold", "coefficients": [1e-9],
                              "thresholds": 3.0}, n_phases=1)
-    with pytest.raises(ValueError, match=r"wear thresholds must be >= 0 \(Pa\), got \[-1.0\]"):
+    with pytest.raises(ValueError, match=r"\[wear\] thresholds must be an array of numbers each "
+                                         r">= 0 \(Pa\), got \[-1.0\]"):
         wear_law_from_table({"law": "threshold", "coefficients": [1e-9],
                              "thresholds": [-1.0]}, n_phases=1)
+    with pytest.raises(ValueError, match=r"wear thresholds must be an array of numbers each "
+                                         r">= 0 \(Pa\), got \[0.0, -1.0\]"):
+        ThresholdLaw([1e-9, 1e-9], [0.0, -1.0])
     solved = solve_scene(scene, face_only=True)
     assert solved.phase_pressures[1] > 1e4, solved.phase_pressures
 

@@ -67,6 +67,7 @@ import scipy.optimize
 import scipy.special
 
 from steady import reference
+from steady.schema import Key
 
 __all__ = ["AxisymmetricRunIn", "AxisymmetricState", "CoatedAxisymmetricRunIn",
            "CoatedAxisymmetricState", "CoatedReferenceHistory", "ReferenceHistory",
@@ -76,6 +77,27 @@ __all__ = ["AxisymmetricRunIn", "AxisymmetricState", "CoatedAxisymmetricRunIn",
 _GAUSS_POINTS = 12
 # Entries within this many rings of the diagonal are integrated adaptively.
 _NEAR = 3
+
+# The inputs of the axisymmetric models, each checked through its key.
+_RINGS = Key("rings", "integer", low=4, low_open=False)
+_GRADING = Key("grading", "number", unit="1", low=1.0, low_open=False)
+_RADIUS = Key("radius", "number", unit="m", low=0.0)
+_E_STAR = Key("E_star", "number", unit="Pa", low=0.0)
+_NORMAL_FORCE = Key("normal_force", "number", unit="N", low=0.0)
+_WEAR_COEFFICIENT = Key("wear_coefficient", "number", unit="1/Pa", low=0.0)
+_THICKNESS = Key("thickness", "number", unit="m", low=0.0)
+_SUBSTRATE_COEFFICIENT = Key("substrate_coefficient", "number", unit="1/Pa", low=0.0)
+_DISTANCE = Key("distance", "number", unit="m", low=0.0, low_open=False)
+_DISTANCES_S_STAR = Key("distances_s_star", "numbers", unit="s*", low=0.0, low_open=False)
+
+
+def _distances_s_star(distances):
+    """Distances (any sequence or array) checked through their key, as a 1-d float array."""
+    try:
+        values = np.asarray(distances, dtype=float).tolist()
+    except (TypeError, ValueError):
+        values = distances  # refused by the key, in its words
+    return np.array(_DISTANCES_S_STAR.parse(values, ""), dtype=float)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -142,21 +164,13 @@ class AxisymmetricRunIn:
 
     def __init__(self, rings=600, *, grading=4.0, radius=1.0, E_star=1.0,
                  normal_force=math.pi, wear_coefficient=1.0):
-        if isinstance(rings, bool) or int(rings) != rings or rings < 4:
-            raise ValueError(f"rings must be an integer >= 4, got {rings!r}")
-        if not (math.isfinite(grading) and grading >= 1):
-            raise ValueError(f"grading must be a finite number >= 1, got {grading!r}")
-        for name, value in (("radius", radius), ("E_star", E_star),
-                            ("normal_force", normal_force),
-                            ("wear_coefficient", wear_coefficient)):
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be positive and finite, got {value!r}")
-        self.rings = int(rings)
-        self.grading = float(grading)
-        self.radius = float(radius)
-        self.E_star = float(E_star)
-        self.normal_force = float(normal_force)
-        self.wear_coefficient = float(wear_coefficient)
+        self.rings = _RINGS.parse(rings, "")
+        self.grading = _GRADING.parse(grading, "")
+        # Any consistent units are taken: no scale range.
+        self.radius = _RADIUS.parse(radius, "", scale=False)
+        self.E_star = _E_STAR.parse(E_star, "", scale=False)
+        self.normal_force = _NORMAL_FORCE.parse(normal_force, "", scale=False)
+        self.wear_coefficient = _WEAR_COEFFICIENT.parse(wear_coefficient, "")
         j = np.arange(self.rings + 1) / self.rings
         self.edges = self.radius * (1.0 - (1.0 - j) ** self.grading)
         self.centres = 0.5 * (self.edges[1:] + self.edges[:-1])
@@ -223,9 +237,7 @@ class AxisymmetricRunIn:
 
         Up to a constant: the rigid part of the wear is left out.
         """
-        s = float(distance)
-        if not (math.isfinite(s) and s >= 0):
-            raise ValueError(f"distance must be a finite non-negative number, got {distance!r} m")
+        s = _DISTANCE.parse(distance, "", scale=False)
         z = self._mu * s
         small = np.abs(z) < 1e-12
         phi = np.where(small, 1.0 + 0.5 * z, np.expm1(z) / np.where(small, 1.0, z))
@@ -341,10 +353,7 @@ def reference_history(distances_s_star, *, rings=1200, grading=4.0):
     >>> print(f"{ref.rms_slope[0]:.3f} {ref.rms_slope[1]:.4f}")
     0.000 0.9829
     """
-    s = np.asarray(distances_s_star, dtype=float)
-    if s.ndim != 1 or not np.all(np.isfinite(s) & (s >= 0)):
-        raise ValueError(f"distances_s_star must be a 1-d array of non-negative numbers, got "
-                         f"{s!r}")
+    s = _distances_s_star(distances_s_star)
     values = []
     counts = (int(rings) // 2, int(rings))
     for count in counts:
@@ -466,14 +475,12 @@ class CoatedAxisymmetricRunIn(AxisymmetricRunIn):
 
     def __init__(self, rings=160, *, thickness, substrate_coefficient, grading=4.0,
                  radius=1.0, E_star=1.0, normal_force=math.pi, wear_coefficient=1.0):
-        for name, value in (("thickness", thickness),
-                            ("substrate_coefficient", substrate_coefficient)):
-            if isinstance(value, bool) or not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be positive and finite, got {value!r}")
+        thickness = _THICKNESS.parse(thickness, "", scale=False)
+        substrate_coefficient = _SUBSTRATE_COEFFICIENT.parse(substrate_coefficient, "")
         super().__init__(rings, grading=grading, radius=radius, E_star=E_star,
                          normal_force=normal_force, wear_coefficient=wear_coefficient)
-        self.thickness = float(thickness)
-        self.substrate_coefficient = float(substrate_coefficient)
+        self.thickness = thickness
+        self.substrate_coefficient = substrate_coefficient
         self.crossings = np.full(self.rings, math.inf)
         self.minimum_crossing_pressure = math.inf
         steady_face = reference.disk_face(self.centres, self.radius, self.mean_pressure,
@@ -563,9 +570,7 @@ class CoatedAxisymmetricRunIn(AxisymmetricRunIn):
         Unlike :meth:`AxisymmetricRunIn.recession` this is the absolute worn
         depth from the flat face, rigid wear included: it decides the phase.
         """
-        s = float(distance)
-        if not (math.isfinite(s) and s >= 0):
-            raise ValueError(f"distance must be a finite non-negative number, got {distance!r} m")
+        s = _DISTANCE.parse(distance, "", scale=False)
         return self._advance_to(s).worn(s)
 
     def state(self, distance):
@@ -755,10 +760,7 @@ def coated_reference_history(distances_s_star, *, thickness_f_star, ratio, rings
     >>> print(f"{ref.first_through:.5f} {ref.last_through:.4f} {ref.rms_slope[0]:.4f}")
     0.00984 0.1456 1.0209
     """
-    s = np.asarray(distances_s_star, dtype=float)
-    if s.ndim != 1 or not np.all(np.isfinite(s) & (s >= 0)):
-        raise ValueError(f"distances_s_star must be a 1-d array of non-negative numbers, got "
-                         f"{s!r}")
+    s = _distances_s_star(distances_s_star)
     counts = (int(rings) // 2, int(rings))
     models, figures, through = [], [], []
     for count in counts:

@@ -36,6 +36,7 @@ from ..memory import check_memory, keep_freed_memory, steady_memory
 from ..output import write_result
 from ..problem import default_phase_names
 from ..scene import load_scene
+from ..schema import Key
 from ..solution import solve_scene
 from .common import (
     EXIT_FAILED,
@@ -58,6 +59,9 @@ from .common import (
 __all__ = ["build_parser", "main", "summary_lines"]
 
 logger = logging.getLogger(__name__)
+
+#: The depth of the section solved (``--depth``).
+_DEPTH = Key("--depth", "number", unit="m", low=0.0, low_open=False)
 
 def build_parser():
     """The argument parser of ``runin-steady`` (``python -m steady``)."""
@@ -198,8 +202,7 @@ def _check(args):
              + ", ".join(f"[{name}]" for name in scene.ignored_sections))
     check_memory(steady_memory(scene.grid().shape, slope_error=args.slope_error),
                  f"a steady solve at n = {scene.n}", args.memory_limit)
-    if not (math.isfinite(args.depth) and args.depth >= 0):
-        raise ValueError(f"--depth must be a finite depth >= 0 (m), got {args.depth!r}")
+    _DEPTH.parse(args.depth, "", scale=False)  # a depth has no scale range: 0 is the surface
     # Names a phase without a face pixel before the solve; the solve takes its map.
     problem = problem_of(scene)
     if problem.phases.columns is not None:
