@@ -571,29 +571,10 @@ class PowerLaw(WearLaw):
         return wear_field * p ** self.exponent
 
     def linearisation(self, recession, c, pressure, wear_field, face_mask, floor):
-        """The implicit stage ``w = recession + c g(P(w))`` linearised about ``pressure``.
+        """The stage linearised about ``pressure`` (:meth:`WearLaw.linearisation`).
 
-        ``g(p) ~ g(p0) + g'(p0) (p - p0)`` turns the stage into the contact
-        problem with the shift ``c g'(p0)`` and the recession
-        ``recession + c (g(p0) - g'(p0) p0)``.
-
-        Parameters
-        ----------
-        recession : ndarray, shape (nx, ny), m
-        c : float, m
-            Sliding distance multiplying the implicit rate.
-        pressure : ndarray, shape (nx, ny), Pa
-            The linearisation point ``p0``.
-        wear_field : ndarray, shape (nx, ny), 1/Pa
-        face_mask : ndarray of bool, shape (nx, ny)
-        floor : float, Pa
-            Least linearisation pressure where ``g'`` is infinite at 0
-            (``m < 1``); not used for ``m >= 1``.
-
-        Returns
-        -------
-        shift : ndarray, shape (nx, ny), m/Pa
-        recession : ndarray, shape (nx, ny), m
+        ``g' = k m p0^(m-1)``, with ``p0`` floored at ``floor`` for ``m < 1``
+        (``g'`` is infinite at 0); ``floor`` is not used for ``m >= 1``.
         """
         m = self.exponent
         floor = floor if m < 1.0 else 0.0
