@@ -86,3 +86,27 @@ sphinx_gallery_conf = {
     # The timing page would load a table script from a CDN: not written.
     "write_computation_times": False,
 }
+
+
+def _every_example_has_its_figure(app, exception):
+    """Fail the build when a gallery page has no figure (the page would show a placeholder).
+
+    sphinx-gallery keeps the figures an example leaves open in pyplot as
+    ``auto_examples/images/sphx_glr_<example>_001.png``; an example whose
+    figures never reached pyplot has none.
+    """
+    if exception is not None:
+        return
+    import pathlib
+
+    source = pathlib.Path(app.srcdir)
+    images = source / "auto_examples" / "images"
+    missing = [path.name for path in sorted((source / "examples").glob("plot_*.py"))
+               if not (images / f"sphx_glr_{path.stem}_001.png").exists()]
+    if missing:
+        raise RuntimeError(f"gallery pages without a figure: {', '.join(missing)}")
+
+
+def setup(app):
+    """The checks of this build beyond Sphinx's own."""
+    app.connect("build-finished", _every_example_has_its_figure)

@@ -720,6 +720,6 @@ def plot_fit(fit_path, png_path, *, force=False, dpi=200):
     ValueError
         Unreadable fit file, or ``png_path`` exists and ``force`` is False.
     """
-    from .plotting import save_png  # deferred: matplotlib is slow to import
+    from .plotting import save_new  # deferred: matplotlib is slow to import
 
-    return save_png(fit_figure(read_fit(fit_path)), png_path, force=force, dpi=dpi)
+    return save_new(fit_figure(read_fit(fit_path)), png_path, force=force, dpi=dpi)

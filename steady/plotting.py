@@ -8,7 +8,9 @@ or a :class:`steady.solution.SteadyResult`, draws into the axes given as
 ``--plot`` of ``runin-steady``); :func:`segmentation_figure` draws the
 segmentation of a micrograph phase map over its image, with the grey-level
 histogram (the ``--segmentation`` of ``runin-steady``).  Uses matplotlib's
-Agg canvas directly (no pyplot, no global backend state).
+Agg canvas directly (no pyplot, no global backend state), unless the caller
+uses pyplot: then they are pyplot's, which ``plt.show()`` shows
+(:func:`new_figure`).
 
 One convention for every map here and in :mod:`transient.plotting`: arrays
 are indexed ``[x, y]``, x runs along the horizontal axis and y up
@@ -25,6 +27,7 @@ from __future__ import annotations
 import logging
 import os
 import pathlib
+import sys
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -43,8 +46,8 @@ from .text import shorten
 
 __all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
            "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
-           "plot_phases", "pressure_unit", "relief", "result_figure", "root_figure", "save_png",
-           "segmentation_figure", "set_fonts"]
+           "plot_phases", "pressure_unit", "relief", "result_figure", "root_figure", "save_new",
+           "save_png", "segmentation_figure", "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,7 +67,16 @@ _RELIEF = {"plane": "about the best-fit plane", "mean": "about the mean"}
 
 
 def new_figure(width, height):
-    """A figure of ``width`` x ``height`` inches on an Agg canvas, constrained layout."""
+    """A figure of ``width`` x ``height`` inches, constrained layout.
+
+    Where the caller uses pyplot (it is imported), the figure is pyplot's:
+    ``plt.show()`` shows it and a notebook or a sphinx-gallery page keeps it.
+    Elsewhere (the commands, which never import pyplot) it is a figure on
+    an Agg canvas, with no global state and no display.
+    """
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        return pyplot.figure(figsize=(width, height), layout="constrained")
     fig = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(fig)
     return fig
@@ -494,7 +506,21 @@ def plot_file(result_path, png_path, *, force=False, dpi=200):
         Unreadable result file, or ``png_path`` exists and ``force`` is
         False.
     """
-    return save_png(result_figure(read_result(result_path)), png_path, force=force, dpi=dpi)
+    return save_new(result_figure(read_result(result_path)), png_path, force=force, dpi=dpi)
+
+
+def save_new(fig, path, **options):
+    """:func:`save_png` of a figure a ``plot_*`` function made for it, then released.
+
+    A figure made for a file only is closed once written, where it is
+    pyplot's (:func:`new_figure`): it is not left open for ``plt.show()``.
+    """
+    try:
+        return save_png(fig, path, **options)
+    finally:
+        pyplot = sys.modules.get("matplotlib.pyplot")
+        if pyplot is not None:
+            pyplot.close(fig)
 
 
 def save_png(fig, png_path, *, force=False, dpi=200):
@@ -684,8 +710,7 @@ def segmentation_figure(geometry, *, ax=None, names=None):
     elif isinstance(names, str) or len(names) != seg.n_phases:
         raise ValueError(f"names must name the {seg.n_phases} phases, got {shorten(names)}")
     if ax is None:
-        fig = Figure(figsize=(11.0, 5.2), layout="constrained")
-        FigureCanvasAgg(fig)
+        fig = new_figure(11.0, 5.2)
         image_ax, hist_ax = fig.subplots(1, 2, width_ratios=(3, 2))
         fig.suptitle(_figure_title(geometry))
     elif isinstance(ax, Axes):

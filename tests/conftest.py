@@ -19,6 +19,7 @@ Tests draw their scenes from here rather than carrying inline copies:
 import dataclasses
 import math
 import pathlib
+import sys
 
 import pytest
 
@@ -239,3 +240,16 @@ def one_error_line(err):
 def temporaries(directory):
     """Temporary files (``*.tmp``) a writer left in ``directory``."""
     return sorted(p.name for p in pathlib.Path(directory).iterdir() if p.name.endswith(".tmp"))
+
+
+@pytest.fixture(autouse=True)
+def _close_pyplot_figures():
+    """Close the figures of pyplot after each test, where a test (or an example) imported it.
+
+    The plot helpers draw into pyplot's figures once pyplot is imported
+    (steady.plotting.new_figure): left open they would add up over the suite.
+    """
+    yield
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        pyplot.close("all")

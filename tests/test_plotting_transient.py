@@ -1,5 +1,7 @@
 """Figures of runs: distance axes in metres and s*, relief, pressure units, orientation."""
 
+import dataclasses
+
 import h5py
 import numpy as np
 import pytest
@@ -117,14 +119,14 @@ def test_history_in_s_star_and_absolute_slope(result):
     np.testing.assert_allclose(ax.lines[0].get_xdata(), d[pos] / distance_scale(result),
                                rtol=1e-15)
     np.testing.assert_array_equal(ax.lines[0].get_ydata(), result.history["rms_slope"][pos])
-    assert ax.get_ylabel() == "rms slope"
+    assert ax.get_ylabel() == "rms slope (rad)"
     assert ax.child_axes[0].get_xlabel().startswith("sliding distance (m)")
 
 
 def test_history_panels_and_given_axes(result):
     fig = plot_history(result, quantities=("rms_slope", "rms_height", "convergence"),
                        normalised=False)
-    assert [a.get_ylabel() for a in fig.axes] == ["rms slope", "rms height (µm)",
+    assert [a.get_ylabel() for a in fig.axes] == ["rms slope (rad)", "rms height (µm)",
                                                   "convergence measure"]
     np.testing.assert_allclose(fig.axes[1].lines[0].get_ydata(),
                                result.history["rms_height"][_steps(result)[1]] * 1e6, rtol=1e-15)
@@ -212,3 +214,37 @@ def test_plot_run_writes_a_png(tmp_path, run_file):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ValueError, match=r"exists \(pass force=True to overwrite\)"):
         plot_run(run_file, png, force=False)
+
+
+def test_a_figure_for_a_paper(result):
+    # The distance axis ends with the data; the title carries no solver counts; a snapshot
+    # says where it was taken.
+    fig = plot_history(result)
+    last = float(result.history["distance"][-1])
+    assert fig.axes[0].get_xlim()[1] <= 1.3 * last, (fig.axes[0].get_xlim(), last)
+    title = run_figure(result)._suptitle.get_text()
+    assert "solves" not in title and "steps" not in title, title
+    face = plot_face(result, snapshot=0)
+    s = float(result.snapshot_distance[0])
+    assert face.axes[0].get_title().startswith("face at s = ") and \
+        f"{s / result.distance_scale:.3g} s*" in face.axes[0].get_title(), face.axes[0].get_title()
+
+
+def test_a_steady_pressure_is_drawn_one_colour_per_phase(run_file):
+    # The final pressure of a steady run is constant on each phase (eq. 7): the phases'
+    # colours of the maps, their pressures in the legend.
+    result, _, arrays = read_run(run_file)
+    assert result.status == "steady", result.message
+    ax = plot_pressure(run_file).axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    p0 = float(np.mean(result.pressure[arrays["phase"] == 0]))
+    assert labels[0] == f"phase 0: p = {p0 / 1e3:.4g} kPa" and len(labels) == 2, labels
+    assert len(np.unique(ax.images[0].get_array().compressed())) == 2, "one colour per phase"
+    # A pressure that is not constant on its phases keeps the colour map.
+    varied = result.pressure * (1 + 1e-3 * np.arange(result.pressure.size)
+                                .reshape(result.pressure.shape))
+    path = run_file.parent / "varied.h5"
+    write_run(path, dataclasses.replace(result, state=dataclasses.replace(
+        result.state, pressure=varied)), arrays={"phase": arrays["phase"]})
+    early = plot_pressure(path)
+    assert early.axes[0].get_legend() is None and len(early.axes) == 2, "a colour bar"

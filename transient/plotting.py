@@ -14,7 +14,8 @@ in metres with ``s*`` on a secondary axis (or the other way round), the
 face is relief about its plane in micrometres, pressures in kPa or MPa,
 lengths in mm; every map follows :func:`steady.plotting.draw_map` (x
 horizontal, y up), as the steady figures do.  Uses matplotlib's Agg
-canvas directly (no pyplot, no global backend state).
+canvas directly (no pyplot, no global backend state), or pyplot's where the
+caller uses pyplot (:func:`steady.plotting.new_figure`).
 :func:`draw_rms_slope_history` draws the history panel for other figures
 too (``studies/runin_history.py``).
 """
@@ -27,7 +28,10 @@ import os
 
 import h5py
 import numpy as np
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.patches import Patch
 from matplotlib.ticker import NullLocator
+from matplotlib.transforms import offset_copy
 
 from steady.plotting import (
     COLUMN_WIDTH,
@@ -38,10 +42,11 @@ from steady.plotting import (
     figure_and_axes,
     map_height,
     new_figure,
+    phase_colours,
     pressure_unit,
     relief,
     root_figure,
-    save_png,
+    save_new,
     set_fonts,
 )
 
@@ -129,7 +134,8 @@ def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, stea
     err = _error_band(history, reference_slope)
     pos = s > 0
     finite_end = s[pos & (s < _JUMP)]
-    right = max(100.0, 3 * float(finite_end.max()) if finite_end.size else 100.0)
+    # The axis ends with the data (a little beyond its last point).
+    right = 1.25 * float(finite_end.max()) if finite_end.size else 1.0
     left = float(s[pos].min()) / 4 if np.any(pos) else 1e-6
     shown = pos & (s <= right)
     x = s * scale
@@ -161,7 +167,7 @@ def draw_rms_slope_history(ax, history, distance_scale, reference_slope, *, stea
         ax.set_xlabel("sliding distance / s*  (s = 0 at the left edge)")
     else:
         ax.set_xlabel("sliding distance (m)")
-    ax.set_ylabel("rms slope / grad_f0" if reference_slope != 1 else "rms slope")
+    ax.set_ylabel("rms slope / grad_f0" if reference_slope != 1 else "rms slope (rad)")
     return left
 
 
@@ -228,6 +234,7 @@ class _Run:
     comparison: dict
     run_in: dict
     phase_names: tuple = ()
+    labels: object = None
 
     @property
     def distance_scale(self):
@@ -253,9 +260,11 @@ def _run(source):
         result, attrs, arrays = read_run(source)
         names = tuple(n.decode() if isinstance(n, bytes) else str(n)
                       for n in np.atleast_1d(arrays.get("phase_name", ())))
-        return _Run(result, dict(attrs), *_groups(source), phase_names=names)
+        return _Run(result, dict(attrs), *_groups(source), phase_names=names,
+                    labels=arrays.get("phase"))
     if hasattr(source, "history") and hasattr(source, "depth_scale"):
-        return _Run(source, {}, {}, {})
+        problem = getattr(source, "problem", None)
+        return _Run(source, {}, {}, {}, labels=None if problem is None else problem.labels)
     raise ValueError(f"expected a run file or a RunResult, got {type(source).__name__}")
 
 
@@ -335,7 +344,7 @@ def _draw_slope(ax, run, units, normalised):
         # plot, not semilogx: the axis is logarithmic already, and its ticks are set
         ax.plot(x[pos], np.asarray(quasi, dtype=float)[pos] / g0, "-", color="C3", lw=1.0,
                 drawstyle="steps-post", label="quasi-steady face of the section")
-    ax.set_ylabel(r"rms slope / $\nabla f^0_\infty$" if normalised else "rms slope")
+    ax.set_ylabel(r"rms slope / $\nabla f^0_\infty$" if normalised else "rms slope (rad)")
     mark = run_in_distance_of(run)
     if mark is not None:
         x = mark / run.distance_scale if units == "s*" else mark
@@ -413,8 +422,9 @@ def _draw_depth(ax, run, units, normalised):
                        label=found.summary().split(" at s")[0])
     fractions = np.atleast_2d(np.asarray(h["phase_fraction"], dtype=float))
     right = ax.twinx()
+    colours = phase_colours(fractions.shape[1])  # each phase in its colour of the maps
     for i, name in enumerate(_phase_names(run, fractions.shape[1])):
-        right.semilogx(x[pos], fractions[pos, i], "-", color=f"C{i}", lw=1.2,
+        right.semilogx(x[pos], fractions[pos, i], "-", color=colours[i], lw=1.2,
                        drawstyle="steps-post", label=f"{name} (fraction)")
     # Fractions in the lower part, the legend of both axes above them (drawn on top).
     right.set_ylim(-0.02, 1.7)
@@ -565,8 +575,8 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
         Heights in micrometres (default) or in ``f*``, the run's depth
         scale.
     snapshot : int, optional
-        Index of a stored snapshot (:attr:`RunResult.snapshot_distance`);
-        default the final face.
+        Index of a stored snapshot (:attr:`RunResult.snapshot_distance`),
+        whose distance titles the axes; default the final face.
     cmap : str, optional
 
     Returns
@@ -590,6 +600,8 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
         if not -count <= snapshot < count:
             raise ValueError(f"snapshot {snapshot} out of range: the run has {count}")
         face = -np.asarray(result.snapshot_recession[snapshot], dtype=float)
+        s = float(result.snapshot_distance[snapshot])
+        ax.set_title(f"face at s = {format_metres(s)} ({s / result.distance_scale:.3g} s*)")
     mask = result.face_mask & np.isfinite(face)
     height = relief(face, mask, h, remove=remove)
     field, scale = ((height * 1e6, "µm") if units == "um"
@@ -603,6 +615,10 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
 
 def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
     """The final contact pressure on the face.
+
+    A pressure constant on each phase (the steady state's, eq. 7) is drawn
+    with one colour per phase, the colours of the phase maps, and the
+    phases' pressures in the legend; any other with the colour map.
 
     Parameters
     ----------
@@ -631,10 +647,48 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
         factor, label = pressure_unit(pressure)
     else:
         factor, label = result.pixel_mean_pressure, "mean pressure"
-    image = draw_map(ax, pressure / factor, ext, unit=unit, cmap=cmap)
-    colour_bar(image, f"pressure ({label})")
+    phases = _phase_wise(run, pressure)
+    if phases is None:
+        image = draw_map(ax, pressure / factor, ext, unit=unit, cmap=cmap)
+        colour_bar(image, f"pressure ({label})")
+    else:  # constant on each phase (the steady state): one colour per phase, as the maps
+        labels, values = phases
+        names = _phase_names(run, len(values))
+        colours = phase_colours(len(values))
+        draw_map(ax, np.ma.masked_less(labels, 0), ext, unit=unit,
+                 cmap=ListedColormap(colours).with_extremes(bad="white"),
+                 norm=BoundaryNorm(np.arange(len(values) + 1) - 0.5, len(values)))
+        handles = [Patch(facecolor=c, edgecolor="0.4", lw=0.5,
+                         label=f"{name}: p = {value / factor:.4g} {label}")
+                   for c, name, value in zip(colours, names, values, strict=True)
+                   if np.isfinite(value)]
+        # Below the axes, clear of the x label (as the steady figure's phase legend).
+        below = offset_copy(ax.transAxes, fig=fig, y=-3.6 * FONT_SIZES["label"], units="points")
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  bbox_transform=below, frameon=False, fontsize=FONT_SIZES["legend"],
+                  ncol=1)
     set_fonts(ax)
     return fig
+
+
+def _phase_wise(run, pressure):
+    """``(labels, phase pressures)`` when the pressure is constant on each phase, else None.
+
+    Constant to 1e-6 of itself, the steady state's wear-rate spread (eq. 7,
+    after a jump to within ``s* / jump`` of it); a phase without a pixel
+    has NaN.
+    """
+    labels = run.labels
+    if labels is None or np.shape(labels) != pressure.shape:
+        return None
+    labels = np.asarray(labels)
+    values = []
+    for i in range(int(labels.max()) + 1):
+        p = pressure[labels == i]
+        if p.size and not (np.all(p > 0) and np.ptp(p) <= 1e-6 * p.max()):
+            return None
+        values.append(float(p.mean()) if p.size else math.nan)
+    return labels, values
 
 
 def run_figure(result, attrs=None, comparison=None, run_in=None, *, units="m",
@@ -709,9 +763,7 @@ def run_figure(result, attrs=None, comparison=None, run_in=None, *, units="m",
     grid_text = f"n = {nx}" if nx == ny else f"{nx} x {ny} pixels"
     outline = _outline(result, attrs)
     described = "" if outline is None else f"{outline.describe()}, "
-    fig.suptitle(f"{described}{grid_text}\n{result.scheme}: {result.steps} steps, "
-                 f"{result.solves} contact solves, status: {result.status}",
-                 fontsize=FONT_SIZES["title"])
+    fig.suptitle(f"{described}{grid_text}: {result.status}", fontsize=FONT_SIZES["title"])
     for ax, title in ((ax_height, "rms height"), (ax_conv, "convergence"),
                       (ax_face, "final face"), (ax_pressure, "final pressure")):
         ax.set_title(title)
@@ -746,4 +798,4 @@ def plot_run(run_path, png_path, *, force=True, dpi=200, units="m"):
     ValueError
         Unreadable run file, or ``png_path`` exists and ``force`` is False.
     """
-    return save_png(run_figure(run_path, units=units), png_path, force=force, dpi=dpi)
+    return save_new(run_figure(run_path, units=units), png_path, force=force, dpi=dpi)

@@ -215,10 +215,10 @@ def _check(args):
 
 def _draw_segmentation(args, scene):
     """Draw the micrograph's segmentation over its image (before the solve, or alone)."""
-    from ..plotting import save_png, segmentation_figure  # deferred: matplotlib is slow
+    from ..plotting import save_new, segmentation_figure  # deferred: matplotlib is slow
 
     figure = segmentation_figure(scene.geometry, names=scene.phase_names)
-    save_png(figure, args.segmentation, force=True)  # the path was checked before
+    save_new(figure, args.segmentation, force=True)  # the path was checked before
 
 
 def _plot(args):
