@@ -348,6 +348,23 @@ def test_too_many_phases_for_the_grey_levels(skimage, tmp_path):
         load_micrograph(tmp_path / "two.npy", RADIUS, 3)
 
 
+def test_otsu_beyond_its_limit_asks_for_thresholds_before_the_image_is_read(tmp_path):
+    # 6 phases: C(256, 5) = 8.8e9 sets of thresholds, minutes (docs/benchmarks.md).
+    with pytest.raises(ValueError) as err:
+        load_micrograph(tmp_path / "absent.npy", RADIUS, 6)
+    assert ("n_phases = 6 by Otsu's thresholds would search C(256, 5) = 8.8e+09 sets" in
+            str(err.value) and "(at most 5 phases): give thresholds = [...], 5 increasing grey "
+            "levels" in str(err.value)), str(err.value)
+    # 5 phases are searched: the image is then looked for.
+    with pytest.raises(ValueError, match="absent.npy' does not exist"):
+        load_micrograph(tmp_path / "absent.npy", RADIUS, 5)
+    image = np.random.default_rng(3517).random((32, 32))
+    with pytest.raises(ValueError, match="n_phases = 7 by Otsu's thresholds"):
+        segment(image, 7)
+    given = segment(image, 7, thresholds=np.linspace(0.1, 0.9, 6))
+    assert given.n_phases == 7 and given.method == "manual", given.summary()
+
+
 def test_colour_png_is_read_as_luminance(tmp_path):
     rgb = np.zeros((10, 12, 3), dtype=np.uint8)
     rgb[..., 0], rgb[..., 1], rgb[..., 2] = 255, 0, 0
