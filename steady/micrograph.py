@@ -737,6 +737,11 @@ class Micrograph(PhaseMap):
         options = {key: value for key, value in values.items() if key != "path"}
         return load_micrograph(values["path"], context.outline, **options)
 
+    @classmethod
+    def declared_phases(cls, values):
+        """``n_phases``, before the image is read and segmented."""
+        return values["n_phases"]
+
     @property
     def extent(self):
         """``(width, height)`` of the image, m."""

@@ -6,7 +6,8 @@ a :class:`WearLaw`: the class states, once, what the model asks of a law,
 and every caller asks the law (its methods and its capabilities), never
 which class it is.
 
-- Identity: ``n_phases``, ``describe()``, its ``[wear]`` values as a scene
+- Identity: ``n_phases`` (:meth:`WearLaw.check_phase_count` refuses a map of
+  another count), ``describe()``, its ``[wear]`` values as a scene
   file writes them (:meth:`WearLaw.scene_values`, :meth:`WearLaw.scene_words`
   for messages) and the attributes result and run files record
   (:meth:`WearLaw.file_attributes`, read back by :func:`wear_law_from_file`).
@@ -246,6 +247,33 @@ class WearLaw(abc.ABC):
         law = f"law = {self.kind!r}, " if self.kind not in ("", WEAR_LAWS.default) else ""
         return f"[wear] {law}{words}"
 
+    def check_phase_count(self, n_phases, what="the phase map"):
+        """Refuse a phase map of another number of phases than the law's.
+
+        Parameters
+        ----------
+        n_phases : int
+            The phases of ``what``.
+        what : str, optional
+            What has them, for the message (default ``"the phase map"``).
+
+        Raises
+        ------
+        ValueError
+            ``n_phases`` is not :attr:`n_phases`; the message names the
+            law's first per-phase key (:attr:`keys`) and its values.
+        """
+        if n_phases == self.n_phases:
+            return
+        values = self.scene_values()
+        key = next((key for key in self.keys if key.per_phase), None)
+        if key is None:
+            raise ValueError(f"{self.scene_words()} is a law of {self.n_phases} phase(s) but "
+                             f"{what} has {n_phases}")
+        entries = "values" if key.type == "numbers" else "lists"
+        raise ValueError(f"[wear] {key.name} has {len(values[key.name])} {entries} "
+                         f"{shorten(values[key.name])} but {what} has {n_phases} phases")
+
     def file_attributes(self):
         """What result and run files record of the law: ``name -> (value, udunits unit)``.
 
@@ -471,11 +499,10 @@ class PowerLaw(WearLaw):
     @classmethod
     def from_values(cls, values, context):
         """From the checked ``[wear]`` keys; their count must be the phase map's."""
-        k = values["coefficients"]
-        if context.n_phases is not None and len(k) != context.n_phases:
-            raise ValueError(f"[wear] coefficients has {len(k)} values {shorten(list(k))} but "
-                             f"the phase map has {context.n_phases} phases")
-        return cls(k, values["exponent"])
+        law = cls(values["coefficients"], values["exponent"])
+        if context.n_phases is not None:
+            law.check_phase_count(context.n_phases)
+        return law
 
     # -- what every law says -------------------------------------------
     @property
@@ -985,11 +1012,10 @@ class TableLaw(WearLaw):
     @classmethod
     def from_values(cls, values, context):
         """From the checked ``[wear]`` keys; one table per phase of the phase map."""
-        p, g = values["pressures"], values["rates"]
-        if context.n_phases is not None and len(p) != context.n_phases:
-            raise ValueError(f"[wear] pressures has {len(p)} tables but the phase map has "
-                             f"{context.n_phases} phases")
-        return cls(p, g)
+        law = cls(values["pressures"], values["rates"])
+        if context.n_phases is not None:
+            law.check_phase_count(context.n_phases)
+        return law
 
     # -- what every law says -------------------------------------------
     @property

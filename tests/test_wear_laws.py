@@ -219,8 +219,8 @@ def test_scene_keys_build_the_laws(tmp_path):
     table = wear_law_from_table({"law": "table", "pressures": [[0, 1e5], [0, 1e5]],
                                  "rates": [[0, 1e-9], [0, 1e-8]]}, n_phases=2)
     assert isinstance(table, TableLaw) and table.n_phases == 2, table
-    with pytest.raises(ValueError, match=r"\[wear\] pressures has 1 tables but the phase map "
-                                         r"has 2 phases"):
+    with pytest.raises(ValueError, match=r"\[wear\] pressures has 1 lists \[\[0.0, 100000.0\]\] "
+                                         r"but the phase map has 2 phases"):
         wear_law_from_table({"law": "table", "pressures": [[0, 1e5]], "rates": [[0, 1e-9]]},
                             n_phases=2)
     with pytest.raises(ValueError, match=r"\[wear\] thresholds must be an array of numbers"):
