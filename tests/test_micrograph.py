@@ -7,6 +7,7 @@ are given in units of the gap between the levels.
 """
 
 import importlib
+import importlib.util
 import pathlib
 import subprocess
 import sys
@@ -363,6 +364,17 @@ def test_otsu_beyond_its_limit_asks_for_thresholds_before_the_image_is_read(tmp_
         segment(image, 7)
     given = segment(image, 7, thresholds=np.linspace(0.1, 0.9, 6))
     assert given.n_phases == 7 and given.method == "manual", given.summary()
+
+
+def test_bench_otsu_smoke(skimage, capsys):
+    spec = importlib.util.spec_from_file_location(
+        "bench_otsu", ROOT / "studies" / "benchmarks" / "bench_otsu.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    rows = bench.main(["--size", "16", "--phases", "2", "3", "--repeat", "1"])
+    assert [(row["phases"], row["sets"]) for row in rows] == [(2, 256), (3, 32640)], rows
+    assert all(row["wall"] > 0 for row in rows), rows
+    assert "6 phases, refused" in capsys.readouterr().out
 
 
 def test_colour_png_is_read_as_luminance(tmp_path):
