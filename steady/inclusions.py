@@ -192,6 +192,11 @@ class Inclusions(PhaseMap):
         geometry.check_outline(context.outline)
         return geometry
 
+    @classmethod
+    def declared_phases(cls, values):
+        """Two phases, the matrix and the inclusions."""
+        return 2
+
     @property
     def n_phases(self):
         """Number of phases (2: matrix 0, inclusions 1)."""

@@ -52,6 +52,7 @@ from .text import shorten
 __all__ = [
     "COVERS",
     "MAX_PIXELS",
+    "OTSU_MAX_SETS",
     "Micrograph",
     "Segmentation",
     "load_micrograph",
@@ -72,6 +73,12 @@ MAX_PIXELS = 4096 * 4096
 #: Histogram bins of the Otsu thresholds: a threshold is known to within one
 #: bin, ``(max - min) / 256`` of the grey range.
 _OTSU_BINS = 256
+
+#: Most sets of thresholds a multi-level Otsu may search.  It tries every set
+#: of ``P - 1`` of the histogram's bins, ``C(256, P - 1)``: 1.7e8 for 5 phases,
+#: 8.8e9 for 6, at a time per set measured in docs/benchmarks.md ("Micrograph
+#: segmentation").  Beyond it the thresholds must be given.
+OTSU_MAX_SETS = 2e8
 
 #: Luminance weights of ITU-R BT.709, for colour images (as scikit-image's rgb2gray).
 _LUMINANCE = (0.2125, 0.7154, 0.0721)
@@ -112,8 +119,22 @@ _PIXEL_SIZE = Key("pixel_size", "number", unit="m", low=0.0,
 
 
 def _check_thresholds(thresholds, n_phases):
-    """Given thresholds as a tuple of floats (None: Otsu); count and order checked."""
+    """Given thresholds as a tuple of floats (None: Otsu); count and order checked.
+
+    Without thresholds, Otsu's search must be one that finishes: every set of
+    ``n_phases - 1`` of the histogram's bins, at most :data:`OTSU_MAX_SETS`.
+    """
     if thresholds is None:
+        sets = math.comb(_OTSU_BINS, n_phases - 1)
+        if sets > OTSU_MAX_SETS:
+            most = max(p for p in range(2, n_phases)
+                       if math.comb(_OTSU_BINS, p - 1) <= OTSU_MAX_SETS)
+            raise ValueError(f"n_phases = {n_phases} by Otsu's thresholds would search "
+                             f"C({_OTSU_BINS}, {n_phases - 1}) = {sets:.2g} sets of thresholds "
+                             f"in the {_OTSU_BINS}-bin grey-level histogram, more than the "
+                             f"{OTSU_MAX_SETS:.0e} it may (at most {most} phases): give "
+                             f"thresholds = [...], {n_phases - 1} increasing grey levels (PNG: "
+                             f"0 black to 1 white)")
         return None
     shown = shorten(list(thresholds) if isinstance(thresholds, (tuple, np.ndarray))
                     else thresholds)
@@ -417,7 +438,7 @@ def segment(image, n_phases, *, smoothing=0.0, min_speck=0, thresholds=None, fil
     thresholds : sequence of float, shape (P-1,), optional
         Increasing grey levels between the phases, in the units of the
         image, each inside its grey range ``(min, max]`` (after the crop
-        and the smoothing).  Default: multi-level Otsu thresholds.
+        and the smoothing).  Default: multi-level Otsu thresholds (Notes).
     fill_holes : bool, optional
         Fill holes (default False): a patch of darker phases enclosed by
         phase ``j``, such as the dark core of a particle seen as a bright
@@ -443,22 +464,24 @@ def segment(image, n_phases, *, smoothing=0.0, min_speck=0, thresholds=None, fil
         scikit-image is not installed for Otsu thresholds (the message
         names the extra), the image is not a finite 2-d array, it has
         fewer distinct grey levels than phases, a parameter is out of
-        range (the message names it and its value), or a phase ends up
-        with no pixel (the message gives the thresholds).
+        range (the message names it and its value; beyond 5 phases Otsu's,
+        asking for thresholds), or a phase ends up with no pixel.
 
     Notes
     -----
     Steps: crop, smoothing, thresholds, holes, specks.  Otsu's thresholds
     maximise the between-class variance of the grey-level histogram (256
     bins between the smallest and the largest value, so a threshold is
-    resolved to one bin, 1/256 of the grey range).  Pixels are classed by
-    :func:`numpy.digitize`: a pixel equal to a threshold goes to the
-    brighter phase.  Holes are filled from the brightest phase down: a
-    hole of phase ``j`` (a patch not connected to the image's edge through
-    pixels sharing a side) takes phase ``j`` if it holds only phases below
-    ``j``; one holding a brighter phase stays.  With two phases, every
-    dark patch enclosed by phase 1 becomes phase 1; a particle cut by the
-    image's edge keeps its open core.
+    resolved to one bin, 1/256 of the grey range); their search of
+    ``C(256, P - 1)`` sets is refused beyond :data:`OTSU_MAX_SETS` (more
+    than 5 phases).  Pixels are classed by :func:`numpy.digitize`: a pixel
+    equal to a threshold goes to the brighter phase.  Holes are filled
+    from the brightest phase down: a hole of phase ``j`` (a patch not
+    connected to the image's edge through pixels sharing a side) takes
+    phase ``j`` if it holds only phases below ``j``; one holding a
+    brighter phase stays.  With two phases, every dark patch enclosed by
+    phase 1 becomes phase 1; a particle cut by the image's edge keeps its
+    open core.
 
     Examples
     --------
@@ -713,6 +736,11 @@ class Micrograph(PhaseMap):
         """From the checked ``[phases] map`` keys: :func:`load_micrograph` on the outline."""
         options = {key: value for key, value in values.items() if key != "path"}
         return load_micrograph(values["path"], context.outline, **options)
+
+    @classmethod
+    def declared_phases(cls, values):
+        """``n_phases``, before the image is read and segmented."""
+        return values["n_phases"]
 
     @property
     def extent(self):

@@ -105,12 +105,33 @@ class PhaseMap:
 
     and answers, with the defaults here for a kind that has nothing to say,
 
+    - :meth:`declared_phases`: the number of phases its keys declare, known
+      before it is built (a scene compares it with the wear law's before a
+      map does its work: a segmentation, a file read);
     - :meth:`file_record`: what a result file records of it;
     - :meth:`segmented_image`: the segmentation of the image it was made from;
     - :meth:`empty_phase_words`: why a phase can have no pixel on a grid.
 
     Callers ask these, never which kind a map is.
     """
+
+    @classmethod
+    def declared_phases(cls, values):
+        """The number of phases the checked keys ``values`` declare (default None: unknown).
+
+        None for a kind whose phases are known only once it is built (the
+        labels of a file); it is then compared with the wear law's after.
+
+        Parameters
+        ----------
+        values : dict
+            The kind's checked ``[phases] map`` keys (as ``from_values`` takes them).
+
+        Returns
+        -------
+        int or None
+        """
+        return None
 
     def empty_phase_words(self, phase, n):
         """Why ``phase`` has no pixel on the face at ``n``, for the refusal (default: none).
@@ -258,6 +279,11 @@ class Homogeneous(PhaseMap):
         """From the checked ``[phases] map`` keys (none)."""
         return cls()
 
+    @classmethod
+    def declared_phases(cls, values):
+        """One phase."""
+        return 1
+
     @property
     def n_phases(self):
         """Number of phases (1)."""
@@ -338,6 +364,11 @@ class Voronoi(PhaseMap):
     def from_values(cls, values, context):
         """From the checked ``[phases] map`` keys."""
         return cls(values["n_seeds"], values["fill_factors"], values["seed"])
+
+    @classmethod
+    def declared_phases(cls, values):
+        """One phase per fill factor."""
+        return len(values["fill_factors"])
 
     @property
     def n_phases(self):
@@ -520,6 +551,12 @@ class Rods(PhaseMap):
                    values.get("rod_phases"))
         rods.check_outline(context.outline)
         return rods
+
+    @classmethod
+    def declared_phases(cls, values):
+        """``1 + max(matrix_phase, rod_phases)``, the rods' phase 1 by default."""
+        rod_phases = values.get("rod_phases", (1,) * len(values["centres"]))
+        return 1 + max(values["matrix_phase"], *rod_phases)
 
     @property
     def n_phases(self):

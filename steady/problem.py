@@ -187,19 +187,19 @@ def check_pixel_scale(outline, n, names):
 
 
 def check_rate_scales(wear, outline, normal_force, names):
-    """The wear law's rate constant ``dg/dp`` at ``pbar`` of every phase, 1/Pa.
+    """The wear law's rate constant of every phase at ``pbar``, 1/Pa.
 
-    ``k m pbar^(m-1)`` for the power law: with ``E*`` and a length it sets
-    the natural sliding distances.
+    :meth:`steady.wear.WearLaw.rate_constant`, named in the law's terms
+    (``dg/dp at pbar = k m pbar^(m-1)`` for the power law): with ``E*`` and
+    a length it sets the natural sliding distances.
     """
     pbar = float(normal_force) / outline.area
     k = np.asarray(wear.wear_field(np.arange(wear.n_phases)), dtype=float)
     with np.errstate(all="ignore"):
         rate_constants = np.asarray(wear.rate_constant(k, np.float64(pbar)), dtype=float)
     for i, kappa in enumerate(np.atleast_1d(rate_constants)):
-        check_scale(float(kappa), f"the rate constant of phase {i}, dg/dp at pbar "
-                    f"(k m pbar^(m-1) for the power law)", "1/Pa",
-                    ("wear", "normal_force", "outline"), names)
+        check_scale(float(kappa), f"the rate constant of phase {i}, {wear.rate_constant_words}",
+                    "1/Pa", ("wear", "normal_force", "outline"), names)
 
 
 def check_phase_scales(wear, counts, normal_force, pixel_area, names):
@@ -218,8 +218,8 @@ def check_phase_scales(wear, counts, normal_force, pixel_area, names):
         check_scale(float(p), f"the steady pressure of phase {i} (eq. 7)", "Pa",
                     ("wear", "normal_force", "outline"), names)
     for i, rate in enumerate(rates):
-        check_scale(float(rate), f"the steady wear rate of phase {i}, g_i(p_i) (k p^m for "
-                    f"the power law)", "1", ("wear", "normal_force", "outline"), names)
+        check_scale(float(rate), f"the steady wear rate of phase {i}, g_i(p_i)", "1",
+                    ("wear", "normal_force", "outline"), names)
 
 
 def check_scales(outline, normal_force, E_star, *, n=None, wear=None, counts=None,

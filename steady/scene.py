@@ -389,17 +389,36 @@ def input_names(outline, normal_force, E_star, n, wear=None):
     return names
 
 
-def _geometry(table, outline, base_dir, n, where="[phases] map"):
-    """The phase geometry of ``[phases] map`` (a registered kind of :data:`PHASE_MAPS`)."""
+def _geometry(table, outline, base_dir, n, wear, where="[phases] map", *, whole=True):
+    """The phase geometry of ``[phases] map`` (a registered kind of :data:`PHASE_MAPS`).
+
+    Its phases are the wear law's (``whole``; for a map of a ``[depth]``
+    section, some of them): compared before the map does its work (a
+    segmentation, a file read) when its keys declare them
+    (:meth:`steady.phases.PhaseMap.declared_phases`), else once it is built.
+    """
     if not isinstance(table, dict):
         raise ValueError(f"{where} must be an inline table with a 'kind', got {shorten(table)}")
     context = Context(base_dir=base_dir, outline=outline, n=n, where=where)
     cls, values = PHASE_MAPS.read(table, context)
+    declared = cls.declared_phases(values)
+    if declared is not None:
+        _check_map_phases(declared, wear, where, whole)
     try:
-        return cls.from_values(values, context)
+        geometry = cls.from_values(values, context)
     except ValueError as err:
         message = one_line(err, 300)
         raise ValueError(message if where in message else f"{where}: {message}") from None
+    _check_map_phases(geometry.n_phases, wear, where, whole)
+    return geometry
+
+
+def _check_map_phases(n_phases, wear, where, whole):
+    """Refuse a map of ``n_phases`` other than the law's (``whole``), or more (a depth layer's)."""
+    if whole:
+        wear.check_phase_count(n_phases)
+    elif n_phases > wear.n_phases:
+        raise ValueError(f"{where} has {n_phases} phases, the wear law {wear.n_phases}")
 
 
 def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
@@ -465,14 +484,15 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
         outline.check_grid(n)
     except ValueError as err:
         raise ValueError(f"[grid] n: {err}") from None
-    geometry = _geometry(doc["phases"]["map"], outline, base_dir, n)
-    depth = _depth(doc["depth"], geometry, outline, base_dir, n) if "depth" in doc else None
-    layout = geometry if depth is None else depth
-    if depth is None:
-        wear = wear_law_from_table(doc["wear"], base_dir, n_phases=geometry.n_phases)
-    else:
-        wear = wear_law_from_table(doc["wear"], base_dir)
+    # The law first: the map's phases are checked against it before the map's work.
+    wear = wear_law_from_table(doc["wear"], base_dir)
+    geometry = _geometry(doc["phases"]["map"], outline, base_dir, n, wear,
+                         whole="depth" not in doc)
+    depth = None
+    if "depth" in doc:
+        depth = _depth(doc["depth"], geometry, outline, base_dir, n, wear)
         _check_layer_phases(depth, wear)
+    layout = geometry if depth is None else depth
     names = phase_keys.get("names")
     if names is not None:
         try:
@@ -501,7 +521,7 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
     return dataclasses.replace(scene, _checked=scene._inputs())
 
 
-def _depth(table, substrate, outline, base_dir, n):
+def _depth(table, substrate, outline, base_dir, n, wear):
     """The :class:`DepthLayers` of ``[depth]`` over the ``[phases] map`` ``substrate``."""
     values = read_table(table, "[depth]", DEPTH_KEYS, base_dir, ignore=("layers",))
     layers = table.get("layers")
@@ -519,24 +539,22 @@ def _depth(table, substrate, outline, base_dir, n):
         if "phase" in keys:
             maps.append(LayerPhase(keys["phase"]))
         else:
-            maps.append(_geometry(layer["map"], outline, base_dir, n, where=f"{where} map"))
+            maps.append(_geometry(layer["map"], outline, base_dir, n, wear,
+                                  where=f"{where} map", whole=False))
         thicknesses.append(keys["thickness"])
     return DepthLayers(tuple(thicknesses), tuple(maps), substrate)
 
 
 def _check_layer_phases(depth, wear):
-    """Refuse a layer phase outside the wear law's phases, and a law for other phases."""
+    """Refuse a layer phase outside the wear law's phases, and a law for other phases.
+
+    Each map's phases were checked against the law as it was read (:func:`_geometry`).
+    """
     top = wear.n_phases - 1
     for i, g in enumerate(depth.maps):
         if isinstance(g, LayerPhase) and g.phase > top:
             raise ValueError(f"[depth] layers[{i}] phase = {g.phase} is outside the wear law's "
                              f"phases 0..{top}")
-        if g.n_phases > wear.n_phases:
-            raise ValueError(f"[depth] layers[{i}] map has {g.n_phases} phases, the wear law "
-                             f"{wear.n_phases}")
-    if depth.substrate.n_phases > wear.n_phases:
-        raise ValueError(f"[phases] map has {depth.substrate.n_phases} phases, the wear law "
-                         f"{wear.n_phases}")
     if depth.n_phases != wear.n_phases:
         raise ValueError(f"[wear] has {wear.n_phases} phases, the [depth] layers and the "
                          f"[phases] map use {depth.n_phases} (phases 0..{depth.n_phases - 1})")

@@ -6,7 +6,8 @@ a :class:`WearLaw`: the class states, once, what the model asks of a law,
 and every caller asks the law (its methods and its capabilities), never
 which class it is.
 
-- Identity: ``n_phases``, ``describe()``, its ``[wear]`` values as a scene
+- Identity: ``n_phases`` (:meth:`WearLaw.check_phase_count` refuses a map of
+  another count), ``describe()``, its ``[wear]`` values as a scene
   file writes them (:meth:`WearLaw.scene_values`, :meth:`WearLaw.scene_words`
   for messages) and the attributes result and run files record
   (:meth:`WearLaw.file_attributes`, read back by :func:`wear_law_from_file`).
@@ -202,12 +203,18 @@ class WearLaw(abc.ABC):
         None): needed by non-uniform sliding (``[sliding]``), run-ins across
         interfaces (a depth-varying map) and, with ``exponent``, the fit of
         wear ratios.
+    rate_constant_words : str
+        What :meth:`rate_constant` is, in the law's terms, for messages
+        (default ``"dg/dp at pbar"``; the power law's ``"dg/dp at pbar =
+        k m pbar^(m-1)"``).
     """
 
     kind = ""
     keys = ()
     linear = False
     factor = None
+    #: The rate constant in the law's terms, for messages (:meth:`rate_constant`).
+    rate_constant_words = "dg/dp at pbar"
 
     # -- identity ----------------------------------------------------------
     @property
@@ -245,6 +252,33 @@ class WearLaw(abc.ABC):
         # The default law goes without saying, as a scene file may leave it out.
         law = f"law = {self.kind!r}, " if self.kind not in ("", WEAR_LAWS.default) else ""
         return f"[wear] {law}{words}"
+
+    def check_phase_count(self, n_phases, what="the phase map"):
+        """Refuse a phase map of another number of phases than the law's.
+
+        Parameters
+        ----------
+        n_phases : int
+            The phases of ``what``.
+        what : str, optional
+            What has them, for the message (default ``"the phase map"``).
+
+        Raises
+        ------
+        ValueError
+            ``n_phases`` is not :attr:`n_phases`; the message names the
+            law's first per-phase key (:attr:`keys`) and its values.
+        """
+        if n_phases == self.n_phases:
+            return
+        values = self.scene_values()
+        key = next((key for key in self.keys if key.per_phase), None)
+        if key is None:
+            raise ValueError(f"{self.scene_words()} is a law of {self.n_phases} phase(s) but "
+                             f"{what} has {n_phases}")
+        entries = "values" if key.type == "numbers" else "lists"
+        raise ValueError(f"[wear] {key.name} has {len(values[key.name])} {entries} "
+                         f"{shorten(values[key.name])} but {what} has {n_phases} phases")
 
     def file_attributes(self):
         """What result and run files record of the law: ``name -> (value, udunits unit)``.
@@ -403,13 +437,14 @@ class WearLaw(abc.ABC):
 
     @abc.abstractmethod
     def rate_constant(self, field, mean_pressure):
-        """``dg/dp`` at the mean pressure of pixels of the given field, 1/Pa.
+        """The slope ``g'`` of the rate at the mean pressure, of pixels of the given field, 1/Pa.
 
         The rate at which a pressure difference wears the face flat; with
         ``E*`` and a length it sets the natural sliding distances
-        (``s* = L / (g'(pbar) E*)``).  ``field`` holds
-        :meth:`wear_field` entries (one per phase:
-        ``wear_field(np.arange(P))``).
+        (``s* = L / (g' E*)``): ``dg/dp`` at ``pbar`` for a smooth law
+        (:attr:`rate_constant_words` says which slope), positive wherever
+        the law has a steady state.  ``field`` holds :meth:`wear_field`
+        entries (one per phase: ``wear_field(np.arange(P))``).
         """
 
 
@@ -460,6 +495,7 @@ class PowerLaw(WearLaw):
 
     coefficients: tuple
     exponent: float = 1.0
+    rate_constant_words = "dg/dp at pbar = k m pbar^(m-1)"
 
     def __post_init__(self):
         """Check the coefficients and the exponent; store them as floats."""
@@ -471,11 +507,10 @@ class PowerLaw(WearLaw):
     @classmethod
     def from_values(cls, values, context):
         """From the checked ``[wear]`` keys; their count must be the phase map's."""
-        k = values["coefficients"]
-        if context.n_phases is not None and len(k) != context.n_phases:
-            raise ValueError(f"[wear] coefficients has {len(k)} values {shorten(list(k))} but "
-                             f"the phase map has {context.n_phases} phases")
-        return cls(k, values["exponent"])
+        law = cls(values["coefficients"], values["exponent"])
+        if context.n_phases is not None:
+            law.check_phase_count(context.n_phases)
+        return law
 
     # -- what every law says -------------------------------------------
     @property
@@ -698,6 +733,7 @@ class ThresholdLaw(WearLaw):
     coefficients: tuple
     thresholds: tuple
     exponent: float = 1.0
+    rate_constant_words = "dg/dp at p_th + pbar = k m pbar^(m-1)"
 
     def __post_init__(self):
         """Check the values (through :class:`PowerLaw`) and the thresholds."""
@@ -939,6 +975,7 @@ class TableLaw(WearLaw):
 
     pressures: tuple
     rates: tuple
+    rate_constant_words = "the secant g_i(z_i + pbar) / pbar above the last zero rate z_i"
 
     def __post_init__(self):
         """Check the tables; build the interpolants and their extrapolation slopes."""
@@ -966,11 +1003,10 @@ class TableLaw(WearLaw):
     @classmethod
     def from_values(cls, values, context):
         """From the checked ``[wear]`` keys; one table per phase of the phase map."""
-        p, g = values["pressures"], values["rates"]
-        if context.n_phases is not None and len(p) != context.n_phases:
-            raise ValueError(f"[wear] pressures has {len(p)} tables but the phase map has "
-                             f"{context.n_phases} phases")
-        return cls(p, g)
+        law = cls(values["pressures"], values["rates"])
+        if context.n_phases is not None:
+            law.check_phase_count(context.n_phases)
+        return law
 
     # -- what every law says -------------------------------------------
     @property
@@ -1062,10 +1098,42 @@ class TableLaw(WearLaw):
         p = np.array([self.phase_pressure(i, math.exp(log_rate)) for i in range(len(areas))])
         balance = float(np.dot(areas[areas > 0], p[areas > 0]))
         if not abs(balance - F) <= 1e-9 * F:
-            raise ValueError(f"the load F_N = {F:.6g} N falls on a flat part of a wear table "
-                             f"(the phases carry {balance:.6g} N at the rate "
-                             f"{math.exp(log_rate):.6g}): the steady pressures are not unique")
+            raise ValueError(self._flat_words(areas, math.exp(log_rate), F, balance))
         return p
+
+    def _flat_words(self, areas, rate, force, balance):
+        """Why the load falls on a flat part of a table: the phase, its table and the part."""
+        flat = [(i, part) for i, a in enumerate(areas) if a > 0
+                for part in [self._flat_part(i, rate)] if part is not None]
+        if not flat:
+            return (f"the load F_N = {force:.6g} N falls on a flat part of a wear table (the "
+                    f"phases carry {balance:.6g} N at the rate {rate:.6g}): the steady pressures "
+                    f"are not unique")
+        i, (level, low, high) = flat[0]
+        span = f"from {low:.6g} Pa on" if math.isinf(high) else f"from {low:.6g} to {high:.6g} Pa"
+        return (f"the load F_N = {force:.6g} N falls on a flat part of the wear table of phase "
+                f"{i} (pressures {shorten(list(self.pressures[i]))} Pa, rates "
+                f"{shorten(list(self.rates[i]))}): its rate is {level:.6g} at every pressure "
+                f"{span}, so the steady pressures are not unique (the least of that rate carry "
+                f"{balance:.6g} N); a table that rises there, or another load")
+
+    def _flat_part(self, i, rate):
+        """``(level, low, high)``: the flat part of phase ``i``'s rate at ``rate``, or None.
+
+        ``g_i = level`` (the tabulated rate within 1e-9 of ``rate``) on
+        ``[low, high]`` Pa: between tabulated points of that rate (PCHIP is
+        constant between equal rates), ``high`` inf when the rate stays
+        there beyond the last point (an end slope of 0).
+        """
+        p, g = np.asarray(self.pressures[i]), np.asarray(self.rates[i])
+        same = np.flatnonzero(np.isclose(g, rate, rtol=1e-9, atol=0))
+        if not same.size:
+            return None
+        first, last = int(same[0]), int(same[-1])
+        beyond = last == p.size - 1 and self._ends[i][2] == 0
+        if first == last and not beyond:
+            return None
+        return float(g[first]), float(p[first]), math.inf if beyond else float(p[last])
 
     # -- the run-in, pixel by pixel ------------------------------------
     def wear_field(self, labels):
@@ -1103,10 +1171,16 @@ class TableLaw(WearLaw):
         return float(np.max(self._by_phase(self.phase_slope, pressure, coefficients)))
 
     def rate_constant(self, field, mean_pressure):
-        """``g_i'`` at ``pbar`` above the phase's last zero-rate pressure, 1/Pa."""
+        """The secant ``g_i(z_i + pbar) / pbar``, 1/Pa, ``z_i`` the last zero-rate pressure.
+
+        The table's mean slope over ``pbar`` above the pressure where the
+        phase starts to wear: positive for every table (its rate rises
+        above ``z_i``), where a tangent would vanish on a flat part; a
+        linear table's slope.
+        """
         phase = _phase_of(field)
         shifted = np.append(0.0, self._zeros)[phase] + mean_pressure
-        return self._by_phase(self.phase_slope, shifted, field)
+        return self._by_phase(self.phase_rate, shifted, field) / mean_pressure
 
 
 def as_wear_law(wear):

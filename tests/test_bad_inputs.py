@@ -100,6 +100,17 @@ def argv(*args):
     return make
 
 
+def grey_image(d):
+    """A 64 x 64 grey-level micrograph of uniform noise, ``grey.npy``."""
+    np.save(d / "grey.npy", np.random.default_rng(3517).random((64, 64)))
+
+
+def micrograph_map(text, keys):
+    """The scene with a micrograph map of ``grey.npy`` and ``keys``."""
+    return re.sub(r"^map = .*$", f'map = {{ kind = "micrograph", path = "grey.npy", {keys} }}',
+                  text, count=1, flags=re.M)
+
+
 def png_garbage(d):
     (d / "map.png").write_bytes(b"GIF89a" + bytes(64))
 
@@ -171,6 +182,14 @@ CASES = [
          "m.npy' must hold integers, got dtype float64"),
     Case("map PNG garbage", scene_and(png_garbage, lambda t: file_map(t, "map.png")),
          "map.png' is not a PNG image"),
+    # -- micrographs: refused before the image is segmented (10 phases would take years)
+    Case("micrograph of 10 phases, 2 coefficients", scene_and(
+        grey_image, lambda t: micrograph_map(t, "n_phases = 10")),
+         "but the phase map has 10 phases"),
+    Case("micrograph of 6 phases by Otsu", scene_and(
+        grey_image, lambda t: with_key(micrograph_map(t, "n_phases = 6"), "coefficients",
+                                       "[1e-13, 2e-13, 3e-13, 4e-13, 5e-13, 6e-13]")),
+         "[phases] map: n_phases = 6 by Otsu's thresholds would search C(256, 5) = 8.8e+09 sets"),
     # -- output paths
     Case("no -o", lambda d, base: [write(d, "s.toml", base)], "the following arguments are "
                                                               "required: -o/--output",

@@ -70,7 +70,8 @@ def test_a_run_in_checks_each_scale_and_map_once(tmp_path, capsys, counted, prog
     checked = {what for what, *_ in scales}
     for what in ("the mean pressure pbar = F_N / A", "the pixel h = 2 L / n",
                  "the steady pressure of phase 1 (eq. 7)",
-                 "the fastest relaxation distance h / (k m pbar^(m-1) E*)"):
+                 "the fastest relaxation distance h / (g' E*) (g' = dg/dp at pbar = k m "
+                 "pbar^(m-1))"):
         assert what in checked, f"{what!r} was not checked at all: {sorted(checked)}"
     # One mean pressure per force the run meets: 10 N, and 20 N and 5 N under the programme.
     means = sorted(v for what, _, v, _ in scales if what == "the mean pressure pbar = F_N / A")

@@ -7,6 +7,7 @@ are given in units of the gap between the levels.
 """
 
 import importlib
+import importlib.util
 import pathlib
 import subprocess
 import sys
@@ -346,6 +347,34 @@ def test_too_many_phases_for_the_grey_levels(skimage, tmp_path):
     np.save(tmp_path / "two.npy", np.eye(16))
     with pytest.raises(ValueError, match="2 distinct grey levels, fewer than the 3 phases"):
         load_micrograph(tmp_path / "two.npy", RADIUS, 3)
+
+
+def test_otsu_beyond_its_limit_asks_for_thresholds_before_the_image_is_read(tmp_path):
+    # 6 phases: C(256, 5) = 8.8e9 sets of thresholds, minutes (docs/benchmarks.md).
+    with pytest.raises(ValueError) as err:
+        load_micrograph(tmp_path / "absent.npy", RADIUS, 6)
+    assert ("n_phases = 6 by Otsu's thresholds would search C(256, 5) = 8.8e+09 sets" in
+            str(err.value) and "(at most 5 phases): give thresholds = [...], 5 increasing grey "
+            "levels" in str(err.value)), str(err.value)
+    # 5 phases are searched: the image is then looked for.
+    with pytest.raises(ValueError, match="absent.npy' does not exist"):
+        load_micrograph(tmp_path / "absent.npy", RADIUS, 5)
+    image = np.random.default_rng(3517).random((32, 32))
+    with pytest.raises(ValueError, match="n_phases = 7 by Otsu's thresholds"):
+        segment(image, 7)
+    given = segment(image, 7, thresholds=np.linspace(0.1, 0.9, 6))
+    assert given.n_phases == 7 and given.method == "manual", given.summary()
+
+
+def test_bench_otsu_smoke(skimage, capsys):
+    spec = importlib.util.spec_from_file_location(
+        "bench_otsu", ROOT / "studies" / "benchmarks" / "bench_otsu.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    rows = bench.main(["--size", "16", "--phases", "2", "3", "--repeat", "1"])
+    assert [(row["phases"], row["sets"]) for row in rows] == [(2, 256), (3, 32640)], rows
+    assert all(row["wall"] > 0 for row in rows), rows
+    assert "6 phases, refused" in capsys.readouterr().out
 
 
 def test_colour_png_is_read_as_luminance(tmp_path):

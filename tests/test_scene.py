@@ -143,6 +143,66 @@ def test_bad_keys(tmp_path, old, new, fragment):
     assert fragment in str(err.value), f"message {err.value!r} lacks {fragment!r}"
 
 
+#: Phase maps and wear laws of different phase counts, and the refusal of each; the map is
+#: never built (a micrograph of 10 phases would be segmented for hours, a missing image read).
+COUNT_MISMATCHES = {
+    "micrograph of 10, power law of 2": (
+        'map = { kind = "micrograph", path = "absent.png", n_phases = 10 }',
+        "coefficients = [1e-09, 1e-08]", "",
+        "[wear] coefficients has 2 values [1e-09, 1e-08] but the phase map has 10 phases"),
+    "voronoi of 3, table of 2": (
+        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.2, 0.3, 0.5], seed = 2024 }',
+        'law = "table"\npressures = [[0, 1e5], [0, 1e5]]\nrates = [[0, 1e-9], [0, 1e-8]]', "",
+        "[wear] pressures has 2 lists [[0.0, 100000.0], [0.0, 100000.0]] but the phase map has 3 "
+        "phases"),
+    "inclusions of 2, threshold law of 3": (
+        'map = { kind = "inclusions", radius = 4e-4, seed = 2024, fill_factor = 0.2 }',
+        'law = "threshold"\ncoefficients = [1e-9, 1e-8, 1e-7]\nthresholds = [0, 0, 0]', "",
+        "[wear] coefficients has 3 values [1e-09, 1e-08, 1e-07] but the phase map has 2 phases"),
+    "rods of 3, Archard's law of 2": (
+        'map = { kind = "rods", centres = [[0.0, 0.0], [0.002, 0.0]], radii = [1e-3, 5e-4], '
+        'rod_phases = [1, 2] }', 'law = "archard"\ncoefficients = [1e-9, 1e-8]', "",
+        "[wear] coefficients has 2 values [1e-09, 1e-08] but the phase map has 3 phases"),
+    "substrate of 3 under a layer, law of 2": (
+        'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.2, 0.3, 0.5], seed = 2024 }',
+        "coefficients = [1e-9, 1e-8]",
+        '[depth]\nkind = "layers"\n[[depth.layers]]\nthickness = 1e-4\nphase = 1\n',
+        "[phases] map has 3 phases, the wear law 2"),
+    "layer micrograph of 3, law of 2": (
+        'map = { kind = "homogeneous" }', "coefficients = [1e-9, 1e-8]",
+        '[depth]\nkind = "layers"\n[[depth.layers]]\nthickness = 1e-4\n'
+        'map = { kind = "micrograph", path = "absent.png", n_phases = 3 }\n',
+        "[depth] layers[0] map has 3 phases, the wear law 2"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(COUNT_MISMATCHES))
+def test_phase_counts_are_compared_before_the_map_is_built(tmp_path, monkeypatch, case):
+    from steady.phases import PHASE_MAPS
+
+    def built(cls, values, context):
+        pytest.fail(f"{case}: the {cls.kind} map was built before the phase counts were compared")
+
+    for kind in PHASE_MAPS:
+        if kind != "homogeneous":
+            monkeypatch.setattr(PHASE_MAPS[kind], "from_values", classmethod(built))
+    phase_map, wear, depth, fragment = COUNT_MISMATCHES[case]
+    text = re.sub(r"^map = .*$", lambda _: phase_map, BASE, count=1, flags=re.M)
+    text = re.sub(r"^coefficients = .*\nexponent = .*$", lambda _: wear, text, count=1,
+                  flags=re.M)
+    with pytest.raises(ValueError) as err:
+        parse_scene(text + depth, tmp_path)
+    assert fragment in str(err.value), f"{case}: {str(err.value)!r} lacks {fragment!r}"
+
+
+def test_a_file_map_is_compared_with_the_law_once_read(tmp_path):
+    np.save(tmp_path / "three.npy", np.repeat(np.arange(3), 22)[None, :64].repeat(64, 0))
+    text = scene_text("parser", map="file", path="three.npy")
+    with pytest.raises(ValueError, match=r"\[wear\] coefficients has 2 values \[1e-09, 1.7e-09\] "
+                                         r"but the phase map has 3 phases"):
+        parse_scene(text, tmp_path)
+
+
 def test_bad_rods_scene(tmp_path):
     text = scene_text("parser", map="rods", centres=[[0.0, 0.0], [0.001, 0.0]],
                       radii=[0.001, 0.001])

@@ -20,11 +20,12 @@ threshold run starts from the flat punch, whose central pressure (about
 
 import importlib.util
 import pathlib
+import re
 
 import h5py
 import numpy as np
 import pytest
-from conftest import FORCE, GEOMETRIES, K1, RADIUS, problem, run_cli, scene_text
+from conftest import FORCE, GEOMETRIES, K1, RADIUS, one_error_line, problem, run_cli, scene_text
 from scipy.optimize import brentq
 
 import steady.cli.solve as steady_cli
@@ -195,6 +196,53 @@ def test_table_with_a_zero_rate_start_acts_as_a_threshold():
     assert np.all(pressures > 0.5 * PBAR), f"steady pressures {pressures}"
 
 
+def test_table_flat_at_pbar_reaches_its_steady_face():
+    # Phase 1 (30 %) wears at 2 K1 pbar from 0.8 to 1.2 pbar, a plateau around pbar where the
+    # slope is 0; its steady pressure, 2.42 pbar, lies beyond it.
+    r = K1 * PBAR
+    table = TableLaw(((0, PBAR, 4 * PBAR), (0, 0.8 * PBAR, 1.2 * PBAR, 4 * PBAR)),
+                     ((0, 10 * r, 40 * r), (0, 2 * r, 2 * r, 10 * r)))
+    assert float(table.phase_slope(1, PBAR)) == 0.0, "test setup: flat at pbar"
+    rate_constants = table.rate_constant(table.wear_field(np.arange(2)), PBAR)
+    assert np.allclose(rate_constants, [10 * K1, 2 * K1], rtol=1e-14, atol=0), \
+        f"the secants g_i(pbar) / pbar: {rate_constants}"
+    _, wp = assert_reaches_steady(table, "table flat at pbar")
+    pressures = table.phase_pressures(wp.counts, wp.normal_force, wp.halfspace.h ** 2)
+    assert pressures[1] > 1.2 * PBAR, f"steady pressures {pressures / PBAR} pbar"
+
+
+def test_a_load_on_a_flat_part_names_the_table(tmp_path, capsys):
+    # Phase 0's rate stays 1e-9 from 1e5 Pa on; 10 N on the disk needs more of it.
+    law = ('[wear]\nlaw = "table"\npressures = [[0, 1e5, 2e5], [0, 1e5, 2e5]]\n'
+           "rates = [[0, 1e-9, 1e-9], [0, 1e-8, 3e-8]]\n")
+    for force, status_wanted in ((2.0, 0), (10.0, 2)):
+        path = tmp_path / f"scene_{force:g}.toml"
+        path.write_text(re.sub(r"^\[wear\]\ncoefficients = .*\n", law,
+                               scene_text("steady", normal_force=force), flags=re.M))
+        status, _, err = run_cli(steady_cli, [path, "-o", tmp_path / "out.h5", "--force",
+                                              "--no-slope-error"], capsys)
+        assert status == status_wanted, f"{force} N: {err}"
+    line = one_error_line(err)
+    assert ("falls on a flat part of the wear table of phase 0 (pressures [0.0, 100000.0, "
+            "200000.0] Pa, rates [0.0, 1e-09, 1e-09]): its rate is 1e-09 at every pressure from "
+            "100000 Pa on, so the steady pressures are not unique" in line), line
+
+
+def test_table_scales_are_named_in_the_table_s_terms(tmp_path):
+    # Phase 0 wears 1e-40 at 1e5 Pa: its secant at pbar = 2e5 Pa is 1e-45 1/Pa.
+    law = ('[wear]\nlaw = "table"\npressures = [[0, 1e5], [0, 1e5]]\n'
+           "rates = [[0, 1e-40], [0, 1e-8]]\n")
+    text = re.sub(r"^\[wear\]\ncoefficients = .*\n", law, scene_text("steady"), flags=re.M)
+    with pytest.raises(ValueError) as err:
+        parse_scene(text, tmp_path)
+    message = str(err.value)
+    assert message.startswith("[wear] law = 'table', pressures = [[0.0, 100000.0], [0.0, "
+                              "100000.0]], rates = [[0.0, 1e-40], [0.0, 1e-08]] and"), message
+    assert ("the rate constant of phase 0, the secant g_i(z_i + pbar) / pbar above the last "
+            "zero rate z_i = 1e-45 1/Pa is outside" in message), message
+    assert "power law" not in message and "coefficients" not in message, message
+
+
 @pytest.mark.parametrize("pressures, rates, fragment", [
     ([[0, 1]], [[0, 1, 2]], "must be lists of the same length"),
     ([[0]], [[0]], "needs at least 2 points, got 1"),
@@ -219,8 +267,8 @@ def test_scene_keys_build_the_laws(tmp_path):
     table = wear_law_from_table({"law": "table", "pressures": [[0, 1e5], [0, 1e5]],
                                  "rates": [[0, 1e-9], [0, 1e-8]]}, n_phases=2)
     assert isinstance(table, TableLaw) and table.n_phases == 2, table
-    with pytest.raises(ValueError, match=r"\[wear\] pressures has 1 tables but the phase map "
-                                         r"has 2 phases"):
+    with pytest.raises(ValueError, match=r"\[wear\] pressures has 1 lists \[\[0.0, 100000.0\]\] "
+                                         r"but the phase map has 2 phases"):
         wear_law_from_table({"law": "table", "pressures": [[0, 1e5]], "rates": [[0, 1e-9]]},
                             n_phases=2)
     with pytest.raises(ValueError, match=r"\[wear\] thresholds must be an array of numbers"):

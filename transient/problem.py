@@ -42,11 +42,13 @@ def check_run_in_scales(problem, names=None, force=None):
     when it was built), a run-in has its distances: the run-in distance
     ``s* = L / (k_min' E*)`` and the fastest relaxation distance
     ``h / (k_max' E*)`` (``k'`` the law's rate constant at the pixel mean
-    pressure, ``k m pbar^(m-1)``), both in range; and the wear rate of a
-    pixel that carries the whole load, ``g(F_N / h^2)`` of the fastest
-    phase, below :data:`PEAK_RATE_LIMIT` (a large exponent overflows
-    ``p^m`` at the rim's pressures long before at ``pbar``).  Computed as
-    the run computes them: an overflow is ``inf``, an underflow 0.
+    pressure, ``k m pbar^(m-1)`` for the power law; messages name it in the
+    law's terms, :attr:`steady.wear.WearLaw.rate_constant_words`), both in
+    range; and the wear rate of a pixel that carries the whole load,
+    ``g(F_N / h^2)`` of the fastest phase, below :data:`PEAK_RATE_LIMIT` (a
+    large exponent overflows ``p^m`` at the rim's pressures long before at
+    ``pbar``).  Computed as the run computes them: an overflow is ``inf``,
+    an underflow 0.
 
     Parameters
     ----------
@@ -78,9 +80,10 @@ def check_run_in_scales(problem, names=None, force=None):
         s_star = float(problem.outline.scale / (slow * E))
         fastest = float(h / (fast * E))
     inputs = ("wear", "normal_force", "outline", "E_star")
-    check_scale(s_star, "the run-in distance s* = L / (k m pbar^(m-1) E*) of the slowest "
-                "phase", "m", inputs, names)
-    check_scale(fastest, "the fastest relaxation distance h / (k m pbar^(m-1) E*)", "m",
+    slope = f"(g' = {wear.rate_constant_words})"
+    check_scale(s_star, f"the run-in distance s* = L / (g' E*) of the slowest phase {slope}",
+                "m", inputs, names)
+    check_scale(fastest, f"the fastest relaxation distance h / (g' E*) {slope}", "m",
                 (*inputs, "n"), names)
     if not peak < PEAK_RATE_LIMIT:  # NaN is not
         given = " and ".join(names[key] for key in ("wear", "normal_force", "outline", "n"))
@@ -242,8 +245,8 @@ class WearProblem:
     def distance_scale(self):
         """``s* = L / (k_min E*)``, m: the slow (run-in) sliding distance (``L = a``, a disk).
 
-        ``k`` is the law's rate constant ``g'(pbar)`` (``k m pbar^(m-1)`` for
-        the power law).
+        ``k`` is the law's rate constant (:meth:`steady.wear.WearLaw.rate_constant`:
+        ``g'(pbar) = k m pbar^(m-1)`` for the power law).
         """
         return self.scale / (self._rate_constants().min() * self.halfspace.E_star)
 
