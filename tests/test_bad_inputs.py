@@ -242,6 +242,34 @@ CASES = [
         lambda d: np.save(d / "h.npy", np.zeros((8, 8))),
         lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
          "h.npy' holds an array of shape (8, 8); (32, 32) is needed", ("transient",)),
+    # -- every array read from a file refuses complex numbers (numpy would keep the real part)
+    Case("[initial_face] complex file", scene_and(
+        lambda d: np.save(d / "h.npy", np.zeros((32, 32)) * (1 + 1e-6j)),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "h.npy' holds complex numbers (complex128); it must hold real numbers", ("transient",)),
+    Case("[initial_face] boolean file", scene_and(
+        lambda d: np.save(d / "h.npy", np.zeros((32, 32), dtype=bool)),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "h.npy' holds booleans (bool); it must hold real numbers", ("transient",)),
+    Case("map of complex numbers", scene_and(
+        lambda d: np.save(d / "m.npy", np.zeros((8, 8), dtype=complex)),
+        lambda t: file_map(t, "m.npy")),
+         "m.npy' holds complex numbers (complex128); it must hold integers"),
+    Case("mask of complex numbers", scene_and(
+        lambda d: np.save(d / "m.npy", np.ones((8, 8), dtype=complex)),
+        lambda t: t.replace("radius = 0.004",
+                            'shape = "mask"\npath = "m.npy"\npixel_size = 1e-3')),
+         "m.npy' holds complex numbers (complex128); it must hold booleans (True on the face) "
+         "or integers"),
+    Case("voxels of complex numbers", scene_and(
+        lambda d: np.save(d / "v.npy", np.zeros((8, 8, 2), dtype=complex)),
+        lambda t: with_key(t, "map", '{ kind = "voxels", file = "v.npy", voxel_depth = 1e-4 }')),
+         "v.npy' holds complex numbers (complex128); it must hold integers"),
+    Case("micrograph of complex numbers", scene_and(
+        lambda d: np.save(d / "g.npy", np.zeros((64, 64), dtype=complex)),
+        lambda t: with_key(t, "map", '{ kind = "micrograph", path = "g.npy", n_phases = 2, '
+                                     'pixel_size = 1e-4 }')),
+         "g.npy' holds complex numbers (complex128); it must hold real numbers or booleans"),
     Case("[initial_face] angle", scene(lambda t: with_section(
         t, "initial_face", 'kind = "tilted"\nangle = 2.0')),
          "[initial_face] angle must be a number in [0, 1.5708) (rad), got 2.0", ("transient",)),

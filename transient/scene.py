@@ -32,7 +32,7 @@ import types
 
 import numpy as np
 
-from steady.array_files import npy_header
+from steady.array_files import REAL_NUMBERS, npy_header
 from steady.scene import RUN_IN_SECTIONS, load_scene, problem_of
 from steady.schema import Context
 from steady.text import one_line
@@ -145,8 +145,8 @@ def parse_initial_face(table, base_dir):
     build, values = INITIAL_FACES.read(table, context)
     for key in build.keys:
         if key.type == "path" and key.name in values:
-            # Exists, is a .npy file, not truncated: checked before the run.
-            npy_header(values[key.name], what="initial face file")
+            # Exists, is a .npy file of real numbers, not truncated: checked before the run.
+            npy_header(values[key.name], what="initial face file", holds=REAL_NUMBERS)
     return InitialFace(build.kind, types.MappingProxyType(values))
 
 
