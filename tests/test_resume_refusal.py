@@ -127,14 +127,16 @@ def _layered(thickness=None):
 @pytest.mark.parametrize("before, after, expected", [
     (_layered(3e-4), _layered(),
      "was run on other phases below the face (248 interfaces at depth 0.0003 m below 248 of "
-     "812 face pixels); the scene has no phases below the face (no [depth], a 2-d map)"),
+     "812 face pixels); the scene has phases that do not change with depth (no [depth], a "
+     "2-d map)"),
     (_layered(), _layered(3e-4),
-     "was run on no phases below the face; the scene has phases below the face ([depth] or a "
-     "3-d map: 248 interfaces at depth 0.0003 m below 248 of 812 face pixels)"),
+     "was run on phases that do not change with depth; the scene has phases that change with "
+     "depth ([depth] or a 3-d map: 248 interfaces at depth 0.0003 m below 248 of 812 face "
+     "pixels)"),
     (_layered(3e-4), _layered(2e-4),
      "was run on other phases below the face (248 interfaces at depth 0.0003 m below 248 of "
-     "812 face pixels); the scene has phases below the face ([depth] or a 3-d map: 248 "
-     "interfaces at depth 0.0002 m below 248 of 812 face pixels)"),
+     "812 face pixels); the scene has phases that change with depth ([depth] or a 3-d map: "
+     "248 interfaces at depth 0.0002 m below 248 of 812 face pixels)"),
 ], ids=["layer -> columnar", "columnar -> layer", "thickness"])
 def test_resume_on_other_phases_below_the_face_is_refused(tmp_path, capsys, before, after,
                                                          expected):
@@ -191,5 +193,12 @@ def test_a_checkpoint_records_the_digest_of_its_columns(tmp_path):
     with pytest.raises(ValueError, match=r"was run on other phases below the face \(its "
                                          r"checkpoint's columns_sha256 differs\)"):
         check_same_columns(path, attrs, stored, layered(2e-6).columns)
-    with pytest.raises(ValueError, match=r"the scene has no phases below the face"):
+    with pytest.raises(ValueError, match=r"the scene has phases that do not change with depth"):
         check_same_columns(path, attrs, stored, None)
+    # A file written before the digest was recorded: a depth run, columns unknown.
+    earlier = {key: value for key, value in attrs.items() if key != "columns_sha256"}
+    assert stored_columns_digest(earlier, stored) is None, "unrecorded columns taken as known"
+    check_same_columns(path, earlier, stored, layered(2e-6).columns)  # resumed with a note
+    with pytest.raises(ValueError, match=r"was run on phases that change with depth; the scene "
+                                         r"has phases that do not change with depth"):
+        check_same_columns(path, earlier, stored, None)

@@ -154,8 +154,9 @@ def check_same_columns(path, stored_attrs, stored, columns):
     on the scene's (the caller notes it).
     """
     digest = stored_columns_digest(stored_attrs, stored)
-    scene = ("no phases below the face (no [depth], a 2-d map)" if columns is None
-             else f"phases below the face ([depth] or a 3-d map: {columns.describe()})")
+    scene = ("phases that do not change with depth (no [depth], a 2-d map)" if columns is None
+             else f"phases that change with depth ([depth] or a 3-d map: "
+                  f"{columns.describe()})")
     if digest is None:
         if columns is None:
             raise ValueError(f"{str(path)!r} was run on phases that change with depth; the "
@@ -164,7 +165,7 @@ def check_same_columns(path, stored_attrs, stored, columns):
     if digest == ("" if columns is None else columns.digest):
         return
     if not digest:
-        was = "no phases below the face"
+        was = "phases that do not change with depth"
     elif stored.columns is not None:
         was = f"other phases below the face ({stored.columns.describe()})"
     else:
