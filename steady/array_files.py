@@ -3,14 +3,21 @@
 A scene names files (phase maps, face masks, micrographs, initial faces);
 every one is checked before its data are read: it exists and is a regular
 file, is not empty, has a valid header (a ``.npy`` header or a PNG
-signature), announces a shape the caller accepts, and holds the bytes its
-header announces -- so that an empty, truncated, foreign or oversized file
-is refused with a message naming it, never an ``EOFError`` or a
-``MemoryError`` half-way.
+signature), announces a shape and a type of number the caller accepts, and
+holds the bytes its header announces -- so that an empty, truncated,
+foreign or oversized file is refused with a message naming it, never an
+``EOFError`` or a ``MemoryError`` half-way.
+
+What a ``.npy`` file may hold is one :class:`Holds` per kind of array
+(:data:`REAL_NUMBERS` for heights and recessions, :data:`INTEGERS`,
+:data:`LABELS`, :data:`MASK`, :data:`NUMBERS`), stated by every reader.
+No array of the project is complex: numpy would keep the real part of
+one, and make heights of 0 and 1 of a boolean one, without a word.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import pathlib
 import stat
@@ -19,8 +26,57 @@ import numpy as np
 
 from .text import format_bytes
 
-__all__ = ["array_suffix", "input_file_size", "integer_face", "npy_header", "png_size",
-           "read_face_mask", "read_npy", "read_png"]
+__all__ = ["INTEGERS", "LABELS", "MASK", "NUMBERS", "REAL_NUMBERS", "Holds", "array_suffix",
+           "input_file_size", "integer_face", "npy_header", "png_size", "read_face_mask",
+           "read_npy", "read_png"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Holds:
+    """What an array read from a file may hold: numpy dtype kinds, and their name.
+
+    Parameters
+    ----------
+    kinds : str
+        The :attr:`numpy.dtype.kind` letters accepted (``"b"`` booleans,
+        ``"i"``, ``"u"`` integers, ``"f"`` floats).
+    words : str
+        What they are, for messages (``"real numbers"``).
+
+    Examples
+    --------
+    >>> REAL_NUMBERS.check(np.dtype(np.float32), "initial face file 'h.npy'")
+    >>> try:
+    ...     REAL_NUMBERS.check(np.dtype(complex), "initial face file 'h.npy'")
+    ... except ValueError as err:
+    ...     print(err)
+    initial face file 'h.npy' holds complex numbers (complex128); it must hold real numbers
+    """
+
+    kinds: str
+    words: str
+
+    def check(self, dtype, what):
+        """``ValueError`` naming ``what`` (the array or its file) unless ``dtype`` is accepted."""
+        dtype = np.dtype(dtype)
+        if dtype.kind in self.kinds:
+            return
+        if dtype.kind in "cb":  # what numpy converts to floats without an error
+            found = "complex numbers" if dtype.kind == "c" else "booleans"
+            raise ValueError(f"{what} holds {found} ({dtype}); it must hold {self.words}")
+        raise ValueError(f"{what} must hold {self.words}, got dtype {dtype}")
+
+
+#: Heights and recessions, m: an initial face, a measured map.
+REAL_NUMBERS = Holds("iuf", "real numbers")
+#: Phase indices of a voxel stack.
+INTEGERS = Holds("iu", "integers")
+#: A phase map: integers, or booleans for two phases.
+LABELS = Holds("biu", "integers")
+#: A face mask: booleans, or integers in one of the forms :func:`integer_face` reads.
+MASK = Holds("biu", "booleans (True on the face) or integers (0/1, or -1 off the face)")
+#: Grey levels of an image (a micrograph): any real numbers or booleans.
+NUMBERS = Holds("biuf", "real numbers or booleans")
 
 
 def input_file_size(path, what):
@@ -40,7 +96,7 @@ def input_file_size(path, what):
     return st.st_size
 
 
-def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
+def npy_header(path, *, what="file", holds=NUMBERS, shape=None, max_side=None, square=True):
     """Shape and dtype of a ``.npy`` file, read from its header without loading the data.
 
     Parameters
@@ -48,6 +104,9 @@ def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
     path : str or path-like
     what : str, optional
         How messages name the file (e.g. ``"phase map"``).
+    holds : Holds, optional
+        What the array may hold (default :data:`NUMBERS`: real numbers or
+        booleans, never complex).
     shape : tuple of int, optional
         Refuse any other shape.
     max_side : int, optional
@@ -66,10 +125,10 @@ def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
     ------
     ValueError
         Missing file, a directory or device, an empty file, no ``.npy``
-        header, a damaged header, an array of Python objects, a shape
-        refused by ``shape`` or ``max_side``, or fewer data bytes than the
-        header announces (a truncated file, or a header that claims a huge
-        array).
+        header, a damaged header, an array of Python objects or of numbers
+        ``holds`` refuses, a shape refused by ``shape`` or ``max_side``, or
+        fewer data bytes than the header announces (a truncated file, or a
+        header that claims a huge array).
     """
     import numpy.lib.format as npy_format
 
@@ -97,6 +156,7 @@ def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
     found = tuple(found)
     if dtype.hasobject:
         raise ValueError(f"{what} {str(path)!r} holds Python objects, not numbers")
+    holds.check(dtype, f"{what} {str(path)!r}")
     if shape is not None and found != tuple(shape):
         raise ValueError(f"{what} {str(path)!r} holds an array of shape {found}; "
                          f"{tuple(shape)} is needed")
@@ -118,7 +178,7 @@ def npy_header(path, *, what="file", shape=None, max_side=None, square=True):
     return found, dtype
 
 
-def read_npy(path, *, what="file", max_side=None, shape=None, square=True):
+def read_npy(path, *, what="file", holds, max_side=None, shape=None, square=True):
     """Read a 2-d array (square by default) from a ``.npy`` file, checking the file first.
 
     Parameters
@@ -126,6 +186,9 @@ def read_npy(path, *, what="file", max_side=None, shape=None, square=True):
     path : str or path-like
     what : str, optional
         How messages name the file (e.g. ``"phase map"``).
+    holds : Holds
+        What the array may hold (:data:`REAL_NUMBERS`, :data:`LABELS`, ...),
+        checked from the header.
     max_side : int, optional
         Refuse arrays larger than ``max_side x max_side`` (before loading).
     shape : tuple of int, optional
@@ -149,13 +212,13 @@ def read_npy(path, *, what="file", max_side=None, shape=None, square=True):
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "empty.npy"
     >>> _ = path.write_bytes(b"")
     >>> try:
-    ...     read_npy(path, what="phase map")
+    ...     read_npy(path, what="phase map", holds=LABELS)
     ... except ValueError as err:
     ...     print(str(err).replace(str(path), "empty.npy"))
     phase map 'empty.npy' is empty (0 bytes)
     """
     path = pathlib.Path(path)
-    found, dtype = npy_header(path, what=what, shape=shape, square=square,
+    found, dtype = npy_header(path, what=what, holds=holds, shape=shape, square=square,
                               max_side=math.inf if max_side is None else max_side)
     try:
         return np.load(path, allow_pickle=False)
@@ -195,16 +258,10 @@ def read_face_mask(path):
     path = pathlib.Path(path)
     what = "face mask"
     if array_suffix(path, what) == ".npy":
-        a = read_npy(path, what=what, square=False)
+        a = read_npy(path, what=what, holds=MASK, square=False)
         if a.size == 0:
             raise ValueError(f"{what} {str(path)!r} is empty: an array of shape {a.shape}")
-        if a.dtype == bool:
-            mask = a
-        elif np.issubdtype(a.dtype, np.integer):
-            mask = integer_face(a, f"{what} {str(path)!r}")
-        else:
-            raise ValueError(f"{what} {str(path)!r} must hold booleans (True on the face) or "
-                             f"integers (0/1, or -1 off the face), got dtype {a.dtype}")
+        mask = a if a.dtype == bool else integer_face(a, f"{what} {str(path)!r}")
     else:
         img = read_png(path, what)
         if img.ndim != 3 or img.shape[2] not in (2, 4):

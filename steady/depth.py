@@ -25,6 +25,7 @@ negative.  A columnar map is the special case ``S = 0``
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -148,6 +149,42 @@ class DepthColumns:
         """
         finite = np.where(np.isfinite(self.interfaces), self.interfaces, 0.0)
         return finite.max(axis=0, initial=0.0)
+
+    def describe(self):
+        """The columns in words: their interfaces, how deep and below how many face pixels.
+
+        Examples
+        --------
+        >>> columns = DepthColumns(np.full((1, 2, 2), 1e-6), np.stack(
+        ...     [np.ones((2, 2), int), np.zeros((2, 2), int)]), 2)
+        >>> columns.describe()
+        '4 interfaces at depth 1e-06 m below 4 of 4 face pixels'
+        """
+        face = self.face_mask
+        finite = np.isfinite(self.interfaces[:, face])
+        if not finite.any():
+            return "no interface below the face"
+        z = self.interfaces[:, face][finite]
+        lo, hi = float(z.min()), float(z.max())
+        at = f"at depth {lo:.4g} m" if lo == hi else f"at depths {lo:.4g} to {hi:.4g} m"
+        below = int(finite.any(axis=0).sum())
+        return f"{z.size} interfaces {at} below {below} of {int(face.sum())} face pixels"
+
+    @functools.cached_property
+    def digest(self):
+        """SHA-256 (hex) of the columns: equal for equal interfaces, phases and ``n_phases``.
+
+        What a checkpoint records of them (the columns themselves are
+        larger than the rest of a run file), to compare a resumed run's;
+        computed once.
+        """
+        import hashlib
+
+        h = hashlib.sha256()
+        h.update(np.asarray(self.interfaces.shape + (self.n_phases,), dtype="<i8").tobytes())
+        h.update(np.ascontiguousarray(self.interfaces, dtype="<f8").tobytes())
+        h.update(np.ascontiguousarray(self.phases, dtype="<i8").tobytes())
+        return h.hexdigest()
 
     def segment_at(self, depth):
         """Index of the segment at ``depth`` (m, shape (nx, ny)) below each pixel.

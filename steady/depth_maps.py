@@ -37,7 +37,7 @@ import pathlib
 
 import numpy as np
 
-from .array_files import npy_header
+from .array_files import INTEGERS, npy_header
 from .depth import DepthColumns
 from .labels import extend_off_face
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid
@@ -285,12 +285,10 @@ def load_voxels(path, *, max_side=None):
     if path.suffix.lower() != ".npy":
         raise ValueError(f"{what} {str(path)!r} must be a .npy file, got suffix "
                          f"{path.suffix!r}")
-    shape, dtype = npy_header(path, what=what)
+    shape, _ = npy_header(path, what=what, holds=INTEGERS)
     if len(shape) != 3:
         raise ValueError(f"{what} {str(path)!r} must be a 3-d array (nx, ny, nz), got shape "
                          f"{shape}")
-    if not np.issubdtype(dtype, np.integer):
-        raise ValueError(f"{what} {str(path)!r} must hold integers, got dtype {dtype}")
     if max_side is not None and max(shape[:2]) > max_side:
         raise ValueError(f"{what} {str(path)!r} has {shape[0]} x {shape[1]} pixels per slice, "
                          f"more than the grid's n = {max_side} (n must be a multiple of it)")

@@ -85,7 +85,7 @@ import pathlib
 import h5py
 import numpy as np
 
-from .array_files import input_file_size, npy_header, read_npy
+from .array_files import REAL_NUMBERS, input_file_size, read_npy
 from .measured_face import MeasuredFace, check_pixel_size
 from .outline import Circle
 from .output import (
@@ -168,16 +168,7 @@ def _read_npy(path):
         # data and advise unpickling it.
         found = f"is {kind}" if kind else "has no NumPy header"
         raise ValueError(f"measured map {str(path)!r} {found}, not a .npy array")
-    shape, dtype = npy_header(path, what="measured map")
-    if dtype.kind == "c":
-        raise ValueError(f"measured map {str(path)!r} holds complex numbers ({dtype}); "
-                         f"heights must be real numbers")
-    if dtype.kind not in "iuf":
-        raise ValueError(f"measured map {str(path)!r} must hold real numbers, got dtype "
-                         f"{dtype}")
-    if len(shape) != 2:
-        raise ValueError(f"measured map {str(path)!r} must be a 2-d array, got shape {shape}")
-    return read_npy(path, what="measured map", square=False)
+    return read_npy(path, what="measured map", holds=REAL_NUMBERS, square=False)
 
 
 def _text_grid(path):

@@ -14,6 +14,7 @@ import dataclasses
 
 import numpy as np
 
+from .array_files import REAL_NUMBERS
 from .schema import Key
 from .text import shorten
 
@@ -77,12 +78,8 @@ class MeasuredFace:
     def __post_init__(self):
         """Check the array and the pixel size; store them read-only."""
         raw = np.asarray(self.heights)
-        # float() of a complex array keeps the real part with a bare numpy warning,
-        # of a boolean one makes heights of 0 and 1: neither is a measured face.
-        if raw.dtype.kind in "cb":
-            kind = "complex numbers" if raw.dtype.kind == "c" else "booleans"
-            raise ValueError(f"measured map {self.source} holds {kind} ({raw.dtype}); heights "
-                             f"must be real numbers")
+        if raw.dtype.kind != "O":  # as from a file; Python objects are tried as numbers below
+            REAL_NUMBERS.check(raw.dtype, f"measured map {self.source}")
         try:
             h = np.array(raw, dtype=float)
         except (TypeError, ValueError) as err:

@@ -66,7 +66,7 @@ import pathlib
 import numpy as np
 from scipy import spatial
 
-from .array_files import array_suffix, read_npy, read_png
+from .array_files import LABELS, array_suffix, read_npy, read_png
 from .labels import apportion, check_fill_factors, extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_grid, grid_size, grid_size_text
 from .schema import Key, KindRegistry
@@ -650,8 +650,7 @@ class ArrayMap(PhaseMap):
         if a.ndim != 2 or (self.outline is None and a.shape[0] != a.shape[1]):
             raise ValueError(f"phase map {self.source} must be a square 2-d array, "
                              f"got shape {a.shape}")
-        if not (a.dtype == bool or np.issubdtype(a.dtype, np.integer)):
-            raise ValueError(f"phase map {self.source} must hold integers, got dtype {a.dtype}")
+        LABELS.check(a.dtype, f"phase map {self.source}")
         if a.size == 0:
             raise ValueError(f"phase map {self.source} is empty: an array of shape {a.shape}")
         a = a.astype(np.int64)
@@ -766,7 +765,7 @@ def load_phase_map(path, *, max_phases=16, max_size=None, outline=None):
     suffix = array_suffix(path, what)
     square = outline is None or outline.aspect == (1.0, 1.0)
     if suffix == ".npy":
-        a = read_npy(path, what=what, max_side=max_size, square=square)
+        a = read_npy(path, what=what, holds=LABELS, max_side=max_size, square=square)
     else:
         a = _png_labels(path, max_phases, max_size, outline)
     return ArrayMap(a, source=repr(str(path)), outline=outline)

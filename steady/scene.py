@@ -72,18 +72,23 @@ from .text import one_line, shorten
 from .wear import wear_law_from_table
 
 __all__ = ["DEPTH_KEYS", "LAYER_KEYS", "MAX_SCENE_BYTES", "OPTIONAL_SECTIONS", "PHASE_KEYS",
-           "RUN_IN_SECTIONS", "SECTIONS", "Scene", "load_scene", "parse_scene", "problem_of"]
+           "RUN_IN_SECTIONS", "SECTIONS", "SLIDING_SPEED", "Scene", "load_scene", "parse_scene",
+           "problem_of"]
 
 #: Largest scene file read, bytes: a scene is a few lines; large data belong in
 #: ``.npy`` files (a 40 MB list would take Python's TOML parser half a minute).
 MAX_SCENE_BYTES = 2 ** 20
 
+#: ``[load] sliding_speed``: a speed, checked against the range of every scale; a run-in
+#: built in Python (:class:`transient.problem.WearProblem`) checks its speed through it too.
+SLIDING_SPEED = Key("sliding_speed", "number", unit="m/s", low=0.0,
+                    doc="sliding speed, optional: the run-in distance is also given as a time")
+
 #: The keys of the sections that name no kind.
 SECTIONS = {
     "load": (Key("normal_force", "number", unit="N", low=0.0, required=True,
                  doc="the normal force F_N"),
-             Key("sliding_speed", "number", unit="m/s", low=0.0,
-                 doc="sliding speed, optional: the run-in distance is also given as a time"),
+             SLIDING_SPEED,
              Key("programme", "pairs", unit="m, N",
                  doc="load programme, optional: [[s_1, F_1], [s_2, F_2], ...], the force F_i "
                      "(N) from the sliding distance s_i (m, increasing, >= 0) on; "

@@ -44,13 +44,13 @@ TYPES = ("number", "integer", "string", "path", "numbers", "integers", "pairs", 
          "strings", "boolean", "number_lists")
 
 #: The range of every scale of a problem, in SI units: lengths, forces,
-#: moduli and what follows from them (:func:`steady.problem.check_scales`).
+#: moduli, speeds and what follows from them (:func:`steady.problem.check_scales`).
 #: Physical problems lie far inside it; beyond it double precision overflows.
 SCALE_RANGE = (1e-30, 1e30)
 
 #: Units of the scales a key may hold: a positive number (``low = 0``) in one
-#: of them -- a length, a force, a modulus -- must lie in :data:`SCALE_RANGE`.
-SCALE_UNITS = ("m", "N", "Pa")
+#: of them -- a length, a force, a modulus, a speed -- must lie in :data:`SCALE_RANGE`.
+SCALE_UNITS = ("m", "N", "Pa", "m/s")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -94,9 +94,9 @@ class Key:
     Notes
     -----
     A positive number (``low = 0``) in a unit of :data:`SCALE_UNITS` (a
-    length, a force, a modulus) must also lie in :data:`SCALE_RANGE`: a
-    value beyond it is refused with the range, not met later as an
-    overflow.
+    length, a force, a modulus, a speed) must also lie in
+    :data:`SCALE_RANGE`: a value beyond it is refused with the range, not
+    met later as an overflow.
     """
 
     name: str
@@ -158,7 +158,7 @@ class Key:
         base_dir : path-like, optional
             Directory against which a ``"path"`` is resolved.
         scale : bool, optional
-            Check a length, force or modulus against :data:`SCALE_RANGE`
+            Check a length, force, modulus or speed against :data:`SCALE_RANGE`
             (default True); False leaves that to a caller that names the
             value in its own words (:func:`steady.problem.check_input_scales`).
 
@@ -198,7 +198,7 @@ class Key:
         return parsed
 
     def _check_scale(self, values, name, shown):
-        """Refuse a length, force or modulus outside :data:`SCALE_RANGE` (see Notes)."""
+        """Refuse a length, force, modulus or speed outside :data:`SCALE_RANGE` (see Notes)."""
         if self.unit not in SCALE_UNITS or self.low != 0.0 or self.type not in (
                 "number", "numbers"):
             return

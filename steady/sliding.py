@@ -51,7 +51,8 @@ import numpy as np
 
 from .schema import Context, Key, KindRegistry
 
-__all__ = ["SLIDING", "PinOnDisk", "Rotation", "Translation", "sliding_from_table"]
+__all__ = ["SLIDING", "PinOnDisk", "Rotation", "Translation", "sliding_file_attributes",
+           "sliding_from_file", "sliding_from_table"]
 
 #: Registered sliding kinematics, by ``[sliding] kind`` (default ``"translation"``).
 SLIDING = KindRegistry("sliding kind", "kind", default="translation",
@@ -225,3 +226,71 @@ def sliding_from_table(table, outline, base_dir="."):
 
     context = Context(base_dir=pathlib.Path(base_dir), outline=outline, where="[sliding]")
     return SLIDING.build(table, context)
+
+
+def sliding_file_attributes(kinematics):
+    """What a run file records of the sliding kinematics: ``name -> (value, unit)``.
+
+    ``sliding_kind`` (its ``[sliding] kind``) and each of the kind's keys as
+    ``sliding_<key>`` in the key's unit; nothing for a translation (None,
+    or a uniform kind): a file without them was a translation.
+    :func:`sliding_from_file` reads them back.
+
+    Examples
+    --------
+    >>> sliding_file_attributes(PinOnDisk(0.02))
+    {'sliding_kind': ('pin_on_disk', None), 'sliding_track_radius': (0.02, 'm')}
+    >>> sliding_file_attributes(None)
+    {}
+    """
+    if kinematics is None or kinematics.uniform:
+        return {}
+    attrs = {"sliding_kind": (kinematics.kind, None)}
+    for key in kinematics.keys:
+        attrs[f"sliding_{key.name}"] = (getattr(kinematics, key.name), key.unit or None)
+    return attrs
+
+
+def sliding_from_file(attrs):
+    """The kinematics a file recorded (:func:`sliding_file_attributes`), or None if unknown.
+
+    Parameters
+    ----------
+    attrs : mapping
+        The file's attributes (``h5py`` attributes, or a dict of them).
+
+    Returns
+    -------
+    kinematics or None
+        A :class:`Translation` when the file records none; None when it
+        names a kind that is not registered here.
+
+    Raises
+    ------
+    ValueError
+        A registered kind whose attributes are missing or bad.
+
+    Examples
+    --------
+    >>> sliding_from_file({"sliding_kind": "pin_on_disk", "sliding_track_radius": 0.02})
+    PinOnDisk(track_radius=0.02)
+    >>> sliding_from_file({})
+    Translation()
+    """
+    import pathlib
+
+    kind = attrs.get("sliding_kind", "translation")
+    if isinstance(kind, bytes):
+        kind = kind.decode()
+    kind = str(kind)
+    if kind not in SLIDING:
+        return None
+    table = {"kind": kind}
+    for key in SLIDING[kind].keys:
+        name = f"sliding_{key.name}"
+        if name not in attrs:
+            raise ValueError(f"the file records the sliding kind {kind!r} without {name}")
+        value = attrs[name]
+        table[key.name] = value.item() if hasattr(value, "item") else value
+    return SLIDING.build(table, Context(base_dir=pathlib.Path("."),
+                                        where="the file's sliding kinematics"))

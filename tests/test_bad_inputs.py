@@ -115,6 +115,12 @@ def png_garbage(d):
     (d / "map.png").write_bytes(b"GIF89a" + bytes(64))
 
 
+#: A coating of phase 1, 0.3 mm thick, over the scene's map.
+LAYERS = '[depth]\nkind = "layers"\n[[depth.layers]]\nthickness = 3e-4\nphase = 1\n'
+#: Spheres of phase 1 (radius 0.8 mm) in a matrix of phase 0, 2 mm deep.
+SPHERES = ('{ kind = "spheres", radius = 8.0e-4, volume_fraction = 0.3, seed = 2031, '
+           'depth = 2.0e-3 }')
+
 CASES = [
     # -- the scene file itself
     Case("scene missing", lambda d, base: [d / "nope.toml"], "nope.toml' does not exist"),
@@ -233,6 +239,17 @@ CASES = [
         t, "transient", "snapshots_s_star = [" + ", ".join(f"{i}.0" for i in range(100_000))
         + "]"),
         "n", "256")), "a run-in at n = 256 with 100000 snapshots needs about", ("transient",)),
+    # -- a run-in across interfaces needs a law k_i g(p); a section is any steady problem
+    Case("threshold law over [depth]", scene(lambda t: t.replace(
+        "[wear]", '[wear]\nlaw = "threshold"\nthresholds = [0.0, 0.0]') + LAYERS),
+         "[wear] law = 'threshold' and [depth]: a run-in across the interfaces of phases that "
+         "change with depth needs a law k_i g(p) ([wear] law = 'archard' or 'power')",
+         ("transient",)),
+    Case("table law on spheres", scene(lambda t: with_key(with_key(
+        t.replace("coefficients = ", "pressures = [[0, 1e5], [0, 1e5]]\nrates = "), "rates",
+        "[[0, 1e-8], [0, 1e-9]]"), "map", SPHERES).replace("[wear]", '[wear]\nlaw = "table"')),
+         "[wear] law = 'table' and [phases] map kind = 'spheres': a run-in across the "
+         "interfaces", ("transient",)),
     Case("[initial_face] missing file", scene(lambda t: with_section(
         t, "initial_face", 'kind = "file"\npath = "h.npy"')), "h.npy' does not exist",
         ("transient",)),
@@ -244,6 +261,34 @@ CASES = [
         lambda d: np.save(d / "h.npy", np.zeros((8, 8))),
         lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
          "h.npy' holds an array of shape (8, 8); (32, 32) is needed", ("transient",)),
+    # -- every array read from a file refuses complex numbers (numpy would keep the real part)
+    Case("[initial_face] complex file", scene_and(
+        lambda d: np.save(d / "h.npy", np.zeros((32, 32)) * (1 + 1e-6j)),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "h.npy' holds complex numbers (complex128); it must hold real numbers", ("transient",)),
+    Case("[initial_face] boolean file", scene_and(
+        lambda d: np.save(d / "h.npy", np.zeros((32, 32), dtype=bool)),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "h.npy' holds booleans (bool); it must hold real numbers", ("transient",)),
+    Case("map of complex numbers", scene_and(
+        lambda d: np.save(d / "m.npy", np.zeros((8, 8), dtype=complex)),
+        lambda t: file_map(t, "m.npy")),
+         "m.npy' holds complex numbers (complex128); it must hold integers"),
+    Case("mask of complex numbers", scene_and(
+        lambda d: np.save(d / "m.npy", np.ones((8, 8), dtype=complex)),
+        lambda t: t.replace("radius = 0.004",
+                            'shape = "mask"\npath = "m.npy"\npixel_size = 1e-3')),
+         "m.npy' holds complex numbers (complex128); it must hold booleans (True on the face) "
+         "or integers"),
+    Case("voxels of complex numbers", scene_and(
+        lambda d: np.save(d / "v.npy", np.zeros((8, 8, 2), dtype=complex)),
+        lambda t: with_key(t, "map", '{ kind = "voxels", file = "v.npy", voxel_depth = 1e-4 }')),
+         "v.npy' holds complex numbers (complex128); it must hold integers"),
+    Case("micrograph of complex numbers", scene_and(
+        lambda d: np.save(d / "g.npy", np.zeros((64, 64), dtype=complex)),
+        lambda t: with_key(t, "map", '{ kind = "micrograph", path = "g.npy", n_phases = 2, '
+                                     'pixel_size = 1e-4 }')),
+         "g.npy' holds complex numbers (complex128); it must hold real numbers or booleans"),
     Case("[initial_face] angle", scene(lambda t: with_section(
         t, "initial_face", 'kind = "tilted"\nangle = 2.0')),
          "[initial_face] angle must be a number in [0, 1.5708) (rad), got 2.0", ("transient",)),
@@ -337,3 +382,16 @@ def test_memory_override_lets_a_scene_run(tmp_path, capsys):
     assert status == 0 and err == "", f"exit {status}: {err!r}"
     assert "rms / grad_f0" in out, f"summary {out!r}"
     assert pathlib.Path(tmp_path / "r.h5").is_file(), "result written"
+
+
+@pytest.mark.parametrize("law", ['law = "threshold"\nthresholds = [0.0, 1e3]\n'
+                                 'coefficients = [1e-13, 1e-12]',
+                                 'law = "table"\npressures = [[0, 1e5], [0, 1e5]]\n'
+                                 'rates = [[0, 1e-8], [0, 1e-9]]'])
+def test_runin_steady_solves_a_section_under_any_law(tmp_path, capsys, law):
+    text = re.sub(r"^coefficients = .*$", law, BASE["steady"], count=1, flags=re.M)
+    path = write(tmp_path, "s.toml", text + LAYERS)
+    status, out, err = run_command("steady", [path, "-o", tmp_path / "r.h5", "--depth", "4e-4",
+                                              "--no-slope-error"], capsys)
+    assert status == 0 and "error" not in err, f"exit {status}: {err!r}"
+    assert "0.0004 m below the initial surface" in out, out

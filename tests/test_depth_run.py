@@ -7,8 +7,9 @@ layer of the substrate's own phase) give the columnar run; a hard coating
 on a soft substrate conserves the load, wears monotonically, wears through
 at the rim first, with bounded Newton iterations and every pixel crossing
 once; the error still follows the tolerance across the first crossings;
-``end_depth`` ends a run on its depth; an interrupted run resumes bit for
-bit; bad columns and a bad end_depth are refused.
+``end_depth`` ends a run on its depth, a tiny one within the depth the run
+resolves; no step too short to move the run on is taken; an interrupted run
+resumes bit for bit; bad columns and a bad end_depth are refused.
 """
 
 import numpy as np
@@ -25,6 +26,7 @@ from transient.control import (
     DEPTH_SLACK,
     SOLVE_ERROR_SHARE,
     StepController,
+    StopTests,
 )
 from transient.depth import WorkDepth
 from transient.options import RunOptions
@@ -289,6 +291,59 @@ def test_end_depth_ends_a_columnar_run_too():
     assert result.status == "depth", result.message
     mean = float(result.worn_depth[problem_.face_mask].mean())
     assert abs(mean / end - 1.0) < 10 * DEPTH_SLACK, f"mean worn depth {mean / end} end_depth"
+
+
+@pytest.mark.parametrize("make", [lambda: coating(16, 0.3),
+                                  lambda: wear_problem("voronoi", (1.0, 10.0), 24)],
+                         ids=["coating", "columnar"])
+@pytest.mark.parametrize("scheme", ["esdirk3", "bdf2"])
+def test_a_tiny_end_depth_ends_within_the_depth_the_run_resolves(make, scheme):
+    # 1e-12 f* (about 1e-15 m): the mean worn depth moves by a rounding unit of the
+    # approach at every step, more than a landing step adds to it.
+    problem_ = make()
+    end = 1e-12 * problem_.depth_scale
+    result = run_in(problem_, np.zeros(problem_.shape),
+                    RunOptions(scheme=scheme, tol=1e-4, end_depth=end, max_steps=50))
+    assert result.status == "depth" and result.steps <= 3, \
+        f"{result.status} after {result.steps} steps: {result.message}"
+    mean = float(result.worn_depth[problem_.face_mask].mean())
+    # The run resolves 16 rounding units of the approach, about 2.5 f* here.
+    assert abs(mean - end) <= 16 * np.spacing(2.5 * problem_.depth_scale), \
+        f"mean worn depth {mean:.6g} m, end_depth {end:.6g} m"
+
+
+def test_an_end_depth_the_run_cannot_resolve_is_refused():
+    problem_ = wear_problem("voronoi", (1.0, 10.0), 24)
+    end = 1e-17 * problem_.depth_scale
+    with pytest.raises(ValueError, match=r"end_depth = \S+ m is below the mean worn depth this "
+                                         r"run resolves, \S+ m .* give a larger end_depth"):
+        run_in(problem_, np.zeros(problem_.shape), RunOptions(end_depth=end, max_steps=50))
+
+
+@pytest.mark.parametrize("options, named", [
+    (dict(first_step=1e-30), "first_step = 1e-30 m is below"),
+    (dict(fixed_step=1e-30), "fixed_step = 1e-30 m is below"),
+    (dict(tol=1e-30), r"tol = 1e-30 gives a first step 0.01 sqrt\(tol\) \(h/L\) s\* of \S+ "
+                      "m, which is below"),
+])
+def test_a_first_step_too_short_to_move_the_run_on_is_refused(options, named):
+    problem_ = wear_problem("voronoi", (1.0, 10.0), 24)
+    with pytest.raises(ValueError, match=named + r" the shortest step that moves the run on"):
+        run_in(problem_, np.zeros(problem_.shape), RunOptions(max_steps=50, **options))
+
+
+def test_a_step_that_cannot_move_the_run_on_ends_it():
+    options = RunOptions(end_depth=1e-9)
+    stop = StopTests(options, 1.0)
+    min_step = StepController.min_step(100.0, 1e-3)
+    assert min_step == 16 * np.spacing(100.0), f"min_step {min_step} at s = 100 m"
+    assert StepController.min_step(0.0, 1e-3) == 16 * np.spacing(1e-3), "min_step at s = 0"
+    status, message = stop.short_step(0.0, min_step, 100.0, at_depth=100.0 + min_step / 2,
+                                      depth=0.99e-9)
+    assert status == "depth" and "as closely as the sliding distance resolves" in message, \
+        message
+    status, message = stop.short_step(min_step / 4, min_step, 100.0)
+    assert status == "failed" and "does not fall with the step" in message, message
 
 
 def test_an_interrupted_coating_run_resumes_bit_for_bit(tmp_path):

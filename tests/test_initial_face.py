@@ -90,3 +90,17 @@ def test_from_file_needs_npy(tmp_path):
     path.write_text("0")
     with pytest.raises(ValueError, match="npy"):
         initial_face.from_file(grid(8), path)
+
+
+@pytest.mark.parametrize("values, found", [
+    (np.zeros((8, 8)) * (1 + 1e-6j), r"holds complex numbers \(complex128\)"),
+    (np.ones((8, 8), dtype=bool), r"holds booleans \(bool\)"),
+])
+def test_a_face_of_complex_numbers_or_booleans_is_refused(tmp_path, values, found):
+    # float() of a complex array keeps its real part, of a boolean one makes 0 and 1 m.
+    with pytest.raises(ValueError, match=f"recession field {found}; it must hold real numbers"):
+        initial_face.from_array(values, grid(8))
+    np.save(tmp_path / "h.npy", values)
+    with pytest.raises(ValueError, match=f"initial face file .*h.npy' {found}; it must hold "
+                                         f"real numbers"):
+        initial_face.from_file(grid(8), tmp_path / "h.npy")

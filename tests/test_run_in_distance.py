@@ -26,6 +26,7 @@ from transient.axisymmetric import AxisymmetricRunIn
 from transient.initial_face import flat
 from transient.options import RunOptions
 from transient.output import read_run, write_run
+from transient.problem import WearProblem
 from transient.run_in_distance import TOLERANCES, RunInDistance, WearThroughMap
 from transient.runin import run_in
 from transient.scene import wear_problem_of
@@ -163,9 +164,12 @@ def test_time_from_the_sliding_speed(disk64):
                       (1.5, "within must lie in (0, 1), got 1.5")):
         with pytest.raises(ValueError, match=what.replace("(", r"\(").replace(")", r"\)")):
             disk64.run_in_distance(bad)
-    with pytest.raises(ValueError, match=r"sliding_speed must be a finite number > 0 \(m/s\), "
+    with pytest.raises(ValueError, match=r"sliding_speed must be a number > 0 \(m/s\), "
                                          r"got -1.0"):
         disk64.run_in_distance(0.01, sliding_speed=-1.0)
+    with pytest.raises(ValueError, match=r"sliding_speed = 1e-320 m/s is outside \[1e-30, "
+                                         r"1e\+30\] m/s"):
+        disk64.run_in_distance(0.01, sliding_speed=1e-320)
 
 
 def test_run_file_stores_the_distances_and_the_scale(tmp_path, disk64):
@@ -318,6 +322,35 @@ def test_scene_sliding_speed_is_read_and_checked(tmp_path):
                                              r"\(m/s\), got "):
             parse_scene(with_speed.replace("sliding_speed = 0.5", f"sliding_speed = {bad}"),
                         tmp_path)
+
+
+@pytest.mark.parametrize("speed, shown", [("1e-320", "1e-320"), ("1e-40", "1e-40"),
+                                         ("1e40", r"1e\+40"), ("inf", None)])
+def test_a_sliding_speed_out_of_range_is_refused_in_the_scene_and_in_python(tmp_path, speed,
+                                                                           shown):
+    # 1e-320 m/s gave infinite times, 1e-40 and 1e40 m/s times of 1e45 s and 1e-35 s.
+    from conftest import scene_text
+
+    from steady.scene import parse_scene
+
+    text = scene_text("runin", n=32, coefficients=(1.0e-13, 1.0e-12), transient=None)
+    text = text.replace("normal_force = 10.0\n", f"normal_force = 10.0\nsliding_speed = {speed}\n")
+    expected = (r"must be a number > 0 \(m/s\)" if shown is None
+                else rf"= {shown} m/s is outside \[1e-30, 1e\+30\] m/s")
+    with pytest.raises(ValueError, match=r"\[load\] sliding_speed " + expected):
+        parse_scene(text, tmp_path)
+    scene = parse_scene(text.replace(f"sliding_speed = {speed}", "sliding_speed = 0.5"), tmp_path)
+    problem = wear_problem_of(scene).problem
+    with pytest.raises(ValueError, match=r"^sliding_speed " + expected):
+        WearProblem(problem, sliding_speed=float(speed))
+
+
+@pytest.mark.parametrize("speed", [-1.0, 0.0, math.nan, True, "0.5"])
+def test_a_python_sliding_speed_is_checked_through_the_scene_key(speed):
+    from conftest import wear_problem
+
+    with pytest.raises(ValueError, match=r"^sliding_speed must be a number > 0 \(m/s\), got "):
+        WearProblem(wear_problem("voronoi", (1.0, 10.0), 16).problem, sliding_speed=speed)
 
 
 def test_wear_through_map_interpolates_within_the_step():

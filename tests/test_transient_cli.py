@@ -28,9 +28,9 @@ def write_scene(scene_file):
     return write
 
 
-def cli(*args, cwd):
+def cli(*args, cwd, timeout=600):
     return subprocess.run([sys.executable, "-m", "transient", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=600)
+                          capture_output=True, text=True, timeout=timeout)
 
 
 def test_run_writes_result_and_agreement(tmp_path, write_scene):
@@ -287,3 +287,18 @@ def test_run_that_reaches_end_depth_exits_0(tmp_path):
     assert proc.stdout.startswith("depth: reached end_depth 0.0001 m"), proc.stdout[:200]
     assert read_run(out)[0].status == "depth", "the run file's status is not 'depth'"
     assert not backup_path(out).exists(), "the finished run kept its previous checkpoint"
+
+
+@pytest.mark.parametrize("end, status, said", [
+    ("1.0e-15", 0, "depth: reached end_depth 1e-15 m"),
+    ("1.0e-20", 2, "error: end_depth = 1e-20 m is below the mean worn depth this run resolves"),
+])
+def test_a_tiny_end_depth_ends_the_run_or_is_refused(tmp_path, end, status, said):
+    text = (ROOT / "steady" / "examples" / "coating_transient.toml").read_text()
+    text = text.replace("n = 64", "n = 16").replace("end_depth = 1.2e-3", f"end_depth = {end}")
+    scene = tmp_path / "coating.toml"
+    scene.write_text(text)
+    proc = cli(scene, "-o", tmp_path / "run.h5", cwd=tmp_path, timeout=60)
+    assert proc.returncode == status, f"exit {proc.returncode}: {proc.stderr}"
+    assert said in (proc.stdout if status == 0 else proc.stderr), proc.stdout + proc.stderr
+    assert (tmp_path / "run.h5").exists() == (status == 0), "a refused run wrote its file"

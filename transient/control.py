@@ -20,6 +20,7 @@ __all__ = [
     "CHECKPOINT_SHARE",
     "CROSSING_CUT",
     "CROSSING_MARGIN",
+    "DEPTH_ROUNDING",
     "DEPTH_SLACK",
     "DIVERGENCE_RELIEF",
     "EXPLICIT_SAFETY",
@@ -32,10 +33,12 @@ __all__ = [
     "SAFETY",
     "SOLVE_ERROR_SHARE",
     "SOLVE_SPREAD_SHARE",
+    "STEP_ROUNDING",
     "StepController",
     "StopTests",
     "checkpoint_due",
     "contact_tolerance",
+    "depth_resolution",
 ]
 
 #: Fraction of the step the error estimate calls optimal that is proposed.
@@ -67,6 +70,14 @@ LANDING_SLACK = 1e-9
 _DISTANCE_SLACK = 1e-12
 #: Relative slack of ``end_depth``: a run that lands within it has reached it.
 DEPTH_SLACK = 1e-9
+#: Rounding units (of the face's largest value) within which the mean worn depth is
+#: resolved, and ``end_depth`` reached: a step's face is a difference of numbers of the
+#: size of the rigid approach, and its mean moves by about a unit at every step
+#: whatever the step's length (see :func:`depth_resolution`).
+DEPTH_ROUNDING = 16
+#: Rounding units of the sliding distance (or, near its start, of the fastest
+#: relaxation distance) below which a step is too short to move the run on.
+STEP_ROUNDING = 16
 #: Most of a run's wall time its checkpoints may take (see :func:`checkpoint_due`).
 CHECKPOINT_SHARE = 0.05
 #: Share of a step's error tolerance ``tol f*`` left to its contact solves.
@@ -88,6 +99,23 @@ def checkpoint_due(elapsed, interval, last_cost):
     if interval == 0:
         return True
     return elapsed >= max(interval, last_cost * (1.0 - CHECKPOINT_SHARE) / CHECKPOINT_SHARE)
+
+
+def depth_resolution(face_size):
+    """The mean worn depth (m) a run resolves on a face whose values reach ``face_size`` (m).
+
+    ``DEPTH_ROUNDING`` rounding units of ``face_size`` (the largest of the
+    rigid approach, the recession with its offset and the initial face):
+    the face of a step is computed as a difference of numbers that large,
+    and the mean worn depth moves by about a unit at every step, however
+    short.  ``end_depth`` is reached within it (:meth:`StopTests.depth_reached`).
+
+    Examples
+    --------
+    >>> f"{depth_resolution(1e-3):.3g}"
+    '3.47e-18'
+    """
+    return DEPTH_ROUNDING * math.ulp(face_size)
 
 
 def contact_tolerance(tol, depth_scale, spread, compliance_floor, mean_pressure):
@@ -170,6 +198,42 @@ class StepController:
         return min(ds, limit)
 
     @staticmethod
+    def min_step(s, fast_distance):
+        """The shortest step (m) that moves the run on from ``s`` (m).
+
+        ``STEP_ROUNDING`` rounding units of the sliding distance, or near
+        its start of the fastest relaxation distance ``fast_distance`` (m),
+        on which the shortest dynamics of the run happen: a shorter step
+        leaves the distance as it is, or resolves nothing.
+        """
+        return STEP_ROUNDING * math.ulp(max(s, fast_distance))
+
+    def check_first_step(self, ds, min_step, distance=0.0):
+        """Refuse a run whose first step ``ds`` (m) from ``distance`` (m) is below ``min_step``.
+
+        Named by the option that set it: ``fixed_step``, ``first_step``, or
+        ``tol`` through the default first step.
+
+        Raises
+        ------
+        ValueError
+            ``ds`` at or below ``min_step`` (:meth:`min_step`).
+        """
+        if ds > min_step:
+            return
+        o = self.options
+        if o.fixed_step is not None:
+            given = f"fixed_step = {o.fixed_step:g} m"
+        elif o.first_step is not None and distance == 0.0:
+            given = f"first_step = {o.first_step:g} m"
+        else:
+            given = (f"tol = {o.tol:g} gives a first step 0.01 sqrt(tol) (h/L) s* of "
+                     f"{ds:.3g} m, which")
+        raise ValueError(f"{given} is below the shortest step that moves the run on from "
+                         f"s = {distance:g} m, {min_step:.3g} m ({STEP_ROUNDING} rounding units "
+                         f"of the sliding distance or of the fastest relaxation distance)")
+
+    @staticmethod
     def land(ds, s, target, end):
         """Shorten (or stretch by at most ``LANDING_SLACK``) ``ds`` to land on ``target``.
 
@@ -248,7 +312,7 @@ class StopTests:
         self.s_star = s_star
 
     def check(self, spread, shape_rate, distance, steps, *, held=False, depth=None,
-              columnar=True):
+              depth_resolution=0.0, columnar=True):
         """``(status, message)`` if the run is over at its current point, else None.
 
         Parameters
@@ -267,6 +331,9 @@ class StopTests:
             (default False).
         depth : float or None, optional
             Mean worn depth over the face, m, which ``end_depth`` ends.
+        depth_resolution : float, optional, m
+            The worn depth the run resolves (:func:`depth_resolution`;
+            default 0): ``end_depth`` is reached within it.
         columnar : bool, optional
             Whether the phases no longer change below the face (default
             True); until then the run is not steady.
@@ -277,10 +344,12 @@ class StopTests:
             return "steady", (f"steady state at s = {distance:.6g} m "
                               f"({distance / s_star:.6g} s*): wear-rate spread "
                               f"{spread:.3g}, shape change {shape_rate:.3g} f*/s*")
-        if (o.end_depth is not None and depth is not None
-                and depth >= o.end_depth * (1 - DEPTH_SLACK)):
+        if o.end_depth is not None and depth is not None and self.depth_reached(
+                depth, depth_resolution):
+            within = ("" if depth >= o.end_depth * (1 - DEPTH_SLACK) else
+                      f", within the {depth_resolution:.3g} m the run resolves")
             return "depth", (f"reached end_depth {o.end_depth:.6g} m (mean worn depth "
-                             f"{depth:.6g} m) at s = {distance:.6g} m "
+                             f"{depth:.6g} m{within}) at s = {distance:.6g} m "
                              f"({distance / s_star:.6g} s*)")
         if distance >= o.distance_limit * (1 - _DISTANCE_SLACK):
             return "stopped", (f"reached distance_limit {o.distance_limit:.6g} m before the "
@@ -351,20 +420,76 @@ class StopTests:
                               f"times: {reason}")
         return None
 
+    def short_step(self, ds, min_step, distance, *, at_depth=None, depth=None):
+        """``(status, message)`` of a run whose next step ``ds`` (m) is below ``min_step``.
+
+        No shorter retry can move the run on.  Where the step was cut to
+        land on ``end_depth`` (its aim ``at_depth``, m, within ``min_step``
+        of ``distance``) the run has reached it as closely as the sliding
+        distance resolves (status ``"depth"``, mean worn depth ``depth``,
+        m); otherwise the steps have shrunk away (``"failed"``): the error
+        estimate does not fall with the step.
+
+        Parameters
+        ----------
+        ds, min_step, distance : float, m
+            The planned step, the shortest step
+            (:meth:`StepController.min_step`) and the distance reached.
+        at_depth : float or None, optional, m
+            The distance the step aimed at to land on ``end_depth``.
+        depth : float or None, optional, m
+            The mean worn depth reached.
+        """
+        s_star = self.s_star
+        at = f"s = {distance:.6g} m ({distance / s_star:.6g} s*)"
+        if at_depth is not None and at_depth - distance <= min_step:
+            return "depth", (f"reached end_depth {self.options.end_depth:.6g} m as closely as "
+                             f"the sliding distance resolves (mean worn depth {depth:.6g} m) "
+                             f"at {at}")
+        return "failed", (f"the step fell to {ds:.3g} m at {at}, below the {min_step:.3g} m "
+                          f"that move the run on: the error estimate does not fall with the "
+                          f"step (tol = {self.options.tol:g} below round-off?)")
+
     def end(self):
         """The distance limit, m."""
         return self.options.distance_limit
 
-    def depth_landing(self, distance, ds, before, after):
+    def depth_reached(self, depth, resolution):
+        """Whether the mean worn depth ``depth`` (m) has reached ``end_depth``.
+
+        Within ``DEPTH_SLACK`` of it, or within the worn depth the run
+        resolves, ``resolution`` (m, :func:`depth_resolution`).
+        """
+        end = self.options.end_depth
+        return depth >= end * (1 - DEPTH_SLACK) or depth >= end - resolution
+
+    def check_end_depth(self, resolution):
+        """Refuse an ``end_depth`` within the worn depth the run resolves (m): 0 has reached it.
+
+        Raises
+        ------
+        ValueError
+            ``end_depth`` at or below ``resolution``, naming both.
+        """
+        end = self.options.end_depth
+        if end is not None and end <= resolution:
+            raise ValueError(f"end_depth = {end:g} m is below the mean worn depth this run "
+                             f"resolves, {resolution:.3g} m ({DEPTH_ROUNDING} rounding units "
+                             f"of the face's displacement): the run would end before its first "
+                             f"step; give a larger end_depth")
+
+    def depth_landing(self, distance, ds, before, after, resolution=0.0):
         """Where to land instead of a trial that went past ``end_depth``, m, or None.
 
         The trial of length ``ds`` (m) from ``distance`` (m) took the mean
         worn depth from ``before`` to ``after`` (m); None unless ``after``
-        is past ``end_depth``.  The secant of the mean worn depth over the
-        trial: the rate at its start misses the step's crossings.
+        is past ``end_depth`` by more than ``DEPTH_SLACK`` of it and the
+        worn depth the run resolves, ``resolution`` (m).  The secant of the
+        mean worn depth over the trial: the rate at its start misses the
+        step's crossings.
         """
         end = self.options.end_depth
-        if end is None or after <= end * (1 + DEPTH_SLACK):
+        if end is None or after <= end * (1 + DEPTH_SLACK) or after <= end + resolution:
             return None
         return distance + ds * (end - before) / (after - before)
 

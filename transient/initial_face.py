@@ -27,7 +27,7 @@ import os
 
 import numpy as np
 
-from steady.array_files import read_npy
+from steady.array_files import REAL_NUMBERS, read_npy
 from steady.outline import FaceGrid, as_outline
 from steady.schema import Key, KindRegistry
 
@@ -284,6 +284,8 @@ def from_array(values, grid):
         A float copy.
     """
     grid = _grid(grid)
+    values = np.asarray(values)
+    REAL_NUMBERS.check(values.dtype, "recession field")
     values = np.array(values, dtype=float)
     if values.shape != grid.shape:
         raise ValueError(f"recession field must have shape {grid.shape}, got {values.shape}")
@@ -319,5 +321,6 @@ def from_file(grid, path):
     path = os.fspath(path)
     if not path.endswith(".npy"):
         raise ValueError(f"recession file must be a .npy file, got {path!r}")
-    values = read_npy(path, what="initial face file", shape=grid.shape, square=False)
+    values = read_npy(path, what="initial face file", holds=REAL_NUMBERS, shape=grid.shape,
+                      square=False)
     return from_array(values, grid)

@@ -26,7 +26,9 @@ Layout (root group)::
                   result knows its problem): n, normal_force (N), E_star
                   (Pa), the wear law (wear_law_kind, wear_law in words and
                   the law's own attributes: exponent, wear_coefficients
-                  (Pa-m) for the power law);
+                  (Pa-m) for the power law), the sliding kinematics
+                  unless a translation (sliding_kind and its keys as
+                  sliding_<key>, e.g. sliding_track_radius (m));
                   the caller's input attributes (scene...; an attribute
                   given as None is left out);
                   with the face's outline known (every run since version 2):
@@ -54,7 +56,8 @@ Layout (root group)::
     columns/      a depth run only, not in a checkpoint (the problem's
                   :class:`steady.depth.DepthColumns`): interfaces
                   (S, nx, ny) m, phases (S + 1, nx, ny) int8, attribute
-                  n_phases; with the root attributes
+                  n_phases; a checkpoint holds their digest instead, the
+                  root attribute columns_sha256; with the root attributes
                   coating_worn_through_distance, coating_gone_distance (m),
                   their ..._s_star (1) and ..._reason (text)
     comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
@@ -135,6 +138,7 @@ from steady.safe_files import (
     dataset_digest,
     seal_groups,
 )
+from steady.sliding import sliding_file_attributes
 from steady.wear import wear_file_attributes
 
 from .result import (
@@ -310,17 +314,20 @@ def problem_inputs(problem):
     Returns
     -------
     attrs : dict of str to (value, units)
-        ``n``, ``normal_force`` (N), ``E_star`` (Pa) and the wear law
+        ``n``, ``normal_force`` (N), ``E_star`` (Pa), the wear law
         (:func:`steady.wear.wear_file_attributes`: ``wear_law_kind``,
         ``wear_law`` in words, and the law's own, for the power law
-        ``wear_coefficients`` (Pa-m) and ``exponent``).
+        ``wear_coefficients`` (Pa-m) and ``exponent``) and the sliding
+        kinematics (:func:`steady.sliding.sliding_file_attributes`:
+        ``sliding_kind`` and its keys, none for a translation).
     arrays : dict of str to ndarray
         ``phase``, the phase map (-1 off the face).
     names : tuple of str
         The phase names, phase 0 first.
     """
     attrs = {"n": (problem.n, "1"), "normal_force": (problem.normal_force, "N"),
-             "E_star": (problem.E_star, "Pa"), **wear_file_attributes(problem.wear)}
+             "E_star": (problem.E_star, "Pa"), **wear_file_attributes(problem.wear),
+             **sliding_file_attributes(problem.sliding)}
     return attrs, {"phase": np.asarray(problem.labels)}, tuple(problem.phase_names)
 
 
@@ -529,7 +536,9 @@ def _write_columns(f, result, grid_scales):
     :data:`transient.run_in_distance.COATING_EVENTS` (NaN with the reason
     when there is no coating or the event did not happen).  A checkpoint
     has the attributes but not the group (compressed, it would cost more
-    than the rest of the file; the resumed run's problem has the columns).
+    than the rest of the file; the resumed run's problem has the columns)
+    but their digest, ``columns_sha256`` (:attr:`steady.depth.DepthColumns.digest`),
+    which a resumed run's columns must match.
     """
     columns = result.columns
     for event in COATING_EVENTS:
@@ -538,7 +547,9 @@ def _write_columns(f, result, grid_scales):
         _attribute(f.attrs, f"coating_{event}_distance_s_star", found.distance_s_star, "1")
         f.attrs[f"coating_{event}_reason"] = found.reason
     if result.status == "running":
-        return  # a checkpoint is rewritten every few seconds; the scene rebuilds the columns
+        # A checkpoint is rewritten every few seconds; the scene rebuilds the columns.
+        f.attrs["columns_sha256"] = columns.digest
+        return
     g = f.create_group("columns")
     g.attrs["description"] = ("the phase below every face pixel as a function of the worn depth "
                               "(steady.depth.DepthColumns)")

@@ -22,6 +22,7 @@ import numpy as np
 
 from steady.normalisation import reference_slope
 from steady.problem import Problem, check_scale, input_names
+from steady.scene import SLIDING_SPEED
 from steady.solution import solve
 
 from .depth import WorkDepth
@@ -107,7 +108,9 @@ class WearProblem:
         The scene's ``[load] programme`` (default None: a constant load).
     sliding_speed : float, optional, m/s
         The scene's ``[load] sliding_speed`` (default None); only for
-        reporting distances as times.
+        reporting distances as times.  Checked through the scene's key
+        (:data:`steady.scene.SLIDING_SPEED`): a speed in the range of every
+        scale.
     geometry : phase geometry, optional
         The scene's phase geometry (default None: a bare label map), for
         the error bar of the rms slope from the geometry's own grid ladder,
@@ -151,8 +154,8 @@ class WearProblem:
     ------
     ValueError
         A scale of the run out of range (:func:`check_run_in_scales`, for
-        each force of the programme), or a law that does not factorise
-        across interfaces.
+        each force of the programme), a sliding speed that is not a speed
+        in range, or a law that does not factorise across interfaces.
 
     Examples
     --------
@@ -169,6 +172,8 @@ class WearProblem:
         if not isinstance(problem, Problem):
             raise ValueError(f"WearProblem takes a steady.problem.Problem, got "
                              f"{type(problem).__name__}")
+        if sliding_speed is not None:
+            sliding_speed = SLIDING_SPEED.parse(sliding_speed, "")
         forces = (None,) if load_programme is None else (load_programme.initial_force,
                                                          *load_programme.forces)
         for force in forces:

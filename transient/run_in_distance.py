@@ -43,6 +43,8 @@ import math
 
 import numpy as np
 
+from steady.scene import SLIDING_SPEED
+
 __all__ = ["COATING_EVENTS", "TOLERANCES", "CoatingDistance", "RunInDistance", "WearThroughMap",
            "coating_distance", "deviations", "distance_table", "entry", "run_in_distance"]
 
@@ -219,7 +221,8 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
     within : float, optional
         Relative tolerance in (0, 1); default 0.01.
     sliding_speed : float, optional, m/s
-        Default ``result.sliding_speed``; gives the time.
+        Default ``result.sliding_speed``; gives the time.  A speed in the
+        range of every scale (:data:`steady.scene.SLIDING_SPEED`).
 
     Returns
     -------
@@ -234,9 +237,9 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
     within = float(within)
     if not 0.0 < within < 1.0:
         raise ValueError(f"within must lie in (0, 1), got {within!r}")
-    speed = result.sliding_speed if sliding_speed is None else float(sliding_speed)
-    if speed is not None and not (math.isfinite(speed) and speed > 0):
-        raise ValueError(f"sliding_speed must be a finite number > 0 (m/s), got {speed!r}")
+    # The result's speed was checked where it entered (the problem's).
+    speed = (result.sliding_speed if sliding_speed is None
+             else SLIDING_SPEED.parse(sliding_speed, ""))
     h = result.history
     s = np.asarray(h["distance"], dtype=float)
     s_star = result.distance_scale

@@ -83,6 +83,7 @@ from .control import (
     StopTests,
     checkpoint_due,
     contact_tolerance,
+    depth_resolution,
 )
 from .diagnostics import shape_rms, wear_rate_spread
 from .history import FaceEstimator
@@ -203,6 +204,7 @@ class _Run:
         # Distance of the next attempt after one that went past end_depth (None: none).
         self.depth_landing = None
         if resume is None:
+            self.stop.check_end_depth(self.depth_resolution())
             self.s, self.steps, self.rejected, self.failures = 0.0, 0, 0, 0
             self.wall_time = 0.0
         else:
@@ -210,6 +212,9 @@ class _Run:
             self.steps, self.rejected = resume.steps, resume.rejected
             self.failures = resume.failures
             self.wall_time = resume.wall_time
+        if resume is None or self.controller.fixed:
+            self.controller.check_first_step(self.next_step if resume is None
+                                             else options.fixed_step, self.min_step(), self.s)
         # (spread, shape_rate) of the current point, which the stop tests judge: the last
         # history point's, or the figures of the state a jump reached (not in the history).
         self.latest = None
@@ -234,6 +239,43 @@ class _Run:
         if self.options.end_depth is None:
             return None
         return float(self.worn_depth()[self.problem.face_mask].mean())
+
+    def min_step(self):
+        """The shortest step that moves the run on, m.
+
+        :meth:`transient.control.StepController.min_step` at the current
+        distance.
+        """
+        return self.controller.min_step(self.s, self.problem.fast_distance)
+
+    def depth_resolution(self):
+        """The mean worn depth the run resolves at its current point, m.
+
+        :func:`transient.control.depth_resolution` of the largest of the
+        rigid approach, the face's recession with its offset and the
+        initial face.
+        """
+        face_mask = self.problem.face_mask
+        size = max(abs(self.approach),
+                   float(np.max(np.abs(self.recession[face_mask]))) + abs(self.offset),
+                   float(np.max(np.abs(self.initial_recession[face_mask]))))
+        return depth_resolution(size)
+
+    def depth_aim(self):
+        """Distance (m) the next step aims at to land on ``end_depth``, or None.
+
+        After a trial that went past it, the landing that trial gave;
+        otherwise where the mean worn depth reaches it at the current rate
+        (:meth:`transient.control.StopTests.depth_target`).
+        """
+        depth = self.mean_depth()
+        if depth is None:
+            return None
+        if self.depth_landing is not None:
+            return self.depth_landing
+        p = self.problem
+        rate = float(self.solver.rate(self.pressure)[p.face_mask].mean())
+        return self.stop.depth_target(self.s, depth, rate)
 
     def below_interfaces(self):
         """Whether the phases no longer change below the face (always, for a columnar run)."""
@@ -316,27 +358,26 @@ class _Run:
         """Scheme and length (m) of the next attempt.
 
         A regular step lands on ``target`` or on the distance where the
-        mean worn depth reaches ``end_depth`` at the current wear rate,
+        mean worn depth reaches ``end_depth`` (:meth:`depth_aim`),
         whichever comes first; across interfaces it ends just past the
         first crossing ahead
-        (:meth:`transient.control.StepController.before_crossing`).
+        (:meth:`transient.control.StepController.before_crossing`).  No
+        step is shorter than :meth:`min_step` unless it lands on a target;
+        the loop ends the run rather than retry one.
         """
         p = self.problem
         if jump:
             return get_scheme("implicit_euler"), self.options.jump_step_s_star * self.s_star
-        ds = self.next_step
+        # After a step cut short to land on a target, the next grows from it: not below
+        # the shortest step that moves the run on.
+        ds = max(self.next_step, self.min_step())
         if self.scheme.explicit:
             ds = self.controller.explicit_limit(ds, self.solver.stable_step(self.pressure))
         if p.work_depth is not None:
             ds = self.controller.before_crossing(ds, self.last_crossing(ds))
-        depth = self.mean_depth()
-        if depth is not None:
-            rate = float(self.solver.rate(self.pressure)[p.face_mask].mean())
-            at_depth = self.depth_landing
-            if at_depth is None:
-                at_depth = self.stop.depth_target(self.s, depth, rate)
-            if at_depth is not None:
-                target = at_depth if target is None else min(target, at_depth)
+        at_depth = self.depth_aim()
+        if at_depth is not None:
+            target = at_depth if target is None else min(target, at_depth)
         return self.scheme, self.controller.land(ds, self.s, target, self.stop.end())
 
     def last_crossing(self, ds):
@@ -385,7 +426,8 @@ class _Run:
             return None
         after = self.problem.worn_depth(trial.recession, self.offset, self.initial_recession)
         return self.stop.depth_landing(self.s, ds, self.mean_depth(),
-                                       float(after[self.problem.face_mask].mean()))
+                                       float(after[self.problem.face_mask].mean()),
+                                       self.depth_resolution())
 
     def accept(self, trial, ds, jump=False):
         """Move to the trial point; the rigid part of the wear goes into ``offset``.
@@ -453,9 +495,11 @@ class _Run:
         while True:
             spread, shape_rate = self.latest
             columnar = self.below_interfaces()
+            depth = self.mean_depth()
             ended = stop.check(spread, shape_rate, self.s, self.steps,
-                               held=self.next_breakpoint() is not None,
-                               depth=self.mean_depth(), columnar=columnar)
+                               held=self.next_breakpoint() is not None, depth=depth,
+                               depth_resolution=0.0 if depth is None else self.depth_resolution(),
+                               columnar=columnar)
             if ended is not None:
                 return ended
             target = self.pending_target()
@@ -466,6 +510,12 @@ class _Run:
                     return ended
                 self.jumps += 1
             scheme, ds = self.plan(jump, target)
+            # A step below min_step moves the run on only to land on a snapshot or a
+            # breakpoint, and no shorter retry would.
+            min_step = self.min_step()
+            if not (jump or ds >= min_step or (target is not None and ds == target - self.s)):
+                return stop.short_step(ds, min_step, self.s, at_depth=self.depth_aim(),
+                                       depth=self.mean_depth())
             try:
                 trial, err = self.attempt(scheme, ds, jump)
             except StepFailure as exc:
@@ -486,6 +536,8 @@ class _Run:
                 logger.debug("past end_depth: landing at %.6g s*", landing / self.s_star)
                 continue
             if controller.rejects(err, jump):
+                if ds <= min_step:  # its retry would be no shorter
+                    return stop.short_step(ds, min_step, self.s)
                 self.rejected += 1
                 self.next_step = controller.after_reject(ds, err, scheme)
                 logger.debug("rejected %.3g s* (err %.3g)", ds / self.s_star, err)

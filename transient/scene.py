@@ -32,7 +32,7 @@ import types
 
 import numpy as np
 
-from steady.array_files import npy_header
+from steady.array_files import REAL_NUMBERS, npy_header
 from steady.scene import RUN_IN_SECTIONS, load_scene, problem_of
 from steady.schema import Context
 from steady.text import one_line
@@ -43,6 +43,7 @@ from .problem import WearProblem
 
 __all__ = [
     "InitialFace",
+    "check_run_in_law",
     "load_transient_scene",
     "parse_initial_face",
     "parse_transient",
@@ -144,8 +145,8 @@ def parse_initial_face(table, base_dir):
     build, values = INITIAL_FACES.read(table, context)
     for key in build.keys:
         if key.type == "path" and key.name in values:
-            # Exists, is a .npy file, not truncated: checked before the run.
-            npy_header(values[key.name], what="initial face file")
+            # Exists, is a .npy file of real numbers, not truncated: checked before the run.
+            npy_header(values[key.name], what="initial face file", holds=REAL_NUMBERS)
     return InitialFace(build.kind, types.MappingProxyType(values))
 
 
@@ -213,6 +214,35 @@ def wear_problem_of(scene, *, n=None, problem=None):
         raise ValueError(f"{where}{err}") from None
 
 
+def check_run_in_law(scene):
+    """Refuse a run-in across interfaces under a law that does not factorise, naming both keys.
+
+    Across the interfaces of a phase map that changes with depth
+    (``[depth]``, a 3-d map kind) the run integrates the wear work
+    ``g(p)`` and maps it to depth through each segment's ``k_i``: the law
+    must be ``k_i g(p)`` (:attr:`steady.wear.WearLaw.factor`).  One
+    section of such a scene is a steady problem like any other
+    (``runin-steady --depth``), whatever its law.
+
+    Raises
+    ------
+    ValueError
+        ``[wear] law`` without a factorisation on a depth-varying scene.
+    """
+    if not scene.depth_varying or scene.wear.factor is not None:
+        return
+    from steady.wear import WEAR_LAWS
+
+    where = ("[depth]" if scene.depth is not None
+             else f"[phases] map kind = {scene.geometry.kind!r}")
+    laws = " or ".join(repr(kind) for kind in sorted(WEAR_LAWS)
+                       if getattr(WEAR_LAWS[kind], "factor", None) is not None)
+    raise ValueError(f"[wear] law = {scene.wear.kind!r} and {where}: a run-in across the "
+                     f"interfaces of phases that change with depth needs a law k_i g(p) "
+                     f"([wear] law = {laws}), whose coefficients k_i change at each "
+                     f"interface; runin-steady solves one section of this scene (--depth)")
+
+
 def load_transient_scene(path):
     """Read a scene file with its ``[transient]`` and ``[initial_face]`` sections.
 
@@ -227,7 +257,9 @@ def load_transient_scene(path):
     Raises
     ------
     ValueError
-        Any error of :func:`steady.scene.load_scene` or of the two sections.
+        Any error of :func:`steady.scene.load_scene` or of the two sections,
+        or a wear law without a run-in across the scene's interfaces
+        (:func:`check_run_in_law`).
 
     Examples
     --------
@@ -238,6 +270,7 @@ def load_transient_scene(path):
     scene = load_scene(path, extra_sections=RUN_IN_SECTIONS)
     base_dir = pathlib.Path(path).parent
     try:
+        check_run_in_law(scene)
         options = (parse_transient(scene.extra["transient"], base_dir,
                                    distance_scale=_distance_scale(scene))
                    if "transient" in scene.extra else RunOptions())

@@ -10,7 +10,8 @@ that was there when the run started (``--resume``, ``--force``): a file
 another writer put at the run's path meanwhile is refused
 (:class:`steady.safe_files.OutputAppearedError`), not replaced.  A resumed
 run continues only the run of the same problem (:func:`check_same_inputs`:
-face, grid, load, phases, wear law, initial face), from a file whose
+face, grid, load, phases and the phases below the face, wear law, sliding
+kinematics, initial face), from a file whose
 checksums hold (:func:`read_resume`, which names the previous checkpoint
 when the file is damaged); its settings may change, and each part of the
 run is recorded with its settings in the root attribute
@@ -31,13 +32,14 @@ import numpy as np
 
 from steady.outline import describe_change
 from steady.safe_files import backup_path, file_identity
+from steady.sliding import Translation, sliding_from_file
 from steady.text import shorten
 from steady.wear import same_wear_law, wear_law_from_file
 
 from .. import output
 
-__all__ = ["RunFile", "at_text", "check_same_inputs", "interrupt_held", "read_resume",
-           "run_inputs"]
+__all__ = ["RunFile", "at_text", "check_same_columns", "check_same_inputs", "interrupt_held",
+           "read_resume", "run_inputs", "stored_columns_digest"]
 
 
 def run_inputs(scene, problem):
@@ -54,12 +56,35 @@ def run_inputs(scene, problem):
     return attrs, {"phase": problem.labels}
 
 
-def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, outline,
+def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, problem,
                       wear):
-    """Refuse to resume a run of another problem (face, grid, load, phases, wear law, start).
+    """Refuse to resume a run of another problem; the message names what differs, both values.
 
-    ``wear`` is the scene's law, compared with the file's (:func:`steady.wear.same_wear_law`).
+    Everything that defines the problem is compared: the face, the grid,
+    the load and its programme, ``E*``, the phase map and the phases below
+    the face (:func:`check_same_columns`), the wear law (``wear``, the
+    scene's, against the file's: :func:`steady.wear.same_wear_law`), the
+    sliding kinematics and the initial face.  The phase names are labels
+    and may change.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The run file.
+    attrs, arrays : dict
+        The scene's inputs as :func:`run_inputs` gives them.
+    stored_attrs, stored_arrays : mapping
+        The file's root attributes and datasets.
+    stored : transient.result.RunResult
+        The run the file holds.
+    h0 : ndarray, shape (nx, ny), m
+        The scene's initial face.
+    problem : transient.problem.WearProblem
+        The scene's problem.
+    wear : wear law
+        The scene's law.
     """
+    outline = problem.outline
     if stored.outline is None or stored.outline != outline:
         change = (f"an unknown face, the scene has the {outline.describe()}"
                   if stored.outline is None else describe_change(stored.outline, outline))
@@ -78,6 +103,16 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
                else f"another wear law ({stored_wear.scene_words()})")
         raise ValueError(f"{str(path)!r} was run with {was}; the scene has "
                          f"{wear.scene_words()}; use --force to start over")
+    try:
+        stored_sliding = sliding_from_file(stored_attrs)
+    except ValueError:
+        stored_sliding = None
+    sliding = problem.problem.sliding or Translation()
+    if stored_sliding != sliding:
+        was = ("an unknown sliding kinematics" if stored_sliding is None
+               else f"[sliding] {stored_sliding.describe()}")
+        raise ValueError(f"{str(path)!r} was run under {was}; the scene has [sliding] "
+                         f"{sliding.describe()}; use --force to start over")
     stored_programme, programme = (a.get("load_programme") for a in (stored_attrs, attrs))
     if (stored_programme is None) != (programme is None) or (
             programme is not None and not np.array_equal(stored_programme, programme)):
@@ -85,9 +120,58 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
                          f"({shorten(stored_programme)}); use --force")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
+    check_same_columns(path, stored_attrs, stored, problem.columns)
     face_mask = arrays["phase"] >= 0
     if not np.array_equal(stored.initial_recession[face_mask], h0[face_mask]):
         raise ValueError(f"{str(path)!r} was run from another initial face; use --force")
+
+
+#: A root attribute every file of a run with columns holds, checkpoint or not, since
+#: depth runs were written (:func:`transient.output.write_run`).
+_DEPTH_RUN_MARK = "coating_worn_through_distance"
+
+
+def stored_columns_digest(stored_attrs, stored):
+    """The digest of the columns a run file's run had: "" for none, None when not recorded.
+
+    A checkpoint holds ``columns_sha256``, a final file the columns
+    themselves; a depth run written before either was recorded is known
+    only as one (None).
+    """
+    digest = stored_attrs.get("columns_sha256")
+    if digest is not None:
+        return digest.decode() if isinstance(digest, bytes) else str(digest)
+    if stored.columns is not None:
+        return stored.columns.digest
+    return None if _DEPTH_RUN_MARK in stored_attrs else ""
+
+
+def check_same_columns(path, stored_attrs, stored, columns):
+    """Refuse to resume a run on other phases below the face (``[depth]``, a 3-d map).
+
+    ``columns`` (:class:`steady.depth.DepthColumns` or None) are the
+    scene's; a depth run whose file does not record its columns is resumed
+    on the scene's (the caller notes it).
+    """
+    digest = stored_columns_digest(stored_attrs, stored)
+    scene = ("phases that do not change with depth (no [depth], a 2-d map)" if columns is None
+             else f"phases that change with depth ([depth] or a 3-d map: "
+                  f"{columns.describe()})")
+    if digest is None:
+        if columns is None:
+            raise ValueError(f"{str(path)!r} was run on phases that change with depth; the "
+                             f"scene has {scene}; use --force to start over")
+        return
+    if digest == ("" if columns is None else columns.digest):
+        return
+    if not digest:
+        was = "phases that do not change with depth"
+    elif stored.columns is not None:
+        was = f"other phases below the face ({stored.columns.describe()})"
+    else:
+        was = "other phases below the face (its checkpoint's columns_sha256 differs)"
+    raise ValueError(f"{str(path)!r} was run on {was}; the scene has {scene}; use --force to "
+                     f"start over")
 
 
 def at_text(steps, distance, distance_scale):

@@ -34,7 +34,9 @@ so that checkpoints take at most 5 % of the run); the file it replaces is kept a
 ``--resume``; a damaged file is refused, naming the previous checkpoint if
 it is intact.  ``--resume`` continues a killed, stopped or failed run with
 the scene's (and the flags') current settings: the inputs that define the
-problem (grid, load, phases, wear law, initial face) must be unchanged,
+problem (face, grid, load, phases and the phases below the face, wear law,
+sliding kinematics, initial face) must be unchanged (the phase names and
+the sliding speed may change),
 the run settings (scheme, tolerances, limits, snapshots) may change, since
 the stored state (face, pressure, previous face and rate, next step) is
 what every scheme continues from.  Each part of the run is recorded with
@@ -96,7 +98,14 @@ from steady.safe_files import OutputAppearedError
 from ..memory import run_in_memory
 from ..options import add_option_flags, options_from_flags
 from .progress import Progress
-from .run_file import RunFile, at_text, check_same_inputs, read_resume, run_inputs
+from .run_file import (
+    RunFile,
+    at_text,
+    check_same_inputs,
+    read_resume,
+    run_inputs,
+    stored_columns_digest,
+)
 
 __all__ = ["build_parser", "main"]
 
@@ -294,9 +303,12 @@ def _prepare(args, lock, scene, initial, options, checked):
     if args.resume and out.exists():
         resume, stored_attrs, stored_arrays = read_resume(out)
         check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
-                           problem.outline, scene.wear)
+                           problem, scene.wear)
         if "sha256" not in stored_attrs:
             note(f"{str(out)!r} carries no checksums; resumed without verification")
+        if stored_columns_digest(stored_attrs, resume) is None:
+            note(f"{str(out)!r} does not record the phases below its face; resumed on the "
+                 f"scene's without comparing them")
         finished = resume.status == "steady" and not _lacks_spatial_error(args, resume)
         if finished:
             note(f"{str(out)!r} holds a finished run; nothing to continue")
