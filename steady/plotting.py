@@ -46,7 +46,7 @@ from .text import shorten
 
 __all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
            "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
-           "plot_phases", "pressure_unit", "relief", "result_figure", "root_figure", "save_new",
+           "plot_phases", "pressure_scale", "pressure_unit", "relief", "result_figure", "root_figure", "save_new",
            "save_png", "segmentation_figure", "set_fonts"]
 
 logger = logging.getLogger(__name__)
@@ -276,6 +276,45 @@ def pressure_unit(values):
         if top >= factor:
             return factor, unit
     return 1.0, "Pa"
+
+
+#: Pa per unit of the pressure units a figure can be asked for.
+PRESSURE_UNITS = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9}
+
+
+def pressure_scale(values, units="auto"):
+    """``(factor, unit)`` of pressures drawn in ``units``: one of :data:`PRESSURE_UNITS` or auto.
+
+    Parameters
+    ----------
+    values : array_like, Pa
+        The pressures (for ``"auto"``).
+    units : str, optional
+        ``"auto"`` (default): the unit that suits their size
+        (:func:`pressure_unit`); else a key of :data:`PRESSURE_UNITS`.
+
+    Returns
+    -------
+    factor : float
+        Pa per unit.
+    unit : str
+
+    Raises
+    ------
+    ValueError
+        Another ``units``.
+
+    Examples
+    --------
+    >>> pressure_scale([2.0e5], "auto"), pressure_scale([2.0e5], "Pa")
+    ((1000.0, 'kPa'), (1.0, 'Pa'))
+    """
+    if units == "auto":
+        return pressure_unit(values)
+    if units not in PRESSURE_UNITS:
+        raise ValueError(f"pressure units must be 'auto' or one of {', '.join(PRESSURE_UNITS)}, "
+                         f"got {units!r}")
+    return PRESSURE_UNITS[units], units
 
 
 def _steady(source):

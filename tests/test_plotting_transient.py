@@ -194,6 +194,19 @@ def test_pressure_in_kilopascals(result):
     assert np.mean(normalised[mask]) == pytest.approx(1.0, rel=1e-9), "mean pressure 1"
 
 
+def test_pressure_in_the_unit_asked_for(result):
+    """``units="Pa"`` draws pascals (it drew the automatic kPa); other names are refused."""
+    mask = result.face_mask
+    for units, factor in (("Pa", 1.0), ("MPa", 1e6)):
+        fig = plot_pressure(result, units=units)
+        np.testing.assert_allclose(_drawn(fig.axes[0])[mask], result.pressure[mask] / factor,
+                                   rtol=1e-15)
+        assert fig.axes[1].get_xlabel() == f"pressure ({units})"
+    with pytest.raises(ValueError, match="pressure units must be 'auto' or one of Pa, kPa, MPa, "
+                                         "GPa, got 'bar'"):
+        plot_pressure(result, units="bar")
+
+
 # -- one orientation in the steady and run-in figures ---------------------------------------
 
 def test_steady_and_run_in_faces_drawn_the_same_way(run_file, steady):

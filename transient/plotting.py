@@ -43,7 +43,7 @@ from steady.plotting import (
     map_height,
     new_figure,
     phase_colours,
-    pressure_unit,
+    pressure_scale,
     relief,
     root_figure,
     save_new,
@@ -613,7 +613,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
     return fig
 
 
-def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
+def plot_pressure(source, *, ax=None, units="auto", cmap="magma"):
     """The final contact pressure on the face.
 
     A pressure constant on each phase (the steady state's, eq. 7) is drawn
@@ -625,10 +625,11 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
     source : str, path-like or RunResult
     ax : matplotlib.axes.Axes, optional
         Axes to draw into (default: a new figure a column wide).
-    units : {"Pa", "normalised"}, optional
-        Pressure in Pa, kPa, MPa or GPa, whichever suits its size
-        (:func:`steady.plotting.pressure_unit`; default), or in the mean
-        pressure over the face's pixels.
+    units : {"auto", "Pa", "kPa", "MPa", "GPa", "normalised"}, optional
+        ``"auto"`` (default): Pa, kPa, MPa or GPa, whichever suits the
+        pressure's size (:func:`steady.plotting.pressure_unit`); a unit
+        named: that unit; ``"normalised"``: in the mean pressure over the
+        face's pixels.
     cmap : str, optional
 
     Returns
@@ -636,17 +637,17 @@ def plot_pressure(source, *, ax=None, units="Pa", cmap="magma"):
     matplotlib.figure.Figure
         Axes in mm (pixels when the outline is unknown), x horizontal, y up.
     """
-    if units not in ("Pa", "normalised"):
-        raise ValueError(f"units must be 'Pa' or 'normalised', got {units!r}")
+    if units != "normalised":
+        pressure_scale((), units)  # refused before the file is read
     run = _run(source)
     result = run.result
     fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(result.shape, COLUMN_WIDTH)))
     ext, unit = extent(result.shape, _outline(result, run.attrs))
     pressure = np.where(result.face_mask, result.pressure, np.nan)
-    if units == "Pa":
-        factor, label = pressure_unit(pressure)
-    else:
+    if units == "normalised":
         factor, label = result.pixel_mean_pressure, "mean pressure"
+    else:
+        factor, label = pressure_scale(pressure, units)
     phases = _phase_wise(run, pressure)
     if phases is None:
         image = draw_map(ax, pressure / factor, ext, unit=unit, cmap=cmap)
