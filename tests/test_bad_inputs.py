@@ -104,6 +104,20 @@ def png_garbage(d):
     (d / "map.png").write_bytes(b"GIF89a" + bytes(64))
 
 
+def symlink_loop(d, name):
+    """``d/name``: a symbolic link to itself, which no lookup can resolve."""
+    (d / name).symlink_to(name)
+    return d / name
+
+
+def with_loop(name, *args):
+    """A case maker with a good scene, ``d/name`` a loop of links and these arguments."""
+    def make(d, base):
+        symlink_loop(d, name)
+        return [write(d, "s.toml", base), *(str(a).format(d=d) for a in args)]
+    return make
+
+
 CASES = [
     # -- the scene file itself
     Case("scene missing", lambda d, base: [d / "nope.toml"], "nope.toml' does not exist"),
@@ -171,6 +185,16 @@ CASES = [
          "m.npy' must hold integers, got dtype float64"),
     Case("map PNG garbage", scene_and(png_garbage, lambda t: file_map(t, "map.png")),
          "map.png' is not a PNG image"),
+    # -- loops of symbolic links: refused by whatever opens the file, naming it
+    Case("scene a symlink loop", lambda d, base: [symlink_loop(d, "loop.toml")],
+         "cannot read scene file '{d}/loop.toml': Too many levels of symbolic links"),
+    Case("-o a symlink loop", with_loop("loop.h5", "-o", "{d}/loop.h5", "--force"),
+         "output '{d}/loop.h5': Too many levels of symbolic links"),
+    Case("--plot a symlink loop", with_loop("loop.png", "--plot", "{d}/loop.png"),
+         "--plot '{d}/loop.png': Too many levels of symbolic links"),
+    Case("map a symlink loop", scene_and(lambda d: symlink_loop(d, "m.npy"),
+                                         lambda t: file_map(t, "m.npy")),
+         "cannot read phase map '{d}/m.npy': Too many levels of symbolic links"),
     # -- output paths
     Case("no -o", lambda d, base: [write(d, "s.toml", base)], "the following arguments are "
                                                               "required: -o/--output",
@@ -288,7 +312,7 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, command):
             args.append("--force")
     before = {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()}
     status, out, err = run_command(command, args, capsys)
-    fragment = FRAGMENTS.get((case.name, command), case.fragment)
+    fragment = FRAGMENTS.get((case.name, command), case.fragment).replace("{d}", str(d))
     lines = err.splitlines()
     assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
     assert status == 2, f"exit {status}, stderr {err[:500]!r}"

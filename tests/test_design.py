@@ -230,6 +230,8 @@ def _incomplete_table(path):
     (lambda d: d / "missing.h5", "does not exist"),
     (lambda d: d, "is a directory"),
     (lambda d: pathlib.Path("/dev/null"), "is not a regular file"),
+    (lambda d: (d / "loop.h5", (d / "loop.h5").symlink_to("loop.h5"))[0],
+     "': Too many levels of symbolic links"),
     (lambda d: (d / "text.h5", (d / "text.h5").write_text("not a table"))[0],
      "is not an HDF5 file"),
     (lambda d: _incomplete_table(d / "incomplete.h5"), "is damaged or incomplete"),

@@ -231,6 +231,29 @@ def test_unreadable_maps_are_one_line(case, capsys, name, kind, fragment):
     assert not (face_path.parent / "fit.h5").exists() and not out, "nothing written"
 
 
+@pytest.mark.parametrize("which, fragment", [
+    ("scene", "cannot read scene file '{loop}'"),
+    ("measured", "cannot read measured map '{loop}'"),
+    ("-o", "output '{loop}'"),
+    ("--plot", "--plot '{loop}'"),
+])
+def test_a_loop_of_symbolic_links_is_bad_input(case, capsys, which, fragment):
+    """A link to itself as any path: one line naming it, exit 2, nothing written."""
+    scene_path, face_path, _ = case
+    loop = face_path.parent / ("loop.png" if which == "--plot" else "loop")
+    loop.symlink_to(loop.name)
+    out_h5 = face_path.parent / "fit.h5"
+    paths = {"scene": scene_path, "measured": face_path, "-o": out_h5, "--plot": None}
+    paths[which] = loop
+    args = [paths["scene"], paths["measured"], "-o", paths["-o"], "--pixel-size", PIXEL]
+    status, out, err = run(capsys, *args, *(["--plot", loop] if which == "--plot" else []))
+    line = one_error_line(err)
+    assert status == 2, f"exit {status}: {err}"
+    expected = f"{fragment.format(loop=loop)}: Too many levels of symbolic links"
+    assert expected in line, f"{line!r} lacks {expected!r}"
+    assert not out_h5.exists() and not out, "nothing written"
+
+
 def test_ragged_text_grid_gets_no_numpy_advice(tmp_path):
     (tmp_path / "m.txt").write_text("1 2 3\n4 5\n")
     with pytest.raises(ValueError, match="number of columns changed") as err:

@@ -311,7 +311,10 @@ def check_distinct(named):
     for what, path in named:
         if path is None:
             continue
-        key = pathlib.Path(path).resolve()
+        # Not Path.resolve: before Python 3.13 it raises RuntimeError on a loop of
+        # symbolic links, which realpath leaves unresolved for the reader or writer
+        # of the file to refuse, naming it.
+        key = os.path.realpath(path)
         if key in seen:
             raise ValueError(f"{what} and {seen[key]} name the same file {str(path)!r}")
         seen[key] = what
