@@ -155,6 +155,12 @@ CASES = [
     # -- size
     Case("n = 100000", scene(lambda t: with_key(t, "n", "100000")),
          "at n = 100000"),
+    Case("n = 2^63 - 1", scene(lambda t: with_key(t, "n", str(2**63 - 1))),
+         "[grid] n: grid size n = 9223372036854775807 is larger than 1073741823: an n x n grid "
+         "of 8-byte values would exceed the memory a process can address"),
+    Case("n = 2^63 - 1, no memory check", lambda d, base: [
+        write(d, "s.toml", with_key(base, "n", str(2**63 - 1))), "--memory-limit", "inf"],
+         "[grid] n: grid size n = 9223372036854775807 is larger than"),
     Case("n = 12000", lambda d, base: [write(d, "s.toml", with_key(base, "n", "12000")),
                                        "--memory-limit", "16"],
          "GiB may be used (--memory-limit)"),
