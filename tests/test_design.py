@@ -254,6 +254,10 @@ def test_command_line_bad_table(tmp_path, capsys, make, fragment):
     (["--pbar-over-estar", "abc"], "argument --pbar-over-estar: invalid float value: 'abc'"),
     (["--pbar-over-estar", "nan"], "pbar_over_estar must be a number > 0 (1), got nan"),
     (["--target-slope", "-1"], "target_slope must be a number > 0 (1), got -1.0"),
+    # Exponent forms and -inf are numbers, not options.
+    (["--pbar-over-estar", "-1e-3"], "pbar_over_estar must be a number > 0 (1), got -0.001"),
+    (["--target-slope", "-inf"], "target_slope must be a number > 0 (1), got -inf"),
+    (["--wear-ratio", "-1E-4"], "wear ratio -0.0001 is outside the table's range"),
     (["--wear-ratio", "inf"], "wear ratio inf is outside the table's range"),
     (["--fill-factor", "nan"], "fill factor must be finite, got nan"),
     (["--target-slope", "1", "--fill-factor", "0.1"], "not allowed with argument"),

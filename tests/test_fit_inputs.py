@@ -254,6 +254,19 @@ def test_a_loop_of_symbolic_links_is_bad_input(case, capsys, which, fragment):
     assert not out_h5.exists() and not out, "nothing written"
 
 
+@pytest.mark.parametrize("flag", ["--rim-margin", "--max-shift", "--height-scale",
+                                  "--pixel-size", "--confidence"])
+def test_a_negative_number_in_exponent_form_reaches_its_check(case, capsys, flag):
+    """``-1e-4`` is the flag's value (refused as negative), not a missing argument."""
+    scene_path, face_path, _ = case
+    args = [scene_path, face_path, "-o", face_path.parent / "fit.h5", "--shift"]
+    args += [flag, "-1e-4"] + (["--pixel-size", PIXEL] if flag != "--pixel-size" else [])
+    status, _, err = run(capsys, *args)
+    line = one_error_line(err)
+    assert status == 2 and "-0.0001" in line, f"exit {status}: {line}"
+    assert "expected one argument" not in line and "expected at least" not in line, line
+
+
 def test_ragged_text_grid_gets_no_numpy_advice(tmp_path):
     (tmp_path / "m.txt").write_text("1 2 3\n4 5\n")
     with pytest.raises(ValueError, match="number of columns changed") as err:
