@@ -17,6 +17,7 @@ from conftest import run_cli, scene_text
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
+from steady.array_files import PNG_SIGNATURE
 
 PRECIOUS = b"a result someone cares about"
 
@@ -104,6 +105,11 @@ def png_garbage(d):
     (d / "map.png").write_bytes(b"GIF89a" + bytes(64))
 
 
+def png_signature_only(d):
+    """``m.png``: the eight bytes that start every PNG file, and nothing else."""
+    (d / "m.png").write_bytes(PNG_SIGNATURE)
+
+
 def symlink_loop(d, name):
     """``d/name``: a symbolic link to itself, which no lookup can resolve."""
     (d / name).symlink_to(name)
@@ -116,6 +122,10 @@ def with_loop(name, *args):
         symlink_loop(d, name)
         return [write(d, "s.toml", base), *(str(a).format(d=d) for a in args)]
     return make
+
+
+#: The cut PNG's message, wherever a PNG is read.
+PNG_CUT = "m.png' is not a readable PNG image: it holds only the 8-byte PNG signature"
 
 
 CASES = [
@@ -198,6 +208,15 @@ CASES = [
          "m.npy' must hold integers, got dtype float64"),
     Case("map PNG garbage", scene_and(png_garbage, lambda t: file_map(t, "map.png")),
          "map.png' is not a PNG image"),
+    # -- a PNG cut after its signature, everywhere a PNG is read
+    Case("map PNG signature only", scene_and(png_signature_only, lambda t: file_map(t, "m.png")),
+         "phase map '{d}/" + PNG_CUT),
+    Case("micrograph PNG signature only", scene_and(png_signature_only, lambda t: with_key(
+        t, "map", '{ kind = "micrograph", path = "m.png", n_phases = 2, pixel_size = 1e-4 }')),
+         "micrograph '{d}/" + PNG_CUT),
+    Case("mask PNG signature only", scene_and(png_signature_only, lambda t: with_section(
+        t, "punch", 'shape = "mask"\npath = "m.png"\npixel_size = 2e-4')),
+         "face mask '{d}/" + PNG_CUT),
     # -- loops of symbolic links: refused by whatever opens the file, naming it
     Case("scene a symlink loop", lambda d, base: [symlink_loop(d, "loop.toml")],
          "cannot read scene file '{d}/loop.toml': Too many levels of symbolic links"),

@@ -21,6 +21,7 @@ import pytest
 from conftest import GEOMETRIES, K1, problem
 
 from steady import FaceModel, MeasuredFace, PowerLaw, load_scene, read_measured, solve
+from steady.array_files import PNG_SIGNATURE
 from steady.cli.fit import main
 from steady.memory import fit_memory
 from steady.outline import Circle
@@ -200,6 +201,8 @@ def _bad_file(kind, path):
         path.write_bytes(path.read_bytes()[:300])
     elif kind == "1-d":
         np.save(path, np.zeros(0))
+    elif kind == "png signature":
+        path.write_bytes(PNG_SIGNATURE)
 
 
 @pytest.mark.parametrize("name, kind, fragment", [
@@ -216,6 +219,10 @@ def _bad_file(kind, path):
     ("m.dat", "comments only", "holds no numbers"),
     ("m.x3p", "empty", "is empty (0 bytes)"),
     ("m.x3p", "directory", "is a directory, not a file"),
+    # Not handed to SurfaceTopography, whose reader of headerless grids would take 8 bytes
+    # for 2 x 2 heights.
+    ("m.png", "png signature", "is a PNG image, not a height map"),
+    ("m.dat", "png signature", "is a PNG image, not a text grid"),
 ])
 def test_unreadable_maps_are_one_line(case, capsys, name, kind, fragment):
     """One line naming the file and what is wrong, exit 2; never advice to unpickle."""
