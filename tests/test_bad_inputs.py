@@ -217,6 +217,12 @@ CASES = [
     Case("mask PNG signature only", scene_and(png_signature_only, lambda t: with_section(
         t, "punch", 'shape = "mask"\npath = "m.png"\npixel_size = 2e-4')),
          "face mask '{d}/" + PNG_CUT),
+    # -- a sphere fraction that places no sphere
+    Case("spheres of volume fraction 1e-6", scene(lambda t: with_key(t, "map", (
+        '{ kind = "spheres", radius = 8e-4, volume_fraction = 1e-6, seed = 2031, '
+        'depth = 2e-3 }'))),
+         "sphere volume_fraction = 1e-06 places no sphere of radius 0.0008 m: the particle "
+         "phase would have no voxel"),
     # -- loops of symbolic links: refused by whatever opens the file, naming it
     Case("scene a symlink loop", lambda d, base: [symlink_loop(d, "loop.toml")],
          "cannot read scene file '{d}/loop.toml': Too many levels of symbolic links"),
