@@ -217,6 +217,11 @@ CASES = [
     Case("mask PNG signature only", scene_and(png_signature_only, lambda t: with_section(
         t, "punch", 'shape = "mask"\npath = "m.png"\npixel_size = 2e-4')),
          "face mask '{d}/" + PNG_CUT),
+    # -- a spread of inclusion radii whose distribution overflows
+    Case("inclusions radius_spread 1e308", scene(lambda t: with_key(t, "map", (
+        '{ kind = "inclusions", radius = 5e-4, seed = 5, fill_factor = 0.2, '
+        'radius_spread = 1e308 }'))),
+         "[phases] map radius_spread must be a number in [0, 10] (1), got 1e+308"),
     # -- a sphere fraction that places no sphere
     Case("spheres of volume fraction 1e-6", scene(lambda t: with_key(t, "map", (
         '{ kind = "spheres", radius = 8e-4, volume_fraction = 1e-6, seed = 2031, '
