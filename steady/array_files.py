@@ -26,8 +26,8 @@ import numpy as np
 
 from .text import format_bytes
 
-__all__ = ["INTEGERS", "LABELS", "MASK", "NUMBERS", "REAL_NUMBERS", "Holds", "array_suffix",
-           "input_file_size", "integer_face", "npy_header", "png_size", "read_face_mask",
+__all__ = ["INTEGERS", "LABELS", "MASK", "NUMBERS", "PNG_SIGNATURE", "REAL_NUMBERS", "Holds",
+           "array_suffix", "input_file_size", "integer_face", "npy_header", "png_size", "read_face_mask",
            "read_npy", "read_png"]
 
 
@@ -328,20 +328,101 @@ def integer_face(values, what="face mask"):
                      f"use a boolean array (True on the face)")
 
 
-def png_size(path, what):
-    """Width and height from a PNG's header.
+#: The eight bytes every PNG file starts with.
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
-    Raises ``ValueError`` naming the file as ``what`` if it cannot be read or
-    has no PNG signature.
+
+def png_size(path, what):
+    """Width and height from a PNG's header, once its chunks are found complete.
+
+    The file is walked chunk by chunk (length, type, data, checksum) without
+    decoding: it must start with the PNG signature, then the header chunk
+    ``IHDR`` of a size of at least 1 x 1, hold image data (``IDAT``) and end
+    with ``IEND``, every chunk within the file.  A file cut short -- down
+    to the signature alone -- is refused here, naming what is missing,
+    rather than met by the decoder.
+
+    Parameters
+    ----------
+    path : str or path-like
+    what : str
+        How messages name the file (e.g. ``"phase map"``).
+
+    Returns
+    -------
+    (int, int)
+        Width and height, pixels.
+
+    Raises
+    ------
+    ValueError
+        The file cannot be read, has no PNG signature, or its chunks are
+        incomplete; the message names the file as ``what``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "cut.png"
+    >>> _ = path.write_bytes(PNG_SIGNATURE)
+    >>> try:
+    ...     png_size(path, "phase map")
+    ... except ValueError as err:
+    ...     print(str(err).replace(str(path), "cut.png"))
+    phase map 'cut.png' is not a readable PNG image: it holds only the 8-byte PNG signature
     """
+    name = f"{what} {str(path)!r}"
     try:
         with open(path, "rb") as f:
-            head = f.read(24)
+            if f.read(8) != PNG_SIGNATURE:
+                raise ValueError(f"{name} is not a PNG image (no PNG signature)")
+            size, chunks, header = _png_chunks(f, name)
     except OSError as err:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {err.strerror or err}") from None
-    if len(head) < 24 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
-        raise ValueError(f"{what} {str(path)!r} is not a PNG image (no PNG signature)")
-    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+        raise ValueError(f"cannot read {name}: {err.strerror or err}") from None
+    broken = f"{name} is not a readable PNG image"
+    if header is None:
+        raise ValueError(f"{broken}: it starts with a chunk {chunks[0]!r}, not the 13-byte "
+                         f"image header IHDR")
+    width, height = int.from_bytes(header[:4], "big"), int.from_bytes(header[4:8], "big")
+    if not (width and height):
+        raise ValueError(f"{broken}: its header gives {width} x {height} pixels")
+    if "IDAT" not in chunks:
+        raise ValueError(f"{broken}: it holds no image data (no IDAT chunk in {size} bytes)")
+    if chunks[-1] != "IEND":
+        raise ValueError(f"{broken}: it is truncated after {size} bytes (no IEND chunk)")
+    return width, height
+
+
+def _png_chunks(f, name):
+    """A PNG's size, its chunk types up to ``IEND`` and its header, read past the signature.
+
+    Returns ``(size, types, header)``: the file's size in bytes, the chunk
+    types in order (``"IHDR"``, ``"IDAT"``, ...) and the 13 bytes of the
+    first chunk if it is the header ``IHDR``, else None.  ``ValueError``
+    for a file that holds only the signature or a chunk that runs past the
+    file's end (a file truncated in its middle).
+    """
+    size = f.seek(0, 2)
+    offset, types, header = 8, [], None
+    if size == offset:
+        raise ValueError(f"{name} is not a readable PNG image: it holds only the 8-byte PNG "
+                         f"signature")
+    while offset < size:
+        f.seek(offset)
+        head = f.read(8)
+        length = int.from_bytes(head[:4], "big")
+        kind = head[4:8].decode("latin-1")
+        end = offset + 12 + length  # length, type, data, checksum
+        if len(head) < 8 or end > size:
+            inside = f"inside a chunk {kind!r}" if len(head) == 8 else "inside a chunk's length"
+            raise ValueError(f"{name} is not a readable PNG image: it is truncated after "
+                             f"{size} bytes, {inside}")
+        if not types and kind == "IHDR" and length == 13:
+            header = f.read(13)
+        types.append(kind)
+        offset = end
+        if kind == "IEND":
+            break
+    return size, types, header
 
 
 def array_suffix(path, what):

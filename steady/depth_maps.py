@@ -530,7 +530,8 @@ class _SpherePacking:
         Raises
         ------
         ValueError
-            The volume fraction cannot be reached by random sequential addition.
+            The volume fraction places no sphere, or cannot be reached by
+            random sequential addition.
         """
         rng = np.random.default_rng(self.seed)
         B, (z0, z1) = self._box()
@@ -546,11 +547,21 @@ class _SpherePacking:
         # The last sphere overshoots by less than its volume: drop it if that is closer.
         if volume - target > 2.0 / 3.0 * math.pi * radii[-1] ** 3:
             radii.pop()
+        if not radii:
+            raise self._empty(volume, period)
         radii = np.sort(np.array(radii))[::-1]
         centres = _place(radii, low, period, rng, self._stalled)
         centres.flags.writeable = False
         radii.flags.writeable = False
         return centres, radii
+
+    def _empty(self, sphere, period):
+        """The error of a volume fraction below half a sphere in the placement box."""
+        least = 0.5 * sphere / float(np.prod(period))
+        return ValueError(f"sphere volume_fraction = {self.volume_fraction:g} places no sphere "
+                          f"of radius {self.radius * self.scale:.6g} m: the particle phase "
+                          f"would have no voxel (the box around the face holds half a sphere "
+                          f"from volume_fraction = {least:.3g})")
 
     def _stalled(self, radii, placed, period):
         """The error of a packing that random sequential addition cannot reach."""

@@ -38,12 +38,14 @@ from __future__ import annotations
 import dataclasses
 import importlib.resources
 import math
+import os
 import pathlib
 
 import h5py
 import numpy as np
 from scipy import interpolate, optimize
 
+from .array_files import input_file_size
 from .safe_files import atomic_h5
 from .schema import Key
 from .text import one_line, shorten
@@ -212,12 +214,10 @@ class DesignTable:
 
     @classmethod
     def _read(cls, path):
-        if not path.exists():
+        if not os.path.lexists(path):
             raise ValueError(f"design table {str(path)!r} does not exist; build it with "
                              f"'python studies/design_table.py'")
-        if not path.is_file():
-            kind = "a directory" if path.is_dir() else "not a regular file"
-            raise ValueError(f"design table {str(path)!r} is {kind}")
+        input_file_size(path, "design table")  # a directory, a device, a loop of links...
         try:
             if not h5py.is_hdf5(path):
                 raise ValueError(f"design table {str(path)!r} is not an HDF5 file")

@@ -85,7 +85,9 @@ import pathlib
 import h5py
 import numpy as np
 
-from .array_files import REAL_NUMBERS, input_file_size, read_npy
+from .array_files import (
+    PNG_SIGNATURE, REAL_NUMBERS, input_file_size, npy_header, read_npy,
+)
 from .measured_face import MeasuredFace, check_pixel_size
 from .outline import Circle
 from .output import (
@@ -135,7 +137,7 @@ _SURFACE_HINT = ("install the optional extra with pip install 'runin[surface]' "
 _SIGNATURES = (
     (b"\x93NUMPY", "a .npy array"),
     (b"\x89HDF\r\n\x1a\n", "an HDF5 file"),
-    (b"\x89PNG\r\n\x1a\n", "a PNG image"),
+    (PNG_SIGNATURE, "a PNG image"),
     (b"PK\x03\x04", "a zip archive (an .npz, an x3p?)"),
     (b"\x1f\x8b", "a gzip-compressed file"),
     (b"%PDF", "a PDF document"),
@@ -144,6 +146,10 @@ _SIGNATURES = (
     (b"\xff\xd8\xff", "a JPEG image"),
     *((bytes([0x80, protocol]), "pickled Python data") for protocol in range(2, 6)),
 )
+
+#: Kinds of :data:`_SIGNATURES` that hold no heights in any format: refused before
+#: SurfaceTopography, which has no reader for them (an image's grey levels are not heights).
+_NOT_HEIGHTS = ("a PNG image", "a JPEG image", "a PDF document")
 
 
 def _file_kind(path):
@@ -302,6 +308,10 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
         heights = _read_npy(path) if suffix == ".npy" else _text_grid(path)
         pixel = pixel_size
     else:
+        kind = _file_kind(path)
+        if kind in _NOT_HEIGHTS:
+            raise ValueError(f"measured map {str(path)!r} is {kind}, not a height map: give a "
+                             f".npy array, a text grid or a profilometer file")
         heights, pixel = _surface_topography(path, pixel_size)
     heights = np.asarray(heights, dtype=float)
     with np.errstate(over="ignore"):

@@ -93,7 +93,11 @@ _FILL_FACTOR = Key("fill_factor", "number", unit="1", low=0.0, high=1.0,
                    doc="expected area fraction of the inclusions, at most 0.5")
 _COUNT = Key("count", "number", unit="1", low=0.0,
              doc="expected inclusion centres on the face, instead of fill_factor")
-_RADIUS_SPREAD = Key("radius_spread", "number", unit="1", low=0.0, low_open=False,
+# Beyond a spread of 10 the truncation at three standard deviations of the logarithm
+# takes a fifth of the mean radius away, and further out the distribution's numbers
+# overflow: no spread of physical radii is that wide.
+_RADIUS_SPREAD = Key("radius_spread", "number", unit="1", low=0.0, low_open=False, high=10.0,
+                     high_open=False,
                      doc="relative standard deviation of the radii, log-normal (default 0)")
 
 
@@ -121,9 +125,9 @@ class Inclusions(PhaseMap):
         ``count * pi <r^2> / A`` with ``A`` the area of the face the
         inclusions are rasterised on.
     radius_spread : float, optional
-        Relative standard deviation of the radii (default 0: all equal).
-        Radii are log-normal with mean ``radius``, truncated at three
-        standard deviations of their logarithm.
+        Relative standard deviation of the radii, at most 10 (default 0:
+        all equal).  Radii are log-normal with mean ``radius``, truncated
+        at three standard deviations of their logarithm.
 
     Raises
     ------

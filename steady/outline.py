@@ -52,6 +52,7 @@ import dataclasses
 import functools
 import math
 import pathlib
+import sys
 
 import numpy as np
 import scipy.integrate
@@ -59,9 +60,10 @@ import scipy.integrate
 from . import reference
 from .array_files import read_face_mask
 from .schema import Context, Key, KindRegistry
-from .text import shorten
+from .text import format_bytes, shorten
 
 __all__ = [
+    "MAX_GRID_SIZE",
     "MIN_SIDE_PIXELS",
     "OUTLINES",
     "UNIT_DISK",
@@ -83,6 +85,11 @@ __all__ = [
 #: of an annulus, in units of three), for an outline and for a phase map.
 MIN_SIDE_PIXELS = 8
 
+#: Most pixels along the longer side of a grid's box: an ``n x n`` field of 8-byte
+#: values (every solve holds several) beyond it would not fit the memory a process can
+#: address (``sys.maxsize`` bytes), nor its sizes a C integer.
+MAX_GRID_SIZE = math.isqrt(sys.maxsize // 8)
+
 #: Registered outlines, by ``shape`` (``[punch] shape``; default ``"circle"``).
 OUTLINES = KindRegistry("face outline", "shape", default="circle",
                         entry_point_group="runin.outlines")
@@ -101,22 +108,34 @@ def _length_key(name, doc):
 def grid_size(n):
     """A grid size ``n`` (pixels along the longer side of a box) as an int, checked.
 
-    The one place a grid size given by a user is checked for its type;
-    outlines and phase maps check its range.
+    The one place a grid size given by a user is checked for its type and
+    its upper bound, :data:`MAX_GRID_SIZE`; outlines and phase maps check
+    the smallest size they need.
 
     Raises
     ------
     ValueError
-        ``n`` is not an integer (a float, a bool, a string).
+        ``n`` is not an integer (a float, a bool, a string), or is larger
+        than :data:`MAX_GRID_SIZE`.
 
     Examples
     --------
     >>> grid_size(64)
     64
+    >>> try:
+    ...     grid_size(10**20)
+    ... except ValueError as err:
+    ...     print(str(err).split(":")[0].replace(str(MAX_GRID_SIZE), "MAX_GRID_SIZE"))
+    grid size n = 100000000000000000000 is larger than MAX_GRID_SIZE
     """
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
         raise ValueError(f"grid size n must be an integer, got {shorten(n)}")
-    return int(n)
+    n = int(n)
+    if n > MAX_GRID_SIZE:
+        raise ValueError(f"grid size n = {shorten(n)} is larger than {MAX_GRID_SIZE}: "
+                         f"an n x n grid of 8-byte values would exceed the memory a process "
+                         f"can address ({format_bytes(sys.maxsize)})")
+    return n
 
 
 def grid_size_text(n):

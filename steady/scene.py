@@ -599,8 +599,9 @@ def load_scene(path, *, extra_sections=()):
     Parameters
     ----------
     path : str or path-like
-        The ``.toml`` file; relative paths inside it are resolved against
-        its directory.
+        The ``.toml`` file, UTF-8 text (a leading byte-order mark is
+        skipped); relative paths inside it are resolved against its
+        directory.
     extra_sections : collection of str, optional
         As in :func:`parse_scene`.
 
@@ -637,6 +638,9 @@ def load_scene(path, *, extra_sections=()):
     except UnicodeDecodeError as err:
         raise ValueError(f"{what} is not UTF-8 text: byte {err.start} is "
                          f"{data[err.start:err.start + 1]!r}") from None
+    # A UTF-8 document may open with a byte-order mark (EF BB BF), as editors on
+    # Windows save it; TOML allows it (toml-lang/toml#437), Python's parser does not.
+    text = text.removeprefix("\ufeff")
     try:
         return parse_scene(text, path.parent, extra_sections=extra_sections, source_path=path)
     except ValueError as err:

@@ -17,6 +17,7 @@ from conftest import run_cli, scene_text
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
+from steady.array_files import PNG_SIGNATURE
 
 PRECIOUS = b"a result someone cares about"
 
@@ -121,6 +122,30 @@ LAYERS = '[depth]\nkind = "layers"\n[[depth.layers]]\nthickness = 3e-4\nphase = 
 SPHERES = ('{ kind = "spheres", radius = 8.0e-4, volume_fraction = 0.3, seed = 2031, '
            'depth = 2.0e-3 }')
 
+
+def png_signature_only(d):
+    """``m.png``: the eight bytes that start every PNG file, and nothing else."""
+    (d / "m.png").write_bytes(PNG_SIGNATURE)
+
+
+def symlink_loop(d, name):
+    """``d/name``: a symbolic link to itself, which no lookup can resolve."""
+    (d / name).symlink_to(name)
+    return d / name
+
+
+def with_loop(name, *args):
+    """A case maker with a good scene, ``d/name`` a loop of links and these arguments."""
+    def make(d, base):
+        symlink_loop(d, name)
+        return [write(d, "s.toml", base), *(str(a).format(d=d) for a in args)]
+    return make
+
+
+#: The cut PNG's message, wherever a PNG is read.
+PNG_CUT = "m.png' is not a readable PNG image: it holds only the 8-byte PNG signature"
+
+
 CASES = [
     # -- the scene file itself
     Case("scene missing", lambda d, base: [d / "nope.toml"], "nope.toml' does not exist"),
@@ -158,6 +183,12 @@ CASES = [
     # -- size
     Case("n = 100000", scene(lambda t: with_key(t, "n", "100000")),
          "at n = 100000"),
+    Case("n = 2^63 - 1", scene(lambda t: with_key(t, "n", str(2**63 - 1))),
+         "[grid] n: grid size n = 9223372036854775807 is larger than 1073741823: an n x n grid "
+         "of 8-byte values would exceed the memory a process can address"),
+    Case("n = 2^63 - 1, no memory check", lambda d, base: [
+        write(d, "s.toml", with_key(base, "n", str(2**63 - 1))), "--memory-limit", "inf"],
+         "[grid] n: grid size n = 9223372036854775807 is larger than"),
     Case("n = 12000", lambda d, base: [write(d, "s.toml", with_key(base, "n", "12000")),
                                        "--memory-limit", "16"],
          "GiB may be used (--memory-limit)"),
@@ -165,6 +196,13 @@ CASES = [
          "1.02 MiB may be used (--memory-limit)"),
     Case("--memory-limit not a number", argv("--memory-limit", "lots"),
          "argument --memory-limit: expected a size in GiB, got 'lots'"),
+    # A negative number in exponent form is the flag's value, refused by its check.
+    Case("--memory-limit -1e-4", argv("--memory-limit", "-1e-4"),
+         "argument --memory-limit: expected a positive size in GiB, got '-1e-4'"),
+    Case("--depth -1e-4", argv("--depth", "-1e-4"),
+         "--depth must be a number >= 0 (m), got -0.0001", ("steady",)),
+    Case("--depth -inf", argv("--depth", "-inf"),
+         "--depth must be a number >= 0 (m), got -inf", ("steady",)),
     # -- file maps
     Case("map missing", scene(lambda t: file_map(t, "gone.npy")), "gone.npy' does not exist"),
     Case("map a directory", scene_and(lambda d: (d / "dir.npy").mkdir(),
@@ -196,6 +234,38 @@ CASES = [
         grey_image, lambda t: with_key(micrograph_map(t, "n_phases = 6"), "coefficients",
                                        "[1e-13, 2e-13, 3e-13, 4e-13, 5e-13, 6e-13]")),
          "[phases] map: n_phases = 6 by Otsu's thresholds would search C(256, 5) = 8.8e+09 sets"),
+
+
+    # -- a PNG cut after its signature, everywhere a PNG is read
+    Case("map PNG signature only", scene_and(png_signature_only, lambda t: file_map(t, "m.png")),
+         "phase map '{d}/" + PNG_CUT),
+    Case("micrograph PNG signature only", scene_and(png_signature_only, lambda t: with_key(
+        t, "map", '{ kind = "micrograph", path = "m.png", n_phases = 2, pixel_size = 1e-4 }')),
+         "micrograph '{d}/" + PNG_CUT),
+    Case("mask PNG signature only", scene_and(png_signature_only, lambda t: with_section(
+        t, "punch", 'shape = "mask"\npath = "m.png"\npixel_size = 2e-4')),
+         "face mask '{d}/" + PNG_CUT),
+    # -- a spread of inclusion radii whose distribution overflows
+    Case("inclusions radius_spread 1e308", scene(lambda t: with_key(t, "map", (
+        '{ kind = "inclusions", radius = 5e-4, seed = 5, fill_factor = 0.2, '
+        'radius_spread = 1e308 }'))),
+         "[phases] map radius_spread must be a number in [0, 10] (1), got 1e+308"),
+    # -- a sphere fraction that places no sphere
+    Case("spheres of volume fraction 1e-6", scene(lambda t: with_key(t, "map", (
+        '{ kind = "spheres", radius = 8e-4, volume_fraction = 1e-6, seed = 2031, '
+        'depth = 2e-3 }'))),
+         "sphere volume_fraction = 1e-06 places no sphere of radius 0.0008 m: the particle "
+         "phase would have no voxel"),
+    # -- loops of symbolic links: refused by whatever opens the file, naming it
+    Case("scene a symlink loop", lambda d, base: [symlink_loop(d, "loop.toml")],
+         "cannot read scene file '{d}/loop.toml': Too many levels of symbolic links"),
+    Case("-o a symlink loop", with_loop("loop.h5", "-o", "{d}/loop.h5", "--force"),
+         "output '{d}/loop.h5': Too many levels of symbolic links"),
+    Case("--plot a symlink loop", with_loop("loop.png", "--plot", "{d}/loop.png"),
+         "--plot '{d}/loop.png': Too many levels of symbolic links"),
+    Case("map a symlink loop", scene_and(lambda d: symlink_loop(d, "m.npy"),
+                                         lambda t: file_map(t, "m.npy")),
+         "cannot read phase map '{d}/m.npy': Too many levels of symbolic links"),
     # -- output paths
     Case("no -o", lambda d, base: [write(d, "s.toml", base)], "the following arguments are "
                                                               "required: -o/--output",
@@ -308,7 +378,14 @@ CASES = [
          # The command logs numpy's overflow warning (shown with -v); here it must not raise.
          marks=(pytest.mark.filterwarnings("ignore::RuntimeWarning"),)),
     Case("--tol negative", argv("--tol", "-3"),
-         "argument --tol: expected a number > 0 (f*), got '-3'", ("transient",)),
+         "argument --tol: expected a number > 2.22045e-16 (f*), got '-3'", ("transient",)),
+    Case("--tol -1e-4", argv("--tol", "-1e-4"),
+         "argument --tol: expected a number > 2.22045e-16 (f*), got '-1e-4'", ("transient",)),
+    # A tolerance below the precision of a double (its product with f* underflowed to 0).
+    Case("[transient] tol 5e-324", scene(lambda t: with_key(t, "tol", "5e-324")),
+         "[transient] tol must be a number > 2.22045e-16 (f*), got 5e-324", ("transient",)),
+    Case("--distance-limit -1E+3", argv("--distance-limit", "-1E+3"),
+         "argument --distance-limit: expected a number > 0 (m), got '-1E+3'", ("transient",)),
     Case("--max-steps 0", argv("--max-steps", "0"),
          "argument --max-steps: expected an integer >= 1, got '0'", ("transient",)),
     Case("--checkpoint-interval -1", argv("--checkpoint-interval", "-1"),
@@ -352,7 +429,7 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, command):
             args.append("--force")
     before = {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()}
     status, out, err = run_command(command, args, capsys)
-    fragment = FRAGMENTS.get((case.name, command), case.fragment)
+    fragment = FRAGMENTS.get((case.name, command), case.fragment).replace("{d}", str(d))
     lines = err.splitlines()
     assert "Traceback" not in err, f"traceback on stderr: {err[-2000:]}"
     assert status == 2, f"exit {status}, stderr {err[:500]!r}"

@@ -12,7 +12,9 @@ In-process (``main(argv)``, faults injected with monkeypatch) except where a rea
 needed.
 """
 
+import importlib
 import os
+import pathlib
 import re
 import signal
 import subprocess
@@ -138,6 +140,49 @@ def test_a_null_byte_names_its_argument(tmp_path, steady_scene, runin_scene, cap
     assert line.startswith(f"error: argument {name}: ") and "null byte" in line, line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["runin.toml", "steady.toml"], \
         "nothing written"
+
+
+# -- number flags: a negative number, in any form, is a value --------------------------------
+#: Each command's module and the arguments it requires besides the flag under test.
+COMMAND_ARGS = {
+    "steady.cli.solve": ["s.toml", "-o", "o.h5"],
+    "transient.cli.runin": ["s.toml", "-o", "o.h5"],
+    "steady.cli.fit": ["s.toml", "m.npy", "-o", "f.h5"],
+    "steady.cli.design": ["--pbar-over-estar", "0.1", "--wear-ratio", "0.1", "--fill-factor",
+                          "0.2"],
+}
+
+
+def _number_flags():
+    """``(module, flag)`` for every flag of every command that converts its value."""
+    for name in COMMAND_ARGS:
+        for action in importlib.import_module(name).build_parser()._actions:
+            if action.option_strings and action.nargs != 0 and action.type not in (
+                    None, pathlib.Path):
+                yield name, action.option_strings[-1]
+
+
+@pytest.mark.parametrize("module, flag", list(_number_flags()))
+@pytest.mark.parametrize("value", ["-1e-4", "-.5E+3", "-inf"])
+def test_a_negative_number_is_the_value_of_its_flag(module, flag, value, capsys):
+    """``-1e-4`` or ``-inf``, which argparse would take for options, are values of number flags."""
+    args = list(COMMAND_ARGS[module])
+    if flag in args:  # a required flag: replaced (and its exclusive partner dropped)
+        del args[args.index(flag):args.index(flag) + 2]
+    elif flag == "--target-slope":
+        del args[args.index("--fill-factor"):args.index("--fill-factor") + 2]
+    parser = importlib.import_module(module).build_parser()
+    try:
+        parsed = parser.parse_args([*args, flag, value])
+    except SystemExit as done:
+        line = one_error_line(capsys.readouterr().err)
+        assert done.code == 2, f"{module} {flag} {value}: exit {done.code}"
+        assert line.startswith(f"error: argument {flag}: ") and repr(value) in line, \
+            f"{module} {flag} {value}: {line!r}, not a refusal of the value"
+    else:
+        got = getattr(parsed, flag.lstrip("-").replace("-", "_"))
+        got = got[0] if isinstance(got, list) else got
+        assert got == float(value), f"{module} {flag} {value}: parsed as {got!r}"
 
 
 # -- messages: the lock of a live process, of a dead one -------------------------------------

@@ -2,6 +2,7 @@
 
 import math
 import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -200,6 +201,18 @@ def test_a_packing_beyond_random_sequential_addition_is_refused():
     with pytest.raises(ValueError, match=r"sphere volume_fraction = 0.5 is not reachable by "
                                          r"random sequential addition: placing stalled at 0\.\d+"):
         spheres.columns(Circle(1.0).grid(16))
+
+
+def test_a_fraction_below_half_a_sphere_names_the_key():
+    """Too small a fraction places no sphere: the key, and the fraction that places one."""
+    pattern = (r"sphere volume_fraction = 1e-06 places no sphere of radius 0\.4 m: the "
+               r"particle phase would have no voxel \(the box around the face holds half a "
+               r"sphere from volume_fraction = ([0-9.e-]+)\)")
+    with pytest.raises(ValueError, match=pattern) as refused:
+        Spheres(0.4, 1e-6, 3, 0.1).columns(Circle(1.0).grid(16))
+    least = float(re.search(pattern, str(refused.value)).group(1))
+    _, radii = Spheres(0.4, 1.01 * least, 3, 0.1).spheres()
+    assert radii.size == 1, f"{radii.size} spheres just above the least fraction {least}"
 
 
 def test_spheres_in_metres_give_the_columns_of_the_scene_file(tmp_path):

@@ -21,6 +21,7 @@ import pytest
 from conftest import GEOMETRIES, K1, problem
 
 from steady import FaceModel, MeasuredFace, PowerLaw, load_scene, read_measured, solve
+from steady.array_files import PNG_SIGNATURE
 from steady.cli.fit import main
 from steady.memory import fit_memory
 from steady.outline import Circle
@@ -200,6 +201,8 @@ def _bad_file(kind, path):
         path.write_bytes(path.read_bytes()[:300])
     elif kind == "1-d":
         np.save(path, np.zeros(0))
+    elif kind == "png signature":
+        path.write_bytes(PNG_SIGNATURE)
 
 
 @pytest.mark.parametrize("name, kind, fragment", [
@@ -216,6 +219,10 @@ def _bad_file(kind, path):
     ("m.dat", "comments only", "holds no numbers"),
     ("m.x3p", "empty", "is empty (0 bytes)"),
     ("m.x3p", "directory", "is a directory, not a file"),
+    # Not handed to SurfaceTopography, whose reader of headerless grids would take 8 bytes
+    # for 2 x 2 heights.
+    ("m.png", "png signature", "is a PNG image, not a height map"),
+    ("m.dat", "png signature", "is a PNG image, not a text grid"),
 ])
 def test_unreadable_maps_are_one_line(case, capsys, name, kind, fragment):
     """One line naming the file and what is wrong, exit 2; never advice to unpickle."""
@@ -229,6 +236,42 @@ def test_unreadable_maps_are_one_line(case, capsys, name, kind, fragment):
     assert f"measured map '{path}' {fragment}" in line, f"{line!r} lacks {fragment!r}"
     assert "allow_pickle" not in line and "pickle.load" not in line, line
     assert not (face_path.parent / "fit.h5").exists() and not out, "nothing written"
+
+
+@pytest.mark.parametrize("which, fragment", [
+    ("scene", "cannot read scene file '{loop}'"),
+    ("measured", "cannot read measured map '{loop}'"),
+    ("-o", "output '{loop}'"),
+    ("--plot", "--plot '{loop}'"),
+])
+def test_a_loop_of_symbolic_links_is_bad_input(case, capsys, which, fragment):
+    """A link to itself as any path: one line naming it, exit 2, nothing written."""
+    scene_path, face_path, _ = case
+    loop = face_path.parent / ("loop.png" if which == "--plot" else "loop")
+    loop.symlink_to(loop.name)
+    out_h5 = face_path.parent / "fit.h5"
+    paths = {"scene": scene_path, "measured": face_path, "-o": out_h5, "--plot": None}
+    paths[which] = loop
+    args = [paths["scene"], paths["measured"], "-o", paths["-o"], "--pixel-size", PIXEL]
+    status, out, err = run(capsys, *args, *(["--plot", loop] if which == "--plot" else []))
+    line = one_error_line(err)
+    assert status == 2, f"exit {status}: {err}"
+    expected = f"{fragment.format(loop=loop)}: Too many levels of symbolic links"
+    assert expected in line, f"{line!r} lacks {expected!r}"
+    assert not out_h5.exists() and not out, "nothing written"
+
+
+@pytest.mark.parametrize("flag", ["--rim-margin", "--max-shift", "--height-scale",
+                                  "--pixel-size", "--confidence"])
+def test_a_negative_number_in_exponent_form_reaches_its_check(case, capsys, flag):
+    """``-1e-4`` is the flag's value (refused as negative), not a missing argument."""
+    scene_path, face_path, _ = case
+    args = [scene_path, face_path, "-o", face_path.parent / "fit.h5", "--shift"]
+    args += [flag, "-1e-4"] + (["--pixel-size", PIXEL] if flag != "--pixel-size" else [])
+    status, _, err = run(capsys, *args)
+    line = one_error_line(err)
+    assert status == 2 and "-0.0001" in line, f"exit {status}: {line}"
+    assert "expected one argument" not in line and "expected at least" not in line, line
 
 
 def test_ragged_text_grid_gets_no_numpy_advice(tmp_path):

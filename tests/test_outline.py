@@ -7,7 +7,9 @@ import pytest
 from conftest import OUTLINES, RADIUS, scene_text
 
 from steady.array_files import read_face_mask
+from steady.memory import fit_memory, steady_memory
 from steady.outline import (
+    MAX_GRID_SIZE,
     UNIT_DISK,
     Annulus,
     Circle,
@@ -23,6 +25,7 @@ from steady.phases import ArrayMap, Homogeneous, Rods, Voronoi
 from steady.problem import FacePhases, Problem
 from steady.scene import parse_scene
 from steady.solution import solve
+from transient.memory import run_in_memory
 
 
 @pytest.mark.parametrize("n", [31, 64])
@@ -272,3 +275,17 @@ def test_read_face_mask(tmp_path):
 def test_face_grid_refuses_an_empty_face():
     with pytest.raises(ValueError, match="grid size n must be an integer"):
         FaceGrid(Circle(1.0), 8.5)
+
+
+@pytest.mark.parametrize("outline", [Circle(1.0), Rectangle(1.0, 3.0), Ellipse(1.0, 0.5)],
+                         ids=["circle", "rectangle", "ellipse"])
+def test_a_grid_beyond_the_address_space_is_refused(outline):
+    """Up to MAX_GRID_SIZE a grid has a memory estimate; beyond, it is refused."""
+    for n in (MAX_GRID_SIZE + 1, np.int64(2**63 - 1), 10**30):
+        with pytest.raises(ValueError, match=rf"grid size n = {n} is larger than "
+                                             rf"{MAX_GRID_SIZE}: an n x n grid of 8-byte"):
+            FaceGrid(outline, n)
+    shape = FaceGrid(outline, MAX_GRID_SIZE).shape  # no array: the shape alone
+    for estimate in (steady_memory(shape), run_in_memory(shape, 10),
+                     fit_memory(shape, 2, (1000, 1000))):
+        assert estimate > 8 * shape[0] * shape[1], f"estimate {estimate} of a {shape} grid"

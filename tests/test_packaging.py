@@ -111,6 +111,15 @@ def test_copy_into_a_file_is_refused(tmp_path):
         examples.copy("checkerboard", tmp_path / "f")
 
 
+@pytest.mark.parametrize("where", ["loop", "loop/sub"])
+def test_copy_into_a_loop_of_links_is_bad_input(tmp_path, capsys, where):
+    (tmp_path / "loop").symlink_to("loop")
+    target = tmp_path / where
+    assert runin_examples(["checkerboard", "-o", str(target)]) == 2, "not bad input"
+    err = capsys.readouterr().err
+    assert err == f"error: {str(target)!r}: Too many levels of symbolic links\n", err
+
+
 @pytest.mark.parametrize("command", sorted(COMMANDS))
 def test_every_command_prints_its_version(command):
     proc = subprocess.run([sys.executable, "-m", COMMANDS[command], "--version"],

@@ -253,6 +253,18 @@ def test_scene_files_that_are_not_scenes(tmp_path):
         load_scene(binary)
 
 
+def test_a_byte_order_mark_is_skipped(tmp_path):
+    """UTF-8 with a byte-order mark (as editors on Windows save it) is the same scene."""
+    plain, marked = tmp_path / "plain.toml", tmp_path / "marked.toml"
+    plain.write_text(BASE, encoding="utf-8")
+    marked.write_text(BASE, encoding="utf-8-sig")
+    assert marked.read_bytes()[:3] == b"\xef\xbb\xbf", "test setup: no byte-order mark"
+    scene, ref = load_scene(marked), load_scene(plain)
+    assert scene.text == ref.text == BASE, "the text without the mark"
+    assert (scene.geometry, scene.wear.coefficients, scene.n) == \
+        (ref.geometry, ref.wear.coefficients, ref.n), "another scene"
+
+
 def test_hostile_values_give_short_messages(tmp_path):
     """Deep nesting, long lists and long strings: the message shows a shortened value."""
     deep = BASE.replace("[1e-09, 1.7e-09]", "[" * 100_000 + "]" * 100_000)

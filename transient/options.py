@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import sys
 
 from steady.schema import Key, read_table
 from steady.text import shorten
@@ -106,9 +107,11 @@ class RunOptions:
 
     scheme: str = _option("esdirk3", Key(
         "scheme", "string", doc="registered integrator (transient.stepping.SCHEMES)"), flag=True)
+    # A tolerance below the precision of a double cannot be met (and times f* may
+    # underflow to 0).
     tol: float = _option(1e-5, Key(
-        "tol", "number", unit="f*", low=0.0, doc="local error per step, shape rms / f*"),
-        flag=True)
+        "tol", "number", unit="f*", low=sys.float_info.epsilon,
+        doc="local error per step, shape rms / f*"), flag=True)
     fixed_step: float | None = _option(None, Key(
         "fixed_step", "number", unit="m", low=0.0,
         doc="fixed steps, no adaptivity (default: adaptive)"))

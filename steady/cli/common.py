@@ -46,6 +46,7 @@ import functools
 import logging
 import os
 import pathlib
+import re
 import stat
 import sys
 import tempfile
@@ -154,6 +155,14 @@ def describe_os_error(err):
     return reason
 
 
+#: Digits, with single underscores between them, as Python's ``float`` reads them.
+_DIGITS = r"\d(?:_?\d)*"
+#: A negative number as ``float`` reads it (``-1``, ``-.5``, ``-1e-4``, ``-1_000``,
+#: ``-inf``, ``-nan``): an argument of the command lines, never an option.
+_NEGATIVE_NUMBER = re.compile(rf"^-(?:(?:{_DIGITS}(?:\.(?:{_DIGITS})?)?|\.{_DIGITS})"
+                             rf"(?:[eE][-+]?{_DIGITS})?|inf|infinity|nan)$", re.IGNORECASE)
+
+
 class ArgumentParser(argparse.ArgumentParser):
     """:class:`argparse.ArgumentParser` whose errors are one line, exit status 2.
 
@@ -169,6 +178,11 @@ class ArgumentParser(argparse.ArgumentParser):
         from ..version import DISTRIBUTION, __version__
 
         super().__init__(*args, **kwargs)
+        # argparse takes an argument for a value, not an option, if it looks like a
+        # negative number; its pattern misses the exponent form and the special values
+        # ('-1e-4', '-inf'), which a number flag would then report as missing its value
+        # rather than refuse as out of range.
+        self._negative_number_matcher = _NEGATIVE_NUMBER
         self.add_argument("--version", action="version",
                           version=f"%(prog)s ({DISTRIBUTION} {__version__})")
 
@@ -311,7 +325,10 @@ def check_distinct(named):
     for what, path in named:
         if path is None:
             continue
-        key = pathlib.Path(path).resolve()
+        # Not Path.resolve: before Python 3.13 it raises RuntimeError on a loop of
+        # symbolic links, which realpath leaves unresolved for the reader or writer
+        # of the file to refuse, naming it.
+        key = os.path.realpath(path)
         if key in seen:
             raise ValueError(f"{what} and {seen[key]} name the same file {str(path)!r}")
         seen[key] = what

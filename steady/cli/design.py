@@ -22,7 +22,27 @@ from ..design import DEFAULT_TABLE, DesignTable
 from ..reference import disk_reference_slope, fine_grain_rms_slope
 from .common import EXIT_STATUS_EPILOG, ArgumentParser, program_name, run_command
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]
+
+
+def build_parser():
+    """The argument parser of ``runin-design`` (``python -m steady.cli.design``)."""
+    parser = ArgumentParser(
+        prog=program_name("python -m steady.cli.design"),
+        description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
+                    "rho_1 of phase 1 that gives a target rms slope, or the rms slope of a "
+                    "fill factor.  Phase 1 is the hard phase when the wear ratio is below 1.",
+        epilog=EXIT_STATUS_EPILOG)
+    parser.add_argument("--pbar-over-estar", type=float, required=True,
+                        help="mean pressure over the effective modulus, pbar/E*")
+    parser.add_argument("--wear-ratio", type=float, required=True,
+                        help="k_1/k_0 (below 1: phase 1 wears less than phase 0)")
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument("--target-slope", type=float, help="target steady rms slope")
+    what.add_argument("--fill-factor", type=float, help="fill factor rho_1 of phase 1")
+    parser.add_argument("--table", default=None,
+                        help=f"design table (default {DEFAULT_TABLE})")
+    return parser
 
 
 def main(argv=None):
@@ -43,22 +63,7 @@ def main(argv=None):
         table; 2 for bad input or an unreadable table (one line ``error:
         ...`` on stderr); 130 when interrupted.
     """
-    parser = ArgumentParser(
-        prog=program_name("python -m steady.cli.design"),
-        description="Steady rms slope (friction proxy) of a biphasic punch: the fill factor "
-                    "rho_1 of phase 1 that gives a target rms slope, or the rms slope of a "
-                    "fill factor.  Phase 1 is the hard phase when the wear ratio is below 1.",
-        epilog=EXIT_STATUS_EPILOG)
-    parser.add_argument("--pbar-over-estar", type=float, required=True,
-                        help="mean pressure over the effective modulus, pbar/E*")
-    parser.add_argument("--wear-ratio", type=float, required=True,
-                        help="k_1/k_0 (below 1: phase 1 wears less than phase 0)")
-    what = parser.add_mutually_exclusive_group(required=True)
-    what.add_argument("--target-slope", type=float, help="target steady rms slope")
-    what.add_argument("--fill-factor", type=float, help="fill factor rho_1 of phase 1")
-    parser.add_argument("--table", default=None,
-                        help=f"design table (default {DEFAULT_TABLE})")
-    return run_command(_answer, parser.parse_args(argv))
+    return run_command(_answer, build_parser().parse_args(argv))
 
 
 def _answer(args):

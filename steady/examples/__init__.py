@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import pathlib
 import shutil
+import stat
 from importlib import resources
 
 try:
@@ -137,12 +138,20 @@ def copy(name, directory, *, force=False):
     Raises
     ------
     ValueError
-        Unknown name (the message lists the names), ``directory`` is a file,
-        or a target exists and ``force`` is False (the message names it).
+        Unknown name (the message lists the names), ``directory`` is a file
+        or cannot be looked up (a loop of symbolic links, a file on its
+        way), or a target exists and ``force`` is False (the message names
+        it).
     """
     source = path(name).parent
     directory = pathlib.Path(directory)
-    if directory.exists() and not directory.is_dir():
+    try:
+        mode = directory.stat().st_mode
+    except FileNotFoundError:
+        mode = None  # created below
+    except OSError as err:  # a loop of symbolic links, a file on the way
+        raise ValueError(f"{str(directory)!r}: {err.strerror or err}") from None
+    if mode is not None and not stat.S_ISDIR(mode):
         raise ValueError(f"{str(directory)!r} is not a directory")
     targets = [(source / file, directory / file) for file in files(name)]
     for _, target in targets:
