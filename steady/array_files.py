@@ -27,8 +27,8 @@ import numpy as np
 from .text import format_bytes
 
 __all__ = ["INTEGERS", "LABELS", "MASK", "NUMBERS", "PNG_SIGNATURE", "REAL_NUMBERS", "Holds",
-           "array_suffix", "input_file_size", "integer_face", "npy_header", "png_size", "read_face_mask",
-           "read_npy", "read_png"]
+           "array_suffix", "input_file_size", "integer_face", "npy_header", "png_size",
+           "read_face_mask", "read_npy", "read_png"]
 
 
 @dataclasses.dataclass(frozen=True)

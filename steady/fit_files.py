@@ -86,7 +86,10 @@ import h5py
 import numpy as np
 
 from .array_files import (
-    PNG_SIGNATURE, REAL_NUMBERS, input_file_size, npy_header, read_npy,
+    PNG_SIGNATURE,
+    REAL_NUMBERS,
+    input_file_size,
+    read_npy,
 )
 from .measured_face import MeasuredFace, check_pixel_size
 from .outline import Circle

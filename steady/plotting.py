@@ -46,8 +46,8 @@ from .text import shorten
 
 __all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
            "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
-           "plot_phases", "pressure_scale", "pressure_unit", "relief", "result_figure", "root_figure", "save_new",
-           "save_png", "segmentation_figure", "set_fonts"]
+           "plot_phases", "pressure_scale", "pressure_unit", "relief", "result_figure",
+           "root_figure", "save_new", "save_png", "segmentation_figure", "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
