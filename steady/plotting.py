@@ -47,7 +47,7 @@ from .text import shorten
 __all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
            "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
            "plot_phases", "pressure_scale", "pressure_unit", "relief", "result_figure",
-           "root_figure", "save_new", "save_png", "segmentation_figure", "set_fonts"]
+           "root_figure", "save_figure", "save_new", "segmentation_figure", "set_fonts"]
 
 logger = logging.getLogger(__name__)
 
@@ -549,26 +549,28 @@ def plot_file(result_path, png_path, *, force=False, dpi=200):
 
 
 def save_new(fig, path, **options):
-    """:func:`save_png` of a figure a ``plot_*`` function made for it, then released.
+    """:func:`save_figure` of a figure a ``plot_*`` function made for it, then released.
 
     A figure made for a file only is closed once written, where it is
     pyplot's (:func:`new_figure`): it is not left open for ``plt.show()``.
     """
     try:
-        return save_png(fig, path, **options)
+        return save_figure(fig, path, **options)
     finally:
         pyplot = sys.modules.get("matplotlib.pyplot")
         if pyplot is not None:
             pyplot.close(fig)
 
 
-def save_png(fig, png_path, *, force=False, dpi=200):
-    """Write a figure to a PNG file, creating missing parent directories.
+def save_figure(fig, png_path, *, force=False, dpi=200):
+    """Write a figure to a file, creating missing parent directories.
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
     png_path : str or path-like
+        The file; its suffix gives the format (``.png``, or ``.pdf`` and
+        ``.svg`` for vector figures).
     force : bool, optional
         Overwrite an existing image (default False).
     dpi : int, optional

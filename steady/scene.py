@@ -71,9 +71,9 @@ from .sliding import sliding_from_table
 from .text import one_line, shorten
 from .wear import wear_law_from_table
 
-__all__ = ["DEPTH_KEYS", "LAYER_KEYS", "MAX_SCENE_BYTES", "OPTIONAL_SECTIONS", "PHASE_KEYS",
-           "RUN_IN_SECTIONS", "SECTIONS", "SLIDING_SPEED", "Scene", "load_scene", "parse_scene",
-           "problem_of"]
+__all__ = ["DEPTH_KEYS", "GRID_N", "LAYER_KEYS", "MAX_SCENE_BYTES", "OPTIONAL_SECTIONS",
+           "PHASE_KEYS", "RUN_IN_SECTIONS", "SECTIONS", "SLIDING_SPEED", "Scene", "load_scene",
+           "parse_scene", "problem_of"]
 
 #: Largest scene file read, bytes: a scene is a few lines; large data belong in
 #: ``.npy`` files (a 40 MB list would take Python's TOML parser half a minute).
@@ -99,6 +99,8 @@ SECTIONS = {
     "grid": (Key("n", "integer", low=2, low_open=False, required=True,
                  doc="pixels along the longer side of the face's bounding box"),),
 }
+#: ``[grid] n``, also the command line's ``--n``.
+GRID_N = SECTIONS["grid"][0]
 
 #: The keys of ``[phases]`` besides the map (read by its kind).
 PHASE_KEYS = (Key("names", "strings",
@@ -426,7 +428,7 @@ def _check_map_phases(n_phases, wear, where, whole):
         raise ValueError(f"{where} has {n_phases} phases, the wear law {wear.n_phases}")
 
 
-def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
+def parse_scene(text, base_dir, *, extra_sections=(), source_path=None, n=None):
     """Parse and check the text of a scene file.
 
     Parameters
@@ -442,6 +444,10 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
         listed in ``Scene.ignored_sections``; any other section is an error.
     source_path : path-like, optional
         Recorded in ``Scene.source_path``.
+    n : int, optional
+        The grid to use instead of the scene's ``[grid] n`` (the command
+        line's ``--n``), checked as that key is; the scene must still
+        hold a valid ``n``.
 
     Returns
     -------
@@ -480,6 +486,8 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None):
     if "map" not in doc["phases"]:
         raise ValueError("missing key 'map' in [phases]")
     outline = outline_from_table(doc["punch"], base_dir)
+    if n is not None:
+        values["grid"]["n"] = GRID_N.parse(n, "")
     n = values["grid"]["n"]
     force, E_star = values["load"]["normal_force"], values["counterbody"]["E_star"]
     # The scales that follow from the face and the load (the keys checked their own),
@@ -593,7 +601,7 @@ def _toml(text):
         raise ValueError("malformed TOML: arrays or tables nested too deeply") from None
 
 
-def load_scene(path, *, extra_sections=()):
+def load_scene(path, *, extra_sections=(), n=None):
     """Read and check a scene file.
 
     Parameters
@@ -604,6 +612,8 @@ def load_scene(path, *, extra_sections=()):
         directory.
     extra_sections : collection of str, optional
         As in :func:`parse_scene`.
+    n : int, optional
+        The grid instead of the scene's, as in :func:`parse_scene`.
 
     Returns
     -------
@@ -642,6 +652,7 @@ def load_scene(path, *, extra_sections=()):
     # Windows save it; TOML allows it (toml-lang/toml#437), Python's parser does not.
     text = text.removeprefix("\ufeff")
     try:
-        return parse_scene(text, path.parent, extra_sections=extra_sections, source_path=path)
+        return parse_scene(text, path.parent, extra_sections=extra_sections, source_path=path,
+                           n=n)
     except ValueError as err:
         raise ValueError(f"{path}: {err}") from None

@@ -10,8 +10,8 @@ control, from a flat initial face, until the wear rates equalise) of
 and plots the history's rms slope (the continuum estimate of
 :mod:`transient.history`, normalised by ``grad_f0``) against the sliding
 distance in units of ``s* = a / (k_min E*)``, with its error band (the
-larger of the per-step error bar and the companion run's on ``n/2``,
-:mod:`transient.spatial_error`), the plain pixel value faintly, and the
+per-step error bar and the companion runs' on about ``3n/4`` and ``n/2``
+in quadrature, :mod:`transient.spatial_error`), the plain pixel value faintly, and the
 steady module's corrected rms slope with its error bar as the asymptote;
 beside it the rms height.  The cases run in parallel as a resumable sweep
 (:mod:`steady.sweep`).
@@ -105,8 +105,9 @@ def run_case(point, *, n, n_seeds, fill, seed, tol):
             "steady": steady.normalised_rms_slope, "steady_error": steady.rms_slope_error / g0,
             "steady_rms_height": steady.normalised_rms_height,
             "face_error": comparison.face_error, "agrees": float(comparison.rms_slope_agrees),
-            "companion_grid": companion.grid, "steps": result.steps, "solves": result.solves,
-            "wall_time": result.wall_time, "companion_wall_time": companion.run.wall_time}
+            "companion_grid": min(companion.grids), "steps": result.steps,
+            "solves": result.solves, "wall_time": result.wall_time,
+            "companion_wall_time": sum(run.wall_time for run in companion.runs)}
 
 
 def compute(path, params, *, workers=None, scheduler=None, progress=False):

@@ -190,7 +190,7 @@ def run_scheme(n, scheme, tol, distances, *, companion=False):
             logger.info("no companion run at n = %d: %s", n, err)
             return out
         out.update(spatial=extra.error[at], companion_wall=time.perf_counter() - t,
-                   companion_grid=extra.grid)
+                   companion_grid=min(extra.grids))
     return out
 
 
@@ -550,7 +550,7 @@ def plot_spatial(path, png):
                      label="per-step error bar")
         if "spatial_error_bar" in r:
             ax[1].loglog(distances, r["spatial_error_bar"] / r["slopes"], ":", color=f"C{i}",
-                         lw=1.2, label=f"companion on n = {int(r['companion_grid'])}")
+                         lw=1.2, label=f"companions down to n = {int(r['companion_grid'])}")
     ax[1].loglog(distances, ref_unc / ref, "k-", lw=0.8, label="reference uncertainty")
     ax[1].set_xlabel("sliding distance / s*")
     ax[1].set_ylabel("relative error of the rms slope")

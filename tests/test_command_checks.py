@@ -1,7 +1,7 @@
 """What the commands check before the work, and what they say when something goes wrong after it.
 
 - an unsupported ``--plot`` suffix is refused before any work (nothing written);
-- ``--resume --spatial-error`` on a finished run computes the spatial error it lacks;
+- ``--resume`` on a finished run computes the grid error it lacks (``--no-grid-error`` skips it);
 - messages: a null byte in an argument names the argument; the lock of a live process is not
   taken over (and "which has ended" is said only of a process that has); one wording for a
   refusal to overwrite; every ``[initial_face]`` error starts with the scene file;
@@ -44,14 +44,15 @@ def runin_scene(scene_file):
 
 
 # -- --plot: the suffix before any work ------------------------------------------------------
-@pytest.mark.parametrize("name", ["figure.txt", "figure", "figure.pdf"])
+@pytest.mark.parametrize("name", ["figure.txt", "figure", "figure.jpg"])
 def test_steady_refuses_a_plot_suffix_before_the_solve(tmp_path, steady_scene, capsys, name):
     out = tmp_path / "r.h5"
     status, _, err = run_cli(steady_cli, [steady_scene, "-o", out, "--plot", tmp_path / name],
                              capsys)
     line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
-    assert line.startswith("error: --plot ") and "expected the suffix .png" in line, line
+    assert line.startswith("error: --plot ") and "expected the suffix .png, .pdf or .svg" in line, \
+        line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["steady.toml"], \
         f"nothing may be written: {sorted(p.name for p in tmp_path.iterdir())}"
 
@@ -63,10 +64,25 @@ def test_runin_refuses_a_plot_suffix_before_the_run(tmp_path, runin_scene, capsy
                                                   tmp_path / name], capsys)
     line = one_error_line(err)
     assert status == 2, f"exit {status}: {err}"
-    assert line.startswith("error: --plot ") and "expected the suffix .png" in line, line
+    assert line.startswith("error: --plot ") and "expected the suffix .png, .pdf or .svg" in line, \
+        line
     assert stdout == "", f"no run may start: {stdout!r}"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["runin.toml"], \
         f"nothing may be written: {sorted(p.name for p in tmp_path.iterdir())}"
+
+
+@pytest.mark.parametrize("name, start", [("r.pdf", b"%PDF-"), ("r.SVG", b"<?xml")])
+def test_a_vector_figure_for_a_paper(tmp_path, steady_scene, runin_scene, capsys, name, start):
+    """``--plot`` of either command writes PDF or SVG by the suffix, a vector figure."""
+    status, _, err = run_cli(steady_cli, [steady_scene, "-o", tmp_path / "r.h5", "--plot",
+                                          tmp_path / name, "--no-slope-error"], capsys)
+    assert status == 0, f"exit {status}: {err}"
+    assert (tmp_path / name).read_bytes().startswith(start), f"{name} is not {start!r}"
+    figure = tmp_path / f"run{pathlib.Path(name).suffix}"
+    status, _, err = run_cli(transient_cli, [runin_scene, "-o", tmp_path / "run.h5", "--plot",
+                                             figure, "--no-grid-error"], capsys)
+    assert status == 0, f"exit {status}: {err}"
+    assert figure.read_bytes().startswith(start), f"{figure.name} is not {start!r}"
 
 
 def test_an_upper_case_png_suffix_is_a_png(tmp_path, steady_scene, capsys):
@@ -76,25 +92,30 @@ def test_an_upper_case_png_suffix_is_a_png(tmp_path, steady_scene, capsys):
     assert (tmp_path / "r.PNG").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", "a PNG image"
 
 
-# -- --resume --spatial-error on a finished run ----------------------------------------------
+# -- --resume on a finished run without its grid error ---------------------------------------
 def spatial_error_of(path):
     with h5py.File(path) as f:
         return f["history/rms_slope_spatial_error"][()], f["history/distance"][()]
 
 
-def test_resume_computes_the_spatial_error_a_finished_run_lacks(tmp_path, scene_file, capsys):
+def test_resume_computes_the_grid_error_a_finished_run_lacks(tmp_path, scene_file, capsys):
     scene = scene_file("runin", filename="s.toml", n=48, transient={"tol": 1e-3})
     out = tmp_path / "run.h5"
-    status, _, err = run_cli(transient_cli, [scene, "-o", out], capsys)
+    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--no-grid-error"], capsys)
     assert status == 0, f"first run: exit {status}: {err}"
     before, _, _ = read_run(out)
-    assert spatial_error_of(out)[0].shape == (0,), "a run without --spatial-error has none"
+    assert spatial_error_of(out)[0].shape == (0,), "a run with --no-grid-error has none"
+    # Asked again to skip it: the finished run is left as it is.
+    files = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--resume", "--no-grid-error"],
+                             capsys)
+    assert status == 0 and "nothing to continue" in err, f"exit {status}: {err}"
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == files, "files changed"
 
-    status, stdout, err = run_cli(transient_cli, [scene, "-o", out, "--resume",
-                                                  "--spatial-error"], capsys)
+    status, stdout, err = run_cli(transient_cli, [scene, "-o", out, "--resume"], capsys)
     assert status == 0, f"exit {status}: {err}"
-    assert "nothing to continue" not in err, f"the spatial error was asked for: {err!r}"
-    assert "companion run on n = 24" in stdout, stdout
+    assert "nothing to continue" not in err, f"the grid error is asked for: {err!r}"
+    assert "companion runs on n = 36, 24" in stdout, stdout
     error, distance = spatial_error_of(out)
     assert error.shape == distance.shape, f"error shape {error.shape}, history {distance.shape}"
     assert np.all(np.isfinite(error)) and error[1:].max() > 0, f"error {error}"
@@ -106,8 +127,7 @@ def test_resume_computes_the_spatial_error_a_finished_run_lacks(tmp_path, scene_
 
     # Now it holds what was asked: nothing to do, nothing touched.
     files = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
-    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--resume", "--spatial-error"],
-                             capsys)
+    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--resume"], capsys)
     assert status == 0, f"exit {status}: {err}"
     assert err == f"note: {str(out)!r} holds a finished run; nothing to continue\n", err
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == files, "files changed"
@@ -279,10 +299,6 @@ def test_initial_face_errors_start_with_the_scene_file(tmp_path, scene_file, cap
         # Read at load time (its header), its shape checked on the grid.
         "wrong shape": (scene_file("runin", filename="a.toml", initial_face={
             "kind": "file", "path": "h16.npy"}), [], "holds an array of shape (16, 16)"),
-        # Right for the grid, not for --spatial-error's companion grid.
-        "companion grid": (scene_file("runin", filename="b.toml", initial_face={
-            "kind": "file", "path": "h32.npy"}), ["--spatial-error"],
-            "companion grid n = 16: [initial_face]"),
         # Read at load time.
         "unknown key": (scene_file("runin", filename="c.toml", initial_face={
             "kind": "crowned", "height": 1e-3}), [], "[initial_face]"),
@@ -295,6 +311,21 @@ def test_initial_face_errors_start_with_the_scene_file(tmp_path, scene_file, cap
         assert line.startswith(f"error: {scene}: "), f"{what}: no scene file first: {line}"
         assert fragment in line, f"{what}: {line!r} lacks {fragment!r}"
         assert not out.exists(), f"{what}: nothing written"
+
+
+def test_an_initial_face_of_one_grid_runs_without_the_grid_error(tmp_path, scene_file,
+                                                                 capsys):
+    """A recession file fits the run's grid only: no companions, a note naming the scene."""
+    np.save(tmp_path / "h32.npy", np.zeros((32, 32)))
+    scene = scene_file("runin", filename="b.toml", initial_face={"kind": "file",
+                                                                  "path": "h32.npy"})
+    out = tmp_path / "b.h5"
+    status, stdout, err = run_cli(transient_cli, [scene, "-o", out], capsys)
+    assert status == 0, f"exit {status}: {err}"
+    assert err.startswith(f"note: {scene}: no grid error (no companion runs): [initial_face]"), \
+        err
+    assert "(+- without the grid's error: no companion runs)" in stdout, stdout
+    assert spatial_error_of(out)[0].shape == (0,), "no companion, no grid error"
 
 
 def test_a_failed_first_solve_names_the_scene_file(tmp_path, scene_file, capsys):
@@ -331,12 +362,11 @@ def test_a_failed_companion_run_keeps_the_finished_run(tmp_path, scene_file, cap
     monkeypatch.setattr(transient.spatial_error, "spatial_error", fails)
     scene = scene_file("runin", n=48, transient={"tol": 1e-3})
     out = tmp_path / "run.h5"
-    status, _, err = run_cli(transient_cli, [scene, "-o", out, "--spatial-error"], capsys)
+    status, _, err = run_cli(transient_cli, [scene, "-o", out], capsys)
     line = one_error_line(err)
     assert status == 1, f"exit {status}: {err}"
-    assert line.startswith(f"error: {scene}: --spatial-error: the companion run on n = 24 "
-                           f"failed: "), line
-    assert "--resume --spatial-error computes it" in line, line
+    assert line.startswith(f"error: {scene}: the companion runs on n = 36, 24 failed: "), line
+    assert "grid error: --resume computes it" in line, line
     assert read_run(out)[0].status == "steady", "the finished run is written"
 
 
@@ -358,3 +388,36 @@ def test_ctrl_c_before_the_work_says_nothing_was_written(tmp_path, steady_scene,
     line = one_error_line(err)
     assert status == 130, f"exit {status}: {err}"
     assert "nothing was written" in line, line
+
+
+# -- --n: the grid from the command line -------------------------------------------------------
+def test_the_grid_flag_sets_the_grid_and_the_file_records_it(tmp_path, steady_scene, runin_scene,
+                                                             capsys):
+    status, stdout, err = run_cli(steady_cli, [steady_scene, "-o", tmp_path / "r.h5", "--n",
+                                               "40", "--no-slope-error"], capsys)
+    assert status == 0, f"exit {status}: {err}"
+    assert "n = 40 (40 x 40 pixels)" in stdout, stdout
+    with h5py.File(tmp_path / "r.h5") as f:
+        assert int(f.attrs["n"]) == 40 and f["face"].size == 40 * 40, dict(f.attrs)
+    status, stdout, err = run_cli(transient_cli, [runin_scene, "-o", tmp_path / "run.h5",
+                                                  "--n", "40", "--no-grid-error"], capsys)
+    assert status == 0, f"exit {status}: {err}"
+    run = read_run(tmp_path / "run.h5")[0]
+    assert run.shape == (40, 40), run.shape
+    # Resumed on the scene's own grid: another grid, refused naming n.
+    status, _, err = run_cli(transient_cli, [runin_scene, "-o", tmp_path / "run.h5",
+                                             "--resume"], capsys)
+    assert status == 2 and " n " in one_error_line(err), f"exit {status}: {err}"
+
+
+@pytest.mark.parametrize("value, fragment", [
+    ("1", "n must be an integer >= 2, got 1"), ("4.5", "expected an integer >= 2, got '4.5'"),
+    ("x", "expected an integer >= 2, got 'x'")])
+def test_a_bad_grid_flag_is_refused_before_any_work(tmp_path, runin_scene, capsys, value,
+                                                    fragment):
+    status, stdout, err = run_cli(transient_cli, [runin_scene, "-o", tmp_path / "run.h5", "--n",
+                                                  value], capsys)
+    line = one_error_line(err)
+    assert status == 2 and line.startswith("error: argument --n: "), f"exit {status}: {err}"
+    assert fragment in line, line
+    assert not (tmp_path / "run.h5").exists(), "nothing written"

@@ -158,8 +158,8 @@ def test_map_error_is_nan_free_on_small_grids():
     assert np.isfinite(estimator.map_error) and estimator.map_error > 0, estimator.map_error
 
 
-def test_companion_run_gives_the_spatial_error(scene_file, tmp_path):
-    """The same scene on n/2: |S_n - S_n/2| at every recorded distance, 0 at s = 0."""
+def test_companion_runs_give_the_grid_error(scene_file, tmp_path):
+    """The same scene on 3n/4 and n/2: max |S_n - S_m| at every recorded distance, 0 at s = 0."""
     from transient.output import read_run, write_run
     from transient.scene import load_transient_scene
     from transient.spatial_error import spatial_error
@@ -167,24 +167,27 @@ def test_companion_run_gives_the_spatial_error(scene_file, tmp_path):
     scene, options, initial = load_transient_scene(scene_file("runin", n=48))
     problem = wear_problem(scene.geometry, (1.0, 10.0), 48)
     result = run_in(problem, initial.recession(problem.grid), FAST)
-    companion = spatial_error(scene, initial, FAST, result)
-    assert companion.grid == 24 and companion.run.success, \
-        f"companion on n = {companion.grid}: {companion.run.status}"
-    error = companion.error
+    companions = spatial_error(scene, initial, FAST, result)
+    assert companions.grids == (36, 24) and all(run.success for run in companions.runs), \
+        f"companions on n = {companions.grids}: {[run.status for run in companions.runs]}"
+    error = companions.error
     assert error.shape == result.history["distance"].shape and error[0] == 0.0, \
         "one value per recorded distance, 0 at the exact start"
-    assert np.all(np.isfinite(error)), "the companion covers the whole run"
-    end = abs(result.history["rms_slope"][-1] - companion.run.history["rms_slope"][-1])
-    assert error[-1] == pytest.approx(end, rel=1e-12), "steady ends: |S_n - S_n/2|"
-    attached = companion.attach(result)
+    assert np.all(np.isfinite(error)), "the companions cover the whole run"
+    end = max(abs(result.history["rms_slope"][-1] - run.history["rms_slope"][-1])
+              for run in companions.runs)
+    assert error[-1] == pytest.approx(end, rel=1e-12), "steady ends: max |S_n - S_m|"
+    one = spatial_error(scene, initial, FAST, result, grids=(24,))
+    assert np.all(one.error <= error), "the larger of two differences bounds either"
+    attached = companions.attach(result)
     path = tmp_path / "run.h5"
     write_run(path, attached)
     back, _, _ = read_run(path)
     assert np.array_equal(back.history["rms_slope_spatial_error"], error), "round trip"
     with pytest.raises(ValueError, match="not the same run"):
-        companion.attach(run_in(wear_problem(scene.geometry, (1.0, 10.0), 48),
-                                initial.recession(problem.grid), dataclasses.replace(
-                                    FAST, max_steps=2)))
+        companions.attach(run_in(wear_problem(scene.geometry, (1.0, 10.0), 48),
+                                 initial.recession(problem.grid), dataclasses.replace(
+                                     FAST, max_steps=2)))
 
 
 @pytest.mark.slow
@@ -205,7 +208,8 @@ def test_readme_spatial_error_example(tmp_path, monkeypatch):
     history = namespace["result"].history
     assert history["rms_slope_spatial_error"].shape == history["rms_slope"].shape, \
         "the companion's error has one value per recorded step"
-    assert namespace["companion"].grid == 40, f"companion on n = {namespace['companion'].grid}"
+    assert namespace["companion"].grids == (48,), \
+        f"companions on n = {namespace['companion'].grids}"
 
 
 @pytest.mark.parametrize("n", [48, 49])

@@ -808,7 +808,7 @@ def test_command_line_draws_the_segmentation_alone(skimage, particles_png, monke
 
 
 @pytest.mark.parametrize("argv, fragment", [
-    (["--segmentation", "seg.pdf"], "seg.pdf': the figure is a PNG image"),
+    (["--segmentation", "seg.jpg"], "seg.jpg': expected the suffix .png, .pdf or .svg"),
     (["--segmentation", "s.toml"], "--segmentation"),
     (["--plot", "p.png", "--segmentation", "seg.png"], "required: -o/--output"),
     ([], "required: -o/--output"),

@@ -17,7 +17,8 @@ STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 
 SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways",
           "three_phases", "wear_exponent", "random_inclusions", "runin_distance",
-          "face_outlines", "pin_on_disk", "coating_wear_through", "particles_3d"]
+          "face_outlines", "pin_on_disk", "coating_wear_through", "particles_3d",
+          "calibrate_error_bar"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
             "design_table", "runin_history", "runin_convergence"]
 
@@ -195,6 +196,25 @@ def test_runin_distance_quick(runs):
     for key, value in s1.items():
         low = a[key + "_low"]
         assert 0 < low <= value < 10, f"{key}: {value} (low {low})"
+
+
+def test_calibrate_error_bar_quick(runs):
+    """Every quick row has a bar, a reference and their ratio; the disk's is the axisymmetric.
+
+    Its run-in distances are 2.156 s* (1 %) and 3.273 s* (0.1 %), here in metres.
+    """
+    path = runs["calibrate_error_bar"][1]
+    with h5py.File(path, "r") as f:
+        bar, ref, s = f["bar"][()], f["reference"][()], f["distance"][()]
+        ratio, kind = f["ratio"][()], [k.decode() if isinstance(k, bytes) else k
+                                       for k in f["reference_kind"][()]]
+        assert f["bar"].attrs["units"] == "m" and f["ratio"].attrs["units"] == "1"
+    assert np.all(bar > 0) and np.all(np.isfinite(ref)), (bar, ref)
+    finite = np.isfinite(bar)
+    assert np.allclose(ratio[finite], bar[finite] / np.abs(s[finite] - ref[finite])), ratio
+    disk = [i for i, k in enumerate(kind) if k.startswith("axisymmetric")]
+    s_star = 0.004 / (1e-13 * 1.3e6)  # the epoxy scene: a / (k E*)
+    assert np.allclose(ref[disk] / s_star, [2.1561, 3.2735], atol=2e-4), ref[disk] / s_star
 
 
 def test_face_outlines_quick(runs):

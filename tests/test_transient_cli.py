@@ -250,29 +250,31 @@ def test_work_precision_study_smoke(tmp_path):
             assert np.isfinite(f[f"runs/{name}"].attrs["history_error"]), name
 
 
-def test_spatial_error_flag_stores_the_companion_error(tmp_path, write_scene):
-    # The companion run on half the grid fills rms_slope_spatial_error at every recorded
-    # distance: 0 at s = 0 (both runs start from the flat face's exact value, 0), and
-    # |S_n - S_n/2| elsewhere, which must equal the difference of the two runs' values.
+def test_companion_runs_store_the_grid_error(tmp_path, write_scene):
+    # The companion runs on 3n/4 and n/2 fill rms_slope_spatial_error at every recorded
+    # distance: 0 at s = 0 (every run starts from the flat face's exact value, 0), and
+    # max |S_n - S_m| elsewhere, which must equal the largest difference of the runs' values.
     scene = write_scene(n=48)
     out = tmp_path / "run.h5"
-    proc = cli(scene, "-o", out, "--spatial-error", cwd=tmp_path)
+    proc = cli(scene, "-o", out, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    assert "companion run on n = 24" in proc.stdout, proc.stdout
+    assert "companion runs on n = 36, 24" in proc.stdout, proc.stdout
     run, _, _ = read_run(out)
     error = run.history["rms_slope_spatial_error"]
     assert error.shape == run.history["distance"].shape, f"shape {error.shape}"
     assert error[0] == 0.0, f"error at s = 0: {error[0]}"
     assert np.all(np.isfinite(error)) and np.all(error >= 0), "error must be finite, >= 0"
-    assert error[1:].max() > 0, "a 48 -> 24 companion cannot agree to round-off"
+    assert error[1:].max() > 0, "48 -> 36, 24 companions cannot agree to round-off"
+    assert "(+- without the grid's error" not in proc.stdout, proc.stdout
 
 
-def test_spatial_error_flag_refuses_a_map_without_a_coarser_grid(tmp_path, write_scene):
+def test_a_map_without_a_coarser_grid_runs_without_the_grid_error(tmp_path, write_scene):
     scene = write_scene(n=16)  # the gallery's 64 seeds need n >= 16: no companion grid
-    proc = cli(scene, "-o", tmp_path / "run.h5", "--spatial-error", cwd=tmp_path)
-    assert proc.returncode == 2, proc.stderr
-    assert "Traceback" not in proc.stderr and "no grid coarser" in proc.stderr, proc.stderr
-    assert not (tmp_path / "run.h5").exists(), "nothing may be written for refused input"
+    proc = cli(scene, "-o", tmp_path / "run.h5", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr, proc.stderr
+    assert "note: " in proc.stderr and "no grid coarser than n = 16" in proc.stderr, proc.stderr
+    assert "(+- without the grid's error: no companion runs)" in proc.stdout, proc.stdout
 
 
 def test_run_that_reaches_end_depth_exits_0(tmp_path):

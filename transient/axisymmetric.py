@@ -395,8 +395,8 @@ class CoatedAxisymmetricState(AxisymmetricState):
     rings_through : int
         Rings whose coating is gone (worn depth at least the thickness).
     face_deviation : float
-        Rms over the disk of ``f - f_inf`` (mean removed) over the relief of
-        ``f_inf``, the eq. 10 face that coating and substrate both tend to.
+        Rms over the disk of ``f - f_inf`` over that of ``f_inf`` (means
+        removed), the eq. 10 face that coating and substrate both tend to.
     """
 
     worn_depth: np.ndarray
@@ -486,7 +486,9 @@ class CoatedAxisymmetricRunIn(AxisymmetricRunIn):
         steady_face = reference.disk_face(self.centres, self.radius, self.mean_pressure,
                                           self.E_star)
         self._steady_face = steady_face
-        self._steady_relief = float(np.ptp(steady_face))
+        total = float(self.areas.sum())
+        shape = steady_face - float(self.areas @ steady_face) / total
+        self._steady_shape_rms = math.sqrt(float(self.areas @ shape ** 2) / total)
         self._segments = [self._segment(0.0, np.zeros(self.rings),
                                         np.zeros(self.rings, dtype=bool))]
         self._starts = [0.0]
@@ -603,7 +605,7 @@ class CoatedAxisymmetricRunIn(AxisymmetricRunIn):
             rim_worn_depth=float(w[-1]),
             rings_through=int(np.count_nonzero(self.crossings <= s)),
             face_deviation=math.sqrt(float(self.areas @ deviation ** 2) / total)
-            / self._steady_relief)
+            / self._steady_shape_rms)
 
     def wear_through_distances(self):
         """Distances (m) at which the rim wears through and the coating leaves the contact.
@@ -682,7 +684,7 @@ class CoatedReferenceHistory:
     mean_worn_depth, mean_worn_depth_error : ndarray, shape (K,)
     rim_worn_depth, rim_worn_depth_error : ndarray, shape (K,)
     face_deviation, face_deviation_error : ndarray, shape (K,)
-        Rms of ``f - f_inf`` over the relief of the eq. 10 face.
+        Rms of ``f - f_inf`` over that of the eq. 10 face (means removed).
     substrate_decay_distance : float
         ``e``-folding distance of the approach to the substrate's steady state.
     minimum_crossing_pressure : float

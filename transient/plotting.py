@@ -51,6 +51,7 @@ from steady.plotting import (
 )
 
 from .output import read_run
+from .result import rms_slope_uncertainty
 
 __all__ = ["RUN_IN_WITHIN", "add_distance_axis", "distance_scale", "draw_rms_slope_history",
            "extent", "format_metres", "plot_face", "plot_history", "plot_pressure", "plot_run",
@@ -66,13 +67,8 @@ _JUMP = 1e6
 
 
 def _error_band(history, reference):
-    """Half-width of the error band: the per-step bar, or the companion run's if larger."""
-    error = np.asarray(history.get("rms_slope_error", np.zeros_like(history["distance"])),
-                       dtype=float)
-    spatial = np.asarray(history.get("rms_slope_spatial_error", ()), dtype=float)
-    if spatial.shape == error.shape:
-        error = np.fmax(error, spatial)
-    return error / reference
+    """Half-width of the error band: :func:`transient.result.rms_slope_uncertainty`."""
+    return rms_slope_uncertainty(history) / reference
 
 
 def _check_units(units):

@@ -76,8 +76,11 @@ class RunRecord:
         The next requested snapshot.
     steady_face : ndarray, shape (nx, ny), m
         The closed-form steady face ``f_inf`` (eq. 9), zero off the face.
-    steady_relief : float, m
-        Its ``max - min`` over the face.
+    steady_shape_rms : float, m
+        Its rms over the face, its mean removed: what ``face_deviation``
+        is relative to (1 for a flat face).  An integral of the face, it
+        converges under refinement as the deviation does; the face's
+        ``max - min``, a single pixel's value at the rim, does not.
     steady_slope : (float, float)
         The estimator's rms slope of ``f_inf`` and its error bar, the rim
         layer fully worn (distance infinite).
@@ -93,7 +96,7 @@ class RunRecord:
         # (the steady solve's own estimate, a ladder of coarser maps, would go unused).
         steady = problem.solve_steady(face_only=True)
         self.steady_face = np.where(face_mask, steady.face, 0.0)
-        self.steady_relief = float(np.ptp(steady.face[face_mask]))
+        self.steady_shape_rms = shape_rms(steady.face, face_mask)
         figures = estimator.figures(math.inf, -self.steady_face,
                                     np.where(face_mask, steady.pressure, 0.0), 0.0)
         self.steady_slope = (float(figures["rms_slope"]), float(figures["rms_slope_error"]))
@@ -168,10 +171,10 @@ class RunRecord:
         hist["rim_worn_depth"].append(float(worn[self.estimator.rim].mean()))
         diff = (run.approach - run.recession - self.steady_face)[face_mask]
         hist["face_deviation"].append(
-            float(np.sqrt(np.mean((diff - diff.mean()) ** 2))) / self.steady_relief)
+            float(np.sqrt(np.mean((diff - diff.mean()) ** 2))) / self.steady_shape_rms)
         step_error = slope_error = 0.0
         if error is not None:
-            step_error = shape_rms(error, face_mask) / self.steady_relief
+            step_error = shape_rms(error, face_mask) / self.steady_shape_rms
             gx, gy = masked_gradient(np.where(face_mask, error, 0.0), face_mask, p.halfspace.h)
             slope_error = float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
         hist["face_deviation_step_error"].append(step_error)

@@ -17,7 +17,7 @@ import types
 import numpy as np
 
 __all__ = ["COATING_HISTORY_UNITS", "DEPTH_HISTORY_UNITS", "HISTORY_UNITS",
-           "PROGRAMME_HISTORY_UNITS", "RunResult", "RunState"]
+           "PROGRAMME_HISTORY_UNITS", "RunResult", "RunState", "rms_slope_uncertainty"]
 
 #: History datasets and their units (docs/model.md, "The run-in history").
 HISTORY_UNITS = {
@@ -30,7 +30,7 @@ HISTORY_UNITS = {
                         "contact; 2: the same plus differences off the contact)",
     "rms_slope_plain": "1 (plain pixel rms of the exact-kernel slope of K p, gap differences "
                        "off the contact)",
-    "rms_slope_spatial_error": "1 (|S_n - S_m| from the same run on a coarser grid m; empty "
+    "rms_slope_spatial_error": "1 (max |S_n - S_m| from the same run on coarser grids m; empty "
                                "unless transient.spatial_error filled it)",
     "rim_layer_pixels": "1 (width k E* s of the slowest-wearing rim phase's worn layer, in "
                         "pixels)",
@@ -45,17 +45,16 @@ HISTORY_UNITS = {
     "worn_volume": "m^3",
     "solves": "1",
     "face_deviation": "1 (rms over the face of the face minus the steady face f_inf, their "
-                      "least-squares constant removed, / relief max - min of f_inf)",
+                      "least-squares constant removed, / rms of f_inf, its mean removed)",
     "face_deviation_step_error": "1 (rms over the face of the step's local error estimate, "
-                                 "its mean removed, / relief of f_inf; 0 at s = 0)",
+                                 "its mean removed, / rms of f_inf; 0 at s = 0)",
     "rms_slope_step_error": "1 (rms slope of the step's local error estimate; 0 at s = 0)",
     "rim_worn_depth": "m (worn depth, mean over the rim pixels of the face)",
-    "face_deviation_spatial_error": "1 (|D_n - D_m| of face_deviation from the same run on a "
-                                    "coarser grid m; empty unless transient.spatial_error "
-                                    "filled it)",
-    "rms_slope_deviation_spatial_error": "1 (the same of rms_slope / steady_rms_slope - 1, each "
-                                         "run's own steady value; empty unless "
-                                         "transient.spatial_error filled it)",
+    "companion_deviation_low": "1 (least over the companion runs on coarser grids of their "
+                               "deviation from their own steady state, max(d_S, d_f); empty "
+                               "unless transient.spatial_error filled it)",
+    "companion_deviation_high": "1 (the same, greatest; empty unless transient.spatial_error "
+                                "filled it)",
 }
 
 #: History datasets of a run under a ``[load] programme`` only, and their units.
@@ -267,7 +266,7 @@ class RunResult:
 
         Both the friction proxy (the history's ``rms_slope`` against
         :attr:`steady_rms_slope`) and the face (``face_deviation``: the rms
-        of the face minus the steady face over the steady face's relief)
+        of the face minus the steady face over that of the steady face)
         must stay within ``within``; see
         :func:`transient.run_in_distance.run_in_distance` and docs/model.md,
         "The run-in distance".
@@ -297,6 +296,16 @@ class RunResult:
         from .run_in_distance import run_in_distance
 
         return run_in_distance(self, within, sliding_speed=sliding_speed)
+
+    @property
+    def rms_slope_uncertainty(self):
+        """The history's rms slope error bar, ndarray, shape (K,), 1 (slope).
+
+        :func:`rms_slope_uncertainty` of :attr:`history`: the estimator's
+        bar, the step's error and, when the companion runs filled it, the
+        grid's, in quadrature.
+        """
+        return rms_slope_uncertainty(self.history)
 
     @property
     def coating_worn_through(self):
@@ -409,3 +418,30 @@ class RunResult:
         Equals ``K p`` on the contact; defined up to a constant; NaN off the face.
         """
         return self.approach - self.recession
+
+
+def rms_slope_uncertainty(history):
+    """Error bar of a history's ``rms_slope``, shape (K,): its parts in quadrature.
+
+    The parts are ``rms_slope_error`` (the estimator's: rim layer and phase
+    map), ``rms_slope_step_error`` (the step's local error) and
+    ``rms_slope_spatial_error`` (the grid's, from the companion runs of
+    :mod:`transient.spatial_error`; absent or empty without them).  An
+    infinite part (no estimate possible) makes the bar infinite.
+
+    Parameters
+    ----------
+    history : mapping of str to array_like
+        A run's history (:attr:`RunResult.history`, a run file's group).
+
+    Returns
+    -------
+    ndarray, shape (K,)
+    """
+    n = len(history["distance"])
+    total = np.zeros(n)
+    for name in ("rms_slope_error", "rms_slope_step_error", "rms_slope_spatial_error"):
+        part = np.asarray(history.get(name, ()), dtype=float)
+        if part.shape == (n,):
+            total += np.nan_to_num(part, nan=0.0, posinf=np.inf) ** 2
+    return np.sqrt(total)

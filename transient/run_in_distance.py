@@ -7,9 +7,10 @@ every accepted step, two relative deviations from the steady state
 - the friction proxy's, ``d_S = |S(s) - S_inf| / S_inf``: the history's
   ``rms_slope`` against the rms slope of the closed-form steady face by the
   same estimator (:attr:`~transient.result.RunResult.steady_rms_slope`);
-- the face's, ``d_f = rms(f(s) - f_inf - c) / (max f_inf - min f_inf)``:
-  the history's ``face_deviation`` (``c`` the least-squares constant: the
-  rigid offset is not part of the shape).
+- the face's, ``d_f = rms(f(s) - f_inf - c) / rms(f_inf - c_inf)``: the
+  history's ``face_deviation`` (``c``, ``c_inf`` the least-squares
+  constants: the rigid offset is not part of the shape; 1 from a flat
+  face).
 
 The run is *within x* at a point where ``max(d_S, d_f) <= x``; the run-in
 distance ``s_x`` is where it enters that band for the last time: after the
@@ -18,22 +19,26 @@ last recorded point outside the band the deviation is interpolated to
 points (exact for the exponential approach of the slowest relaxation mode,
 which governs the end of a run-in).
 
-Its uncertainty comes from the errors the run estimates at every point:
-the step's local error (``rms_slope_step_error``,
-``face_deviation_step_error``: time integration), the part of the slope
-estimator's error bar that the steady value does not share (the rim layer;
-the map's share is common to both and cancels in ``d_S``) and, when the
-companion run of :mod:`transient.spatial_error` filled them, the spatial
-errors of the two deviations, ``rms_slope_deviation_spatial_error`` and
-``face_deviation_spatial_error`` (the same run on a coarser grid, each
-deviation from its own grid's steady state: ``rms_slope_spatial_error``
-holds the difference of the steady values too, which the distance does
-not see).  Without the companion the grid's error
-of the face is not in the uncertainty (:attr:`RunInDistance.spatial` is
-False): on the homogeneous disk it is the larger part (docs/model.md).  The band is widened and
-narrowed by them: the first crossing of the narrowed band and the last of
-the widened one bound ``s_x``, and the uncertainty is the larger of the two
-distances to ``s_x``.
+Its uncertainty has two parts.  The run's own, from the errors it
+estimates at every point: the step's local error (``rms_slope_step_error``,
+``face_deviation_step_error``: time integration) times
+:data:`STEP_ERROR_FACTOR`, and the part of the slope estimator's error bar
+that the steady value does not share (the rim layer; the map's share is
+common to both and cancels in ``d_S``).  The band is widened and narrowed
+by them: the first crossing of the narrowed band and the last of the
+widened one bound ``s_x``.  And the grid's, when the companion runs of
+:mod:`transient.spatial_error` gave it (``runin-transient`` runs them
+unless ``--no-grid-error``): the same run on coarser grids ``m``, each
+against its own grid's steady state, enters the band at ``s_x^(m)``; the
+history holds the least and greatest of their deviations
+(``companion_deviation_low``, ``companion_deviation_high``), whose entries
+are the least and greatest ``s_x^(m)``, and the grid's part is the larger
+distance from ``s_x`` to them.  The two parts add in quadrature on each
+side (``low_m``, ``high_m``); the uncertainty is the larger side.  Without
+the companions the grid's part is left out (:attr:`RunInDistance.spatial`
+is False).  The bar's calibration against finer grids, tighter tolerances
+and the axisymmetric reference is in ``docs/benchmarks.md``, "Calibrated
+error bar".
 """
 
 from __future__ import annotations
@@ -45,11 +50,19 @@ import numpy as np
 
 from steady.scene import SLIDING_SPEED
 
-__all__ = ["COATING_EVENTS", "TOLERANCES", "CoatingDistance", "RunInDistance", "WearThroughMap",
-           "coating_distance", "deviations", "distance_table", "entry", "run_in_distance"]
+__all__ = ["COATING_EVENTS", "STEP_ERROR_FACTOR", "TOLERANCES", "CoatingDistance",
+           "RunInDistance", "WearThroughMap", "coating_distance", "deviations", "distance_table",
+           "entry", "run_in_distance"]
 
 #: The tolerances a run file and the summary of ``runin-transient`` give the run-in distance for.
 TOLERANCES = (0.01, 0.001)
+
+#: What the step's local error estimate is multiplied by in the run-in distance's bar.  A
+#: local estimate does not hold what the earlier steps' errors left in the face: against
+#: runs at a hundredth of the tolerance, the distance's step error was 1.0 to 2.7 times the
+#: bar of the local estimates alone on the shipped run-in scenes (docs/benchmarks.md,
+#: "Calibrated error bar").
+STEP_ERROR_FACTOR = 3.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -76,8 +89,9 @@ class RunInDistance:
     mean_worn_depth_m, rim_worn_depth_m : float, m
         Depth worn off at ``s_x``, mean over the face and over its rim
         pixels (linear in ``s`` between recorded points).
-    time_s, time_uncertainty_s : float or None, s
-        ``s_x`` and its uncertainty over the sliding speed; None without one.
+    time_s, time_uncertainty_s : float, s
+        ``s_x`` and its uncertainty over the sliding speed; NaN without one
+        (as in the run file).
     end_m : float, m
         The last recorded distance of the run (the end of its dynamics).
     distance_scale : float, m
@@ -97,8 +111,8 @@ class RunInDistance:
     high_m: float
     mean_worn_depth_m: float
     rim_worn_depth_m: float
-    time_s: float | None
-    time_uncertainty_s: float | None
+    time_s: float
+    time_uncertainty_s: float
     end_m: float
     distance_scale: float
     spatial: bool = False
@@ -118,10 +132,10 @@ class RunInDistance:
                 f"{self.uncertainty_m:.2g} m = {self.distance_s_star:.4g} +- "
                 f"{self.uncertainty_s_star:.2g} s*; worn depth there {self.mean_worn_depth_m:.4g} m"
                 f" (mean), {self.rim_worn_depth_m:.4g} m (rim)")
-        if self.time_s is not None:
+        if math.isfinite(self.time_s):
             line += f"; time {self.time_s:.5g} +- {self.time_uncertainty_s:.2g} s"
         return line + ("" if self.spatial else " (+- without the grid's error: no companion "
-                                               "run)")
+                                               "runs)")
 
 
 def deviations(result):
@@ -160,12 +174,11 @@ def deviations(result):
     bar = np.asarray(h["rms_slope_error"], dtype=float)
     map_share = (steady_error / steady) * slope if math.isfinite(steady_error) else 0.0
     rim = np.sqrt(np.maximum(bar ** 2 - map_share ** 2, 0.0))
-    parts = [rim / steady, _dataset(h, "rms_slope_step_error") / steady,
-             _dataset(h, "rms_slope_deviation_spatial_error")]
+    parts = [rim / steady, STEP_ERROR_FACTOR * _dataset(h, "rms_slope_step_error") / steady]
     # An infinite error bar (no estimate possible) stays infinite: no bound.
     e_slope = np.sqrt(sum(np.nan_to_num(p, nan=0.0, posinf=np.inf) ** 2 for p in parts))
-    e_face = np.hypot(*(np.nan_to_num(_dataset(h, name), nan=0.0, posinf=np.inf) for name in (
-        "face_deviation_step_error", "face_deviation_spatial_error")))
+    e_face = STEP_ERROR_FACTOR * np.nan_to_num(_dataset(h, "face_deviation_step_error"),
+                                               nan=0.0, posinf=np.inf)
     # At s = 0 the slope is the initial face's own, exact, value.
     e_slope[0], e_face[0] = 0.0, 0.0
     deviation = np.maximum(d_slope, face)
@@ -174,11 +187,11 @@ def deviations(result):
     return deviation, low, high
 
 
-def _dataset(history, name):
-    """A history dataset as floats; zeros when absent (or empty: no spatial error)."""
+def _dataset(history, name, fill=0.0):
+    """A history dataset as floats; ``fill`` when absent (or empty: no companion runs)."""
     n = len(history["distance"])
     value = np.asarray(history.get(name, ()), dtype=float)
-    return value if value.shape == (n,) else np.zeros(n)
+    return value if value.shape == (n,) else np.full(n, fill)
 
 
 def entry(distance, deviation, within):
@@ -249,12 +262,13 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
         return RunInDistance(
             within=within, reached=False, distance_m=nan, distance_s_star=nan,
             uncertainty_m=nan, low_m=nan, high_m=nan, mean_worn_depth_m=nan,
-            rim_worn_depth_m=nan, time_s=None, time_uncertainty_s=None, end_m=float(s[-1]),
+            rim_worn_depth_m=nan, time_s=nan, time_uncertainty_s=nan, end_m=float(s[-1]),
             distance_scale=float(s_star), message=unsteady)
     deviation, low, high = deviations(result)
     nan = math.nan
-    spatial = _dataset(h, "face_deviation_spatial_error").any() or \
-        _dataset(h, "rms_slope_deviation_spatial_error").any()
+    companions = [_dataset(h, name, fill=math.nan) for name in (
+        "companion_deviation_low", "companion_deviation_high")]
+    spatial = all(np.all(np.isfinite(c)) for c in companions)
     common = dict(within=within, end_m=float(s[-1]), distance_scale=float(s_star),
                   spatial=bool(spatial))
     found = entry(s, deviation, within)
@@ -266,14 +280,22 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
             status = f"; the run {result.status}"
         return RunInDistance(
             reached=False, distance_m=nan, distance_s_star=nan, uncertainty_m=nan, low_m=nan,
-            high_m=nan, mean_worn_depth_m=nan, rim_worn_depth_m=nan, time_s=None,
-            time_uncertainty_s=None,
+            high_m=nan, mean_worn_depth_m=nan, rim_worn_depth_m=nan, time_s=nan,
+            time_uncertainty_s=nan,
             message=(f"the dynamics end at s = {s[-1]:.4g} m = {s[-1] / s_star:.4g} s*, "
                      f"{100 * deviation[-1]:.3g} % from the steady state{status}"), **common)
     lo = entry(s, low, within)
     hi = entry(s, high, within)
     lo = found if lo is None else min(lo, found)
     hi = math.inf if hi is None else max(hi, found)
+    if spatial:
+        # The companions' own entries into the band: the earliest and the latest.
+        early = entry(s, companions[0], within)
+        late = entry(s, companions[1], within)
+        early = found if early is None else min(early, found)
+        late = math.inf if late is None else max(late, found)
+        lo = found - math.hypot(found - lo, found - early)
+        hi = found + math.hypot(hi - found, late - found)
     uncertainty = max(found - lo, hi - found)
     area = float(np.count_nonzero(result.face_mask)) * result.pixel_size ** 2
     mean_depth = float(np.interp(found, s, np.asarray(h["worn_volume"], dtype=float))) / area
@@ -282,8 +304,8 @@ def run_in_distance(result, within=0.01, *, sliding_speed=None):
     return RunInDistance(
         reached=True, distance_m=found, distance_s_star=float(found / s_star),
         uncertainty_m=uncertainty, low_m=lo, high_m=hi, mean_worn_depth_m=mean_depth,
-        rim_worn_depth_m=rim_depth, time_s=None if speed is None else found / speed,
-        time_uncertainty_s=None if speed is None else uncertainty / speed, **common)
+        rim_worn_depth_m=rim_depth, time_s=nan if speed is None else found / speed,
+        time_uncertainty_s=nan if speed is None else uncertainty / speed, **common)
 
 
 def _without_steady_state(result):
@@ -430,8 +452,7 @@ def distance_table(result, tolerances=TOLERANCES):
         return {}
 
     def column(name):
-        return np.array([math.nan if getattr(d, name) is None else getattr(d, name)
-                         for d in found], dtype=float)
+        return np.array([getattr(d, name) for d in found], dtype=float)
 
     return {
         "within": (np.array(tolerances, dtype=float), "1",

@@ -243,8 +243,15 @@ def check_run_in_law(scene):
                      f"interface; runin-steady solves one section of this scene (--depth)")
 
 
-def load_transient_scene(path):
+def load_transient_scene(path, *, n=None):
     """Read a scene file with its ``[transient]`` and ``[initial_face]`` sections.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The scene file.
+    n : int, optional
+        The grid instead of the scene's ``[grid] n`` (:func:`steady.scene.load_scene`).
 
     Returns
     -------
@@ -267,7 +274,7 @@ def load_transient_scene(path):
     >>> initial.kind, initial.recession(scene.grid()).shape
     ('tilted', (64, 64))
     """
-    scene = load_scene(path, extra_sections=RUN_IN_SECTIONS)
+    scene = load_scene(path, extra_sections=RUN_IN_SECTIONS, n=n)
     base_dir = pathlib.Path(path).parent
     try:
         check_run_in_law(scene)

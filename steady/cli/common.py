@@ -32,7 +32,7 @@ Outputs and memory
 :func:`prepare_output` checks an output path before the work starts (not a
 directory, not a device, not existing without ``--force``, in a writable
 directory, which it creates if missing); :func:`check_distinct` refuses an
-output that names an input or another output; :func:`check_png_path`
+output that names an input or another output; :func:`check_figure_path`
 refuses a figure name that is not a ``.png``.  ``--memory-limit``
 (:func:`add_memory_limit`) is the limit :func:`steady.memory.check_memory`
 compares a command's memory estimate with.
@@ -63,9 +63,11 @@ __all__ = [
     "EXIT_STATUS_EPILOG",
     "ArgumentParser",
     "CommandError",
+    "add_grid_flag",
+    "FIGURE_SUFFIXES",
     "add_memory_limit",
     "check_distinct",
-    "check_png_path",
+    "check_figure_path",
     "configure_logging",
     "describe_os_error",
     "note",
@@ -402,12 +404,18 @@ def prepare_output(path, *, force, what="output"):
     return path
 
 
-def check_png_path(path, what="--plot"):
-    """Refuse a figure file name whose suffix is not ``.png``, before any work.
+#: Suffixes of the figure files the commands write: a PNG image, or vector PDF or SVG for papers.
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
-    The figures are PNG images; another suffix would be refused (``.txt``)
-    or give another format (``.pdf``) only once the figure is drawn, after
-    the work, and no suffix would write ``NAME.png`` beside the name checked.
+
+def check_figure_path(path, what="--plot"):
+    """Refuse a figure file name whose suffix is not a figure format, before any work.
+
+    The figures are PNG images or vector PDF or SVG files
+    (:data:`FIGURE_SUFFIXES`, matplotlib's format follows the suffix);
+    another suffix would be refused (``.txt``) or give another format
+    (``.jpg``) only once the figure is drawn, after the work, and no
+    suffix would write ``NAME.png`` beside the name checked.
 
     Parameters
     ----------
@@ -419,22 +427,49 @@ def check_png_path(path, what="--plot"):
     Raises
     ------
     ValueError
-        The suffix is not ``.png`` (in any case); the message names it.
+        The suffix is not one of :data:`FIGURE_SUFFIXES` (in any case); the
+        message names it.
 
     Examples
     --------
-    >>> check_png_path("out/run.PNG")
+    >>> check_figure_path("out/run.PNG"), check_figure_path("paper/run.pdf")
+    (None, None)
     >>> try:
-    ...     check_png_path("out/run.txt")
+    ...     check_figure_path("out/run.txt")
     ... except ValueError as err:
     ...     print(err)
-    --plot 'out/run.txt': the figure is a PNG image: expected the suffix .png, got '.txt'
+    --plot 'out/run.txt': expected the suffix .png, .pdf or .svg, got '.txt'
     """
     suffix = pathlib.PurePath(os.fspath(path)).suffix
-    if suffix.lower() != ".png":
+    if suffix.lower() not in FIGURE_SUFFIXES:
         got = shorten(suffix) if suffix else "none"
-        raise ValueError(f"{what} {shorten(str(path))}: the figure is a PNG image: expected the "
-                         f"suffix .png, got {got}")
+        raise ValueError(f"{what} {shorten(str(path))}: expected the suffix .png, .pdf or .svg, "
+                         f"got {got}")
+
+
+def add_grid_flag(parser):
+    """Add ``--n N`` to an argument parser (dest ``n``): the grid instead of the scene's.
+
+    Checked as the scene's ``[grid] n`` is (:data:`steady.scene.GRID_N`), at
+    parse time.
+    """
+    from ..scene import GRID_N
+
+    def grid(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer >= 2, got "
+                                             f"{shorten(text)}") from None
+        try:
+            return GRID_N.parse(value, "")
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
+
+    parser.add_argument("--n", type=grid, metavar="N",
+                        help="the grid: pixels along the longer side of the face's bounding "
+                             "box, instead of the scene's [grid] n (the output file records "
+                             "the grid it ran on)")
 
 
 def add_memory_limit(parser):

@@ -41,7 +41,7 @@ from .common import (
     CommandError,
     add_memory_limit,
     check_distinct,
-    check_png_path,
+    check_figure_path,
     configure_logging,
     describe_os_error,
     note,
@@ -102,7 +102,7 @@ def run(args):
     check_distinct([("the scene", args.scene), ("the measured map", args.measured),
                     ("-o", args.output), ("--plot", args.plot)])
     if args.plot is not None:
-        check_png_path(args.plot, "--plot")
+        check_figure_path(args.plot, "--plot")
     if args.pixel_size is not None and len(args.pixel_size) > 2:
         raise ValueError(f"--pixel-size takes one or two values, got {len(args.pixel_size)}")
     prepare_output(args.output, force=args.force)

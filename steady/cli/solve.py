@@ -17,7 +17,7 @@ A failure prints one line ``error: ...`` on stderr; exit status 0, 1 for an
 operating-system error or a figure that could not be drawn (the message
 says the result is saved), 2 for bad input (nothing written), 130 when
 interrupted (:mod:`steady.cli.common`).  The suffix of ``--plot`` is
-checked before the solve too (:func:`steady.cli.common.check_png_path`).
+checked before the solve too (:func:`steady.cli.common.check_figure_path`).
 ``--segmentation`` draws the segmentation of a ``micrograph`` phase map
 over its image (:func:`steady.plotting.segmentation_figure`) before the
 solve; without ``-o`` it is all the command writes.
@@ -45,9 +45,10 @@ from .common import (
     EXIT_STATUS_EPILOG,
     ArgumentParser,
     CommandError,
+    add_grid_flag,
     add_memory_limit,
     check_distinct,
-    check_png_path,
+    check_figure_path,
     configure_logging,
     describe_os_error,
     note,
@@ -88,6 +89,7 @@ def build_parser():
                         help="for a phase map that changes with depth ([depth], a 3-d map "
                              "kind): solve the section at this worn depth below the initial "
                              "surface, m (default 0, the surface): its quasi-steady face")
+    add_grid_flag(parser)
     add_memory_limit(parser)
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log progress (-v) or details (-vv) to stderr")
@@ -188,8 +190,8 @@ def _check(args):
                     ("--segmentation", args.segmentation)])
     for path, what in ((args.plot, "--plot"), (args.segmentation, "--segmentation")):
         if path is not None:
-            check_png_path(path, what)
-    scene = load_scene(args.scene)
+            check_figure_path(path, what)
+    scene = load_scene(args.scene, n=args.n)
     if args.segmentation is not None and scene.geometry.segmented_image() is None:
         raise ValueError(f"--segmentation needs a phase map of kind \"micrograph\", the "
                          f"scene's is {scene.geometry.kind!r}")

@@ -76,9 +76,12 @@ class Progress:
     log : bool, optional
         Log one line per step (rate-limited) when stderr is not a terminal
         (``-v``; default False).
+    label : str, optional
+        What runs: the bar's name and, but for the main run (default
+        ``"run-in"``), the log lines' first words.
     """
 
-    def __init__(self, start, log=False):
+    def __init__(self, start, log=False, label="run-in"):
         from tqdm import tqdm
 
         self.terminal = sys.stderr.isatty()
@@ -88,7 +91,8 @@ class Progress:
         # Some terminals report no size (tqdm then draws nothing): fall back to 100 x 40.
         cols, rows = shutil.get_terminal_size((100, 40))
         self.start = start
-        self.bar = tqdm(desc="run-in", total=_TOTAL, unit="", file=sys.stderr,
+        self.prefix = "" if label == "run-in" else f"{label}: "
+        self.bar = tqdm(desc=label, total=_TOTAL, unit="", file=sys.stderr,
                         disable=not self.terminal, ncols=cols if cols > 0 else 100,
                         nrows=rows if rows > 0 else 40,
                         bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}{postfix}")
@@ -107,7 +111,7 @@ class Progress:
             jumped = run.jumps != self.last_jumps and self.last_jumps is not None
             if jumped or now - self.last_line >= LOG_INTERVAL:
                 self.last_line = now
-                logger.info("%s", self.line(run))
+                logger.info("%s%s", self.prefix, self.line(run))
             self.last_jumps = run.jumps
 
     @staticmethod

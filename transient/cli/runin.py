@@ -43,13 +43,21 @@ what every scheme continues from.  Each part of the run is recorded with
 its settings in the root attribute ``settings_history`` (JSON, one entry
 per part: steps, distances, status, settings); snapshots requested at
 distances the run had already passed are listed in ``snapshots_missing``
-and on stderr.  ``--force`` starts over.  ``--resume --spatial-error`` on a
-finished run that lacks its spatial error runs the companion and stores it;
-one that holds it is left untouched.
+and on stderr.  ``--force`` starts over.  ``--resume`` on a finished run
+that lacks its grid error runs the companions and stores it (unless
+``--no-grid-error``); one that holds it is left untouched.
+
+After the run, the scene runs again on about ``3 n / 4`` and ``n / 2``
+(the companions, about 0.8 of the run's cost): the largest difference of
+the history from theirs is its grid error, part of the run-in distance's
+``+-`` (``--no-grid-error`` skips them; the summary then says the ``+-``
+lacks it).  A scene whose map has no coarser grid, or whose initial face
+exists only on its own grid, runs without them (a note on stderr says
+why).
 
 Exit status: 0 steady state or ``end_depth`` reached; 1 run stopped or failed (resumable),
 an operating-system error (the message names the last checkpoint), a
-companion run of ``--spatial-error`` that failed or a figure that could not
+companion run that failed or a figure that could not
 be drawn (the run is saved); 2 bad input (``error: ...`` on stderr, nothing
 written), including a run whose first contact solve fails, an unsupported
 ``--plot`` suffix and a run file another run is writing or that is damaged;
@@ -82,9 +90,10 @@ from steady.cli.common import (
     EXIT_STATUS_EPILOG,
     ArgumentParser,
     CommandError,
+    add_grid_flag,
     add_memory_limit,
     check_distinct,
-    check_png_path,
+    check_figure_path,
     configure_logging,
     describe_os_error,
     note,
@@ -133,10 +142,11 @@ def build_parser():
     from ..stepping import SCHEMES
 
     add_option_flags(p, choices={"scheme": sorted(SCHEMES)})
-    p.add_argument("--spatial-error", action="store_true",
-                   help="after the run, run the scene again on about half the grid and store "
-                        "the history's spatial error |S_n - S_n/2| as rms_slope_spatial_error "
-                        "(about a quarter of the cost)")
+    p.add_argument("--no-grid-error", action="store_true",
+                   help="skip the companion runs on about 3n/4 and n/2 that give the history's "
+                        "grid error (about 0.8 of the run's cost); the run-in distance's +- "
+                        "then lacks it")
+    add_grid_flag(p)
     add_memory_limit(p)
     p.add_argument("-v", "--verbose", action="count", default=0,
                    help="log progress (-v) or details (-vv) to stderr")
@@ -160,7 +170,7 @@ def _check_outputs(args):
                     ("the run file's backup", backup_path(out)),
                     ("the run file's lock", lock_path(out)), ("--plot", args.plot)])
     if args.plot is not None:
-        check_png_path(args.plot)
+        check_figure_path(args.plot)
     # Existence is checked again under the run's lock.
     prepare_output(out, force=True)
     if args.plot is not None:
@@ -227,7 +237,21 @@ def _distance_lines(result):
         lines += [result.run_in_distance(x).summary() for x in TOLERANCES]
     except ValueError as err:
         lines.append(f"run-in distance: {err}")
-    return lines
+    return lines + [_slope_line(result)]
+
+
+def _slope_line(result):
+    """The history's last rms slope with its bar and the bar's parts."""
+    h = result.history
+    bar = float(result.rms_slope_uncertainty[-1])
+    parts = f"estimator {float(h['rms_slope_error'][-1]):.2g}"
+    spatial = np.asarray(h.get("rms_slope_spatial_error", ()), dtype=float)
+    if spatial.shape == np.shape(h["distance"]):
+        parts += f", grid {spatial[-1]:.2g}"
+    else:
+        parts += "; without the grid's error: no companion runs"
+    return (f"rms slope at the end of the dynamics: {float(h['rms_slope'][-1]):.6g} +- "
+            f"{bar:.2g} ({parts})")
 
 
 def _end_lines(result):
@@ -261,11 +285,13 @@ class _Job:
     options: object
     resume: object
     run_file: RunFile
-    companion_grid: int | None = None  # --spatial-error: the companion run's grid
+    companion_grids: tuple = ()  # the companion runs' grids; empty: none
     # A finished run with nothing to add: not written again.
     finished: bool = False
-    # Why --spatial-error's companion run failed (the run is written without its error).
+    # Why a companion run failed (the run is written without its grid error).
     companion_failure: str | None = None
+    # What the companion runs found, for the summary.
+    companion_line: str | None = None
     verbose: int = 0  # -v: progress lines outside a terminal
 
 
@@ -309,13 +335,13 @@ def _prepare(args, lock, scene, initial, options, checked):
         if stored_columns_digest(stored_attrs, resume) is None:
             note(f"{str(out)!r} does not record the phases below its face; resumed on the "
                  f"scene's without comparing them")
-        finished = resume.status == "steady" and not _lacks_spatial_error(args, resume)
+        finished = resume.status == "steady" and not _lacks_grid_error(args, resume)
         if finished:
             note(f"{str(out)!r} holds a finished run; nothing to continue")
         else:
             if resume.status == "steady":
-                note(f"{str(out)!r} holds a finished run without its spatial error: "
-                     f"running the companion run of --spatial-error and storing it")
+                note(f"{str(out)!r} holds a finished run without its grid error: "
+                     f"running the companion runs and storing it")
             notes, snapshots = run_file.resume(resume, stored_attrs)
             for text in notes:
                 note(text)
@@ -327,34 +353,32 @@ def _prepare(args, lock, scene, initial, options, checked):
         if args.resume:
             note(f"{str(out)!r} does not exist; starting a new run")
         run_file.start()
-    grid = (_companion_grid(args.scene, scene, initial, problem.n)
-            if args.spatial_error and not finished else None)
+    grids = (() if args.no_grid_error or finished
+             else _companion_grids(args.scene, scene, initial, problem.n))
     return _Job(scene, initial, problem, h0, options, resume, run_file,
-                companion_grid=grid, finished=finished, verbose=args.verbose)
+                companion_grids=grids, finished=finished, verbose=args.verbose)
 
 
-def _lacks_spatial_error(args, stored):
-    """Whether ``--spatial-error`` asks for the error a finished stored run does not hold."""
+def _lacks_grid_error(args, stored):
+    """Whether the companions are asked for and a finished stored run lacks their error."""
     from ..spatial_error import DATASET
 
     error = np.asarray(stored.history.get(DATASET, ()), dtype=float)
-    return args.spatial_error and error.shape != np.shape(stored.history["distance"])
+    return not args.no_grid_error and error.shape != np.shape(stored.history["distance"])
 
 
-def _companion_grid(scene_path, scene, initial, n):
-    """The grid of ``--spatial-error``'s companion run; refused before the run if none exists."""
-    from ..spatial_error import companion_grid
+def _companion_grids(scene_path, scene, initial, n):
+    """The companion runs' grids; none, with a note saying why, if the scene has none."""
+    from ..spatial_error import companion_grids
 
     try:
-        m = companion_grid(scene.geometry, n, scene.outline)  # names the minimum grid
-    except ValueError as err:
-        raise ValueError(f"{scene_path}: --spatial-error: {err}") from None
-    try:
-        initial.recession(scene.grid(m))
+        grids = companion_grids(scene.geometry, n, scene.outline)  # names the minimum grid
+        for m in grids:
+            initial.recession(scene.grid(m))
     except ValueError as err:  # "[initial_face]: ...": the scene file first
-        raise ValueError(f"{scene_path}: --spatial-error needs the initial face on the companion "
-                         f"grid n = {m}: {err}") from None
-    return m
+        note(f"{scene_path}: no grid error (no companion runs): {err}")
+        return ()
+    return grids
 
 
 def run(args):
@@ -367,7 +391,7 @@ def run(args):
     out = args.output
     not_started = "interrupted before the run started; nothing was written"
     try:
-        scene, options, initial = load_transient_scene(args.scene)
+        scene, options, initial = load_transient_scene(args.scene, n=args.n)
         options = options_from_flags(options, args)
         _check_outputs(args)
         grid = scene.grid()  # load_scene has checked n against the outline
@@ -403,13 +427,15 @@ def run(args):
             raise CommandError(f"{err}; {job.run_file.saved_text()}",
                                EXIT_FAILED if saved else EXIT_BAD_INPUT) from None
         print("\n".join(_report(result, comparison)))
+        if job.companion_line is not None:
+            print(job.companion_line)
         status = EXIT_OK if result.finished else EXIT_FAILED
         at = at_text(result.steps, result.distance, result.distance_scale)
         stop = f"run {result.status} at {at}: {result.message}; continue with --resume"
         if job.companion_failure is not None:
             status = EXIT_FAILED
             stop = (f"{job.companion_failure}; the run is saved in {str(out)!r} without its "
-                    f"spatial error: --resume --spatial-error computes it")
+                    f"grid error: --resume computes it")
         del job, result, comparison  # the figure is drawn from the file
         if args.plot is not None:
             _plot(out, args.plot, may_replace=args.force or args.resume)
@@ -445,7 +471,7 @@ def _run(job):
         initial = np.where(problem.face_mask, result.initial_recession, 0.0)
         comparison = compare_with_steady(result, steady_of_run(job.scene, problem, initial),
                                          problem)
-        if job.companion_grid is not None and not finished:
+        if job.companion_grids and not finished:
             result = _companion(job, result)
     if not finished:
         extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
@@ -454,7 +480,7 @@ def _run(job):
 
 
 def _companion(job, result):
-    """The run on about half the grid beside it: the history's spatial error bar.
+    """The runs on coarser grids beside it: the history's grid error.
 
     If the companion run fails, the main run is returned as it is (and
     written: it is finished) and :attr:`_Job.companion_failure` says why.
@@ -462,20 +488,24 @@ def _companion(job, result):
     from ..solver import StepFailure
     from ..spatial_error import spatial_error
 
-    bar = Progress(0, log=job.verbose)
+    bar = Progress(0, log=job.verbose, label="companion runs")
     try:
-        companion = spatial_error(job.scene, job.initial, job.options, result,
-                                  grid=job.companion_grid, on_step=bar)
+        companions = spatial_error(job.scene, job.initial, job.options, result,
+                                   grids=job.companion_grids, on_step=bar)
     except (ValueError, StepFailure) as err:
-        job.companion_failure = (f"{job.scene.source_path or 'the scene'}: --spatial-error: "
-                                 f"the companion run on n = {job.companion_grid} failed: {err}")
+        grids = ", ".join(map(str, job.companion_grids))
+        job.companion_failure = (f"{job.scene.source_path or 'the scene'}: the companion runs "
+                                 f"on n = {grids} failed: {err}")
         return result
     finally:
         bar.close()
-    result = companion.attach(result)
+    result = companions.attach(result)
     error = result.history["rms_slope_spatial_error"] / result.reference_slope
-    print(f"spatial error (companion run on n = {companion.grid}, {companion.run.wall_time:.3g}"
-          f" s): largest {np.nanmax(error):.3g} grad_f0, at the end {error[-1]:.3g} grad_f0")
+    grids = ", ".join(map(str, companions.grids))
+    wall = sum(run.wall_time for run in companions.runs)
+    job.companion_line = (f"grid error (companion runs on n = {grids}, {wall:.3g} s): rms "
+                          f"slope largest {np.nanmax(error):.3g} grad_f0, at the end "
+                          f"{error[-1]:.3g} grad_f0")
     return result
 
 
