@@ -5,7 +5,7 @@ From a flat face, :func:`transient.runin.run_in` (ESDIRK3, local error
 The run-in distance is :meth:`transient.result.RunResult.run_in_distance`:
 the distance after which both the friction proxy (the history's continuum
 rms slope, :mod:`transient.history`) and the face (its rms deviation from
-the steady face of eq. 9 over the steady face's relief) stay within the
+the steady face of eq. 9 over the steady face's own rms) stay within the
 band of the steady state (docs/model.md, "The run-in distance"), with its
 bounds from the step errors and the estimator's rim-layer error.
 Distances are in ``s* = a / (k_min E*)`` (``k_min`` the smaller wear
@@ -22,7 +22,7 @@ and one of 40^2 seeds.
 
 Run::
 
-    python studies/runin_distance.py            # n = 256, 41 run-ins, about 5 min on one core
+    python studies/runin_distance.py            # n = 256, 41 run-ins, about 3 min on 2 cores
     python studies/runin_distance.py --quick    # a few seconds
     python studies/runin_distance.py --plot-only
 

@@ -63,8 +63,10 @@ def _repeated(counter):
 @pytest.mark.parametrize("programme", [False, True])
 def test_a_run_in_checks_each_scale_and_map_once(tmp_path, capsys, counted, programme):
     scales, maps = counted
+    # The companion runs on coarser grids are problems of their own (their pixel's scales
+    # differ): left out here.
     status, _, err = run_cli(transient_cli, [_scene(tmp_path, programme), "-o",
-                                             tmp_path / "run.h5"], capsys)
+                                             tmp_path / "run.h5", "--no-grid-error"], capsys)
     assert status == 0, err
     assert not _repeated(scales), f"scales checked more than once: {_repeated(scales)}"
     checked = {what for what, *_ in scales}

@@ -289,6 +289,20 @@ def history_cf(name):
     return unit.replace("^", ""), meaning  # one spelling of powers: "m3", as "Pa-1"
 
 
+def _per_relief(datasets):
+    """Whether the file's ``face_deviation`` is relative to the steady relief (layouts <= 4)."""
+    entry = datasets.get("history/face_deviation")
+    if entry is None:
+        return False
+    text = entry[1].get("long_name", entry[1].get("units", ""))
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "replace")
+    return "relief" in str(text)
+
+
+#: History datasets of earlier layouts that are read no longer.
+_RETIRED = ("face_deviation_spatial_error", "rms_slope_deviation_spatial_error")
+
 # Long names of history datasets whose HISTORY_UNITS entry is a bare unit.
 _HISTORY_NAMES = {"distance": "sliding distance", "step": "length of the step to this distance",
                   "peak_pressure": "largest contact pressure",
@@ -836,8 +850,10 @@ def _result(path, datasets, groups):
         kw["sliding_speed"] = None
     state.update({name: datasets[f"state/{name}"][0] if f"state/{name}" in datasets else None
                   for name in _STATE_UNITS})
+    # The first-order companion errors of the deviations (layouts up to 4) are no longer
+    # what the run-in distance reads (the companions' own deviations are): left unread.
     history = {name[len("history/"):]: value for name, (value, _) in datasets.items()
-               if name.startswith("history/")}
+               if name.startswith("history/") and name[len("history/"):] not in _RETIRED}
     outline = _read_outline(path, datasets, groups, root)
     shape = np.shape(datasets["pressure"][0])
     if outline is not None:
@@ -866,7 +882,8 @@ def _result(path, datasets, groups):
         outline=outline, reference_slope_error=ref_error,
         reference_slope_source=str(source),
         load_programme=_read_load_programme(groups.get("history", {})),
-        columns=_read_columns(path, datasets, groups))
+        columns=_read_columns(path, datasets, groups),
+        face_deviation_per_relief=_per_relief(datasets))
     arrays = {name: value for name, (value, _) in datasets.items()
               if "/" not in name and name not in ("worn_depth", "pressure", "x", "y")}
     return result, attrs, arrays

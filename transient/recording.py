@@ -108,6 +108,12 @@ class RunRecord:
             self.snap_h = self.snap_p = frozen(np.empty((0, *problem.shape)))
         else:
             self.history = {k: list(v.tolist()) for k, v in resume.history.items()}
+            if resume.face_deviation_per_relief:
+                # A file of an earlier layout: its deviations were relative to the relief.
+                to_rms = float(np.ptp(steady.face[face_mask])) / self.steady_shape_rms
+                for name in ("face_deviation", "face_deviation_step_error"):
+                    if name in self.history:
+                        self.history[name] = [v * to_rms for v in self.history[name]]
             for name in _LATER_HISTORY:
                 self.history.setdefault(name, [math.nan] * len(self.history["distance"]))
             self.snap_d = list(resume.snapshot_distance.tolist())

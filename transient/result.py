@@ -260,6 +260,9 @@ class RunResult:
     sliding_speed: float | None = None
     load_programme: object = None
     columns: object = None
+    # A run file of layout 4 or earlier: its face_deviation is relative to the steady face's
+    # max - min, not its rms (a run continued from it converts it).
+    face_deviation_per_relief: bool = False
 
     def run_in_distance(self, within=0.01, *, sliding_speed=None):
         """The sliding distance after which the run stays within ``within`` of the steady state.

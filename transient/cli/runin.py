@@ -286,6 +286,7 @@ class _Job:
     resume: object
     run_file: RunFile
     companion_grids: tuple = ()  # the companion runs' grids; empty: none
+    no_companions: str | None = None  # why there are none, if the scene has none
     # A finished run with nothing to add: not written again.
     finished: bool = False
     # Why a companion run failed (the run is written without its grid error).
@@ -353,10 +354,11 @@ def _prepare(args, lock, scene, initial, options, checked):
         if args.resume:
             note(f"{str(out)!r} does not exist; starting a new run")
         run_file.start()
-    grids = (() if args.no_grid_error or finished
-             else _companion_grids(args.scene, scene, initial, problem.n))
+    grids, why_none = ((), None) if args.no_grid_error or finished else _companion_grids(
+        args.scene, scene, initial, problem.n)
     return _Job(scene, initial, problem, h0, options, resume, run_file,
-                companion_grids=grids, finished=finished, verbose=args.verbose)
+                companion_grids=grids, no_companions=why_none, finished=finished,
+                verbose=args.verbose)
 
 
 def _lacks_grid_error(args, stored):
@@ -368,7 +370,7 @@ def _lacks_grid_error(args, stored):
 
 
 def _companion_grids(scene_path, scene, initial, n):
-    """The companion runs' grids; none, with a note saying why, if the scene has none."""
+    """The companion runs' grids and None; or none and why (noted once the run is done)."""
     from ..spatial_error import companion_grids
 
     try:
@@ -376,9 +378,8 @@ def _companion_grids(scene_path, scene, initial, n):
         for m in grids:
             initial.recession(scene.grid(m))
     except ValueError as err:  # "[initial_face]: ...": the scene file first
-        note(f"{scene_path}: no grid error (no companion runs): {err}")
-        return ()
-    return grids
+        return (), f"{scene_path}: no grid error (no companion runs): {err}"
+    return grids, None
 
 
 def run(args):
@@ -473,6 +474,8 @@ def _run(job):
                                          problem)
         if job.companion_grids and not finished:
             result = _companion(job, result)
+        elif job.no_companions is not None:
+            note(job.no_companions)
     if not finished:
         extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
         job.run_file.write(result, comparison, extra)
