@@ -15,12 +15,15 @@ limit ``grad_f0`` both approach from below.
 
 import sys
 
+import h5py
 import numpy as np
 import pytest
+import xarray as xr
 from conftest import GEOMETRIES, K1, OUTLINES, RADIUS, problem, wear_problem
 
 from steady import solve
 from steady.fit_files import read_measured
+from steady.output import read_result, write_result
 from steady.relief import rms_height
 from steady.topography import isotropic_psd, to_topography
 from transient import RunOptions, run_in
@@ -211,3 +214,18 @@ def test_psd_of_a_plane_is_zero_and_bad_faces_are_refused():
     with pytest.raises(ValueError, match="pixel_size"):
         isotropic_psd(np.zeros((4, 4)), -1e-4)
 
+
+def test_result_file_holds_the_psd_along_its_wavevector(tmp_path):
+    result = voronoi_face(33)
+    path = write_result(tmp_path / "r.h5", result)
+    with h5py.File(path, "r") as f:
+        group = f["face_psd"]
+        assert group["wavevector"].attrs["units"] == "m-1", "wavevector in m-1"
+        assert group["psd"].attrs["units"] == "m4", "C^iso in m4"
+        assert np.array_equal(group["wavevector"][()], result.face_psd.wavevector), "q"
+        assert np.array_equal(group["psd"][()], result.face_psd.density), "C^iso"
+    with xr.open_datatree(path, engine="h5netcdf") as tree:
+        psd = tree["face_psd"]["psd"]
+        assert psd.dims == ("wavevector",), f"psd along {psd.dims}"
+    stored = read_result(path).result
+    assert np.array_equal(stored.face_psd.density, result.face_psd.density), "read back"
