@@ -14,6 +14,8 @@ limit ``grad_f0`` both approach from below, and on a cosine over the disk, where
 of the two stencils is known in closed form.
 """
 
+import pathlib
+import re
 import sys
 
 import h5py
@@ -274,3 +276,17 @@ def test_result_file_holds_the_psd_along_its_wavevector(tmp_path):
         assert psd.dims == ("wavevector",), f"psd along {psd.dims}"
     stored = read_result(path).result
     assert np.array_equal(stored.face_psd.density, result.face_psd.density), "read back"
+
+
+def test_the_files_page_example_runs(st, tmp_path, monkeypatch, capsys):
+    """The example of docs/files.md, "Faces as SurfaceTopography topographies", as printed."""
+    page = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "files.md").read_text()
+    section = page.split("## Faces as SurfaceTopography topographies", 1)[1]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, "docs/files.md", "exec"), {})
+    sizes, heights = capsys.readouterr().out.splitlines()
+    assert sizes == "(0.008, 0.008) m", sizes
+    left, right = heights.split(" = ")
+    assert left == right, f"the rms heights printed: {heights}"
+    assert (tmp_path / "predicted.x3p").stat().st_size > 0, "the x3p file is written"
