@@ -17,6 +17,8 @@ a module imports only from its floor and below):
   :mod:`steady.relief` -- rms heights; :mod:`steady.validity` -- where the
   model holds; :mod:`steady.measured_face` -- a measured height map;
   :mod:`steady.reference` -- closed-form solutions (eq. 10, 12, 18, ...);
+  :mod:`steady.topography` -- a face's power spectrum, and the face as a
+  SurfaceTopography topography;
 - the face: :mod:`steady.outline` -- face outlines and their grids;
   :mod:`steady.phases` (the :class:`~steady.phases.PhaseMap` contract),
   :mod:`steady.inclusions`, :mod:`steady.micrograph`,
@@ -70,6 +72,7 @@ _MODULE_OF = {
     "MeasuredFace": "measured_face",
     "Micrograph": "micrograph",
     "PhaseBasis": "basis",
+    "PowerSpectrum": "topography",
     "ArchardLaw": "wear",
     "Factorisation": "wear",
     "PowerLaw": "wear",
@@ -97,6 +100,7 @@ _MODULE_OF = {
     "estimate_rms_slope": "rms_slope",
     "fit_face": "fit",
     "fit_scene": "fit",
+    "isotropic_psd": "topography",
     "load_micrograph": "micrograph",
     "load_phase_map": "phases",
     "load_scene": "scene",
@@ -114,6 +118,7 @@ _MODULE_OF = {
     "segment": "micrograph",
     "solve": "solution",
     "solve_scene": "solution",
+    "to_topography": "topography",
     "validate_labels": "labels",
     "write_fit": "fit_files",
     "write_result": "output",

@@ -34,6 +34,9 @@ for every dataset and attribute with its unit and meaning.  In short::
     group ``outline``: the face's outline (:func:`write_outline`)
     groups the phase map records (:meth:`steady.phases.PhaseMap.file_record`):
         ``micrograph``, a segmented micrograph's segmentation and placement
+    group ``face_psd``: the face's radially averaged power spectral density
+        (:attr:`steady.solution.SteadyResult.face_psd`), ``psd`` (K,) in m4
+        along the dimension scale ``wavevector`` (K,) in m-1
 
 An attribute cannot carry attributes, so the unit of attribute ``x`` is the
 string attribute ``x_units``, a udunits string like a dataset's ``units``.
@@ -340,6 +343,18 @@ def _write(f, result, scene, phase_names):
         scene.source_path)
     for name, attributes in ({} if scene is None else scene.geometry.file_record()).items():
         f.create_group(name).attrs.update(attributes)
+    _write_face_psd(f.create_group("face_psd"), result.face_psd)
+
+
+def _write_face_psd(group, spectrum):
+    """The steady face's ``C^iso(q)`` (:attr:`SteadyResult.face_psd`) as datasets of ``group``."""
+    q = group.create_dataset("wavevector", data=spectrum.wavevector)
+    describe(q, "m-1", "wavevector magnitude q = 2 pi / wavelength, mean over the bin")
+    q.make_scale("wavevector")
+    ds = group.create_dataset("psd", data=spectrum.density)
+    describe(ds, "m4", "radially averaged power spectral density of the face about its "
+                       "least-squares plane, Hann-windowed (SurfaceTopography's C^iso)")
+    attach_scales(ds, q)
 
 
 def write_outline(group, outline):

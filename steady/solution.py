@@ -27,6 +27,7 @@ scale ``L``.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 
@@ -38,6 +39,7 @@ from .problem import Problem
 from .relief import rms_height
 from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
 from .scene import problem_of
+from .topography import isotropic_psd, to_topography
 from .validity import check_rms_slope
 
 __all__ = ["SteadyResult", "solve", "solve_scene"]
@@ -171,6 +173,37 @@ class SteadyResult:
         cylinder (eq. 10).
         """
         return self.face / (self.reference_slope * self.scale)
+
+    @functools.cached_property
+    def face_psd(self):
+        """Radially averaged power spectral density ``C^iso(q)`` of :attr:`face`.
+
+        A :class:`steady.topography.PowerSpectrum`: the wavevector (m^-1) and
+        the density (m^4) of :func:`steady.topography.isotropic_psd`, the face
+        about its least-squares plane under SurfaceTopography's radial Hann
+        window (docs/model.md, "The face's power spectrum").  Computed on
+        first use; SurfaceTopography is not needed.
+        """
+        return isotropic_psd(self.face, self.pixel_size)
+
+    def topography(self):
+        """:attr:`face` as a ``SurfaceTopography.Topography`` (the optional extra ``surface``).
+
+        Heights in m, undefined off the face, physical size ``(nx h, ny h)``
+        (:func:`steady.topography.to_topography`): power spectra,
+        autocorrelation and scale-dependent slopes of the steady face from
+        that library.
+
+        Returns
+        -------
+        SurfaceTopography.Topography
+
+        Raises
+        ------
+        ModuleNotFoundError
+            SurfaceTopography is not installed.
+        """
+        return to_topography(self.face, self.pixel_size)
 
 
 def solve(problem, *, geometry=None, face_only=False):

@@ -16,6 +16,8 @@ import types
 
 import numpy as np
 
+from steady.topography import to_topography
+
 __all__ = ["COATING_HISTORY_UNITS", "DEPTH_HISTORY_UNITS", "HISTORY_UNITS",
            "PROGRAMME_HISTORY_UNITS", "RunResult", "RunState", "rms_slope_uncertainty"]
 
@@ -421,6 +423,47 @@ class RunResult:
         Equals ``K p`` on the contact; defined up to a constant; NaN off the face.
         """
         return self.approach - self.recession
+
+    def topography(self, snapshot=None):
+        """The worn face as a ``SurfaceTopography.Topography`` (the optional extra ``surface``).
+
+        Heights in m (elevation, the sign of :attr:`face`, up to a
+        constant), undefined off the face, physical size ``(nx h, ny h)``
+        (:func:`steady.topography.to_topography`): power spectra,
+        autocorrelation and scale-dependent slopes of the worn face from
+        that library.
+
+        Parameters
+        ----------
+        snapshot : int, optional
+            Index of a stored snapshot (:attr:`snapshot_distance`; negative
+            from the last); default the final face, :attr:`face`.  A
+            snapshot's face is ``-snapshot_recession[snapshot]``.
+
+        Returns
+        -------
+        SurfaceTopography.Topography
+
+        Raises
+        ------
+        ValueError
+            ``snapshot`` out of range, or the pixel size unknown (a run read
+            from a file written without its outline).
+        ModuleNotFoundError
+            SurfaceTopography is not installed.
+        """
+        if self.outline is None:
+            raise ValueError("the run's pixel size is unknown: its file does not record the "
+                             "face's outline")
+        if snapshot is None:
+            return to_topography(self.face, self.pixel_size)
+        count = len(self.snapshot_distance)
+        if isinstance(snapshot, bool) or not isinstance(snapshot, (int, np.integer)) \
+                or not -count <= snapshot < count:
+            raise ValueError(f"snapshot must be an index of one of the run's {count} "
+                             f"snapshots, got {snapshot!r}")
+        return to_topography(-np.asarray(self.snapshot_recession[snapshot], dtype=float),
+                             self.pixel_size)
 
 
 def rms_slope_uncertainty(history):
