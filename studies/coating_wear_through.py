@@ -51,7 +51,7 @@ QUICK = {"scene": "coating_transient.toml", "n": 20, "tol": 1e-3, "ratios": [10.
 
 #: History datasets kept from each 2-d run, their normalisation and units.
 _KEPT = {"normalised_rms_slope": "1 (rms slope / grad_f0)",
-         "face_deviation": "1 (rms of f - f_inf over the relief of f_inf)",
+         "face_deviation": "1 (rms of f - f_inf over the rms of f_inf)",
          "worn_depth_mean": "f* (pbar a / E*)"}
 # How far past the coating's last crossing (in e-folding distances of the
 # substrate) the steady search looks.
@@ -276,7 +276,7 @@ def plot(path, png):
     ax_slope.legend(fontsize=6)
     ax_dev.axhline(p["within"], color="k", lw=0.6, ls=":")
     ax_dev.set_xlabel(r"sliding distance / $s^*_c$")
-    ax_dev.set_ylabel(r"face deviation from eq. 10 (rms / relief)")
+    ax_dev.set_ylabel(r"face deviation from eq. 10 (rms / rms of eq. 10)")
     ax_dev.set_ylim(1e-4, 1.0)
     ax_dev.set_title("towards the substrate's steady state (lines as above)", fontsize=8)
     _plot_sweep(axes[1, 1], axes[1, 2], d, a, p)

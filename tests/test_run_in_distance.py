@@ -4,10 +4,11 @@ The homogeneous disk worn from flat is axisymmetric; :mod:`transient.axisymmetri
 integrates it exactly in the distance on graded rings, where the run-in
 distance (the last entry of ``max(d_S, d_f)`` into the band, the same
 definition as :mod:`transient.run_in_distance`) is found to 1e-9 s* by root
-finding.  With 150 rings it is 1.52382 s* within 1 % and 2.64089 s* within
-0.1 % (600 rings: 1.52375, 2.64080).  The 2-d runs (ESDIRK3, tol 1e-5)
-give 1.5583, 1.5374, 1.5320 s* within 1 % on n = 32, 64, 128 and 2.6744,
-2.6517, 2.6458 within 0.1 %: first order in ``h``, the face's share.
+finding.  With 150 rings it is 2.156091 s* within 1 % and 3.273480 s*
+within 0.1 % (600 rings: 2.156078, 3.273440).  The 2-d runs (ESDIRK3, tol
+1e-5) give 2.16269, 2.14989, 2.15718, 2.15613 s* within 1 % on n = 32, 48,
+64, 128 and 3.27075, 3.25214, 3.26357, 3.26266 within 0.1 %: a scatter
+from grid to grid, not an order in ``h``.
 """
 
 import dataclasses
