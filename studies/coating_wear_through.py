@@ -277,7 +277,7 @@ def plot(path, png):
     ax_dev.axhline(p["within"], color="k", lw=0.6, ls=":")
     ax_dev.set_xlabel(r"sliding distance / $s^*_c$")
     ax_dev.set_ylabel(r"face deviation from eq. 10 (rms / rms of eq. 10)")
-    ax_dev.set_ylim(1e-4, 1.0)
+    ax_dev.set_ylim(1e-4, 10.0)
     ax_dev.set_title("towards the substrate's steady state (lines as above)", fontsize=8)
     _plot_sweep(axes[1, 1], axes[1, 2], d, a, p)
     study_io.save_figure(fig, png, dpi=70)
