@@ -242,3 +242,17 @@ def test_single_precision_figures_are_the_double_ones(n):
         assert b["rms_height"] == a["rms_height"], "no transform in the rms height"
         assert abs(b["rms_slope"] - a["rms_slope"]) < 2e-5 * a["rms_slope_error"], \
             f"n={n}, s={distance:.3g}: against the error bar"
+
+
+def test_a_companion_that_jumped_at_once_is_read_at_every_distance():
+    """A companion whose history is its start only (it jumped to its steady state at s = 0)."""
+    from transient.spatial_error import _at, _decay_at
+
+    targets = np.array([0.0, 5.0, 50.0])
+    assert np.array_equal(_at([0.0], [0.3], targets, steady=True), [0.3, 0.3, 0.3])
+    assert np.array_equal(_at([0.0], [0.3], targets, steady=False), [0.3, np.nan, np.nan],
+                          equal_nan=True)
+    assert np.array_equal(_decay_at([0.0], [1.0], targets, steady=True), [1.0, 1.0, 1.0])
+    # Two points: log-linear between them, exact at both.
+    got = _decay_at([0.0, 10.0], [1.0, 0.01], np.array([0.0, 5.0, 10.0]), steady=True)
+    assert np.allclose(got, [1.0, 0.1, 0.01], rtol=1e-14), got

@@ -248,6 +248,10 @@ def _decay_at(distance, deviation, targets, *, steady):
     distance = np.asarray(distance, dtype=float)
     deviation = np.asarray(deviation, dtype=float)
     targets = np.asarray(targets, dtype=float)
+    if distance.size == 1:  # a run that jumped to its steady state at once
+        out = np.full(targets.shape, deviation[0])
+        out[targets > distance[0]] = deviation[0] if steady else np.nan
+        return out
     right = np.clip(np.searchsorted(distance, targets, side="right"), 1, distance.size - 1)
     left = right - 1
     d0, d1 = deviation[left], deviation[right]
@@ -282,6 +286,10 @@ def _at(distance, values, targets, *, steady):
     out = np.full(targets.shape, np.nan)
     out[targets == 0] = values[distance == 0][0] if np.any(distance == 0) else np.nan
     positive = distance > 0
+    if not np.any(positive):  # a run that jumped to its steady state at once
+        if steady:
+            out[targets > 0] = values[-1]
+        return out
     pos_d, pos_v = distance[positive], values[positive]
     inside = (targets > 0) & (targets <= pos_d[-1] * (1 + 1e-12))
     out[inside] = np.interp(np.log(targets[inside]), np.log(pos_d), pos_v)

@@ -185,21 +185,24 @@ def _captured_solve(solve, halfspace, data, **options):
 def _base_modules(tree):
     """``steady/halfspace.py`` and ``transient/contact.py`` of another tree, as modules.
 
-    Loaded from their files under other names (``transient`` as a package
-    ``runin_base_transient`` whose ``__init__`` is not run), so that both
-    versions live in this process.
+    Loaded from their files under other names (``steady`` and ``transient``
+    as packages ``runin_base_steady`` and ``runin_base_transient`` whose
+    ``__init__`` is not run), so that both versions live in this process.
     """
-    import importlib.util
-
     tree = pathlib.Path(tree).resolve()
-    spec = importlib.util.spec_from_file_location("runin_base_halfspace",
-                                                  tree / "steady" / "halfspace.py")
-    halfspace = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(halfspace)
-    package = types.ModuleType("runin_base_transient")
-    package.__path__ = [str(tree / "transient")]
+    return (importlib.import_module(_base_package(tree, "steady") + ".halfspace"),
+            importlib.import_module(_base_package(tree, "transient") + ".contact"))
+
+
+def _base_package(tree, name):
+    """The package ``name`` of the tree ``tree`` as ``runin_base_<name>``, its ``__init__`` not run.
+
+    Its modules import each other relatively, so they load from that tree.
+    """
+    package = types.ModuleType(f"runin_base_{name}")
+    package.__path__ = [str(pathlib.Path(tree).resolve() / name)]
     sys.modules[package.__name__] = package
-    return halfspace, importlib.import_module("runin_base_transient.contact")
+    return package.__name__
 
 
 def compare(directory, base, *, rounds=ROUNDS):
@@ -349,14 +352,9 @@ def products(sizes, base, *, rounds=ROUNDS):
     double and single precision, interleaved over ``rounds`` rounds; the
     median per case.
     """
-    import importlib.util
-
     from steady.halfspace import HalfSpace
 
-    spec = importlib.util.spec_from_file_location(
-        "halfspace_base", pathlib.Path(base) / "steady" / "halfspace.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = importlib.import_module(_base_package(base, "steady") + ".halfspace")
     rows = []
     for n in sizes:
         p = np.random.default_rng(2711).random((n, n))
