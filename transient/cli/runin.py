@@ -58,7 +58,7 @@ A flag that overrides a :class:`transient.options.RunOptions` field comes
 from the field's declaration (``flag``).  One that adds a computation
 after the run reads what it needs from the ``_Job`` (scene, initial face,
 problem, options) in ``_run``, stores its figures
-through the ``extra_attrs`` of ``RunFile.write`` and prints them in
+through the ``extra_quantities`` of ``RunFile.write`` and prints them in
 ``_report``.
 """
 
@@ -288,13 +288,13 @@ def _prepare(args, lock, scene, initial, options, checked):
         h0 = initial.recession(problem.grid)
     except ValueError as err:  # "[initial_face]: ...": the scene file first, as when loading
         raise ValueError(f"{args.scene}: {err}") from None
-    attrs, arrays = run_inputs(scene, problem)
-    run_file = RunFile(out, attrs, arrays, options.settings(), options)
+    attrs, quantities, arrays = run_inputs(scene, problem)
+    run_file = RunFile(out, attrs, quantities, arrays, options.settings(), options)
     resume, finished = None, False
     if args.resume and out.exists():
         resume, stored_attrs, stored_arrays = read_resume(out)
-        check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
-                           problem.outline, scene.wear)
+        check_same_inputs(out, quantities, arrays, stored_attrs, stored_arrays, resume, h0,
+                          scene, problem.outline)
         if "sha256" not in stored_attrs:
             note(f"{str(out)!r} carries no checksums; resumed without verification")
         finished = resume.status == "steady" and not _lacks_spatial_error(args, resume)
@@ -436,7 +436,9 @@ def _run(job):
         if job.companion_grid is not None and not finished:
             result = _companion(job, result)
     if not finished:
-        extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
+        # The steady face's rms slope: the steady result's, with its error bar, once compared.
+        extra = None if comparison is None else {"steady_rms_slope": (
+            comparison.steady_rms_slope, "1", "rms slope of the steady face f_inf")}
         job.run_file.write(result, comparison, extra)
     return result, comparison
 
