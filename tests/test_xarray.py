@@ -5,11 +5,13 @@ the CF attribute ``Conventions``; CF ``units`` that udunits parses and a ``long_
 variable, the scalar results 0-d variables (no ``*_units`` attribute), the values per phase
 along ``phase_name``; coordinates ``x`` and ``y`` in m as dimension scales, the fields stored
 (y, x) so that xarray draws x across; the run history along its distance; no dimension of
-length 0; and the problem's inputs in a run file written from Python.
+length 0; every group a node of ``xarray.open_datatree``; and the problem's inputs in a run
+file written from Python.
 """
 
 import pathlib
 import re
+import shutil
 
 import h5py
 import numpy as np
@@ -122,9 +124,9 @@ def test_result_file_opens_as_labelled_arrays(files):
 def test_run_file_opens_as_labelled_arrays(files):
     run = files["run_result"]
     with xr.open_dataset(files["run"], engine="h5netcdf") as ds:
-        for name in ("worn_depth", "pressure"):
+        for name in ("worn_depth", "face", "pressure"):
             assert ds[name].dims == ("y", "x"), f"{name}: dims {ds[name].dims}"
-        assert np.array_equal(ds["pressure"].values, run.pressure.T), "pressure stored (y, x)"
+        assert np.array_equal(ds["face"].values, run.face.T, equal_nan=True), "face stored (y, x)"
         assert ds["x"].attrs["units"] == "m", "x in m"
         assert tuple(ds["phase_name"].values.tolist()) == NAMES, "phase names as a coordinate"
         assert ds["distance_scale"].attrs["units"] == "m", "s* in m"
@@ -284,3 +286,70 @@ def test_two_files_written_alike_compare_identical(files, tmp_path):
     other = write_result(tmp_path / "other.h5", stored.result, phase_names=("a", "b"))
     assert compare.compare_files(files["result"], other, ()) == ["/phase_name: dataset differs"]
 
+
+@pytest.fixture(scope="module")
+def ellipse_files(tmp_path_factory):
+    """The result and the run file the commands write of the ellipse of :data:`LAYOUT_4`'s scene.
+
+    An ellipse 8 mm along x and 5 mm along y: 24 pixels along x, 15 along y, so that a
+    field drawn the wrong way round shows.
+    """
+    where = tmp_path_factory.mktemp("ellipse")
+    scene = where / "scene.toml"
+    shutil.copy(DATA / "run_layout4.toml", scene)
+    paths = {"result": where / "result.h5", "run": where / "run.h5"}
+    assert steady_cli.main([str(scene), "-o", str(paths["result"]), "--no-slope-error"]) == 0
+    assert transient_cli.main([str(scene), "-o", str(paths["run"])]) == 0
+    return paths
+
+
+def _drawn_extent(face):
+    """The widths (m) across and up of ``face.plot()``, drawn on a figure without pyplot."""
+    from matplotlib.figure import Figure
+
+    ax = Figure().add_subplot()
+    face.plot(ax=ax)
+    return np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim())
+
+
+@pytest.mark.parametrize("kind", ["result", "run"])
+def test_files_open_as_a_datatree_with_x_across(ellipse_files, kind):
+    path = ellipse_files[kind]
+    if kind == "result":
+        face = read_result(path).result.face
+    else:
+        face = read_run(path)[0].face
+    nx, ny = face.shape
+    assert (nx, ny) == (24, 15), f"the ellipse's grid {face.shape}"
+    tree = xr.open_datatree(path, engine="h5netcdf")
+    try:
+        ds = tree.to_dataset()
+        assert ds.attrs["Conventions"] == "CF-1.10", ds.attrs
+        assert ds["face"].dims == ("y", "x") and ds["face"].shape == (ny, nx), ds["face"]
+        # Labelled access gives the library's [i, j] (i along x) pixel for pixel.
+        i, j = 17, 4
+        assert np.array_equal(ds["face"].isel(x=i, y=j).values, face[i, j], equal_nan=True)
+        assert np.array_equal(ds["face"].values, face.T, equal_nan=True), "face stored (y, x)"
+        h = float(ds["x"][1] - ds["x"][0])
+        across, up = _drawn_extent(ds["face"])
+        assert (across, up) == (pytest.approx(nx * h), pytest.approx(ny * h)), \
+            f"ds.face.plot() draws {across} m across and {up} m up: {nx * h} x {ny * h} expected"
+        empty = {f"{node.path}:{dim}" for node in tree.subtree
+                 for dim, size in node.to_dataset().sizes.items() if size == 0}
+        assert not empty, f"dimensions of length 0: {sorted(empty)}"
+        for node in tree.subtree:
+            for name, var in node.to_dataset(inherit=False).variables.items():
+                assert var.attrs.get("long_name"), f"{node.path}/{name} has no long_name"
+                if var.dtype.kind == "f" and "code" not in var.attrs["long_name"]:
+                    assert var.attrs.get("units"), f"{node.path}/{name} has no units"
+        for name, unit in {"normal_force": "N", "E_star": "Pa", "n": "1"}.items():
+            assert ds[name].dims == () and ds[name].attrs["units"] == unit, ds[name]
+        assert ds["wear_coefficients"].dims == ("phase_name",), ds["wear_coefficients"]
+        assert ds["phase_name"].values.tolist() == ["matrix", "filler"], ds["phase_name"]
+        if kind == "run":
+            assert tree["snapshots"]["recession"].dims == ("distance", "y", "x")
+            assert tree["history"]["load_forces"].dims == ("load_breakpoints",)
+            assert float(tree["history"]["load_breakpoints"][0]) == 20.0
+            assert tree["history"]["distance"].attrs["units"] == "m"
+    finally:
+        tree.close()

@@ -37,6 +37,8 @@ Layout (root group)::
     phase_name    (P,) the phase names: the dimension scale ``phase_name``,
                   of the wear law's numbers per phase (wear_coefficients)
     worn_depth    (y, x) m, NaN off the face
+    face          (y, x) m, the face's elevation (:attr:`transient.result.RunResult.face`:
+                  approach - recession, ``K p`` on the contact), NaN off the face; layout 5 on
     pressure      (y, x) Pa
     phase         (y, x) the phase map, and the caller's fields
     state/        recession, initial_recession, previous_recession, previous_rate
@@ -455,6 +457,10 @@ def write_run(path, result, *, attrs=None, quantities=None, arrays=None, compari
                 f.attrs[name] = value
         _field(f, "worn_depth", result.worn_depth, "m", "depth worn off since the start, NaN "
                "off the face", scales[:2])
+        # What RunResult.face gives, the run's face to compare with the steady one (ds.face).
+        _field(f, "face", result.face, "m", "elevation of the worn face, approach - recession "
+               "(the steady face's convention, K p on the contact), NaN off the face",
+               scales[:2])
         _field(f, "pressure", result.pressure, "Pa", "contact pressure", scales[:2])
         for name, value in {**input_arrays, **(arrays or {})}.items():
             _field(f, name, value, "1", _ARRAY_NAMES.get(name, name.replace("_", " ")),
@@ -860,8 +866,8 @@ def read_run(path):
         before layout 5); ``attrs["sha256"]`` absent: an unverified file
         without checksums.
     arrays : dict
-        Root datasets other than ``worn_depth``, ``pressure``, ``x`` and
-        ``y``, fields indexed ``[i, j]``.
+        Root datasets other than ``worn_depth``, ``face``, ``pressure``,
+        ``x`` and ``y``, fields indexed ``[i, j]``.
 
     Raises
     ------
@@ -1007,5 +1013,5 @@ def _result(path, datasets, groups):
         load_programme=_read_load_programme(groups.get("history", {})),
         columns=_read_columns(path, datasets, groups))
     arrays = {name: value for name, (value, _) in datasets.items()
-              if "/" not in name and name not in ("worn_depth", "pressure", "x", "y")}
+              if "/" not in name and name not in ("worn_depth", "face", "pressure", "x", "y")}
     return result, attrs, arrays
