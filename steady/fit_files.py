@@ -21,21 +21,23 @@ given.  A height is the face's elevation towards the counter-body (larger =
 protruding), as a profilometer sees the worn face turned upwards: the sign
 of the steady face ``f_inf = K p``.  NaN marks a missing pixel.
 
-Fit result files (layout ``runin.fit``, version 2), written by
-:func:`write_fit` through :func:`steady.safe_files.atomic_h5`::
+Fit result files (layout ``runin.fit``, version 3), written by
+:func:`write_fit` through :func:`steady.safe_files.atomic_h5`, with the CF
+attributes ``units`` (udunits) and ``long_name`` on every variable::
 
-    root attributes (unit of attribute x in x_units)
+    root variables, 0-d unless said
         ratios                 k_i / k_ref, one per phase (1 for the reference)
         ratio_lower, ratio_upper   confidence interval of each ratio (inf: unbounded)
         confidence             level of the intervals (0.95)
         reference_phase        index of the phase the ratios refer to
         phase_pressures        fitted steady pressure of each phase, Pa
         phase_pressure_errors  their standard errors, Pa
-        pressure_covariance    (P, P) covariance of the phase pressures, Pa2
+        pressure_covariance    (phase_name, other_phase_name) covariance of the phase
+                               pressures, Pa2
         offset                 fitted height at the face's centre, m
-        tilt                   fitted slopes dz/dx, dz/dy of the plane, 1
-        shift                  position of the face's centre in the map (from the map's
-                               centre), m
+        tilt                   (component) fitted slopes dz/dx, dz/dy of the plane, 1
+        shift                  (component) position of the face's centre in the map
+                               (from the map's centre), m
         residual_rms           rms of the residual over the fitted pixels, m
         relief                 max - min of the fitted face without the plane, m
         samples                pixels in the fit
@@ -46,31 +48,33 @@ Fit result files (layout ``runin.fit``, version 2), written by
                                sum_i A_i p_i / F_N and its interval, 1
         implied_normal_force   load implied by the relief at the scene's E*, N
         implied_E_star         modulus implied by the relief at the scene's load, Pa
-        success, message       all phase pressures positive; notes
         exponent, normal_force, E_star, scale, n, scene_ratios
                                the scene (scale: the outline's length L, m; n: the
                                model grid's pixels along the longer side;
                                scene_ratios: the ratios written in the scene, not
                                used by the fit)
         radius                 m, the disk's radius (circular faces only)
-        pixel_size             (dx, dy) of the measured map, m
+        pixel_size             (component) dx, dy of the measured map, m
+        x (nx,), y (ny,)       pixel centres from the map's centre: dimension scales, m
+        phase_name (P,)        the phase names, phase 0 first: a dimension scale
+        other_phase_name (P,)  the same: the second dimension of a matrix
+        component (2,)         "x", "y": the dimension of a vector's components
+        measured  (ny, nx)     measured heights, NaN where missing        m
+        fitted    (ny, nx)     fitted face with its plane, NaN off the face m
+        residual  (ny, nx)     measured - fitted on the fitted pixels, NaN  m
+        fit_mask  (ny, nx)     1 for the pixels of the fit                1
+        phase     (ny, nx)     phase index at each pixel, -1 off the face 1
+        scene     string       the scene TOML (attribute source_path)
+    root attributes
+        format "runin.fit", format_version 3, Conventions
+        success, message       all phase pressures positive; notes
         measured_source        the measured file
-    root datasets, each with the CF attributes units (udunits) and long_name
-        x (nx,), y (ny,)    pixel centres from the map's centre: dimension scales  m
-        phase_name (P,)     the phase names, phase 0 first: a dimension scale
-        measured  (nx, ny)  measured heights, NaN where missing        m
-        fitted    (nx, ny)  fitted face with its plane, NaN off the face m
-        residual  (nx, ny)  measured - fitted on the fitted pixels, NaN  m
-        fit_mask  (nx, ny)  1 for the pixels of the fit                1
-        phase     (nx, ny)  phase index at each pixel, -1 off the face 1
-        scene     string    the scene TOML (attribute source_path)
-    group ``outline``: the face's outline (:func:`steady.output.write_outline`):
-        attributes kind, area (m2) and its lengths (m, with <name>_units);
-        for a mask the dataset ``mask`` (mx, my)
+    group ``outline``: the face's outline (:func:`steady.output.write_outline`)
 
-The unit of attribute ``x`` is the udunits string ``x_units`` (docs/files.md).
-Version 1 files (disks only: ``radius``, no ``outline`` or ``scale``) and
-version 2 files without the coordinates and phase names are read too.
+docs/files.md lists them.  Version 2 files (the quantities as root
+attributes, the unit of ``x`` in ``x_units``, the fields stored ``(nx,
+ny)``), version 2 files without the coordinates and phase names and version
+1 files (disks only: ``radius``, no ``outline`` or ``scale``) are read too.
 
 :func:`plot_fit` draws the measured, fitted and residual faces side by
 side from such a file (matplotlib without pyplot, imported on demand).
@@ -94,13 +98,18 @@ from .array_files import (
 from .measured_face import MeasuredFace, check_pixel_size
 from .outline import Circle
 from .output import (
-    attach_scales,
+    CONVENTIONS,
     describe,
+    field_from_file,
     read_outline,
     read_phase_names,
+    read_values,
+    write_field,
     write_grid_coordinates,
     write_outline,
     write_phase_names,
+    write_quantity,
+    write_record,
 )
 from .problem import check_phase_names, default_phase_names
 from .safe_files import atomic_h5
@@ -121,9 +130,10 @@ __all__ = [
 logger = logging.getLogger(__name__)
 
 FIT_FORMAT = "runin.fit"
-FIT_FORMAT_VERSION = 2
-#: Versions :func:`read_fit` reads (1: disks only, without the ``outline`` group).
-_READABLE_VERSIONS = (1, 2)
+FIT_FORMAT_VERSION = 3
+#: Versions :func:`read_fit` reads (1: disks only, without the ``outline`` group; 1 and 2:
+#: the quantities as root attributes, the fields stored (nx, ny)).
+_READABLE_VERSIONS = (1, 2, 3)
 
 #: Suffixes read as plain text grids (anything else but ``.npy`` goes to
 #: SurfaceTopography).
@@ -335,37 +345,42 @@ _DATASETS = {
     "fit_mask": ("1", "1 for the pixels of the fit, 0 elsewhere"),
     "phase": ("1", "phase index, -1 off the face"),
 }
+# Root quantities: (units, long_name); along phase_name, (phase_name, other_phase_name) or
+# component (:data:`_DIMENSIONS`), else 0-d.
 _ATTRIBUTES = {
-    "ratios": "1",
-    "ratio_lower": "1",
-    "ratio_upper": "1",
-    "confidence": "1",
-    "reference_phase": "1",
-    "phase_pressures": "Pa",
-    "phase_pressure_errors": "Pa",
-    "pressure_covariance": "Pa2",
-    "offset": "m",
-    "tilt": "1",
-    "shift": "m",
-    "residual_rms": "m",
-    "relief": "m",
-    "samples": "1",
-    "effective_samples": "1",
-    "correlation_length": "m",
-    "degrees_of_freedom": "1",
-    "load_scale": "1",
-    "load_scale_lower": "1",
-    "load_scale_upper": "1",
-    "implied_normal_force": "N",
-    "implied_E_star": "Pa",
-    "exponent": "1",
-    "normal_force": "N",
-    "E_star": "Pa",
-    "scale": "m",
-    "n": "1",
-    "scene_ratios": "1",
-    "pixel_size": "m",
+    "ratios": ("1", "wear ratio k_i / k_ref of each phase"),
+    "ratio_lower": ("1", "lower end of the confidence interval of each ratio"),
+    "ratio_upper": ("1", "upper end of the confidence interval of each ratio (inf: unbounded)"),
+    "confidence": ("1", "confidence level of the intervals"),
+    "reference_phase": ("1", "index of the phase the ratios refer to"),
+    "phase_pressures": ("Pa", "fitted steady pressure of each phase"),
+    "phase_pressure_errors": ("Pa", "standard error of each fitted phase pressure"),
+    "pressure_covariance": ("Pa2", "covariance of the fitted phase pressures"),
+    "offset": ("m", "fitted height at the face's centre"),
+    "tilt": ("1", "slopes dz/dx, dz/dy of the fitted plane"),
+    "shift": ("m", "position of the face's centre from the measured map's centre"),
+    "residual_rms": ("m", "rms of the residual over the fitted pixels"),
+    "relief": ("m", "max - min of the fitted face without its plane"),
+    "samples": ("1", "pixels in the fit"),
+    "effective_samples": ("1", "independent samples, from the residual's correlation"),
+    "correlation_length": ("m", "1/e radius of the residual's correlation"),
+    "degrees_of_freedom": ("1", "degrees of freedom of the t quantile of the intervals"),
+    "load_scale": ("1", "sum_i A_i p_i / F_N: 1 when the fitted pressures carry the load"),
+    "load_scale_lower": ("1", "lower end of the confidence interval of load_scale"),
+    "load_scale_upper": ("1", "upper end of the confidence interval of load_scale"),
+    "implied_normal_force": ("N", "normal force implied by the relief at the scene's E*"),
+    "implied_E_star": ("Pa", "effective modulus implied by the relief at the scene's load"),
+    "exponent": ("1", "the scene's exponent m of dw/ds = k_i p^m"),
+    "normal_force": ("N", "the scene's normal force F_N"),
+    "E_star": ("Pa", "the scene's effective modulus E*"),
+    "scale": ("m", "length scale L of the outline (a disk's radius)"),
+    "n": ("1", "pixels of the model grid along the face's longer side"),
+    "scene_ratios": ("1", "wear ratios written in the scene (not used by the fit; NaN: none)"),
+    "pixel_size": ("m", "pixel sides dx, dy of the measured map"),
 }
+# Quantities along dimensions other than phase_name (one value per phase, by its length).
+_DIMENSIONS = {"pressure_covariance": ("phase_name", "other_phase_name"),
+               "tilt": ("component",), "shift": ("component",), "pixel_size": ("component",)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -479,21 +494,19 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
     }
     with atomic_h5(path, format=FIT_FORMAT, version=FIT_FORMAT_VERSION, force=force,
                    checked=checked) as f:
-        for name, unit in _ATTRIBUTES.items():
-            f.attrs[name] = values[name]
-            f.attrs[f"{name}_units"] = unit
-        for name, (value, unit) in result.outline.root_attributes().items():
-            f.attrs[name] = value
-            f.attrs[f"{name}_units"] = unit
+        f.attrs["Conventions"] = CONVENTIONS
         f.attrs["success"] = bool(result.success)
         f.attrs["message"] = result.message
         f.attrs["measured_source"] = result.measured.source
         scales = write_grid_coordinates(f, *result.measured.coordinates())
+        dims = _write_dimensions(f, phase_names)
+        for name, (unit, long_name) in _ATTRIBUTES.items():
+            write_quantity(f, name, values[name], unit, long_name,
+                           [dims[d] for d in _DIMENSIONS.get(name, ("phase_name",))]
+                           if np.ndim(values[name]) else ())
+        write_record(f, result.outline.root_attributes())
         for name, (unit, long_name) in _DATASETS.items():
-            ds = f.create_dataset(name, data=arrays[name])
-            describe(ds, unit, long_name)
-            attach_scales(ds, *scales)
-        write_phase_names(f, phase_names)
+            write_field(f, name, arrays[name], unit, long_name, scales)
         write_outline(f.create_group("outline"), result.outline)
         ds = f.create_dataset("scene", data="" if scene is None else scene.text,
                               dtype=h5py.string_dtype())
@@ -501,6 +514,24 @@ def write_fit(path, result, scene=None, *, phase_names=None, force=False, checke
         ds.attrs["source_path"] = ("" if scene is None or scene.source_path is None
                                    else str(scene.source_path))
     return path
+
+
+def _write_dimensions(f, phase_names):
+    """The dimension scales of the fit's quantities: ``{name: scale}``.
+
+    ``phase_name`` and ``other_phase_name`` (the phase names again: the
+    columns of the covariance matrix), and ``component`` (``"x"``,
+    ``"y"``: the components of the tilt, the shift and the pixel size).
+    """
+    phase = write_phase_names(f, phase_names)
+    other = f.create_dataset("other_phase_name", data=phase[()], dtype=h5py.string_dtype())
+    describe(other, None, "name of the phase, phase 0 first (the second index of a matrix)")
+    other.make_scale("other_phase_name")
+    component = f.create_dataset("component", data=np.array(["x", "y"], dtype=object),
+                                 dtype=h5py.string_dtype())
+    describe(component, None, "axis of a vector's component")
+    component.make_scale("component")
+    return {"phase_name": phase, "other_phase_name": other, "component": component}
 
 
 def _text(value):
@@ -537,29 +568,35 @@ def read_fit(path):
             readable = " or ".join(map(str, _READABLE_VERSIONS))
             raise ValueError(f"{str(path)!r} is not a {FIT_FORMAT} file of version {readable} "
                              f"(format {fmt!r}, version {version!r})")
-        # Version 1 (disks only) has the radius, not the scale or the outline.
+        # Version 3 stores the quantities as variables and the fields (y, x); 1 and 2 as
+        # root attributes and (nx, ny).  Version 1 (disks only) has the radius, not the
+        # scale or the outline.
+        stored_yx = version >= 3
+        values = read_values(f, skip=(*_DATASETS, "scene")) if stored_yx else dict(f.attrs)
         names = [name if version >= 2 or name != "scale" else "radius" for name in _ATTRIBUTES]
         missing = [name for name in (*_DATASETS, "scene") if name not in f]
-        missing += [name for name in (*names, "success", "message") if name not in f.attrs]
+        missing += [name for name in (*names, "success", "message") if name not in values]
         if version >= 2 and "outline" not in f:
             missing.append("outline")
         if missing:
             raise ValueError(f"fit file {str(path)!r} lacks {missing[0]!r}")
-        attrs = {name: f.attrs[name] for name in names}
+        attrs = {name: values[name] for name in names}
         if version >= 2:
             try:
-                outline = read_outline(f["outline"])
+                outline = read_outline(f["outline"], stored_yx=stored_yx)
             except (ValueError, KeyError, TypeError) as err:
                 raise ValueError(f"fit file {str(path)!r}: bad outline: {err}") from None
         else:
             outline = Circle(float(attrs["radius"]))
         attrs["scale"] = outline.scale
         # Disks record their radius at the root (Circle.root_attributes), other faces do not.
-        attrs["radius"] = float(f.attrs["radius"]) if "radius" in f.attrs else None
-        attrs["success"] = bool(f.attrs["success"])
-        attrs["message"] = _text(f.attrs["message"])
-        attrs["measured_source"] = _text(f.attrs.get("measured_source", ""))
+        attrs["radius"] = float(values["radius"]) if "radius" in values else None
+        attrs["success"] = bool(values["success"])
+        attrs["message"] = _text(values["message"])
+        attrs["measured_source"] = _text(values.get("measured_source", ""))
         arrays = {name: f[name][()] for name in _DATASETS}
+        if stored_yx:
+            arrays = {name: field_from_file(value) for name, value in arrays.items()}
         scene_text = _text(f["scene"][()])
         try:
             names = read_phase_names(f, len(np.atleast_1d(attrs["ratios"])))

@@ -1,36 +1,43 @@
 """Steady result files, and the HDF5 helpers every file layout of the project shares.
 
-The helpers give a dataset its CF attributes (:func:`describe`), write the
-pixel centres and the phase names as dimension scales
-(:func:`write_grid_coordinates`, :func:`write_phase_names`,
-:func:`attach_scales`) and the face's outline (:func:`write_outline`,
-:func:`read_outline`); the fit files (:mod:`steady.fit_files`) and the run
-files use them too.  Every file is written whole and atomically by
+The result, run and fit files follow the CF conventions as netCDF tools read
+them (root attribute ``Conventions``, :data:`CONVENTIONS`): every quantity is
+a variable with the CF attributes ``units`` (udunits) and ``long_name``
+(:func:`describe`) -- a scalar result a 0-d variable (:func:`write_quantity`,
+:func:`write_record`), a value per phase a variable along ``phase_name`` --
+and text stays in attributes.  The pixel centres and the phase names are
+dimension scales (:func:`write_grid_coordinates`, :func:`write_phase_names`,
+:func:`attach_scales`); a field of the face, indexed ``[i, j]`` with ``i``
+along x in memory, is stored ``[j, i]`` on ``(y, x)`` (:func:`write_field`,
+:func:`field_from_file`), so that xarray draws x across.  The face's outline
+has a group of its own (:func:`write_outline`, :func:`read_outline`).  The
+fit files (:mod:`steady.fit_files`) and the run files use these helpers too;
+every file is written whole and atomically by
 :func:`steady.safe_files.atomic_h5`.
 
-Steady result files (layout ``runin.steady``, version 2): see docs/files.md
-for every dataset and attribute with its unit and meaning.  In short::
+Steady result files (layout ``runin.steady``, version 3): see docs/files.md
+for every variable and attribute with its unit and meaning.  In short::
 
-    root datasets (CF attributes ``units``, udunits, and ``long_name``)
+    root variables (CF attributes ``units``, udunits, and ``long_name``)
         x (nx,), y (ny,)  m      pixel centres from the outline's centre: the
-                                 dimension scales of every (nx, ny) dataset
+                                 dimension scales of every field
         phase_name (P,) string   the phase names, phase 0 first: the dimension
                                  scale ``phase_name``
-        phase     (nx, ny) int   phase index, -1 off the face          units "1"
-        pressure  (nx, ny) float steady pressure                       units "Pa"
-        face      (nx, ny) float limiting face f_inf, NaN off the face units "m"
-        slope     (nx, ny) float |grad f_inf|, NaN off the face        units "1"
+        phase     (ny, nx) int   phase index, -1 off the face          units "1"
+        pressure  (ny, nx) float steady pressure                       units "Pa"
+        face      (ny, nx) float limiting face f_inf, NaN off the face units "m"
+        slope     (ny, nx) float |grad f_inf|, NaN off the face        units "1"
         scene     scalar string  the scene TOML (attribute ``source_path``)
-    root attributes: a quantity ``x`` with its udunits unit in ``x_units``
-        format "runin.steady", format_version 2, rms_slope, rms_slope_error,
-        rms_slope_plain, rms_slope_ref (grad_f0), rms_slope_ref_error,
-        rms_slope_ref_source (text), mean_pressure (Pa), rms_height (m),
-        fill_factors, phase_pressures (Pa), the wear law (wear_law_kind, its
-        ``[wear] law``; wear_law, in words; and its own attributes, for the
-        power law wear_coefficients (Pa-m) and exponent), normal_force (N),
-        E_star (Pa),
-        pixel_size (m), radius (m, disks only), scale (m), n (pixels along
-        the longer side)
+        0-d: rms_slope, rms_slope_error, rms_slope_plain, rms_slope_ref
+        (grad_f0), rms_slope_ref_error, mean_pressure (Pa), rms_height (m),
+        normal_force (N), E_star (Pa), pixel_size (m), radius (m, disks
+        only), scale (m), n (pixels along the longer side), the wear law's
+        numbers (the power law's exponent)
+        (phase_name): fill_factors, phase_pressures (Pa), the wear law's
+        numbers per phase (the power law's wear_coefficients, Pa-m)
+    root attributes: format "runin.steady", format_version 3, Conventions,
+        rms_slope_ref_source, wear_law_kind (its ``[wear] law``), wear_law
+        (in words)
     group ``outline``: the face's outline (:func:`write_outline`)
     groups the phase map records (:meth:`steady.phases.PhaseMap.file_record`):
         ``micrograph``, a segmented micrograph's segmentation and placement
@@ -38,11 +45,11 @@ for every dataset and attribute with its unit and meaning.  In short::
         (:attr:`steady.solution.SteadyResult.face_psd`), ``psd`` (K,) in m4
         along the dimension scale ``wavevector`` (K,) in m-1
 
-An attribute cannot carry attributes, so the unit of attribute ``x`` is the
-string attribute ``x_units``, a udunits string like a dataset's ``units``.
-Files written before the coordinates and phase names (version 2 without
-them, and version 1, disks only, without ``outline``, ``scale``,
-``mean_pressure`` and the reference's error and source) are read too.
+Files of version 2 (the quantities as root attributes, the unit of ``x`` in
+``x_units``; the fields stored ``(nx, ny)``), of version 2 without the
+coordinates and phase names, and of version 1 (disks only, without
+``outline``, ``scale``, ``mean_pressure`` and the reference's error and
+source) are read too.
 """
 
 from __future__ import annotations
@@ -59,40 +66,69 @@ from .safe_files import atomic_h5
 from .solution import SteadyResult
 from .wear import wear_file_attributes, wear_law_from_file
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "StoredResult", "attach_scales", "describe",
-           "read_outline", "read_phase_names", "read_result", "write_grid_coordinates",
-           "write_outline", "write_phase_names", "write_result"]
+__all__ = ["CONVENTIONS", "FORMAT", "FORMAT_VERSION", "StoredResult", "attach_scales",
+           "describe", "field_from_file", "read_outline", "read_phase_names", "read_result",
+           "read_values", "wear_long_names", "write_field", "write_grid_coordinates",
+           "write_outline", "write_phase_names", "write_quantity", "write_record",
+           "write_result"]
 
 FORMAT = "runin.steady"
-FORMAT_VERSION = 2
-#: Versions :func:`read_result` reads.
-_READABLE_VERSIONS = (1, 2)
+FORMAT_VERSION = 3
+#: Versions :func:`read_result` reads (1 and 2: the quantities as root attributes, the
+#: fields stored (nx, ny)).
+_READABLE_VERSIONS = (1, 2, 3)
 
-# Datasets: (units, long_name).
+#: The root attribute ``Conventions`` of the result, run and fit files.
+CONVENTIONS = "CF-1.10"
+
+# Fields: (units, long_name).
 _DATASETS = {
     "phase": ("1", "phase index, -1 off the face"),
     "pressure": ("Pa", "steady contact pressure, zero off the face"),
     "face": ("m", "limiting worn face f_inf = K p, NaN off the face"),
     "slope": ("1", "magnitude of the gradient of the limiting face, NaN off the face"),
 }
-# Root attributes and their units (udunits); the wear law's come from the law
-# (steady.wear.wear_file_attributes).
+# Root quantities (0-d, or along phase_name): (units, long_name); the wear law's come from
+# the law (steady.wear.wear_file_attributes), the outline's from the outline.
 _ATTRIBUTES = {
-    "rms_slope": "1",
-    "rms_slope_error": "1",
-    "rms_slope_plain": "1",
-    "rms_slope_ref": "1",
-    "fill_factors": "1",
-    "phase_pressures": "Pa",
-    "normal_force": "N",
-    "E_star": "Pa",
-    "pixel_size": "m",
-    "n": "1",
+    "rms_slope": ("1", "rms slope over the face, best estimate (energy-corrected)"),
+    "rms_slope_error": ("1", "estimated discretisation error of rms_slope (NaN: not "
+                             "estimated, inf: no bound)"),
+    "rms_slope_plain": ("1", "plain pixel rms of slope over the face"),
+    "rms_slope_ref": ("1", "grad_f0, the rms slope of the homogeneous face of the outline "
+                           "under the same load"),
+    "fill_factors": ("1", "realised area fraction of each phase"),
+    "phase_pressures": ("Pa", "steady contact pressure on each phase"),
+    "normal_force": ("N", "normal force F_N"),
+    "E_star": ("Pa", "effective modulus E* of the counter-body"),
+    "pixel_size": ("m", "side h of the grid's square pixels"),
+    "n": ("1", "pixels of the grid along the face's longer side"),
 }
-# Attributes written by this version and read when present (files written
+# Quantities written by this version and read when present (files written
 # before they existed still read, with NaN).
-_OPTIONAL_ATTRIBUTES = {"rms_height": "m", "rms_slope_ref_error": "1", "mean_pressure": "Pa",
-                        "scale": "m"}
+_OPTIONAL_ATTRIBUTES = {
+    "rms_height": ("m", "rms of the limiting face about its least-squares plane"),
+    "rms_slope_ref_error": ("1", "uncertainty of rms_slope_ref (0 for a closed form)"),
+    "mean_pressure": ("Pa", "mean pressure pbar = F_N / A"),
+    "scale": ("m", "length scale L of the outline (a disk's radius)"),
+}
+# Long names of the quantities the wear laws and the outlines record (others: the key's doc).
+_RECORD_NAMES = {
+    "wear_coefficients": "wear coefficient k_i of each phase in dw/ds = k_i p^m",
+    "exponent": "exponent m of the pressure in dw/ds = k_i p^m",
+    "wear_thresholds": "threshold pressure p_th,i of each phase: no wear at or below it",
+    "radius": "radius of the disk",
+    "area": "area of the face",
+    "width": "width of the rectangle (along x)",
+    "length": "length of the rectangle (along y)",
+    "semi_axis_x": "semi-axis of the ellipse along x",
+    "semi_axis_y": "semi-axis of the ellipse along y",
+    "inner_radius": "radius of the annulus's inner circle",
+    "outer_radius": "radius of the annulus's outer circle",
+    "pixel_size": "side of the mask's pixels",
+    "mask_pixels_x": "pixels of the mask along x",
+    "mask_pixels_y": "pixels of the mask along y",
+}
 
 
 def describe(obj, units, long_name):
@@ -213,6 +249,146 @@ def attach_scales(ds, *scales):
             ds.dims[axis].attach_scale(scale)
 
 
+def field_from_file(values):
+    """A field as the files store it, ``[..., j, i]`` on ``(..., y, x)``, indexed ``[..., i, j]``.
+
+    The library indexes a field ``[i, j]`` with ``i`` along x; the files
+    store it transposed (:func:`write_field`), x last, so that netCDF tools
+    draw x across.  The array returned is C-contiguous, as the library's.
+
+    Parameters
+    ----------
+    values : ndarray, shape (..., ny, nx)
+
+    Returns
+    -------
+    ndarray, shape (..., nx, ny)
+    """
+    return np.ascontiguousarray(np.swapaxes(np.asarray(values), -1, -2))
+
+
+def write_field(group, name, values, units, long_name, scales=(), put=None, **options):
+    """A field ``[..., i, j]`` (``i`` along x) stored ``[..., j, i]`` on the scales ``(..., y, x)``.
+
+    xarray's ``plot`` puts the last dimension across: stored so, a face
+    opened with ``xarray.open_dataset`` draws with x across and y up.
+    :func:`field_from_file` reads it back.
+
+    Parameters
+    ----------
+    group : h5py.Group
+    name : str
+    values : ndarray, shape (..., nx, ny)
+    units : str or None
+    long_name : str
+    scales : sequence of h5py.Dataset or None, optional
+        The dimension scales of the library's axes, ``(..., x, y)``; None
+        leaves an axis bare.
+    put : callable, optional
+        As for :func:`write_grid_coordinates`.
+    **options
+        Passed to the dataset's creation (compression, ...).
+
+    Returns
+    -------
+    h5py.Dataset
+    """
+    ds = _create(group, name, np.swapaxes(np.asarray(values), -1, -2), units, long_name, put,
+                 **options)
+    if scales:
+        *leading, x, y = scales
+        attach_scales(ds, *leading, y, x)
+    return ds
+
+
+def write_quantity(group, name, value, units, long_name, dims=(), put=None):
+    """A quantity as a variable of ``group``: 0-d for a scalar, else on the scales ``dims``.
+
+    A 1-d quantity without a scale is made a dimension scale of its own (a
+    coordinate, as netCDF tools need one for every dimension).
+
+    Parameters
+    ----------
+    group : h5py.Group
+    name : str
+    value : float, int, str or ndarray
+    units : str or None
+        udunits (``"m"``, ``"1"``, ...); None for a code.
+    long_name : str
+    dims : sequence of h5py.Dataset, optional
+        The dimension scales of its axes.
+    put : callable, optional
+        As for :func:`write_grid_coordinates`.
+
+    Returns
+    -------
+    h5py.Dataset
+    """
+    ds = _create(group, name, value, units, long_name, put)
+    if dims:
+        attach_scales(ds, *dims)
+    elif ds.ndim == 1:
+        ds.make_scale(name)
+    return ds
+
+
+def write_record(group, record, phase_scale=None, put=None, long_names=None):
+    """A record ``name -> (value, units)``: quantities as variables, text as attributes.
+
+    A value with a unit is a quantity: a variable (:func:`write_quantity`),
+    along ``phase_scale`` when it holds one value per phase.  A value
+    without one (text, the law's name) is an attribute.
+
+    Parameters
+    ----------
+    group : h5py.Group
+    record : mapping of str to (object, str or None)
+        E.g. :func:`steady.wear.wear_file_attributes`,
+        :meth:`~steady.outline.Circle.parameters`.
+    phase_scale : h5py.Dataset, optional
+        The dimension scale ``phase_name``.
+    put : callable, optional
+        As for :func:`write_grid_coordinates`.
+    long_names : mapping of str to str, optional
+        Long names of the record's quantities; default the project's
+        (wear laws, outlines), else the name in words.
+    """
+    names = {**_RECORD_NAMES, **(long_names or {})}
+    for name, (value, units) in record.items():
+        if units is None:
+            group.attrs[name] = value
+            continue
+        per_phase = (phase_scale is not None and np.ndim(value) == 1
+                     and len(value) == phase_scale.shape[0])
+        write_quantity(group, name, value, units, names.get(name, name.replace("_", " ")),
+                       (phase_scale,) if per_phase else (), put)
+
+
+def read_values(group, skip=()):
+    """A group's attributes and the values of its datasets, by name (text as ``str``).
+
+    What :func:`write_quantity` and :func:`write_record` wrote as variables
+    reads back as the attributes of the earlier layouts did: numpy scalars
+    and arrays.
+
+    Parameters
+    ----------
+    group : h5py.Group
+    skip : collection of str, optional
+        Datasets not to read (the fields, the coordinates).
+
+    Returns
+    -------
+    dict
+    """
+    values = dict(group.attrs)
+    for name, obj in group.items():
+        if isinstance(obj, h5py.Dataset) and name not in skip:
+            value = obj[()]
+            values[name] = value.decode("utf-8") if isinstance(value, bytes) else value
+    return values
+
+
 @dataclasses.dataclass(frozen=True)
 class StoredResult:
     """A steady result read back from HDF5.
@@ -282,7 +458,9 @@ def write_result(path, result, scene=None, *, phase_names=None, force=False, che
     >>> path = write_result(pathlib.Path(tempfile.mkdtemp()) / "r.h5", result)
     >>> with xr.open_dataset(path, engine="h5netcdf") as ds:
     ...     print(ds["pressure"].dims, ds["x"].attrs["units"], ds["phase_name"].values.tolist())
-    ('x', 'y') m ['phase 0', 'phase 1']
+    ...     print(ds["rms_slope"].attrs["units"], ds["phase_pressures"].dims)
+    ('y', 'x') m ['phase 0', 'phase 1']
+    1 ('phase_name',)
     """
     path = pathlib.Path(path)
     if phase_names is None:
@@ -296,6 +474,19 @@ def write_result(path, result, scene=None, *, phase_names=None, force=False, che
 
 
 def _write(f, result, scene, phase_names):
+    f.attrs["Conventions"] = CONVENTIONS
+    grid = result.outline.grid(result.n)
+    scales = write_grid_coordinates(f, grid.x, grid.y)
+    phase_scale = write_phase_names(f, phase_names)
+    _write_quantities(f, result, phase_scale)
+    write_outline(f.create_group("outline"), result.outline)
+    _write_fields(f, result, scales)
+    _write_scene(f, scene)
+    _write_face_psd(f.create_group("face_psd"), result.face_psd)
+
+
+def _write_quantities(f, result, phase_scale):
+    """The result's figures and inputs: root variables, 0-d or along ``phase_name``."""
     values = {
         "rms_slope": result.rms_slope,
         "rms_slope_error": result.rms_slope_error,
@@ -312,30 +503,27 @@ def _write(f, result, scene, phase_names):
         "mean_pressure": result.mean_pressure,
         "scale": result.scale,
     }
-    units = {**_ATTRIBUTES, **_OPTIONAL_ATTRIBUTES}
+    quantities = {**_ATTRIBUTES, **_OPTIONAL_ATTRIBUTES}
+    write_record(f, {name: (values[name], unit) for name, (unit, _) in quantities.items()},
+                 phase_scale, long_names={name: words for name, (_, words) in quantities.items()})
     if result.wear is not None:
-        for name, (value, unit) in wear_file_attributes(result.wear).items():
-            values[name] = value
-            units[name] = unit
-    for name, unit in units.items():
-        f.attrs[name] = values[name]
-        if unit is not None:
-            f.attrs[f"{name}_units"] = unit
+        write_record(f, wear_file_attributes(result.wear), phase_scale,
+                     long_names=wear_long_names(result.wear))
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
-    for name, (value, unit) in result.outline.root_attributes().items():
-        f.attrs[name] = value
-        f.attrs[f"{name}_units"] = unit
-    write_outline(f.create_group("outline"), result.outline)
-    grid = result.outline.grid(result.n)
-    scales = write_grid_coordinates(f, grid.x, grid.y)
-    write_phase_names(f, phase_names)
+    write_record(f, result.outline.root_attributes())
+
+
+def _write_fields(f, result, scales):
+    """The phase map, the pressure, the face and its slope, stored (y, x)."""
     dtype = np.int8 if result.n_phases < 127 else np.int16
     arrays = {"phase": result.labels.astype(dtype), "pressure": result.pressure,
               "face": result.face, "slope": result.slope}
     for name, (unit, long_name) in _DATASETS.items():
-        ds = f.create_dataset(name, data=arrays[name])
-        describe(ds, unit, long_name)
-        attach_scales(ds, *scales)
+        write_field(f, name, arrays[name], unit, long_name, scales)
+
+
+def _write_scene(f, scene):
+    """The scene's text and source path, and the records of its phase map."""
     ds = f.create_dataset("scene", data="" if scene is None else scene.text,
                           dtype=h5py.string_dtype())
     describe(ds, None, "scene file (TOML), verbatim")
@@ -343,7 +531,6 @@ def _write(f, result, scene, phase_names):
         scene.source_path)
     for name, attributes in ({} if scene is None else scene.geometry.file_record()).items():
         f.create_group(name).attrs.update(attributes)
-    _write_face_psd(f.create_group("face_psd"), result.face_psd)
 
 
 def _write_face_psd(group, spectrum):
@@ -357,14 +544,33 @@ def _write_face_psd(group, spectrum):
     attach_scales(ds, q)
 
 
-def write_outline(group, outline):
-    """A face outline as the attributes (and for a mask the dataset) of ``group``.
+def wear_long_names(wear):
+    """Long names of what a file records of a wear law (:func:`steady.wear.wear_file_attributes`).
 
-    Attribute ``x`` has its udunits unit in ``x_units``: ``area`` (``m2``)
-    and the outline's lengths (``m``); then what the outline records
-    besides (:meth:`~steady.outline.MaskOutline.group_record`): a mask
-    outline's ``source`` and ``mask``, with the dimension scales ``mask_x``
-    and ``mask_y`` (m, its pixel centres).
+    The project's own for the power and threshold laws' numbers; for
+    another law's ``wear_<key>``, its key's ``doc``.
+
+    Parameters
+    ----------
+    wear : steady.wear.WearLaw
+
+    Returns
+    -------
+    dict of str to str
+    """
+    return {f"wear_{key.name}": f"[wear] {key.name}: {key.doc}" for key in wear.keys
+            if key.doc and f"wear_{key.name}" not in _RECORD_NAMES}
+
+
+def write_outline(group, outline):
+    """A face outline as the attribute ``kind`` and the variables of ``group``.
+
+    0-d variables ``area`` (``m2``) and the outline's lengths (``m``,
+    :meth:`~steady.outline.Circle.parameters`); then what the outline
+    records besides (:meth:`~steady.outline.MaskOutline.group_record`): a
+    mask outline's attribute ``source`` and its ``mask``, a field stored
+    ``(mask_y, mask_x)`` (:func:`write_field`) on the dimension scales
+    ``mask_x`` and ``mask_y`` (m, its pixel centres).
 
     Parameters
     ----------
@@ -372,27 +578,34 @@ def write_outline(group, outline):
     outline : outline object (:mod:`steady.outline`)
     """
     group.attrs["kind"] = outline.kind
-    group.attrs["area"] = outline.area
-    group.attrs["area_units"] = "m2"
-    for name, (value, unit) in outline.parameters().items():
-        group.attrs[name] = value
-        group.attrs[f"{name}_units"] = unit
+    write_record(group, {"area": (outline.area, "m2"), **outline.parameters()})
     attributes, arrays = outline.group_record()
     for name, (values, units, long_name, coordinates) in arrays.items():
-        ds = group.create_dataset(name, data=values)
-        describe(ds, units, long_name)
         scales = []
         for axis, centres in zip("xy", coordinates, strict=True) if coordinates else ():
             scale = group.create_dataset(f"{name}_{axis}", data=centres)
             describe(scale, "m", f"{axis} of the {name}'s pixel centre, from its centre")
             scale.make_scale(f"{name}_{axis}")
             scales.append(scale)
-        attach_scales(ds, *scales)
+        if np.ndim(values) == 2:
+            write_field(group, name, values, units, long_name, scales)
+        else:
+            write_quantity(group, name, values, units, long_name, scales)
     group.attrs.update(attributes)
 
 
-def read_outline(group):
+def read_outline(group, *, stored_yx=True):
     """The outline written by :func:`write_outline`.
+
+    Parameters
+    ----------
+    group : h5py.Group
+        Or any object with its ``attrs``, its dataset names (iteration) and
+        their values (``group[name][()]``).
+    stored_yx : bool, optional
+        Whether its 2-d datasets are stored ``(y, x)`` (default True: result
+        layout 3, run layout 5, fit layout 3 on); False for the earlier
+        layouts, whose lengths are attributes and whose mask is ``(mx, my)``.
 
     Raises
     ------
@@ -404,7 +617,17 @@ def read_outline(group):
         kind = kind.decode()
     if kind not in OUTLINES:
         raise ValueError(f"unknown outline kind {kind!r} (known: {sorted(OUTLINES)})")
-    return OUTLINES[kind].from_group(group.attrs, lambda name: group[name][()])
+    values = dict(group.attrs)
+    for name in group:
+        value = group[name][()]
+        if np.ndim(value) == 0:
+            values.setdefault(name, value)
+
+    def read(name):
+        value = group[name][()]
+        return field_from_file(value) if stored_yx and np.ndim(value) == 2 else value
+
+    return OUTLINES[kind].from_group(values, read)
 
 
 def _text(value):
@@ -463,23 +686,29 @@ def _read(f, path):
     if version not in _READABLE_VERSIONS:
         raise ValueError(f"result file {str(path)!r} has format_version {version!r}; this "
                          f"reader supports {', '.join(map(str, _READABLE_VERSIONS))}")
+    # Layout 3 stores the quantities as variables and the fields (y, x); 1 and 2 as root
+    # attributes and (nx, ny).
+    stored_yx = version >= 3
+    values = read_values(f, skip=(*_DATASETS, "scene")) if stored_yx else dict(f.attrs)
     missing = [name for name in (*_DATASETS, "scene") if name not in f]
-    missing += [name for name in _ATTRIBUTES if name not in f.attrs]
+    missing += [name for name in _ATTRIBUTES if name not in values]
     if version >= 2 and "outline" not in f:
         missing.append("outline")
-    if version < 2 and "radius" not in f.attrs:
+    if version < 2 and "radius" not in values:
         missing.append("radius")
     if missing:
         raise ValueError(f"result file {str(path)!r} lacks {missing[0]!r}")
-    a = {name: f.attrs[name] for name in _ATTRIBUTES}
+    a = {name: values[name] for name in _ATTRIBUTES}
     if version >= 2:
         try:
-            outline = read_outline(f["outline"])
+            outline = read_outline(f["outline"], stored_yx=stored_yx)
         except (ValueError, KeyError) as err:
             raise ValueError(f"result file {str(path)!r}: bad outline: {err}") from None
     else:
-        outline = Circle(float(f.attrs["radius"]))
+        outline = Circle(float(values["radius"]))
     arrays = {name: f[name][()] for name in _DATASETS}
+    if stored_yx:
+        arrays = {name: field_from_file(v) if v.ndim == 2 else v for name, v in arrays.items()}
     n = int(a["n"])
     try:
         shape = outline.grid_shape(n)
@@ -487,13 +716,14 @@ def _read(f, path):
         raise ValueError(f"result file {str(path)!r}: {err}") from None
     bad = [name for name, v in arrays.items() if v.shape != shape]
     if bad:
+        shown = arrays[bad[0]].shape[::-1] if stored_yx else arrays[bad[0]].shape
         raise ValueError(f"result file {str(path)!r}: dataset {bad[0]!r} has shape "
-                         f"{arrays[bad[0]].shape}, expected {shape}")
+                         f"{shown}, expected {shape[::-1] if stored_yx else shape}")
     scene_text = f["scene"][()]
     if isinstance(scene_text, bytes):
         scene_text = scene_text.decode("utf-8")
     try:
-        wear = wear_law_from_file(f.attrs)
+        wear = wear_law_from_file(values)
     except ValueError as err:
         raise ValueError(f"result file {str(path)!r}: bad wear law: {err}") from None
     result = SteadyResult(
@@ -510,10 +740,10 @@ def _read(f, path):
         E_star=float(a["E_star"]),
         rms_slope_plain=float(a["rms_slope_plain"]),
         rms_slope_error=float(a["rms_slope_error"]),
-        rms_height=float(f.attrs.get("rms_height", np.nan)),
+        rms_height=float(values.get("rms_height", np.nan)),
         outline=outline,
-        reference_slope_error=float(f.attrs.get("rms_slope_ref_error", 0.0)),
-        reference_slope_source=_text(f.attrs.get("rms_slope_ref_source",
-                                                 "disk: 4 pbar / (pi E*) (eq. 12)")),
+        reference_slope_error=float(values.get("rms_slope_ref_error", 0.0)),
+        reference_slope_source=_text(values.get("rms_slope_ref_source",
+                                                "disk: 4 pbar / (pi E*) (eq. 12)")),
     )
     return result, scene_text

@@ -254,17 +254,20 @@ def test_run_file_layout(tmp_path, coated):
             assert f[f"history/{name}"].attrs["units"] == "m", name
         assert f["history/crossings"].attrs["units"] == "1"
         section = f["snapshots/section"]
-        assert section.dtype == np.int8 and section.shape == result.snapshot_recession.shape
+        # Stored (distance, y, x): the library's [k, i, j] with the last two swapped.
+        assert section.dtype == np.int8
+        assert section.shape == np.swapaxes(result.snapshot_recession, 1, 2).shape
         assert "phase map of the section" in section.attrs["long_name"] or \
             "section" in section.attrs["long_name"]
-        np.testing.assert_array_equal(section[()], result.snapshot_sections)
+        np.testing.assert_array_equal(section[()], np.swapaxes(result.snapshot_sections, 1, 2))
         assert f["columns/interfaces"].attrs["units"] == "m"
-        assert f["columns"].attrs["n_phases"] == 3
+        assert f["columns/n_phases"][()] == 3
         for event, found in (("worn_through", result.coating_worn_through),
                              ("gone", result.coating_gone)):
-            assert f.attrs[f"coating_{event}_distance"] == found.distance_m
-            assert f.attrs[f"coating_{event}_distance_units"] == "m"
-            assert f.attrs[f"coating_{event}_distance_s_star_units"] == "1"
+            distance = f[f"coating_{event}_distance"]
+            assert distance.shape == () and distance[()] == found.distance_m
+            assert distance.attrs["units"] == "m"
+            assert f[f"coating_{event}_distance_s_star"].attrs["units"] == "1"
             assert f.attrs[f"coating_{event}_reason"] == ""
     read, attrs, _ = read_run(path)
     np.testing.assert_array_equal(read.columns.interfaces, columns.interfaces)
@@ -283,7 +286,7 @@ def test_xarray_opens_the_depth_datasets(tmp_path, coated):
         assert hist["phase_fraction"].dims == ("distance", "phase_name")
         assert hist["phase_fraction"].attrs["units"] == "1"
     with xr.open_dataset(path, engine="h5netcdf", group="snapshots") as snaps:
-        assert snaps["section"].dims == ("distance", "x", "y")
+        assert snaps["section"].dims == ("distance", "y", "x")
 
 
 def test_columnar_run_file_unchanged(tmp_path, columnar):
@@ -291,9 +294,11 @@ def test_columnar_run_file_unchanged(tmp_path, columnar):
     path = tmp_path / "run.h5"
     write_run(path, columnar)
     with h5py.File(path, "r") as f:
-        assert set(f["history"]) == set(HISTORY_UNITS)
+        # The history's own (but the spatial errors no companion run filled) and s*.
+        assert set(f["history"]) - {"distance_scale"} <= set(HISTORY_UNITS), set(f["history"])
+        assert not set(f["history"]) & set(DEPTH_HISTORY_UNITS), set(f["history"])
         assert "columns" not in f and "section" not in f["snapshots"]
-        assert not [a for a in f.attrs if a.startswith("coating_")]
+        assert not [a for a in (*f.attrs, *f) if a.startswith("coating_")]
     assert read_run(path)[0].columns is None
 
 
@@ -389,6 +394,7 @@ def test_checkpoint_without_columns(tmp_path, coated):
     write_run(path, result)
     with h5py.File(path, "r") as f:
         assert "columns" not in f, "a checkpoint stores no columns"
-        assert f.attrs["coating_gone_distance"] == result.coating_gone.distance_m
-        np.testing.assert_array_equal(f["snapshots/section"][()], result.snapshot_sections)
+        assert f["coating_gone_distance"][()] == result.coating_gone.distance_m
+        np.testing.assert_array_equal(f["snapshots/section"][()],
+                                      np.swapaxes(result.snapshot_sections, 1, 2))
     assert read_run(path)[0].columns is None

@@ -327,13 +327,17 @@ def _damage_state(path):
     flip_bit(path, _offset(path, "state/recession") + 8 * (16 * 32 + 16) + 3)
 
 
-def _damage_attribute(path):
+def _damage_scalar(path):
     import struct
 
     with h5py.File(path, "r") as f:
-        distance = f.attrs["distance"]
+        distance = f["distance"][()]
     data = path.read_bytes()
     flip_bit(path, data.index(struct.pack("<d", distance)), 0x01)
+
+
+def _damage_attribute(path):
+    flip_bit(path, path.read_bytes().index(b"RunOptions("), 0x01)
 
 
 def _truncate(path):
@@ -346,6 +350,7 @@ def _garbage(path):
 
 @pytest.mark.parametrize("damage, fragment", [
     (_damage_state, "dataset 'state/recession' does not match its checksum"),
+    (_damage_scalar, "dataset 'distance' does not match its checksum"),
     (_damage_attribute, "the root attributes do not match their checksum"),
     (_truncate, "cannot be opened (Unable to synchronously open file (truncated file"),
     (lambda p: p.write_bytes(b""), "the file is empty (0 bytes)"),

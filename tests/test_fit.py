@@ -389,10 +389,11 @@ def test_file_round_trip_and_figure(tmp_path):
     assert np.array_equal(stored.arrays["residual"], fit.residual, equal_nan=True), "residual"
     assert stored.attrs["success"] and stored.attrs["measured_source"] == "synthetic"
     with h5py.File(path) as f:
-        assert f.attrs["format"] == "runin.fit" and f.attrs["format_version"] == 2, "layout"
+        assert f.attrs["format"] == "runin.fit" and f.attrs["format_version"] == 3, "layout"
         assert f["outline"].attrs["kind"] == "circle", "the outline is recorded"
-        assert f["outline"].attrs["radius"] == RADIUS and f.attrs["radius"] == RADIUS, "radius"
-        assert f.attrs["phase_pressures_units"] == "Pa" and f["fitted"].attrs["units"] == "m"
+        assert f["outline/radius"][()] == RADIUS and f["radius"][()] == RADIUS, "radius"
+        assert f["phase_pressures"].attrs["units"] == "Pa" and f["fitted"].attrs["units"] == "m"
+        assert np.array_equal(f["residual"][()], fit.residual.T, equal_nan=True), "stored (y, x)"
     with pytest.raises(ValueError, match="exists"):
         write_fit(path, fit)
     png = plot_fit(path, tmp_path / "fit.png")
@@ -797,13 +798,13 @@ def test_command_line_on_rectangle(tmp_path, scene_file, capsys):
     assert re.search(r"phase 1\s+4\s+\[4, 4\]\s+\(scene: 10\)", out), out
     assert "rectangle face (width 2.66667 mm, length 8 mm), model grid n = 48" in out, out
     stored = read_fit(tmp_path / "fit.h5")
-    assert stored.outline == scene.outline and stored.version == 2, stored.outline
+    assert stored.outline == scene.outline and stored.version == 3, stored.outline
     assert stored.attrs["radius"] is None and stored.attrs["scale"] == RADIUS, "scale L"
     with h5py.File(tmp_path / "fit.h5") as f:
         group = f["outline"]
-        assert group.attrs["kind"] == "rectangle" and group.attrs["width_units"] == "m", \
-            dict(group.attrs)
-        assert group.attrs["length"] == 2 * RADIUS and "radius" not in f.attrs, "lengths in m"
+        assert group.attrs["kind"] == "rectangle" and group["width"].attrs["units"] == "m", \
+            dict(group["width"].attrs)
+        assert group["length"][()] == 2 * RADIUS and "radius" not in f, "lengths in m"
     assert (tmp_path / "fit.png").stat().st_size > 20_000, "figure drawn"
     fig = fit_figure(stored)
     panels = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
@@ -846,15 +847,35 @@ def test_fit_file_records_the_outline(tmp_path, name):
     assert stored.outline.parameters() == outline.parameters(), "lengths"
     with h5py.File(tmp_path / "fit.h5") as f:
         group = f["outline"]
-        assert group.attrs["kind"] == outline.kind and group.attrs["area_units"] == "m2"
+        assert group.attrs["kind"] == outline.kind and group["area"].attrs["units"] == "m2"
         if name == "mask":
-            assert np.array_equal(group["mask"][()], outline.mask), "the mask itself"
+            assert np.array_equal(group["mask"][()], outline.mask.T), "the mask, stored (y, x)"
             assert np.array_equal(stored.outline.mask, outline.mask), "read back"
-            assert group.attrs["pixel_size_units"] == "m", dict(group.attrs)
+            assert group["pixel_size"].attrs["units"] == "m", dict(group["pixel_size"].attrs)
         else:
-            assert group.attrs["inner_radius"] == outline.inner_radius, dict(group.attrs)
-            assert group.attrs["outer_radius_units"] == "m", dict(group.attrs)
+            assert group["inner_radius"][()] == outline.inner_radius, list(group)
+            assert group["outer_radius"].attrs["units"] == "m", dict(group["outer_radius"].attrs)
     assert np.array_equal(stored.arrays["phase"], fit.phase), "phase map on the measured grid"
+
+
+def _as_attributes(f):
+    """A fit file of layout 3 turned to the layouts before, in place.
+
+    The root quantities become attribute pairs ``x``, ``x_units``; the fields are stored
+    ``(nx, ny)``, without their dimension scales.
+    """
+    fields = ("measured", "fitted", "residual", "fit_mask", "phase")
+    scales = ("x", "y", "phase_name", "other_phase_name", "component")
+    for name, ds in list(f.items()):
+        if isinstance(ds, h5py.Dataset) and name not in (*fields, *scales, "scene"):
+            f.attrs[name], f.attrs[f"{name}_units"] = ds[()], ds.attrs["units"]
+            del f[name]
+    for name in fields:
+        values = f[name][()].T
+        del f[name]
+        f.create_dataset(name, data=values)
+    for name in scales[3:]:
+        del f[name]
 
 
 def test_reads_version_1_files(tmp_path):
@@ -864,6 +885,7 @@ def test_reads_version_1_files(tmp_path):
     fit = fit_face(MeasuredFace(face, pixel_size(n)), fit_problem(labels))
     path = write_fit(tmp_path / "fit.h5", fit)
     with h5py.File(path, "r+") as f:           # as version 1 wrote it
+        _as_attributes(f)
         del f["outline"]
         del f.attrs["scale"], f.attrs["scale_units"]
         f.attrs["format_version"] = 1
@@ -873,8 +895,8 @@ def test_reads_version_1_files(tmp_path):
     assert np.array_equal(stored.attrs["ratios"], fit.ratios), "ratios"
     assert plot_fit(path, tmp_path / "fit.png").stat().st_size > 20_000, "figure drawn"
     with h5py.File(path, "r+") as f:
-        f.attrs["format_version"] = 3
-    with pytest.raises(ValueError, match=r"not a runin.fit file of version 1 or 2"):
+        f.attrs["format_version"] = 4
+    with pytest.raises(ValueError, match=r"not a runin.fit file of version 1 or 2 or 3"):
         read_fit(path)
 
 

@@ -233,12 +233,13 @@ def test_run_file_marks_the_breakpoints(tmp_path, capsys):
     with h5py.File(out) as f:
         hist = f["history"]
         assert hist["force"].attrs["units"] == "N", dict(hist["force"].attrs)
-        assert np.array_equal(hist.attrs["load_breakpoints"], [programme[0][0]]), \
-            dict(hist.attrs)
-        assert hist.attrs["load_breakpoints_units"] == "m", dict(hist.attrs)
+        assert np.array_equal(hist["load_breakpoints"][()], [programme[0][0]]), \
+            hist["load_breakpoints"][()]
+        assert hist["load_breakpoints"].attrs["units"] == "m", dict(hist["load_breakpoints"].attrs)
+        assert np.array_equal(hist["load_forces"][()], [programme[0][1]]), hist["load_forces"][()]
+        assert [d[0].name for d in hist["load_forces"].dims] == ["/history/load_breakpoints"], \
+            "one force per breakpoint"
         assert np.array_equal(f["snapshots/force"][()], [10.0, 20.0]), f["snapshots/force"][()]
-        assert np.array_equal(f.attrs["load_programme"], [programme[0]]), \
-            f.attrs["load_programme"]
 
 
 def test_resume_refuses_another_programme(tmp_path, capsys):

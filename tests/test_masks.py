@@ -123,8 +123,8 @@ def test_steady_solves_the_face_of_a_0_1_mask(tmp_path, capsys):
     _, err = capsys.readouterr()
     assert status == 0, f"exit {status}: {err!r}"
     with h5py.File(tmp_path / "out.h5") as f:
-        area = float(f["outline"].attrs["area"])
-        on_face = np.isfinite(f["face"][()])
+        area = float(f["outline/area"][()])
+        on_face = np.isfinite(f["face"][()]).T  # stored (y, x)
     assert area == pytest.approx(FACE.sum() * PIXEL**2, rel=1e-15), \
         f"stored area {area} m^2: the 0/1 mask was read as another face"
     assert np.array_equal(on_face, np.kron(FACE, np.ones((2, 2), dtype=bool))), \

@@ -407,7 +407,7 @@ def test_command_line_reports_and_records_the_segmentation(skimage, grains_png):
             f"segmentation stored: {dict(group.attrs)}"
         assert np.array_equal(group.attrs["crop"], [[0, 160], [0, 200]]), "the whole image"
         assert group.attrs["fill_phases"].size == 0, "no phase filled"
-        assert np.allclose(f.attrs["fill_factors"], scene.geometry.face_fill_factors(40)), \
+        assert np.allclose(f["fill_factors"][()], scene.geometry.face_fill_factors(40)), \
             "the face's fill factors are the result's"
 
 

@@ -209,8 +209,8 @@ def test_run_file_stores_the_distances_and_the_scale(tmp_path, disk64):
     write_run(path, disk64)
     with h5py.File(path, "r") as f:
         assert "run_in_distance" not in f.attrs, "s* still called run_in_distance"
-        assert f.attrs["distance_scale"] == disk64.distance_scale
-        assert f.attrs["distance_scale_units"] == "m"
+        assert f["distance_scale"][()] == disk64.distance_scale
+        assert f["distance_scale"].attrs["units"] == "m"
         g = f["run_in_distance"]
         assert list(g["within"][()]) == list(TOLERANCES)
         units = {name: g[name].attrs["units"] for name in g}
@@ -232,9 +232,10 @@ def test_a_file_naming_the_scale_run_in_distance_is_read(tmp_path):
     path = tmp_path / "old.h5"
     write_run(path, stopped)
     with h5py.File(path, "r+") as f:
-        f.attrs["run_in_distance"] = f.attrs["distance_scale"]
-        for name in ("distance_scale", "steady_rms_slope", "sha256"):
-            del f.attrs[name]
+        f.attrs["run_in_distance"] = f["distance_scale"][()]
+        for name in ("distance_scale", "steady_rms_slope", "history/distance_scale"):
+            del f[name]
+        del f.attrs["sha256"]
     back, _, _ = read_run(path)
     assert back.distance_scale == stopped.distance_scale, "s* not read from run_in_distance"
     assert math.isnan(back.steady_rms_slope), "a steady rms slope read from nowhere"

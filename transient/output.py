@@ -1,4 +1,4 @@
-"""HDF5 run files (layout ``runin.transient``, version 3), checksummed and written by one writer.
+"""HDF5 run files (layout ``runin.transient``, version 5), checksummed and written by one writer.
 
 A run file holds a run-in, finished or in progress (a checkpoint): the
 state a resumed run needs (:class:`transient.result.RunState`), the
@@ -6,61 +6,68 @@ history, the snapshots, the inputs that identify the run and, once the run
 is steady, its agreement with the steady face.  It is written whole and
 atomically by the project's one HDF5 writer (:func:`steady.safe_files.atomic_h5`),
 so a reader never sees half a file and a killed run leaves its last
-checkpoint intact.  It opens in xarray (``xarray.open_dataset(path,
-engine="h5netcdf")``, ``group="history"`` or ``"snapshots"``) as labelled
-arrays; docs/files.md lists every dataset and attribute.
+checkpoint intact.  It follows the CF conventions (root attribute
+``Conventions``) and opens in xarray (``xarray.open_datatree(path,
+engine="h5netcdf")``, one node per group) as labelled arrays;
+docs/files.md lists every variable and attribute.
 
 Layout (root group)::
 
-    attributes    format "runin.transient", format_version 3
-                  status, message, scheme, distance (m), steps, rejected,
-                  failures, solves, iterations, wall_time (s), offset (m),
-                  approach (m), depth_scale (m), distance_scale (m),
-                  fast_distance (m), pixel_mean_pressure (Pa),
-                  reference_slope, steady_rms_slope, steady_rms_slope_error,
-                  sliding_speed (m s-1, NaN if none), previous_step (m, NaN if none),
-                  next_step (m, NaN if none), jumps (jumps to the steady
-                  state so far; files written before it was stored lack
-                  it and are read as 0);
-                  the problem's inputs (:func:`problem_inputs`, when the
-                  result knows its problem): n, normal_force (N), E_star
-                  (Pa), the wear law (wear_law_kind, wear_law in words and
-                  the law's own attributes: exponent, wear_coefficients
-                  (Pa-m) for the power law), the sliding kinematics
-                  unless a translation (sliding_kind and its keys as
-                  sliding_<key>, e.g. sliding_track_radius (m));
-                  the caller's input attributes (scene...; an attribute
-                  given as None is left out);
-                  with the face's outline known (every run since version 2):
-                  reference_slope_error, reference_slope_source (where
-                  grad_f0 comes from, in words), scale (m, the outline's
-                  L), pixel_size (m) and, for a disk only, radius (m)
+    attributes    format "runin.transient", format_version 5, Conventions,
+                  status, message, scheme, reference_slope_source (where
+                  grad_f0 comes from, in words), wear_law_kind, wear_law (in
+                  words), the caller's text attributes (scene, ...; one given
+                  as None is left out), coating_<event>_reason (depth runs)
+    0-d variables distance (m), steps, rejected, failures, solves,
+                  iterations, wall_time (s), offset (m), approach (m),
+                  depth_scale (m), distance_scale (m), fast_distance (m),
+                  pixel_mean_pressure (Pa), reference_slope,
+                  steady_rms_slope, steady_rms_slope_error, sliding_speed
+                  (m s-1, NaN if none), previous_step (m, NaN if none),
+                  next_step (m, NaN if none), jumps (jumps to the steady state
+                  so far); the problem's inputs (:func:`problem_inputs`, when
+                  the result knows its problem): n, normal_force (N), E_star
+                  (Pa), the wear law's numbers (the power law's exponent), the sliding
+                  kinematics unless a translation (sliding_kind and its keys
+                  as sliding_<key>, e.g. sliding_track_radius (m));
+                  with the face's outline: reference_slope_error, scale (m,
+                  the outline's L), pixel_size (m) and, for a disk only,
+                  radius (m); the caller's quantities; a depth run's
+                  coating_<event>_distance (m) and ..._s_star (1)
     x, y          (nx,), (ny,) m: pixel centres, the dimension scales of
-                  every (nx, ny) axis pair
-    phase_name    (P,) the phase names: the dimension scale ``phase_name``
-    worn_depth    (nx, ny) m, NaN off the face
-    pressure      (nx, ny) Pa
-    phase         (nx, ny) the phase map, and the caller's input datasets
-    state/        recession, initial_recession, previous_recession, previous_rate,
-                  pressure_history, pressure_history_displacement
-    history/      one dataset per :data:`transient.result.HISTORY_UNITS` name,
-                  along the dimension scale ``distance`` (m); attribute
-                  distance_scale (s*, m); a depth run's also
+                  every field
+    phase_name    (P,) the phase names: the dimension scale ``phase_name``,
+                  of the wear law's numbers per phase (wear_coefficients)
+    worn_depth    (y, x) m, NaN off the face
+    face          (y, x) m, the face's elevation (:attr:`transient.result.RunResult.face`:
+                  approach - recession, ``K p`` on the contact), NaN off the face; layout 5 on
+    pressure      (y, x) Pa
+    phase         (y, x) the phase map, and the caller's fields
+    state/        recession, initial_recession, previous_recession, previous_rate
+                  (y, x); pressure_history, pressure_history_displacement
+                  (kept_solve, y, x)
+    history/      one variable per :data:`transient.result.HISTORY_UNITS` name,
+                  along the dimension scale ``distance`` (m), but the spatial
+                  errors while empty; 0-d distance_scale (s*, m); under a load
+                  programme load_breakpoints (m, a dimension scale),
+                  load_forces (N), load_initial_force (N); a depth run's also
                   :data:`transient.result.DEPTH_HISTORY_UNITS` (phase_fraction
                   also along ``phase_name``) and, under a coating,
                   :data:`transient.result.COATING_HISTORY_UNITS`
-    snapshots/    distance (k,) m (a dimension scale), recession (k, nx, ny) m,
-                  pressure (k, nx, ny) Pa (byte shuffle and deflate, except
-                  in a checkpoint); for a depth run section (k, nx, ny)
-                  int8, the phase map of the section at the worn depth
+    snapshots/    distance (k,) m (a dimension scale), recession (distance, y, x)
+                  m, pressure (distance, y, x) Pa (byte shuffle and deflate,
+                  except in a checkpoint); for a depth run section (distance,
+                  y, x) int8, the phase map of the section at the worn depth;
+                  under a load programme force (distance,) N and the
+                  programme as in history/
     columns/      a depth run only, not in a checkpoint (the problem's
                   :class:`steady.depth.DepthColumns`): interfaces
-                  (S, nx, ny) m, phases (S + 1, nx, ny) int8, attribute
-                  n_phases; a checkpoint holds their digest instead, the
-                  root attribute columns_sha256; with the root attributes
-                  coating_worn_through_distance, coating_gone_distance (m),
-                  their ..._s_star (1) and ..._reason (text)
-    comparison/   :class:`transient.comparison.SteadyComparison` (steady runs)
+                  (interface, y, x) m, phases (segment, y, x) int8, 0-d n_phases;
+                  a checkpoint holds their digest instead, the root
+                  attribute columns_sha256
+    comparison/   :class:`transient.comparison.SteadyComparison` (steady runs):
+                  0-d variables, the phase pressures along ``phase_name``,
+                  the flag rms_slope_agrees an attribute
     run_in_distance/  the run-in distances within 1 % and 0.1 % (dimension ``within``):
                   distance, distance_s_star, uncertainty, low, high, mean_worn_depth,
                   rim_worn_depth, time, time_uncertainty, reached, each with ``units``
@@ -69,12 +76,15 @@ Layout (root group)::
     outline/      the face's outline, as :func:`steady.output.write_outline`
                   writes it (kind, area, its lengths; a mask's ``mask``)
 
-Every dataset carries the CF attributes ``units`` (udunits: ``"m"``,
-``"Pa"``, ``"1"``; none for text and codes) and ``long_name``; the unit of
-a root attribute ``x`` is the udunits string ``x_units``.  Arrays are
-``(nx, ny)``, the grid of the outline (:class:`steady.outline.FaceGrid`;
-``n x n`` for a disk).  Version 2 files (without coordinates, phase names
-and the problem's own inputs) are read too.  Files written before the face
+Every variable carries the CF attributes ``units`` (udunits: ``"m"``,
+``"Pa"``, ``"1"``; none for text and codes) and ``long_name``.  A field is
+indexed ``[i, j]`` in memory, ``i`` along x (the grid of the outline,
+:class:`steady.outline.FaceGrid`; ``n x n`` for a disk), and stored
+transposed, ``(y, x)`` (:func:`steady.output.write_field`), so that
+xarray draws x across.  Files of layouts 2 to 4 (the quantities as root
+and group attributes with their unit in ``x_units``, the fields stored
+``(nx, ny)``; layout 2 without coordinates, phase names and the problem's
+own inputs) are read and resumed too.  Files written before the face
 outlines (disks only) lack the group ``outline`` and the reference slope's
 error and source: :func:`read_run` reads their outline as the disk of their
 ``radius`` attribute (None without it) and the source as eq. 12's.
@@ -123,12 +133,18 @@ from steady.depth import DepthColumns
 from steady.load_programme import LoadProgramme
 from steady.outline import Circle
 from steady.output import (
+    CONVENTIONS,
     attach_scales,
     describe,
+    field_from_file,
     read_outline,
+    wear_long_names,
+    write_field,
     write_grid_coordinates,
     write_outline,
     write_phase_names,
+    write_quantity,
+    write_record,
 )
 from steady.safe_files import (
     CHECKSUM_ATTRIBUTE,
@@ -165,11 +181,14 @@ __all__ = [
 #: ``format`` attribute of a run file.
 FORMAT = "runin.transient"
 #: Layout version of a run file (``format_version`` attribute).
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 #: Versions :func:`read_run` reads (2: without coordinates, phase names and
 #: the problem's inputs; 2 and 3: the face's recession under the name
-#: ``height``, :data:`_FORMER_DATASETS`).  A run of any of them resumes.
-_READABLE_VERSIONS = (2, 3, 4)
+#: ``height``, :data:`_FORMER_DATASETS`; 2 to 4: the quantities as attributes,
+#: the fields stored (nx, ny)).  A run of any of them resumes.
+_READABLE_VERSIONS = (2, 3, 4, 5)
+#: The first version that stores the quantities as variables and the fields (y, x).
+_CF_VERSION = 5
 
 # Root scalar attributes and their units.
 _SCALARS = {
@@ -194,6 +213,40 @@ _OPTIONAL_SCALARS = {"previous_step": "m", "next_step": "m"}
 _LATER_STATE_SCALARS = {"jumps": ("1", 0)}
 # Written with the outline; files of disks written before outlines lack them.
 _REFERENCE_UNITS = {"reference_slope_error": "1", "scale": "m", "pixel_size": "m"}
+# Long names of the root quantities (the wear law's and the outline's: steady.output).
+_LONG_NAMES = {
+    "status": "how the run ended: running, steady, stopped or failed",
+    "distance": "sliding distance reached",
+    "steps": "accepted steps", "rejected": "rejected steps", "failures": "failed step attempts",
+    "solves": "contact solves", "iterations": "iterations of the contact solver",
+    "wall_time": "computing time",
+    "offset": "constant removed from the recession (the rigid part of the wear)",
+    "approach": "rigid approach, in the frame of the recession",
+    "depth_scale": "depth scale f*",
+    "distance_scale": "run-in distance scale s* (not a distance the run took)",
+    "fast_distance": "fastest relaxation distance h / (k_max E*)",
+    "pixel_mean_pressure": "load over the face's pixel area",
+    "reference_slope": "grad_f0, the rms slope of the homogeneous face of the outline under "
+                       "the same load",
+    "steady_rms_slope": "rms slope of the steady face",
+    "steady_rms_slope_error": "error bar of steady_rms_slope",
+    "sliding_speed": "sliding speed (NaN: none given)",
+    "previous_step": "length of the last accepted step (NaN: none)",
+    "next_step": "length of the next step (NaN: none)",
+    "jumps": "jumps to the steady state so far",
+    "reference_slope_error": "uncertainty of reference_slope (0 for a closed form)",
+    "scale": "length scale L of the outline (a disk's radius)",
+    "pixel_size": "side h of the grid's square pixels",
+    "n": "pixels of the grid along the face's longer side",
+    "normal_force": "normal force F_N",
+    "E_star": "effective modulus E* of the counter-body",
+}
+# Quantities of the group history beside the history itself (layout 5 on; attributes before).
+_HISTORY_RECORD = ("distance_scale", "load_breakpoints", "load_forces", "load_initial_force")
+# History datasets that stay empty unless a companion run fills them
+# (transient.spatial_error): left out of the file while empty (layout 5 on).
+_EMPTY_UNLESS_FILLED = ("rms_slope_spatial_error", "companion_deviation_low",
+                        "companion_deviation_high")
 _DISK_SOURCE = "disk: 4 pbar / (pi E*) (eq. 12)"
 # Root attributes that belong to the state (RunState) rather than to the result.
 _STATE_SCALARS = ("offset", "approach")
@@ -311,15 +364,26 @@ _HISTORY_NAMES = {"distance": "sliding distance", "step": "length of the step to
                   "solves": "contact solves so far"}
 
 
-def _attribute(attrs, name, value, unit):
-    """Root attribute ``name`` and, for a quantity, its udunits unit in ``name_units``."""
-    attrs[name] = value
-    if unit is not None:
-        attrs[f"{name}_units"] = unit
+def _quantity(group, name, value, unit, long_name=None, dims=()):
+    """A quantity as a checksummed variable of ``group`` (:func:`steady.output.write_quantity`)."""
+    return write_quantity(group, name, value, unit, long_name or name.replace("_", " "), dims,
+                          put=_put)
+
+
+def _field(group, name, value, unit, long_name, scales, **options):
+    """A checksummed field, stored (..., y, x) (:func:`steady.output.write_field`)."""
+    return write_field(group, name, value, unit, long_name, scales, put=_put, **options)
+
+
+def _index(group, name, length, long_name):
+    """An index ``0..length-1`` made the dimension scale ``name`` (a leading axis of fields)."""
+    ds = _put(group, name, np.arange(length), "1", long_name)
+    ds.make_scale(name)
+    return ds
 
 
 def problem_inputs(problem):
-    """What a run file stores of the problem a run solved: root attributes and datasets.
+    """What a run file stores of the problem a run solved: root quantities and datasets.
 
     Parameters
     ----------
@@ -333,7 +397,8 @@ def problem_inputs(problem):
         ``wear_law`` in words, and the law's own, for the power law
         ``wear_coefficients`` (Pa-m) and ``exponent``) and the sliding
         kinematics (:func:`steady.sliding.sliding_file_attributes`:
-        ``sliding_kind`` and its keys, none for a translation).
+        ``sliding_kind`` and its keys, none for a translation); a value with
+        a unit is stored as a variable, text as an attribute.
     arrays : dict of str to ndarray
         ``phase``, the phase map (-1 off the face).
     names : tuple of str
@@ -346,8 +411,8 @@ def problem_inputs(problem):
 
 
 # -- writing ----------------------------------------------------------------
-def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=False,
-              force=True, replaces=None, checked=False):
+def write_run(path, result, *, attrs=None, quantities=None, arrays=None, comparison=None,
+              backup=False, force=True, replaces=None, checked=False):
     """Write a run (or a checkpoint) to HDF5, atomically, replacing ``path``.
 
     The file holds the run's inputs when the result knows its problem (a
@@ -358,12 +423,17 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     ----------
     path : str or path-like
     result : transient.result.RunResult
-    attrs : mapping, optional
-        Extra root attributes (scene text, parameters); those whose value is
-        None are left out.  They replace the problem's of the same name.
+    attrs : mapping of str to str, optional
+        Extra root attributes (scene text, options); those whose value is
+        None are left out.
+    quantities : mapping of str to (value, str, str), optional
+        Extra root quantities, ``name -> (value, units, long_name)``, each
+        a variable (0-d for a scalar), replacing the run's own of the same
+        name (e.g. the scene's ``normal_force``); those whose value is None
+        are left out.
     arrays : mapping of str to ndarray, optional
-        Extra root datasets (e.g. ``phase``), replacing the problem's of
-        the same name.
+        Extra root fields, shape (nx, ny) (e.g. ``phase``), replacing the
+        problem's of the same name.
     comparison : transient.comparison.SteadyComparison, optional
         Stored in the group ``comparison``.
     backup : bool, optional
@@ -399,20 +469,24 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
     problem = getattr(result, "problem", None)
     inputs, input_arrays, names = ({}, {}, None) if problem is None else problem_inputs(problem)
     with writer as f:
-        _write_scalars(f, result)
-        for name, (value, unit) in inputs.items():
-            _attribute(f.attrs, name, value, unit)
+        f.attrs["Conventions"] = CONVENTIONS
+        scales = _write_coordinates(f, result, names)
+        _write_root(f, result, inputs, quantities or {}, scales[2])
         if result.outline is not None:
             _write_outline(f, result)
         for name, value in (attrs or {}).items():
             if value is not None:
                 f.attrs[name] = value
-        scales = _write_coordinates(f, result, names)
-        _put(f, "worn_depth", result.worn_depth, "m", "depth worn off since the start, NaN "
-             "off the face", dims=scales[:2])
-        _put(f, "pressure", result.pressure, "Pa", "contact pressure", dims=scales[:2])
+        _field(f, "worn_depth", result.worn_depth, "m", "depth worn off since the start, NaN "
+               "off the face", scales[:2])
+        # What RunResult.face gives, the run's face to compare with the steady one (ds.face).
+        _field(f, "face", result.face, "m", "elevation of the worn face, approach - recession "
+               "(the steady face's convention, K p on the contact), NaN off the face",
+               scales[:2])
+        _field(f, "pressure", result.pressure, "Pa", "contact pressure", scales[:2])
         for name, value in {**input_arrays, **(arrays or {})}.items():
-            _put(f, name, value, "1", _ARRAY_NAMES.get(name), dims=scales[:2])
+            _field(f, name, value, "1", _ARRAY_NAMES.get(name, name.replace("_", " ")),
+                   scales[:2])
         _write_state(f, result, scales[:2])
         _write_history(f, result, scales[2])
         _write_snapshots(f, result, scales[:2])
@@ -429,18 +503,35 @@ def write_run(path, result, *, attrs=None, arrays=None, comparison=None, backup=
 _ARRAY_NAMES = {"phase": "phase index, -1 off the face"}
 
 
-def _write_scalars(f, result):
-    """The result's and the state's root attributes, each with its unit."""
-    for name, unit in _SCALARS.items():
-        _attribute(f.attrs, name, getattr(result, name), unit or None)
+def _write_root(f, result, inputs, quantities, phase_scale):
+    """The result's and the state's root quantities, the problem's inputs, the caller's.
+
+    Text (status, message, scheme, the wear law's name) goes to attributes.
+    """
+    record = {name: (getattr(result, name), unit or None) for name, unit in _SCALARS.items()}
     for name, unit in _OPTIONAL_SCALARS.items():
         value = getattr(result.state, name)
-        _attribute(f.attrs, name, np.nan if value is None else value, unit)
+        record[name] = (np.nan if value is None else value, unit)
     for name, (unit, _) in _LATER_STATE_SCALARS.items():
-        _attribute(f.attrs, name, getattr(result.state, name), unit)
+        record[name] = (getattr(result.state, name), unit)
     for name, unit in _LATER_SCALARS.items():
         value = getattr(result, name)
-        _attribute(f.attrs, name, np.nan if value is None else value, unit)
+        record[name] = (np.nan if value is None else value, unit)
+    if result.outline is not None:
+        values = {"reference_slope_error": result.reference_slope_error,
+                  "scale": result.outline.scale, "pixel_size": result.pixel_size}
+        record.update({name: (values[name], unit) for name, unit in _REFERENCE_UNITS.items()})
+        record.update(result.outline.root_attributes())
+    record.update(inputs)
+    long_names = dict(_LONG_NAMES)
+    problem = getattr(result, "problem", None)
+    if problem is not None:
+        long_names.update(wear_long_names(problem.wear))
+    for name, (value, unit, long_name) in quantities.items():
+        if value is not None:
+            record[name] = (value, unit)
+            long_names[name] = long_name
+    write_record(f, record, phase_scale, put=_put, long_names=long_names)
 
 
 def _write_coordinates(f, result, names):
@@ -459,53 +550,67 @@ def _write_coordinates(f, result, names):
 
 
 def _write_state(f, result, grid_scales):
-    """The group ``state``: the arrays a resumed run needs."""
+    """The group ``state``: the arrays a resumed run needs, stored (..., y, x)."""
     st = f.create_group("state")
     st.attrs["description"] = "everything a resumed run needs (face up to offset)"
+    kept = None
     for name, unit in _STATE_UNITS.items():
         value = getattr(result.state, name)
-        if value is not None:
-            dims = grid_scales if np.ndim(value) == 2 else (None, *grid_scales)
-            _put(st, name, value, unit, _STATE_NAMES[name], dims=dims)
+        if value is None:
+            continue
+        leading = ()
+        if np.ndim(value) == 3:
+            if kept is None:
+                kept = _index(st, "kept_solve", len(value),
+                              "index of a kept contact solve (warm start), newest first")
+            leading = (kept,)
+        _field(st, name, value, unit, _STATE_NAMES[name], (*leading, *grid_scales))
 
 
 def _write_history(f, result, phase_scale=None):
     """The group ``history``: one dataset per recorded quantity along ``distance``.
 
     A quantity per phase (``phase_fraction``, shape (K, P)) is also along
-    ``phase_scale``, the root's ``phase_name``.
+    ``phase_scale``, the root's ``phase_name``.  A dataset still empty in
+    a history that is not (a spatial error no companion run filled) is
+    left out: a dimension of length 0 would leave xarray no row to show.
     """
     hist = f.create_group("history")
-    _attribute(hist.attrs, "distance_scale", result.distance_scale, "m")
+    _quantity(hist, "distance_scale", result.distance_scale, "m", _LONG_NAMES["distance_scale"])
     distance = None
     if "distance" in result.history:
         distance = _put(hist, "distance", result.history["distance"], *history_cf("distance"))
         distance.make_scale("distance")
+    length = len(result.history.get("distance", ()))
     for name, value in result.history.items():
-        if name == "distance":
+        if name == "distance" or (name in _EMPTY_UNLESS_FILLED and np.size(value) == 0):
             continue
         dims = (distance,) if np.ndim(value) < 2 else (distance, phase_scale)
-        ds = _put(hist, name, value, *history_cf(name), dims=dims)
-        if np.ndim(value) == 1 and (distance is None or len(value) != len(distance)):
-            ds.make_scale(name)  # e.g. an empty spatial error: a dimension of its own
-    _write_load_programme(hist.attrs, result.load_programme)
+        if np.ndim(value) == 1 and (distance is None or len(value) != length):
+            dims = ()  # a dimension of its own
+        _quantity(hist, name, value, *history_cf(name), dims=dims)
+    _write_load_programme(hist, result.load_programme)
 
 
-def _write_load_programme(attrs, programme):
-    """A load programme's breakpoints (m), forces (N) and initial force as attributes."""
+def _write_load_programme(group, programme):
+    """A load programme: breakpoints (m, a dimension scale), forces (N), initial force (N)."""
     if programme is None:
         return
-    _attribute(attrs, "load_breakpoints", np.array(programme.breakpoints), "m")
-    _attribute(attrs, "load_forces", np.array(programme.forces), "N")
-    _attribute(attrs, "load_initial_force", programme.initial_force, "N")
+    breakpoints = _quantity(group, "load_breakpoints", np.array(programme.breakpoints), "m",
+                            "distance s_i from which the load programme's force F_i holds")
+    _quantity(group, "load_forces", np.array(programme.forces), "N",
+              "force F_i of the load programme from s_i on", dims=(breakpoints,))
+    _quantity(group, "load_initial_force", programme.initial_force, "N",
+              "normal force before the load programme's first breakpoint")
 
 
-def _read_load_programme(attrs):
-    """The :class:`LoadProgramme` of :func:`_write_load_programme`'s attributes, or None."""
-    if "load_breakpoints" not in attrs:
+def _read_load_programme(values):
+    """The :class:`LoadProgramme` of :func:`_write_load_programme`'s values, or None."""
+    if "load_breakpoints" not in values:
         return None
-    pairs = zip(np.ravel(attrs["load_breakpoints"]), np.ravel(attrs["load_forces"]), strict=True)
-    return LoadProgramme(float(attrs["load_initial_force"]), tuple(pairs))
+    pairs = zip(np.ravel(values["load_breakpoints"]), np.ravel(values["load_forces"]),
+                strict=True)
+    return LoadProgramme(float(values["load_initial_force"]), tuple(pairs))
 
 
 def _write_snapshots(f, result, grid_scales):
@@ -517,22 +622,23 @@ def _write_snapshots(f, result, grid_scales):
     # A checkpoint is rewritten whole every few seconds: compressing its
     # snapshots each time would cost more than the rest of the file.
     packed = {} if result.status == "running" else _SNAPSHOT_FILTERS
-    _put(snaps, "recession", result.snapshot_recession, "m", "recession of the face: worn depth "
-         "plus the initial face's recession (larger = deeper), NaN off the face",
-         dims=(distance, *grid_scales), **packed)
-    _put(snaps, "pressure", result.snapshot_pressure, "Pa", "contact pressure",
-         dims=(distance, *grid_scales), **packed)
+    scales = (distance, *grid_scales)
+    _field(snaps, "recession", result.snapshot_recession, "m", "recession of the face: worn "
+           "depth plus the initial face's recession (larger = deeper), NaN off the face",
+           scales, **packed)
+    _field(snaps, "pressure", result.snapshot_pressure, "Pa", "contact pressure", scales,
+           **packed)
     sections = result.snapshot_sections
     if sections is not None:
-        _put(snaps, "section", sections.astype(_section_dtype(result.columns)), "1",
-             "phase index of the section at the worn depth, -1 off the face",
-             dims=(distance, *grid_scales), **packed)
+        _field(snaps, "section", sections.astype(_section_dtype(result.columns)), "1",
+               "phase index of the section at the worn depth, -1 off the face", scales,
+               **packed)
     programme = result.load_programme
     if programme is not None:
-        _put(snaps, "force", np.array([programme.force_at(s) for s in result.snapshot_distance],
-                                      dtype=float),
-             "N", "normal force of the load programme at the snapshot", dims=(distance,))
-        _write_load_programme(snaps.attrs, programme)
+        _quantity(snaps, "force", np.array([programme.force_at(s)
+                                            for s in result.snapshot_distance], dtype=float),
+                  "N", "normal force of the load programme at the snapshot", dims=(distance,))
+        _write_load_programme(snaps, programme)
 
 
 def _section_dtype(columns):
@@ -543,22 +649,26 @@ def _section_dtype(columns):
 def _write_columns(f, result, grid_scales):
     """The group ``columns`` of a depth run (not of a checkpoint) and its coating distances.
 
-    ``interfaces`` (S, nx, ny) m and ``phases`` (S + 1, nx, ny) of
-    :class:`steady.depth.DepthColumns`, attribute ``n_phases``; the root
-    attributes ``coating_<event>_distance`` (m), ``..._distance_s_star``
-    (1) and ``..._reason`` (text, "" when reached) for each event of
+    ``interfaces`` (interface, y, x) m and ``phases`` (segment, y, x) of
+    :class:`steady.depth.DepthColumns` (``(S, nx, ny)`` and ``(S + 1, nx,
+    ny)`` in memory), the 0-d ``n_phases``; the root quantities
+    ``coating_<event>_distance`` (m) and ``..._distance_s_star`` (1) and
+    the attribute ``..._reason`` (text, "" when reached) for each event of
     :data:`transient.run_in_distance.COATING_EVENTS` (NaN with the reason
     when there is no coating or the event did not happen).  A checkpoint
-    has the attributes but not the group (compressed, it would cost more
-    than the rest of the file; the resumed run's problem has the columns)
-    but their digest, ``columns_sha256`` (:attr:`steady.depth.DepthColumns.digest`),
+    has the root's but not the group (compressed, it would cost more than
+    the rest of the file; the resumed run's problem has the columns), but
+    their digest, ``columns_sha256`` (:attr:`steady.depth.DepthColumns.digest`),
     which a resumed run's columns must match.
     """
     columns = result.columns
     for event in COATING_EVENTS:
         found = coating_distance(result, event)
-        _attribute(f.attrs, f"coating_{event}_distance", found.distance_m, "m")
-        _attribute(f.attrs, f"coating_{event}_distance_s_star", found.distance_s_star, "1")
+        words = event.replace("_", " ")
+        _quantity(f, f"coating_{event}_distance", found.distance_m, "m",
+                  f"sliding distance at which the coating is {words} (NaN: not reached)")
+        _quantity(f, f"coating_{event}_distance_s_star", found.distance_s_star, "1",
+                  f"the same over s*: the coating {words}")
         f.attrs[f"coating_{event}_reason"] = found.reason
     if result.status == "running":
         # A checkpoint is rewritten every few seconds; the scene rebuilds the columns.
@@ -567,13 +677,17 @@ def _write_columns(f, result, grid_scales):
     g = f.create_group("columns")
     g.attrs["description"] = ("the phase below every face pixel as a function of the worn depth "
                               "(steady.depth.DepthColumns)")
-    _attribute(g.attrs, "n_phases", columns.n_phases, "1")
-    _put(g, "interfaces", columns.interfaces, "m", "depths of the phase changes below each "
-         "pixel, ascending, inf beyond the pixel's last", dims=(None, *grid_scales),
-         **_SNAPSHOT_FILTERS)
-    _put(g, "phases", columns.phases.astype(_section_dtype(columns)), "1",
-         "phase index of each segment between interfaces, -1 off the face",
-         dims=(None, *grid_scales), **_SNAPSHOT_FILTERS)
+    _quantity(g, "n_phases", columns.n_phases, "1", "number of phases")
+    interface = _index(g, "interface", len(columns.interfaces),
+                       "index of the interface below a pixel, shallowest first")
+    segment = _index(g, "segment", len(columns.phases),
+                     "index of the segment between interfaces, from the face down")
+    _field(g, "interfaces", columns.interfaces, "m", "depths of the phase changes below each "
+           "pixel, ascending, inf beyond the pixel's last", (interface, *grid_scales),
+           **_SNAPSHOT_FILTERS)
+    _field(g, "phases", columns.phases.astype(_section_dtype(columns)), "1",
+           "phase index of each segment between interfaces, -1 off the face",
+           (segment, *grid_scales), **_SNAPSHOT_FILTERS)
 
 
 def _read_columns(path, datasets, groups):
@@ -588,9 +702,25 @@ def _read_columns(path, datasets, groups):
         raise DamagedRunFileError(path, f"its columns are malformed ({err})") from None
 
 
-# The comparison's arrays (Pa, one value per phase) and its lengths; the rest is 1 or a flag.
-_COMPARISON_NAMES = {"phase_pressures": "mean pressure on each phase, run",
-                     "steady_phase_pressures": "pressure on each phase, steady state (eq. 7)"}
+# The comparison's long names and units (Pa for its arrays, one value per phase; 1 for the
+# rest but the lengths); a flag is an attribute.
+_COMPARISON_NAMES = {
+    "face_error": "max |face - f_inf| over the face (best constant removed) / relief of f_inf",
+    "face_rms_error": "rms of face - f_inf over the face (least-squares constant removed) / "
+                      "relief of f_inf",
+    "rms_slope": "rms slope of the run's final face",
+    "rms_slope_uncertainty": "error bar of rms_slope",
+    "steady_rms_slope": "rms slope of the steady face f_inf",
+    "steady_rms_slope_uncertainty": "error bar of steady_rms_slope",
+    "rms_slope_error": "rms_slope / steady_rms_slope - 1",
+    "rms_slope_plain": "plain pixel rms slope of the run's final face",
+    "steady_rms_slope_plain": "plain pixel rms slope of f_inf",
+    "rms_height": "rms height of the run's final face about its least-squares plane",
+    "steady_rms_height": "rms height of f_inf about its least-squares plane",
+    "phase_pressures": "mean pressure on each phase, run",
+    "steady_phase_pressures": "pressure on each phase, steady state (eq. 7)",
+    "phase_pressure_error": "max_i |p_i / p_i,steady - 1|",
+}
 _COMPARISON_UNITS = {"rms_height": "m", "steady_rms_height": "m"}
 
 
@@ -599,12 +729,13 @@ def _write_comparison(f, comparison, phase_scale):
     g = f.create_group("comparison")
     for fld in dataclasses.fields(comparison):
         value = getattr(comparison, fld.name)
+        long_name = _COMPARISON_NAMES.get(fld.name, fld.name.replace("_", " "))
         if isinstance(value, np.ndarray):
-            _put(g, fld.name, value, "Pa", _COMPARISON_NAMES.get(fld.name), dims=(phase_scale,))
+            _quantity(g, fld.name, value, "Pa", long_name, dims=(phase_scale,))
+        elif isinstance(value, (bool, np.bool_)):
+            g.attrs[fld.name] = value
         else:
-            unit = None if isinstance(value, (bool, np.bool_)) else _COMPARISON_UNITS.get(
-                fld.name, "1")
-            _attribute(g.attrs, fld.name, value, unit)
+            _quantity(g, fld.name, value, _COMPARISON_UNITS.get(fld.name, "1"), long_name)
 
 
 def _write_run_in_distances(f, result):
@@ -621,18 +752,11 @@ def _write_run_in_distances(f, result):
 
 
 def _write_outline(f, result):
-    """The outline group, the reference slope's attributes and the outline's root attributes."""
-    outline = result.outline
-    values = {"reference_slope_error": result.reference_slope_error,
-              "scale": outline.scale, "pixel_size": result.pixel_size}
-    for name, unit in _REFERENCE_UNITS.items():
-        _attribute(f.attrs, name, values[name], unit)
+    """The outline group and the reference slope's source (the root's quantities: _write_root)."""
     f.attrs["reference_slope_source"] = result.reference_slope_source
-    for name, (value, unit) in outline.root_attributes().items():
-        _attribute(f.attrs, name, value, unit)
     group = f.create_group("outline")
-    write_outline(group, outline)
-    for ds in group.values():  # a mask's pixels: checksummed like every dataset
+    write_outline(group, result.outline)
+    for ds in group.values():  # a mask's pixels and the lengths: checksummed like every dataset
         ds.attrs[CHECKSUM_ATTRIBUTE] = dataset_digest(ds[()], dict(ds.attrs))
 
 
@@ -643,11 +767,12 @@ def _read_outline(path, datasets, groups, root):
         if isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0:
             return Circle(float(radius))
         return None
-    # read_outline reads an h5py group: give it a view of what was loaded.
-    mask = datasets.get("outline/mask")
+    # read_outline reads an h5py group: give it a view of what was loaded (the fields
+    # already in the library's order).
+    own = {name[len("outline/"):]: value for name, (value, _) in datasets.items()
+           if name.startswith("outline/")}
     try:
-        return read_outline(_LoadedGroup(groups["outline"],
-                                         {} if mask is None else {"mask": mask[0]}))
+        return read_outline(_LoadedGroup(groups["outline"], own), stored_yx=False)
     except (KeyError, TypeError, ValueError) as err:
         raise DamagedRunFileError(path, f"its outline cannot be read ({err})") from None
 
@@ -661,6 +786,9 @@ class _LoadedGroup:
 
     def __getitem__(self, name):
         return _LoadedDataset(self._datasets[name])
+
+    def __iter__(self):
+        return iter(self._datasets)
 
 
 class _LoadedDataset:
@@ -759,10 +887,13 @@ def read_run(path):
     -------
     result : transient.result.RunResult
     attrs : dict
-        All root attributes (``attrs["sha256"]`` absent: an unverified file
-        without checksums).
+        All root attributes and, by name, the root's quantities (its 0-d
+        variables and those along ``phase_name``, stored as attributes
+        before layout 5); ``attrs["sha256"]`` absent: an unverified file
+        without checksums.
     arrays : dict
-        Root datasets other than ``worn_depth`` and ``pressure``.
+        Root datasets other than ``worn_depth``, ``face``, ``pressure``,
+        ``x`` and ``y``, fields indexed ``[i, j]``.
 
     Raises
     ------
@@ -808,7 +939,33 @@ def read_run(path):
             raise DamagedRunFileError(path, f"cannot be read ({str(err)[:200]})") from None
     if CHECKSUM_ATTRIBUTE in groups[""]:
         _verify(path, datasets, groups)
+    if int(version) >= _CF_VERSION:
+        datasets, groups = _as_attributes(datasets, groups)
     return _result(path, datasets, groups)
+
+
+def _as_attributes(datasets, groups):
+    """The contents of a file of layout 5 on as the earlier layouts held them.
+
+    Every 0-d variable, the root's quantities of one dimension (but its
+    coordinates) and the load programme among the attributes of their
+    group; every field back in the library's order ``[..., i, j]``; the
+    history's datasets left out while empty, empty again.
+    """
+    datasets, groups = dict(datasets), {name: dict(attrs) for name, attrs in groups.items()}
+    for name, (value, attrs) in list(datasets.items()):
+        group, _, own = name.rpartition("/")
+        quantity = (np.ndim(value) == 0 or own in _HISTORY_RECORD
+                    or (not group and np.ndim(value) == 1 and own not in ("x", "y", "phase_name")))
+        if quantity:
+            del datasets[name]
+            groups[group][own] = value.decode("utf-8") if isinstance(value, bytes) else value
+        elif np.ndim(value) >= 2 and group != "history":
+            datasets[name] = (field_from_file(value), attrs)
+    if "history/distance" in datasets:
+        for name in _EMPTY_UNLESS_FILLED:
+            datasets.setdefault(f"history/{name}", (np.zeros(0), {}))
+    return datasets, groups
 
 
 def _result(path, datasets, groups):
@@ -885,5 +1042,5 @@ def _result(path, datasets, groups):
         columns=_read_columns(path, datasets, groups),
         face_deviation_per_relief=_per_relief(datasets))
     arrays = {name: value for name, (value, _) in datasets.items()
-              if "/" not in name and name not in ("worn_depth", "pressure", "x", "y")}
+              if "/" not in name and name not in ("worn_depth", "face", "pressure", "x", "y")}
     return result, attrs, arrays

@@ -33,6 +33,7 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import NullLocator
 from matplotlib.transforms import offset_copy
 
+from steady.output import read_values
 from steady.plotting import (
     COLUMN_WIDTH,
     FONT_SIZES,
@@ -239,9 +240,10 @@ class _Run:
 
 
 def _groups(run_path):
-    """The run file's ``comparison`` attributes and ``run_in_distance`` datasets, or empty."""
+    """The run file's ``comparison`` figures and ``run_in_distance`` datasets, or empty."""
     with h5py.File(run_path, "r") as f:
-        comparison = dict(f["comparison"].attrs) if "comparison" in f else {}
+        # Its variables, or its attributes in a file of a layout before 5.
+        comparison = read_values(f["comparison"]) if "comparison" in f else {}
         group = f.get("run_in_distance")
         run_in = ({name: ds[()] for name, ds in group.items() if isinstance(ds, h5py.Dataset)}
                   if isinstance(group, h5py.Group) else {})

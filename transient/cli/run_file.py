@@ -43,21 +43,36 @@ __all__ = ["RunFile", "at_text", "check_same_columns", "check_same_inputs", "int
 
 
 def run_inputs(scene, problem):
-    """Root attributes and datasets that identify the run's inputs.
+    """What identifies the run's inputs in its file: attributes, quantities and fields.
 
     The outline goes into the run file with the result (its group
     ``outline``; ``radius`` for a disk), from ``problem.outline``; the wear
-    law with the problem (:func:`transient.output.problem_inputs`).
+    law with the problem (:func:`transient.output.problem_inputs`); a load
+    programme with the history (its group's ``load_breakpoints``,
+    ``load_forces``, ``load_initial_force``).
+
+    Returns
+    -------
+    attrs : dict of str to str
+        ``scene`` (its text) and ``scene_path``.
+    quantities : dict of str to (value, str, str)
+        ``n``, and the scene's ``normal_force`` (N, before a load
+        programme's first step) and ``E_star`` (Pa), with units and long
+        names (:func:`transient.output.write_run`).
+    arrays : dict of str to ndarray
+        ``phase``, the phase map.
     """
-    attrs = {"scene": scene.text, "scene_path": str(scene.source_path or ""),
-             "n": problem.n, "normal_force": scene.normal_force, "E_star": scene.E_star}
-    if scene.load_programme is not None:
-        attrs["load_programme"] = np.array(scene.load_programme.pairs)  # [s (m), F (N)] rows
-    return attrs, {"phase": problem.labels}
+    attrs = {"scene": scene.text, "scene_path": str(scene.source_path or "")}
+    quantities = {
+        "n": (problem.n, "1", "pixels of the grid along the face's longer side"),
+        "normal_force": (scene.normal_force, "N", "the scene's normal force F_N (before a "
+                                                  "load programme's first step)"),
+        "E_star": (scene.E_star, "Pa", "effective modulus E* of the counter-body")}
+    return attrs, quantities, {"phase": problem.labels}
 
 
-def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, h0, problem,
-                      wear):
+def check_same_inputs(path, quantities, arrays, stored_attrs, stored_arrays, stored, h0,
+                      problem, wear):
     """Refuse to resume a run of another problem; the message names what differs, both values.
 
     Everything that defines the problem is compared: the face, the grid,
@@ -71,10 +86,10 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
     ----------
     path : pathlib.Path
         The run file.
-    attrs, arrays : dict
+    quantities, arrays : dict
         The scene's inputs as :func:`run_inputs` gives them.
     stored_attrs, stored_arrays : mapping
-        The file's root attributes and datasets.
+        The file's root attributes and quantities, and its datasets.
     stored : transient.result.RunResult
         The run the file holds.
     h0 : ndarray, shape (nx, ny), m
@@ -90,10 +105,10 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
                   if stored.outline is None else describe_change(stored.outline, outline))
         raise ValueError(f"{str(path)!r} was run on {change}; use --force to start over")
     for key in ("n", "normal_force", "E_star"):
-        if stored_attrs.get(key) != attrs[key]:
+        if stored_attrs.get(key) != quantities[key][0]:
             raise ValueError(f"{str(path)!r} was run with {key} = "
-                             f"{shorten(stored_attrs.get(key))}, the scene has {attrs[key]!r}; "
-                             f"use --force to start over")
+                             f"{shorten(stored_attrs.get(key))}, the scene has "
+                             f"{quantities[key][0]!r}; use --force to start over")
     try:
         stored_wear = wear_law_from_file(stored_attrs)
     except ValueError:
@@ -113,11 +128,12 @@ def check_same_inputs(path, attrs, arrays, stored_attrs, stored_arrays, stored, 
                else f"[sliding] {stored_sliding.describe()}")
         raise ValueError(f"{str(path)!r} was run under {was}; the scene has [sliding] "
                          f"{sliding.describe()}; use --force to start over")
-    stored_programme, programme = (a.get("load_programme") for a in (stored_attrs, attrs))
+    stored_programme, programme = stored.load_programme, problem.load_programme
     if (stored_programme is None) != (programme is None) or (
-            programme is not None and not np.array_equal(stored_programme, programme)):
+            programme is not None and stored_programme.pairs != programme.pairs):
+        shown = None if stored_programme is None else [list(p) for p in stored_programme.pairs]
         raise ValueError(f"{str(path)!r} was run with another [load] programme "
-                         f"({shorten(stored_programme)}); use --force")
+                         f"({shorten(shown)}); use --force")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
     check_same_columns(path, stored_attrs, stored, problem.columns)
@@ -207,7 +223,7 @@ class RunFile:
     Parameters
     ----------
     path : pathlib.Path
-    attrs, arrays : dict
+    attrs, quantities, arrays : dict
         The inputs stored with every checkpoint (:func:`run_inputs`).
     settings : dict
         The settings of this part of the run (:meth:`RunOptions.settings`).
@@ -215,9 +231,10 @@ class RunFile:
         The options as asked for (stored in the attribute ``options``).
     """
 
-    def __init__(self, path, attrs, arrays, settings, requested):
+    def __init__(self, path, attrs, quantities, arrays, settings, requested):
         self.path = path
         self.attrs = dict(attrs)
+        self.quantities = dict(quantities)
         self.arrays = arrays
         self.requested = requested
         self.history = []
@@ -298,7 +315,7 @@ class RunFile:
                 "to_distance": distance, "status": "running", "settings": self.settings,
                 "snapshots_missing": missing}
 
-    def write(self, result, comparison=None, extra_attrs=None):
+    def write(self, result, comparison=None, extra_quantities=None):
         """Write a checkpoint or the final run; the file it replaces becomes the backup.
 
         The backup of a run that ends steady is removed once the final file
@@ -315,17 +332,20 @@ class RunFile:
         """
         self.history[-1].update(to_step=result.steps, to_distance=result.distance,
                                 status=result.status)
-        attrs = dict(self.attrs, **(extra_attrs or {}))
-        attrs.update({
+        attrs = dict(self.attrs, **{
             "options": repr(self.requested),
             # JSON (docs/files.md): from_distance, to_distance in m, settings in s*.
-            "settings_history": json.dumps(self.history),
-            "snapshots_missing": np.asarray(self.missing, dtype=float),
-            "snapshots_missing_units": "m"})
+            "settings_history": json.dumps(self.history)})
+        quantities = dict(self.quantities, **(extra_quantities or {}))
+        if self.missing:  # no empty variable: a run that missed none has none
+            quantities["snapshots_missing"] = (
+                np.asarray(self.missing, dtype=float), "m",
+                "requested snapshot distances passed before a resume (not in the file)")
         with interrupt_held():  # what saved_text() says must be what is on disk
             self.replaces = output.write_run(
-                self.path, result, attrs=attrs, arrays=self.arrays, comparison=comparison,
-                backup=self.ours, force=False, replaces=self.replaces, checked=True)
+                self.path, result, attrs=attrs, quantities=quantities, arrays=self.arrays,
+                comparison=comparison, backup=self.ours, force=False, replaces=self.replaces,
+                checked=True)
             if not self.ours:
                 # A backup beside a new run belongs to the run this one replaced.
                 backup_path(self.path).unlink(missing_ok=True)

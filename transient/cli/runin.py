@@ -68,7 +68,7 @@ A flag that overrides a :class:`transient.options.RunOptions` field comes
 from the field's declaration (``flag``).  One that adds a computation
 after the run reads what it needs from the ``_Job`` (scene, initial face,
 problem, options) in ``_run``, stores its figures
-through the ``extra_attrs`` of ``RunFile.write`` and prints them in
+through the ``extra_quantities`` of ``RunFile.write`` and prints them in
 ``_report``.
 """
 
@@ -324,12 +324,12 @@ def _prepare(args, lock, scene, initial, options, checked):
         h0 = initial.recession(problem.grid)
     except ValueError as err:  # "[initial_face]: ...": the scene file first, as when loading
         raise ValueError(f"{args.scene}: {err}") from None
-    attrs, arrays = run_inputs(scene, problem)
-    run_file = RunFile(out, attrs, arrays, options.settings(), options)
+    attrs, quantities, arrays = run_inputs(scene, problem)
+    run_file = RunFile(out, attrs, quantities, arrays, options.settings(), options)
     resume, finished = None, False
     if args.resume and out.exists():
         resume, stored_attrs, stored_arrays = read_resume(out)
-        check_same_inputs(out, attrs, arrays, stored_attrs, stored_arrays, resume, h0,
+        check_same_inputs(out, quantities, arrays, stored_attrs, stored_arrays, resume, h0,
                            problem, scene.wear)
         if "sha256" not in stored_attrs:
             note(f"{str(out)!r} carries no checksums; resumed without verification")
@@ -477,7 +477,9 @@ def _run(job):
         elif job.no_companions is not None:
             note(job.no_companions)
     if not finished:
-        extra = None if comparison is None else {"steady_rms_slope": comparison.steady_rms_slope}
+        # The steady face's rms slope: the steady result's, with its error bar, once compared.
+        extra = None if comparison is None else {"steady_rms_slope": (
+            comparison.steady_rms_slope, "1", "rms slope of the steady face f_inf")}
         job.run_file.write(result, comparison, extra)
     return result, comparison
 
@@ -493,7 +495,9 @@ def _companion(job, result):
 
     bar = Progress(0, log=job.verbose, label="companion runs")
     try:
-        companions = spatial_error(job.scene, job.initial, job.options, result,
+        # Without snapshots, which would only move their steps (and differ on resuming).
+        options = dataclasses.replace(job.options, snapshot_distances=(), snapshots_s_star=())
+        companions = spatial_error(job.scene, job.initial, options, result,
                                    grids=job.companion_grids, on_step=bar)
     except (ValueError, StepFailure) as err:
         grids = ", ".join(map(str, job.companion_grids))
