@@ -202,8 +202,10 @@ class DesignTable:
 
         Raises
         ------
+        FileNotFoundError
+            The file does not exist.
         ValueError
-            Missing or foreign file.
+            A foreign, damaged or incomplete file.
         """
         if path is None:
             with importlib.resources.as_file(DEFAULT_TABLE) as shipped:
@@ -213,8 +215,8 @@ class DesignTable:
     @classmethod
     def _read(cls, path):
         if not path.exists():
-            raise ValueError(f"design table {str(path)!r} does not exist; build it with "
-                             f"'python studies/design_table.py'")
+            raise FileNotFoundError(f"design table {str(path)!r} does not exist; build it "
+                                    f"with 'python studies/design_table.py'")
         if not path.is_file():
             kind = "a directory" if path.is_dir() else "not a regular file"
             raise ValueError(f"design table {str(path)!r} is {kind}")

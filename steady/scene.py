@@ -605,10 +605,13 @@ def load_scene(path, *, extra_sections=()):
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Missing or unreadable file, a directory or device, a file larger
-        than :data:`MAX_SCENE_BYTES`, not UTF-8, or any error of
-        :func:`parse_scene`; the message starts with the path.
+        Unreadable file, a directory or device, a file larger than
+        :data:`MAX_SCENE_BYTES`, not UTF-8, or any error of
+        :func:`parse_scene` (a file the scene names that does not exist
+        included: a bad value of its key); the message starts with the path.
     """
     path = pathlib.Path(path)
     what = f"scene file {str(path)!r}"
@@ -621,7 +624,7 @@ def load_scene(path, *, extra_sections=()):
         with open(path, "rb") as f:
             data = f.read(MAX_SCENE_BYTES + 1)
     except FileNotFoundError:
-        raise ValueError(f"{what} does not exist") from None
+        raise FileNotFoundError(f"{what} does not exist") from None
     except OSError as err:
         raise ValueError(f"cannot read {what}: {err.strerror or err}") from None
     if len(data) > MAX_SCENE_BYTES:

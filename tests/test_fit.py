@@ -346,7 +346,7 @@ def test_readers(tmp_path):
         assert face.pixel_size == (1e-4, 2e-4) and face.extent == pytest.approx((3e-4, 8e-4))
     with pytest.raises(ValueError, match=r"pixel size of .*m.npy.* is unknown"):
         read_measured(tmp_path / "m.npy")
-    with pytest.raises(ValueError, match="does not exist"):
+    with pytest.raises(FileNotFoundError, match="nope.npy' does not exist"):
         read_measured(tmp_path / "nope.npy", pixel_size=1e-4)
     with pytest.raises(ValueError, match=r"height_scale must be a number > 0 \(m per file unit\), "
                                          r"got 0"):

@@ -176,9 +176,10 @@ def spatial_error(scene, initial, options, result, *, grid=None, on_step=None):
 
     Examples
     --------
+    >>> from steady import examples
     >>> from transient import RunOptions, run_in
     >>> from transient.scene import load_transient_scene, wear_problem_of
-    >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
+    >>> scene, _, initial = load_transient_scene(examples.path("voronoi_transient"))
     >>> options = RunOptions(tol=1e-2)
     >>> problem = wear_problem_of(scene, n=64)
     >>> result = run_in(problem, initial.recession(problem.grid), options)

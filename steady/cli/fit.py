@@ -47,6 +47,7 @@ from .common import (
     note,
     prepare_output,
     program_name,
+    read_input,
     run_command,
 )
 
@@ -108,12 +109,12 @@ def run(args):
     prepare_output(args.output, force=args.force)
     if args.plot is not None:
         prepare_output(args.plot, force=args.force, what="--plot")
-    scene = load_scene(args.scene)
+    scene = read_input(load_scene, args.scene)
     if scene.ignored_sections:
         note("ignoring run-in sections "
              + ", ".join(f"[{name}]" for name in scene.ignored_sections))
-    measured = read_measured(args.measured, pixel_size=args.pixel_size,
-                             height_scale=args.height_scale)
+    measured = read_input(read_measured, args.measured, pixel_size=args.pixel_size,
+                          height_scale=args.height_scale)
     grid = scene.grid(args.n)
     check_memory(fit_memory(grid.shape, scene.n_phases, measured.shape),
                  f"a fit at n = {grid.n} of a {measured.shape[0]} x {measured.shape[1]} map",

@@ -53,6 +53,7 @@ from .common import (
     note,
     prepare_output,
     program_name,
+    read_input,
     run_command,
 )
 
@@ -189,7 +190,7 @@ def _check(args):
     for path, what in ((args.plot, "--plot"), (args.segmentation, "--segmentation")):
         if path is not None:
             check_png_path(path, what)
-    scene = load_scene(args.scene)
+    scene = read_input(load_scene, args.scene)
     if args.segmentation is not None and scene.geometry.segmented_image() is None:
         raise ValueError(f"--segmentation needs a phase map of kind \"micrograph\", the "
                          f"scene's is {scene.geometry.kind!r}")

@@ -88,6 +88,7 @@ from steady.cli.common import (
     note,
     prepare_output,
     program_name,
+    read_input,
     run_command,
 )
 from steady.memory import check_memory, keep_freed_memory
@@ -355,7 +356,7 @@ def run(args):
     out = args.output
     not_started = "interrupted before the run started; nothing was written"
     try:
-        scene, options, initial = load_transient_scene(args.scene)
+        scene, options, initial = read_input(load_transient_scene, args.scene)
         options = options_from_flags(options, args)
         _check_outputs(args)
         grid = scene.grid()  # load_scene has checked n against the outline
