@@ -24,11 +24,9 @@ registries of the tables that name a kind -- the face outline
 ``[sliding]`` section, the sliding kinematics (:data:`steady.sliding.SLIDING`,
 ``[sliding] kind``; absent, a translation), and of the optional ``[depth]``
 section, layers from the surface down over the ``[phases] map``
-(:data:`DEPTH_KEYS`, :data:`LAYER_KEYS`; :meth:`Scene.depth_columns`).  The README's tables of
-scene keys are checked against them (``tests/test_scene.py``).  Lengths of
-phase geometries are in m in the file and in units of the outline's scale
-``L`` in the geometry objects (the radius of a disk; else the larger half
-side of the bounding box).
+(:data:`DEPTH_KEYS`, :data:`LAYER_KEYS`; :meth:`Scene.depth_columns`).  The
+tables of scene keys in docs/scenes.md are drawn from them.  Lengths of
+phase geometries are in m, in the file and in the geometry objects alike.
 
 Every key is checked; unknown sections and keys are errors, so that a typo
 cannot pass silently.  Another package reads sections of its own: it names
