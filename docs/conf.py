@@ -10,15 +10,20 @@ Needs the ``docs`` extra (``sphinx``, ``numpydoc``, ``myst-parser``,
 needed.  The build needs no network: MathJax is copied into the site
 (``sphinx-mathjax-offline``), and the examples of ``docs/examples`` run
 during the build (sphinx-gallery), their pages written to
-``docs/auto_examples``.
+``docs/auto_examples``.  The tables of scene keys are drawn from the keys'
+declarations and the command outputs the pages quote are printed by the
+commands during the build (``docs/_ext/runin_directives.py``).
 """
 
 import os
 import sys
 
-# The repository root, so that ``steady`` and ``transient`` import without install.
+# The repository root, so that ``steady`` and ``transient`` import without install;
+# _ext, the directives of these pages (runin_directives: scene-key tables drawn from
+# the keys' declarations, command outputs run at build time).
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, ROOT)
+sys.path.insert(0, os.path.join(ROOT, "docs", "_ext"))
 
 project = "runin"
 author = "runin contributors"
@@ -41,6 +46,7 @@ extensions = [
     "numpydoc",
     "myst_parser",
     "sphinx_gallery.gen_gallery",
+    "runin_directives",
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
@@ -48,7 +54,7 @@ root_doc = "index"
 
 # figures/ holds images only; pages show them, but nothing there is a source page.
 # examples/ holds the gallery's scripts; their pages are generated into auto_examples/.
-exclude_patterns = ["_build", "figures", "examples", "Thumbs.db", ".DS_Store"]
+exclude_patterns = ["_build", "_ext", "figures", "examples", "Thumbs.db", ".DS_Store"]
 
 # -- MyST ----------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "amsmath"]

@@ -276,7 +276,7 @@ def read_face_mask(path):
 def integer_face(values, what="face mask"):
     """The face pixels an integer mask marks: ``True`` on the face.
 
-    The rule (README, ``[punch] shape = "mask"``): an integer mask holds
+    The rule (docs/scenes.md, ``[punch] shape = "mask"``): an integer mask holds
     either only 0 and 1, 1 on the face (a 0/1 image), or -1 off the face
     and values ``>= 0`` on it (a phase map with -1 off its face, the
     convention of phase-map files, is its own mask).  Any other set of

@@ -204,8 +204,10 @@ class DesignTable:
 
         Raises
         ------
+        FileNotFoundError
+            The file does not exist.
         ValueError
-            Missing or foreign file.
+            A foreign, damaged or incomplete file.
         """
         if path is None:
             with importlib.resources.as_file(DEFAULT_TABLE) as shipped:
@@ -215,8 +217,8 @@ class DesignTable:
     @classmethod
     def _read(cls, path):
         if not os.path.lexists(path):
-            raise ValueError(f"design table {str(path)!r} does not exist; build it with "
-                             f"'python studies/design_table.py'")
+            raise FileNotFoundError(f"design table {str(path)!r} does not exist; build it "
+                                    f"with 'python studies/design_table.py'")
         input_file_size(path, "design table")  # a directory, a device, a loop of links...
         try:
             if not h5py.is_hdf5(path):

@@ -290,8 +290,10 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Missing file, a directory, an empty file, a file of another format
+        A directory, an empty file, a file of another format
         than its suffix says (named when known: an HDF5 file, pickled data
         -- never unpickled), a damaged or truncated ``.npy``, a text grid
         that is not UTF-8 text or holds no numbers, heights that are not
@@ -311,7 +313,9 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
     ((2, 3), (0.0001, 0.0001), 1)
     """
     path = pathlib.Path(path)
-    input_file_size(path, "measured map")  # exists, a regular file, not empty
+    if not path.exists():
+        raise FileNotFoundError(f"measured map {str(path)!r} does not exist")
+    input_file_size(path, "measured map")  # a regular file, not empty
     scale = _HEIGHT_SCALE.parse(height_scale, "")
     suffix = path.suffix.lower()
     if suffix == ".npy" or suffix in TEXT_SUFFIXES:
@@ -551,13 +555,17 @@ def read_fit(path):
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Missing file, not HDF5, another layout or version, incomplete or a
-        bad outline (the message names the path and the problem).
+        Not a regular file, not HDF5, another layout or version, incomplete
+        or a bad outline (the message names the path and the problem).
     """
     path = pathlib.Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"fit file {str(path)!r} does not exist")
     if not path.is_file():
-        raise ValueError(f"fit file {str(path)!r} does not exist")
+        raise ValueError(f"fit file {str(path)!r} is not a regular file")
     if not h5py.is_hdf5(path):
         raise ValueError(f"fit file {str(path)!r} is not an HDF5 file")
     with h5py.File(path, "r") as f:

@@ -648,13 +648,17 @@ def read_result(path):
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Missing file, not HDF5, corrupt, another layout or another version
-        (the message names the path and the problem).
+        Not a regular file, not HDF5, corrupt, another layout or another
+        version (the message names the path and the problem).
     """
     path = pathlib.Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"result file {str(path)!r} does not exist")
     if not path.is_file():
-        raise ValueError(f"result file {str(path)!r} does not exist")
+        raise ValueError(f"result file {str(path)!r} is not a regular file")
     try:
         is_hdf5 = h5py.is_hdf5(path)
     except OSError as err:

@@ -24,11 +24,9 @@ registries of the tables that name a kind -- the face outline
 ``[sliding]`` section, the sliding kinematics (:data:`steady.sliding.SLIDING`,
 ``[sliding] kind``; absent, a translation), and of the optional ``[depth]``
 section, layers from the surface down over the ``[phases] map``
-(:data:`DEPTH_KEYS`, :data:`LAYER_KEYS`; :meth:`Scene.depth_columns`).  The README's tables of
-scene keys are checked against them (``tests/test_scene.py``).  Lengths of
-phase geometries are in m in the file and in units of the outline's scale
-``L`` in the geometry objects (the radius of a disk; else the larger half
-side of the bounding box).
+(:data:`DEPTH_KEYS`, :data:`LAYER_KEYS`; :meth:`Scene.depth_columns`).  The
+tables of scene keys in docs/scenes.md are drawn from them.  Lengths of
+phase geometries are in m, in the file and in the geometry objects alike.
 
 Every key is checked; unknown sections and keys are errors, so that a typo
 cannot pass silently.  Another package reads sections of its own: it names
@@ -621,10 +619,13 @@ def load_scene(path, *, extra_sections=(), n=None):
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Missing or unreadable file, a directory or device, a file larger
-        than :data:`MAX_SCENE_BYTES`, not UTF-8, or any error of
-        :func:`parse_scene`; the message starts with the path.
+        Unreadable file, a directory or device, a file larger than
+        :data:`MAX_SCENE_BYTES`, not UTF-8, or any error of
+        :func:`parse_scene` (a file the scene names that does not exist
+        included: a bad value of its key); the message starts with the path.
     """
     path = pathlib.Path(path)
     what = f"scene file {str(path)!r}"
@@ -637,7 +638,7 @@ def load_scene(path, *, extra_sections=(), n=None):
         with open(path, "rb") as f:
             data = f.read(MAX_SCENE_BYTES + 1)
     except FileNotFoundError:
-        raise ValueError(f"{what} does not exist") from None
+        raise FileNotFoundError(f"{what} does not exist") from None
     except OSError as err:
         raise ValueError(f"cannot read {what}: {err.strerror or err}") from None
     if len(data) > MAX_SCENE_BYTES:

@@ -341,7 +341,7 @@ class KindRegistry(Registry):
 
     A :class:`steady.registry.Registry` whose entries are the kinds a
     table names by its ``selector`` key; the scene reader, its messages and
-    the README's tables of keys come from it.
+    the documentation's tables of keys (docs/scenes.md) come from it.
 
     Parameters
     ----------

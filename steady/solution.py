@@ -406,8 +406,8 @@ def solve_scene(scene, *, n=None, face_only=False, problem=None, estimate=None):
     the corrected rms slope is ``grad_f0`` (eq. 10, 12) within its error
     bar, the plain pixel value 3.5 % low.
 
-    >>> from steady import load_scene, solve_scene
-    >>> scene = load_scene("steady/examples/epoxy_cylinder.toml")
+    >>> from steady import examples, load_scene, solve_scene
+    >>> scene = load_scene(examples.path("epoxy_cylinder"))
     >>> result = solve_scene(scene, n=64)
     >>> print(f"{result.normalised_rms_slope:.3f} "
     ...       f"+- {result.rms_slope_error / result.reference_slope:.3f} grad_f0, "

@@ -143,6 +143,8 @@ class SweepFile:
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist and ``settings`` is None.
     ValueError
         Not a sweep file, or different settings.
     """
@@ -152,7 +154,7 @@ class SweepFile:
         self.settings_text = None if settings is None else point_key(settings)
         if not self.path.exists():
             if settings is None:
-                raise ValueError(f"sweep file {str(self.path)!r} does not exist")
+                raise FileNotFoundError(f"sweep file {str(self.path)!r} does not exist")
             self._create()
         self._check_settings()
         self._drop_incomplete()

@@ -140,12 +140,14 @@ def read_study(path, name):
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Missing file, another study's file or another layout version.
+        Another study's file or another layout version.
     """
     path = pathlib.Path(path)
     if not path.is_file():
-        raise ValueError(f"study file {str(path)!r} does not exist; run the study first")
+        raise FileNotFoundError(f"study file {str(path)!r} does not exist; run the study first")
     data = {}
     with h5py.File(path, "r") as f:
         if f.attrs.get("format") != f"runin.study.{name}":
@@ -344,7 +346,7 @@ def run_study(name, doc, compute, plot, params, quick_params, argv=None, *, para
             print(f"{name}: computed in {time.perf_counter() - t0:.1f} s -> {out}")
         plot(out, png)
         print(f"{name}: figure {png}")
-    except ValueError as err:
+    except (ValueError, FileNotFoundError) as err:  # a missing input is bad input
         print(f"error: {err}", file=sys.stderr)
         return 2
     finally:

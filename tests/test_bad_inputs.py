@@ -472,3 +472,43 @@ def test_runin_steady_solves_a_section_under_any_law(tmp_path, capsys, law):
                                               "--no-slope-error"], capsys)
     assert status == 0 and "error" not in err, f"exit {status}: {err!r}"
     assert "0.0004 m below the initial surface" in out, out
+
+
+# -- a missing file from Python ----------------------------------------------
+def _loaders():
+    from steady.design import DesignTable
+    from steady.fit_files import read_fit, read_measured
+    from steady.output import read_result
+    from steady.scene import load_scene
+    from steady.sweep import SweepFile
+    from transient.output import read_run
+    from transient.scene import load_transient_scene
+
+    return [("scene file", load_scene, {}), ("scene file", load_transient_scene, {}),
+            ("result file", read_result, {}), ("run file", read_run, {}),
+            ("fit file", read_fit, {}), ("measured map", read_measured, {"pixel_size": 1e-4}),
+            ("design table", DesignTable.read, {}), ("sweep file", SweepFile, {})]
+
+
+@pytest.mark.parametrize("what, read, kwargs", _loaders(),
+                         ids=lambda v: getattr(v, "__qualname__", None))
+def test_a_missing_file_is_file_not_found_from_python(tmp_path, what, read, kwargs):
+    """Python's own exception for a file that does not exist, with the file named."""
+    path = tmp_path / "nowhere.h5"
+    with pytest.raises(FileNotFoundError) as err:
+        read(path, **kwargs)
+    assert str(err.value).startswith(f"{what} {str(path)!r} does not exist"), str(err.value)
+    (tmp_path / "a_directory.h5").mkdir()
+    with pytest.raises(ValueError, match="a_directory.h5"):  # there, but not a file: bad input
+        read(tmp_path / "a_directory.h5", **kwargs)
+
+
+def test_a_missing_map_named_by_a_scene_is_a_bad_value(tmp_path):
+    """A file the scene names is one of its values: ValueError naming the key and the file."""
+    from steady.scene import load_scene
+
+    path = write(tmp_path, "s.toml", file_map(BASE["steady"], "gone.npy"))
+    with pytest.raises(ValueError) as err:
+        load_scene(path)
+    assert "[phases] map" in str(err.value) and "gone.npy' does not exist" in str(err.value), \
+        str(err.value)

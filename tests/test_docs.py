@@ -1,19 +1,32 @@
-"""The API pages list every module, and each module's summary is a whole sentence.
+"""The API pages, the module summaries and the command-line reference match the code.
+
+The API pages list every module, and each module's summary is a whole sentence.
 
 The Sphinx build (docs/conf.py) is run by CI; these checks are the parts of it
 that fail silently: a module missing from ``docs/api`` or from its package's
 docstring is simply absent, and autosummary cuts a summary at the first period
-followed by a space, so that "(paper eq. 8)" shows as "(paper eq.".
+followed by a space, so that "(paper eq. 8)" shows as "(paper eq.".  The
+options of docs/cli.md are each command's ``--help``, printed by the build; the
+prose around them must name only options the commands have, and its table of
+exit statuses the statuses the commands end with.
 """
 
 import ast
+import importlib
 import pathlib
 import re
 
 import pytest
 
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 PACKAGES = ("steady", "transient")
+CLI = (ROOT / "docs" / "cli.md").read_text()
+SCRIPTS = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
 
 
 def _modules(package):
@@ -58,3 +71,49 @@ def test_module_summary_is_a_whole_sentence(path):
     summary = _summary(path)
     assert not re.search(r"\b(eq|eqs|Eq|Fig|Figs|Sec|cf|vs|e\.g|i\.e)\.$", summary), \
         f"{path.relative_to(ROOT)}: the summary is cut at an abbreviation: {summary!r}"
+
+
+# -- the command line's reference (docs/cli.md) ----------------------------------------------
+def _help(command, capsys):
+    """The ``--help`` of an installed command, run in-process."""
+    module, function = SCRIPTS[command].split(":")
+    with pytest.raises(SystemExit) as done:
+        getattr(importlib.import_module(module), function)(["--help"])
+    assert done.value.code == 0, f"{command} --help: exit {done.value.code}"
+    return capsys.readouterr().out
+
+
+def _section(command):
+    """The text of docs/cli.md under ``## command``, up to the next ``## `` heading."""
+    parts = re.split(rf"^## {re.escape(command)}\n", CLI, flags=re.M)
+    assert len(parts) == 2, f"docs/cli.md has no section '## {command}'"
+    return re.split(r"^## ", parts[1], flags=re.M)[0]
+
+
+@pytest.mark.parametrize("command", sorted(SCRIPTS))
+def test_cli_reference_shows_the_help_and_names_only_real_options(command, capsys):
+    section = _section(command)
+    assert re.search(rf"```{{command-output}}\n{re.escape(command)} --help\n```", section), \
+        f"docs/cli.md's section {command} does not print '{command} --help'"
+    options = set(re.findall(r"(?<![\w-])(--?[a-z][\w-]*)", _help(command, capsys)))
+    named = set(re.findall(r"`(--?[a-z][\w-]*)", section))
+    # A run-in's companion, the command lines of another command quoted in the section.
+    named -= {f for line in re.findall(r"```{command-output}\n(.*?)```", section, re.S)
+              for f in re.findall(r"(?<![\w-])(--?[a-z][\w-]*)", line)}
+    assert named <= options, f"docs/cli.md names options {sorted(named - options)} that " \
+                             f"{command} does not have"
+
+
+def test_cli_reference_lists_the_exit_statuses_of_the_commands():
+    from steady.cli import common
+
+    table = re.search(r"## Exit statuses\n.*?\| status \| meaning \|\n\|---\|---\|\n(.*?)\n\n",
+                      CLI, re.S)
+    assert table is not None, "docs/cli.md has no table of exit statuses"
+    documented = [int(row.split("|")[1]) for row in table.group(1).splitlines()]
+    statuses = [common.EXIT_OK, common.EXIT_FAILED, common.EXIT_BAD_INPUT,
+                common.EXIT_INTERRUPTED]
+    in_help = [int(s) for s in re.findall(r"(?:^exit status: |; )(\d+) ",
+                                          common.EXIT_STATUS_EPILOG)]
+    assert documented == statuses == in_help, \
+        f"docs/cli.md lists {documented}, the commands end with {statuses}, --help says {in_help}"

@@ -41,7 +41,7 @@ pytestmark = pytest.mark.slow
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
 
-#: Exit statuses of the README's table.
+#: Exit statuses of the table in docs/cli.md.
 STATUSES = (0, 1, 2, 130)
 
 START_UP = ("Ctrl-C in the first half second (exit 130 with one line, at any moment): "

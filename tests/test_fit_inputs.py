@@ -184,6 +184,8 @@ def _hdf5(path):
 
 def _bad_file(kind, path):
     """Make ``path`` a bad measured map of ``kind``."""
+    if kind == "missing":
+        return
     if kind == "empty":
         path.write_bytes(b"")
     elif kind == "directory":
@@ -206,6 +208,7 @@ def _bad_file(kind, path):
 
 
 @pytest.mark.parametrize("name, kind, fragment", [
+    ("m.npy", "missing", "does not exist"),
     ("m.npy", "empty", "is empty (0 bytes)"),
     ("m.npy", "directory", "is a directory, not a file"),
     ("m.npy", "hdf5", "is an HDF5 file, not a .npy array"),

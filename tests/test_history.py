@@ -191,20 +191,21 @@ def test_companion_runs_give_the_grid_error(scene_file, tmp_path):
 
 
 @pytest.mark.slow
-def test_readme_spatial_error_example(tmp_path, monkeypatch):
-    """The README's run-in example followed by its companion-run example, as written."""
+def test_docs_spatial_error_example(tmp_path, monkeypatch):
+    """The README's run-in example, then the companion-run example of docs/library.md."""
     import pathlib
     import re
 
     root = pathlib.Path(__file__).resolve().parents[1]
-    text = (root / "README.md").read_text().split("## Run-in (transient)", 1)[1]
-    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
-    assert len(blocks) >= 2, "README lacks the companion-run example"
-    (tmp_path / "studies").symlink_to(root / "studies")
+    first = (root / "README.md").read_text().split("### A run-in", 1)[1]
+    then = (root / "docs" / "library.md").read_text().split(
+        "### The history: friction against sliding distance", 1)[1]
+    blocks = [re.search(r"```python\n(.*?)```", text, re.S) for text in (first, then)]
+    assert None not in blocks, "the README's run-in or the library's companion run is missing"
     monkeypatch.chdir(tmp_path)
     namespace = {}
-    for code in blocks[:2]:
-        exec(compile(code, "README.md", "exec"), namespace)
+    for block, where in zip(blocks, ("README.md", "docs/library.md"), strict=True):
+        exec(compile(block.group(1), where, "exec"), namespace)
     history = namespace["result"].history
     assert history["rms_slope_spatial_error"].shape == history["rms_slope"].shape, \
         "the companion's error has one value per recorded step"

@@ -64,7 +64,7 @@ def test_no_overwrite_without_force(tmp_path, solved):
 
 def test_read_rejects_bad_files(tmp_path, solved):
     scene, res = solved
-    with pytest.raises(ValueError, match="missing.h5' does not exist"):
+    with pytest.raises(FileNotFoundError, match="missing.h5' does not exist"):
         read_result(tmp_path / "missing.h5")
     (tmp_path / "text.h5").write_text("not hdf5")
     with pytest.raises(ValueError, match="text.h5' is not an HDF5 file"):

@@ -211,7 +211,7 @@ def test_bad_rods_scene(tmp_path):
 
 
 def test_missing_files(tmp_path):
-    with pytest.raises(ValueError, match="scene file .*nope.toml' does not exist"):
+    with pytest.raises(FileNotFoundError, match="scene file .*nope.toml' does not exist"):
         load_scene(tmp_path / "nope.toml")
     (tmp_path / "s.toml").write_text(scene_text("parser", map="file", path="gone.npy"))
     with pytest.raises(ValueError) as err:

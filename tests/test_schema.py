@@ -1,13 +1,15 @@
-"""One declaration per scene key: the registries, the README's tables, and adding a kind.
+"""One declaration per scene key: the registries, the documentation's tables, adding a kind.
 
 The scene's keys are declared once (``steady.schema.Key``) in the registries of outlines,
-phase maps, wear laws and initial faces, and in the fields of ``RunOptions``; the README's
-tables must list exactly what is registered, and one registration must be all a new kind needs.
+phase maps, wear laws and initial faces, and in the fields of ``RunOptions``; the tables of
+docs/scenes.md, drawn from the declarations (``docs/_ext/scene_tables.py``), must list exactly
+what is registered, and one registration must be all a new kind needs.
 """
 
 import dataclasses
 import pathlib
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -15,7 +17,17 @@ from conftest import FORCE, K1, RADIUS, problem, scene_text
 
 from steady.outline import OUTLINES, Circle, MaskOutline
 from steady.phases import PHASE_MAPS, PhaseMap
-from steady.scene import SECTIONS, load_scene, parse_scene
+from steady.scene import (
+    CORE_SECTIONS,
+    DEPTH_KEYS,
+    LAYER_KEYS,
+    OPTIONAL_SECTIONS,
+    PHASE_KEYS,
+    RUN_IN_SECTIONS,
+    SECTIONS,
+    load_scene,
+    parse_scene,
+)
 from steady.schema import Key, read_table
 from steady.sliding import SLIDING
 from steady.solution import solve, solve_scene
@@ -26,52 +38,56 @@ from transient.options import RunOptions, option_keys
 from transient.scene import wear_problem_of
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-README = (ROOT / "README.md").read_text()
+SCENES = (ROOT / "docs" / "scenes.md").read_text()
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+import scene_tables  # noqa: E402 -- docs/_ext, the documentation's tables of keys
 
 
-def _table(header):
-    """``kind -> keys column`` of the README's Markdown table whose header starts so."""
-    lines = README.split(header, 1)[1].split("\n")[2:]
+def _documented(name):
+    """``kind -> key names`` of the tables docs/scenes.md draws for the scene table ``name``."""
+    assert re.search(rf"^```{{scene-keys}} {re.escape(name)}$", SCENES, re.M), \
+        f"docs/scenes.md draws no table of {name!r}"
     rows = {}
-    for line in lines:
-        if not line.startswith("|"):
-            break
-        cells = [c.strip() for c in line.strip("|").split("|")]
-        rows[cells[0].strip("`")] = cells[1]
+    for table in scene_tables.tables(name):
+        kind = re.search(r'= "(\w+)"', table.caption)
+        rows[kind.group(1) if kind else None] = {row[0] for row in table.rows}
     return rows
 
 
-@pytest.mark.parametrize("registry, header", [(OUTLINES, "| shape | keys |"),
-                                              (PHASE_MAPS, "| kind | keys |"),
-                                              (WEAR_LAWS, "| law | keys |"),
-                                              (SLIDING, "| sliding kind | keys |")])
-def test_readme_tables_list_what_is_registered(registry, header):
-    rows = _table(header)
+@pytest.mark.parametrize("registry, name", [(OUTLINES, "punch"), (PHASE_MAPS, "phases.map"),
+                                            (WEAR_LAWS, "wear"), (SLIDING, "sliding"),
+                                            (INITIAL_FACES, "initial_face")])
+def test_docs_tables_list_what_is_registered(registry, name):
+    rows = _documented(name)
     assert set(rows) == set(registry), \
-        f"README table {header!r} lists {sorted(rows)}, registered {sorted(registry)}"
-    for kind, column in rows.items():
-        named = set(re.findall(r"`([a-z_]+)`", column))
+        f"docs/scenes.md's tables of {name!r} list {sorted(rows)}, registered {sorted(registry)}"
+    for kind, named in rows.items():
         keys = {key.name for key in registry[kind].keys}
-        assert named == keys, f"README row {kind!r} names keys {sorted(named)}, the " \
-                              f"registered keys are {sorted(keys)}"
+        assert named == keys, f"docs/scenes.md's table of {kind!r} names keys {sorted(named)}, " \
+                              f"the registered keys are {sorted(keys)}"
 
 
-def test_readme_names_every_run_option_and_initial_face():
-    section = README.split("## Run-in (transient)", 1)[1].split("In Python:", 1)[0]
-    for key in option_keys():
-        assert re.search(rf"\b{key.name}\b", section), f"README lacks [transient] {key.name}"
-    for kind in INITIAL_FACES:
-        assert kind in section, f"README lacks the initial face kind {kind!r}"
-        for key in INITIAL_FACES[kind].keys:
-            assert key.name in section, f"README lacks [initial_face] {key.name} ({kind})"
+def test_docs_tables_cover_every_section_and_run_option():
+    """Every section a scene may have, and every option of a run, has its table."""
+    sections = set(CORE_SECTIONS) | set(OPTIONAL_SECTIONS) | set(RUN_IN_SECTIONS)
+    assert sections | {"phases.map", "depth.layers"} == set(scene_tables.TABLES), \
+        f"sections {sorted(sections)}, tables {sorted(scene_tables.TABLES)}"
+    for section, keys in {**SECTIONS, "phases": PHASE_KEYS, "depth": DEPTH_KEYS,
+                          "depth.layers": LAYER_KEYS}.items():
+        assert _documented(section) == {None: {key.name for key in keys}}, section
+    options = _documented("transient")[None]
+    assert options == {key.name for key in option_keys()}, f"[transient] table: {options}"
+    defaults = {row[0]: row[4] for row in scene_tables.tables("transient")[0].rows}
+    assert defaults["scheme"] == '"esdirk3"' and defaults["tol"] == f"{RunOptions().tol:g}", \
+        f"the run options' defaults: {defaults}"
 
 
-def test_core_sections_name_their_keys_in_the_readme():
-    block = README.split("```toml", 1)[1].split("```", 1)[0]
+def test_core_sections_name_their_keys_in_the_docs_example():
+    block = SCENES.split("```toml", 1)[1].split("```", 1)[0]
     for section, keys in SECTIONS.items():
         for key in keys:
             assert re.search(rf"\[{section}\]\s*\n(?:[^\[\n]*\n)*{key.name} =", block), \
-                f"README's scene example lacks [{section}] {key.name}"
+                f"docs/scenes.md's scene example lacks [{section}] {key.name}"
 
 
 # -- keys ----------------------------------------------------------------

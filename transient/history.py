@@ -265,9 +265,9 @@ class FaceEstimator:
     --------
     >>> import numpy as np
     >>> from transient.problem import WearProblem
-    >>> from transient.scene import wear_problem_of
-    >>> from transient.scene import load_transient_scene
-    >>> scene, _, _ = load_transient_scene("steady/examples/voronoi_transient.toml")
+    >>> from steady import examples
+    >>> from transient.scene import load_transient_scene, wear_problem_of
+    >>> scene, _, _ = load_transient_scene(examples.path("voronoi_transient"))
     >>> problem = wear_problem_of(scene, n=40)
     >>> estimator = FaceEstimator(problem, np.zeros((40, 40)))
     >>> from transient.solver import StageSolver

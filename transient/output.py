@@ -900,13 +900,15 @@ def read_run(path):
     DamagedRunFileError
         The file is empty, truncated, unreadable or fails a checksum, or
         lacks part of the state (a :class:`ValueError`).
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Missing file, a directory, not a run file (another ``format``), or
-        an unknown layout version.
+        A directory, not a run file (another ``format``), or an unknown
+        layout version.
     """
     path = pathlib.Path(path)
     if not path.exists():
-        raise ValueError(f"run file {str(path)!r} does not exist")
+        raise FileNotFoundError(f"run file {str(path)!r} does not exist")
     if not path.is_file():
         raise ValueError(f"run file {str(path)!r} is not a regular file")
     if path.stat().st_size == 0:

@@ -289,9 +289,10 @@ class RunResult:
 
         Examples
         --------
+        >>> from steady import examples
         >>> from transient import RunOptions, run_in
         >>> from transient.scene import load_transient_scene, wear_problem_of
-        >>> scene, _, initial = load_transient_scene("steady/examples/voronoi_transient.toml")
+        >>> scene, _, initial = load_transient_scene(examples.path("voronoi_transient"))
         >>> problem = wear_problem_of(scene, n=40)
         >>> result = run_in(problem, initial.recession(problem.grid), RunOptions(tol=1e-3))
         >>> one, tenth = result.run_in_distance(0.01), result.run_in_distance(0.001)

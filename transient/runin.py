@@ -646,10 +646,10 @@ def run_in(problem, initial_recession, options=None, *, resume=None, on_step=Non
     A biphasic Voronoi punch worn from flat to the steady state, with a
     loose step tolerance; the final face is the closed-form one (eq. 9).
 
+    >>> from steady import examples
     >>> from transient import RunOptions, compare_with_steady, run_in
     >>> from transient.scene import load_transient_scene, wear_problem_of
-    >>> scene, settings, initial = load_transient_scene(
-    ...     "steady/examples/voronoi_transient.toml")
+    >>> scene, settings, initial = load_transient_scene(examples.path("voronoi_transient"))
     >>> problem = wear_problem_of(scene, n=40)
     >>> result = run_in(problem, initial.recession(problem.grid),
     ...                 RunOptions(tol=1e-2))

@@ -197,8 +197,8 @@ def wear_problem_of(scene, *, n=None, problem=None):
 
     Examples
     --------
-    >>> scene, options, initial = load_transient_scene(
-    ...     "steady/examples/voronoi_transient.toml")
+    >>> from steady import examples
+    >>> scene, options, initial = load_transient_scene(examples.path("voronoi_transient"))
     >>> problem = wear_problem_of(scene, n=40)
     >>> problem.n, problem.n_phases
     (40, 2)
@@ -263,14 +263,17 @@ def load_transient_scene(path, *, n=None):
 
     Raises
     ------
+    FileNotFoundError
+        The file does not exist.
     ValueError
-        Any error of :func:`steady.scene.load_scene` or of the two sections,
-        or a wear law without a run-in across the scene's interfaces
-        (:func:`check_run_in_law`).
+        Any other error of :func:`steady.scene.load_scene` or of the two
+        sections, or a wear law without a run-in across the scene's
+        interfaces (:func:`check_run_in_law`).
 
     Examples
     --------
-    >>> scene, options, initial = load_transient_scene("steady/examples/tilted_transient.toml")
+    >>> from steady import examples
+    >>> scene, options, initial = load_transient_scene(examples.path("tilted_transient"))
     >>> initial.kind, initial.recession(scene.grid()).shape
     ('tilted', (64, 64))
     """

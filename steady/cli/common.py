@@ -20,7 +20,9 @@ A command that cannot do what it was asked ends with one line
 =====  ==============================================================
 
 Every command's ``--help`` ends with this table (:data:`EXIT_STATUS_EPILOG`).
-:func:`run_command` turns exceptions into these lines and statuses;
+:func:`run_command` turns exceptions into these lines and statuses; a
+missing input file, :class:`FileNotFoundError` from the library's readers,
+is bad input when a command reads it through :func:`read_input`;
 :class:`ArgumentParser` reports argument errors the same way, a null byte
 in an argument included.  Values echoed in messages are shortened
 (:func:`steady.text.shorten`).  Ctrl-C before the command's own handling
@@ -73,6 +75,7 @@ __all__ = [
     "note",
     "prepare_output",
     "program_name",
+    "read_input",
     "run_command",
 ]
 
@@ -147,6 +150,37 @@ class CommandError(Exception):
 def note(text):
     """Print ``note: text`` on stderr: what the user should know, not an error."""
     print(f"note: {text}", file=sys.stderr)
+
+
+def read_input(read, *args, **kwargs):
+    """``read(*args, **kwargs)`` for a command: a missing input file is bad input (exit 2).
+
+    The library's readers raise :class:`FileNotFoundError` for a file the
+    caller names that does not exist, as Python's own do; to a command that
+    is bad input like any other, refused before the work (exit status 2),
+    not a refusal of the operating system (:class:`OSError`, status 1).
+
+    Parameters
+    ----------
+    read : callable
+        A reader of input files (:func:`steady.scene.load_scene`, ...).
+    *args, **kwargs
+        Its arguments.
+
+    Returns
+    -------
+    object
+        What ``read`` returns.
+
+    Raises
+    ------
+    ValueError
+        The file does not exist (the reader's message).
+    """
+    try:
+        return read(*args, **kwargs)
+    except FileNotFoundError as err:
+        raise ValueError(str(err)) from None
 
 
 def describe_os_error(err):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..design import DEFAULT_TABLE, DesignTable
 from ..reference import disk_reference_slope, fine_grain_rms_slope
-from .common import EXIT_STATUS_EPILOG, ArgumentParser, program_name, run_command
+from .common import EXIT_STATUS_EPILOG, ArgumentParser, program_name, read_input, run_command
 
 __all__ = ["build_parser", "main"]
 
@@ -68,7 +68,7 @@ def main(argv=None):
 
 def _answer(args):
     """Print the answer of the design rule for parsed arguments; return the exit status."""
-    table = DesignTable.read(args.table)
+    table = read_input(DesignTable.read, args.table)
     source = (f"table: {table.attrs.get('n_seeds', '?')} Voronoi seeds, "
               f"{table.attrs.get('realisations', '?')} realisations, "
               f"n = {table.attrs.get('n', '?')}")

@@ -47,6 +47,7 @@ from .common import (
     note,
     prepare_output,
     program_name,
+    read_input,
     run_command,
 )
 
@@ -74,8 +75,9 @@ def build_parser():
     parser.add_argument("--height-scale", type=float, default=1.0, metavar="S",
                         help="metres per height unit of a .npy or text grid (default 1; 1e-6 "
                              "for micrometres)")
-    parser.add_argument("--plot", type=pathlib.Path, metavar="PNG",
-                        help="also draw measured, fitted and residual faces into this PNG")
+    parser.add_argument("--plot", type=pathlib.Path, metavar="FIGURE",
+                        help="also draw measured, fitted and residual faces into this figure "
+                             "(.png, .pdf or .svg)")
     parser.add_argument("--shift", action="store_true",
                         help="search the lateral shift of the phase map that fits best")
     parser.add_argument("--max-shift", type=float, metavar="M",
@@ -108,12 +110,12 @@ def run(args):
     prepare_output(args.output, force=args.force)
     if args.plot is not None:
         prepare_output(args.plot, force=args.force, what="--plot")
-    scene = load_scene(args.scene)
+    scene = read_input(load_scene, args.scene)
     if scene.ignored_sections:
         note("ignoring run-in sections "
              + ", ".join(f"[{name}]" for name in scene.ignored_sections))
-    measured = read_measured(args.measured, pixel_size=args.pixel_size,
-                             height_scale=args.height_scale)
+    measured = read_input(read_measured, args.measured, pixel_size=args.pixel_size,
+                          height_scale=args.height_scale)
     grid = scene.grid(args.n)
     check_memory(fit_memory(grid.shape, scene.n_phases, measured.shape),
                  f"a fit at n = {grid.n} of a {measured.shape[0]} x {measured.shape[1]} map",

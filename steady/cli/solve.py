@@ -54,6 +54,7 @@ from .common import (
     note,
     prepare_output,
     program_name,
+    read_input,
     run_command,
 )
 
@@ -74,11 +75,13 @@ def build_parser():
     parser.add_argument("-o", "--output", type=pathlib.Path,
                         help="HDF5 result file to write (missing directories are created); "
                              "required unless --segmentation is given")
-    parser.add_argument("--plot", type=pathlib.Path, metavar="PNG",
-                        help="also draw the phase map and the face into this PNG file")
-    parser.add_argument("--segmentation", type=pathlib.Path, metavar="PNG",
+    parser.add_argument("--plot", type=pathlib.Path, metavar="FIGURE",
+                        help="also draw the phase map and the face into this figure (.png, .pdf "
+                             "or .svg)")
+    parser.add_argument("--segmentation", type=pathlib.Path, metavar="FIGURE",
                         help="draw the segmentation of the micrograph phase map over its image "
-                             "into this PNG file, before the solve (without -o: only this)")
+                             "into this figure (.png, .pdf or .svg), before the solve (without "
+                             "-o: only this)")
     parser.add_argument("--force", action="store_true",
                         help="overwrite existing output files")
     parser.add_argument("--no-slope-error", dest="slope_error", action="store_false",
@@ -191,7 +194,7 @@ def _check(args):
     for path, what in ((args.plot, "--plot"), (args.segmentation, "--segmentation")):
         if path is not None:
             check_figure_path(path, what)
-    scene = load_scene(args.scene, n=args.n)
+    scene = read_input(load_scene, args.scene, n=args.n)
     if args.segmentation is not None and scene.geometry.segmented_image() is None:
         raise ValueError(f"--segmentation needs a phase map of kind \"micrograph\", the "
                          f"scene's is {scene.geometry.kind!r}")

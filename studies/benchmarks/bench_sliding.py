@@ -28,12 +28,13 @@ import time
 
 import numpy as np
 
+from steady import examples
 from steady.sliding import PinOnDisk
 from steady.solution import solve
 from transient.runin import run_in
 from transient.scene import load_transient_scene, wear_problem_of
 
-SCENE = "steady/examples/voronoi_transient.toml"
+SCENE = examples.path("voronoi_transient")
 
 
 def measure(scene, options, initial, n):
@@ -66,7 +67,7 @@ def main(argv=None):
     cases = [("translation", scene)] + [
         (f"pin_on_disk R = {r:g} m", dataclasses.replace(scene, sliding=PinOnDisk(r)))
         for r in args.track_radius]
-    print(f"{platform.processor() or platform.machine()}, n = {args.n}, {SCENE}, "
+    print(f"{platform.processor() or platform.machine()}, n = {args.n}, {SCENE.name}, "
           f"F_N = {scene.normal_force:g} N")
     print("| kinematics | steps | solves | iterations | per solve | wall (s) | face vs "
           "closed form |")

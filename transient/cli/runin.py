@@ -99,6 +99,7 @@ from steady.cli.common import (
     note,
     prepare_output,
     program_name,
+    read_input,
     run_command,
 )
 from steady.memory import check_memory, keep_freed_memory
@@ -136,9 +137,10 @@ def build_parser():
                             "it does not exist)")
     start.add_argument("--force", action="store_true",
                        help="start over, overwriting existing output files")
-    p.add_argument("--plot", type=pathlib.Path, metavar="PNG",
-                   help="draw the history and the final face into this PNG (from RUN.h5; an "
-                        "existing figure is replaced with --resume or --force)")
+    p.add_argument("--plot", type=pathlib.Path, metavar="FIGURE",
+                   help="draw the history and the final face into this figure, .png, .pdf or "
+                        ".svg (from RUN.h5; an existing figure is replaced with --resume or "
+                        "--force)")
     from ..stepping import SCHEMES
 
     add_option_flags(p, choices={"scheme": sorted(SCHEMES)})
@@ -392,7 +394,7 @@ def run(args):
     out = args.output
     not_started = "interrupted before the run started; nothing was written"
     try:
-        scene, options, initial = load_transient_scene(args.scene, n=args.n)
+        scene, options, initial = read_input(load_transient_scene, args.scene, n=args.n)
         options = options_from_flags(options, args)
         _check_outputs(args)
         grid = scene.grid()  # load_scene has checked n against the outline
