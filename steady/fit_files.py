@@ -84,6 +84,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import os
 import pathlib
 
 import h5py
@@ -313,7 +314,7 @@ def read_measured(path, *, pixel_size=None, height_scale=1.0):
     ((2, 3), (0.0001, 0.0001), 1)
     """
     path = pathlib.Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):  # a loop of links is there, and named as one
         raise FileNotFoundError(f"measured map {str(path)!r} does not exist")
     input_file_size(path, "measured map")  # a regular file, not empty
     scale = _HEIGHT_SCALE.parse(height_scale, "")
@@ -562,7 +563,7 @@ def read_fit(path):
         or a bad outline (the message names the path and the problem).
     """
     path = pathlib.Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):  # a loop of links is there, and named as one
         raise FileNotFoundError(f"fit file {str(path)!r} does not exist")
     if not path.is_file():
         raise ValueError(f"fit file {str(path)!r} is not a regular file")

@@ -55,6 +55,7 @@ source) are read too.
 from __future__ import annotations
 
 import dataclasses
+import os
 import pathlib
 
 import h5py
@@ -655,7 +656,7 @@ def read_result(path):
         version (the message names the path and the problem).
     """
     path = pathlib.Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):  # a loop of links is there, and named as one
         raise FileNotFoundError(f"result file {str(path)!r} does not exist")
     if not path.is_file():
         raise ValueError(f"result file {str(path)!r} is not a regular file")

@@ -152,7 +152,7 @@ class SweepFile:
     def __init__(self, path, settings=None):
         self.path = pathlib.Path(path)
         self.settings_text = None if settings is None else point_key(settings)
-        if not self.path.exists():
+        if not os.path.lexists(self.path):  # a loop of links is there
             if settings is None:
                 raise FileNotFoundError(f"sweep file {str(self.path)!r} does not exist")
             self._create()

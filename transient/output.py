@@ -123,6 +123,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import pathlib
 import types
 
@@ -907,7 +908,7 @@ def read_run(path):
         layout version.
     """
     path = pathlib.Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):  # a loop of links is there, and named as one
         raise FileNotFoundError(f"run file {str(path)!r} does not exist")
     if not path.is_file():
         raise ValueError(f"run file {str(path)!r} is not a regular file")
