@@ -345,6 +345,10 @@ CASES = [
         lambda d: np.save(d / "h.npy", np.zeros((8, 8))),
         lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
          "h.npy' holds an array of shape (8, 8); (32, 32) is needed", ("transient",)),
+    Case("[initial_face] NaN on the face", scene_and(
+        lambda d: np.save(d / "h.npy", np.full((32, 32), np.nan)),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "h.npy': recession field must be finite on the face, got ", ("transient",)),
     # -- every array read from a file refuses complex numbers (numpy would keep the real part)
     Case("[initial_face] complex file", scene_and(
         lambda d: np.save(d / "h.npy", np.zeros((32, 32)) * (1 + 1e-6j)),
