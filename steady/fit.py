@@ -96,9 +96,11 @@ _SEARCH_PIXELS = 8000
 _MIN_PIXELS_ACROSS = 8
 
 
-# Options of a fit, lengths >= 0: any length is taken (the scale range is a problem's).
-_RIM_MARGIN = Key("rim_margin", "number", unit="m", low=0.0, low_open=False)
-_MAX_SHIFT = Key("max_shift", "number", unit="m", low=0.0, low_open=False)
+#: The fit's ``rim_margin`` (and ``runin-fit --rim-margin``): a length >= 0, in the range
+#: of every scale of a problem (:data:`steady.schema.SCALE_RANGE`) unless 0.
+RIM_MARGIN = Key("rim_margin", "number", unit="m", low=0.0, low_open=False)
+#: The fit's ``max_shift`` (and ``runin-fit --max-shift``), as ``rim_margin``.
+MAX_SHIFT = Key("max_shift", "number", unit="m", low=0.0, low_open=False)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -1014,9 +1016,9 @@ class FaceModel(FaceBasis):
         start = np.asarray(shift, dtype=float)
         if start.shape != (2,) or not np.all(np.isfinite(start)):
             raise ValueError(f"shift must be two finite lengths (m), got {shift!r}")
-        rim_margin = _RIM_MARGIN.parse(rim_margin, "", scale=False)
+        rim_margin = RIM_MARGIN.parse(rim_margin, "")
         max_shift = (_DEFAULT_MAX_SHIFT * self.outline.scale if max_shift is None
-                     else _MAX_SHIFT.parse(max_shift, "", scale=False))
+                     else MAX_SHIFT.parse(max_shift, ""))
         confidence = float(confidence)
         if not 0 < confidence < 1:
             raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")

@@ -126,7 +126,7 @@ def grid_size(n):
     ...     grid_size(10**20)
     ... except ValueError as err:
     ...     print(str(err).split(":")[0].replace(str(MAX_GRID_SIZE), "MAX_GRID_SIZE"))
-    grid size n = 100000000000000000000 is larger than MAX_GRID_SIZE
+    grid size n = 1e+20 is larger than MAX_GRID_SIZE
     """
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
         raise ValueError(f"grid size n must be an integer, got {shorten(n)}")

@@ -81,7 +81,7 @@ def input_names(outline, normal_force, E_star, n=None, wear=None):
     names["outline"] = (f"{type(outline).__name__}("
                         + ", ".join(f"{k}={v!r}" for k, v in lengths.items()) + ")")
     names.update(normal_force=f"normal_force = {normal_force!r}", E_star=f"E_star = {E_star!r}",
-                 n=f"n = {n!r}", wear=getattr(wear, "describe", lambda: repr(wear))())
+                 n=f"n = {shorten(n)}", wear=getattr(wear, "describe", lambda: repr(wear))())
     return names
 
 

@@ -388,7 +388,7 @@ def input_names(outline, normal_force, E_star, n, wear=None):
     names = {name: f"[punch] {name} = {value!r}" for name, value in lengths.items()}
     names["outline"] = "[punch] " + ", ".join(f"{k} = {v!r}" for k, v in lengths.items())
     names.update(normal_force=f"[load] normal_force = {normal_force!r}",
-                 E_star=f"[counterbody] E_star = {E_star!r}", n=f"[grid] n = {n!r}")
+                 E_star=f"[counterbody] E_star = {E_star!r}", n=f"[grid] n = {shorten(n)}")
     if wear is not None:
         names["wear"] = wear.scene_words()
     return names
@@ -407,8 +407,9 @@ def _geometry(table, outline, base_dir, n, wear, where="[phases] map", *, whole=
     context = Context(base_dir=base_dir, outline=outline, n=n, where=where)
     cls, values = PHASE_MAPS.read(table, context)
     declared = cls.declared_phases(values)
-    if declared is not None:
-        _check_map_phases(declared, wear, where, whole)
+    if declared is not None:  # named by the key that declares them, if one does
+        _check_map_phases(declared, wear, where, whole,
+                          "n_phases" if "n_phases" in values else None)
     try:
         geometry = cls.from_values(values, context)
     except ValueError as err:
@@ -418,12 +419,19 @@ def _geometry(table, outline, base_dir, n, wear, where="[phases] map", *, whole=
     return geometry
 
 
-def _check_map_phases(n_phases, wear, where, whole):
-    """Refuse a map of ``n_phases`` other than the law's (``whole``), or more (a depth layer's)."""
+def _check_map_phases(n_phases, wear, where, whole, key=None):
+    """Refuse a map of ``n_phases`` other than the law's (``whole``), or more (a depth layer's).
+
+    ``key``, the map's key that declares ``n_phases``, is named with its value.
+    """
     if whole:
-        wear.check_phase_count(n_phases)
+        if key is None:
+            wear.check_phase_count(n_phases)
+        else:
+            wear.check_phase_count(n_phases, where, key)
     elif n_phases > wear.n_phases:
-        raise ValueError(f"{where} has {n_phases} phases, the wear law {wear.n_phases}")
+        has = f"{key} = {shorten(n_phases)}" if key else f"has {shorten(n_phases)} phases"
+        raise ValueError(f"{where} {has}, the wear law {wear.n_phases}")
 
 
 def parse_scene(text, base_dir, *, extra_sections=(), source_path=None, n=None):

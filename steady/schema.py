@@ -197,6 +197,49 @@ class Key:
             self._check_scale((parsed,), name, value)
         return parsed
 
+    def parse_text(self, text):
+        """The value of a command-line argument ``text`` for this key (a flag's check).
+
+        Parameters
+        ----------
+        text : str
+            The argument as typed.
+
+        Returns
+        -------
+        float, int or str
+
+        Raises
+        ------
+        ValueError
+            ``"expected a number > 0 (m), got 'abc'"``, or for a length,
+            force, modulus or speed outside :data:`SCALE_RANGE`, the value and
+            that range; the caller names the flag.
+
+        Examples
+        --------
+        >>> Key("limit", "number", unit="m", low=0.0).parse_text("1e3")
+        1000.0
+        >>> try:
+        ...     Key("limit", "number", unit="m", low=0.0).parse_text("1e300")
+        ... except ValueError as err:
+        ...     print(err)
+        1e+300 m is outside [1e-30, 1e+30] m, the range of every scale of a problem (SI units)
+        """
+        expected = f"expected {self.describe()}, got {shorten(text)}"
+        try:
+            value = int(text) if self.type == "integer" else float(text)
+        except ValueError:
+            if self.type != "string":
+                raise ValueError(expected) from None
+            value = text
+        try:
+            parsed = self.parse(value, "", scale=False)
+        except ValueError:
+            raise ValueError(expected) from None
+        self._check_scale((parsed,), "", parsed)
+        return parsed
+
     def _check_scale(self, values, name, shown):
         """Refuse a length, force, modulus or speed outside :data:`SCALE_RANGE` (see Notes)."""
         if self.unit not in SCALE_UNITS or self.low != 0.0 or self.type not in (
@@ -210,7 +253,8 @@ class Key:
                 given = (f"{shorten(shown)} {self.unit}" if len(values) == 1 and
                          not isinstance(shown, list)
                          else f"{shorten(shown)}: {v!r} {self.unit}")
-                raise ValueError(f"{name} = {given} is outside [{low:g}, {high:g}] {self.unit}, "
+                value = f"{name} = {given}" if name else given
+                raise ValueError(f"{value} is outside [{low:g}, {high:g}] {self.unit}, "
                                  f"the range of every scale of a problem (SI units)")
 
     def _scalar(self, value, name, shown, base_dir):

@@ -253,7 +253,7 @@ class WearLaw(abc.ABC):
         law = f"law = {self.kind!r}, " if self.kind not in ("", WEAR_LAWS.default) else ""
         return f"[wear] {law}{words}"
 
-    def check_phase_count(self, n_phases, what="the phase map"):
+    def check_phase_count(self, n_phases, what="the phase map", key=None):
         """Refuse a phase map of another number of phases than the law's.
 
         Parameters
@@ -262,6 +262,9 @@ class WearLaw(abc.ABC):
             The phases of ``what``.
         what : str, optional
             What has them, for the message (default ``"the phase map"``).
+        key : str, optional
+            The key of ``what`` that gives ``n_phases``, named with its value
+            (``[phases] map n_phases = 10``); default None: none does.
 
         Raises
         ------
@@ -271,14 +274,16 @@ class WearLaw(abc.ABC):
         """
         if n_phases == self.n_phases:
             return
+        has = (f"{what} {key} = {shorten(n_phases)}" if key is not None
+               else f"{what} has {shorten(n_phases)} phases")
         values = self.scene_values()
-        key = next((key for key in self.keys if key.per_phase), None)
-        if key is None:
+        per_phase = next((k for k in self.keys if k.per_phase), None)
+        if per_phase is None:
             raise ValueError(f"{self.scene_words()} is a law of {self.n_phases} phase(s) but "
-                             f"{what} has {n_phases}")
-        entries = "values" if key.type == "numbers" else "lists"
-        raise ValueError(f"[wear] {key.name} has {len(values[key.name])} {entries} "
-                         f"{shorten(values[key.name])} but {what} has {n_phases} phases")
+                             f"{has}")
+        entries = "values" if per_phase.type == "numbers" else "lists"
+        raise ValueError(f"[wear] {per_phase.name} has {len(values[per_phase.name])} {entries} "
+                         f"{shorten(values[per_phase.name])} but {has}")
 
     def file_attributes(self):
         """What result and run files record of the law: ``name -> (value, udunits unit)``.

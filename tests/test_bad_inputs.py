@@ -171,6 +171,17 @@ CASES = [
          "unknown key 'kkkk"),
     Case("radius a string", scene(lambda t: with_key(t, "radius", '"4 mm"')),
          "[punch] radius must be a number > 0 (m), got '4 mm'"),
+    # A TOML date, time or big integer is shown as written, not as Python holds it.
+    Case("radius a date", scene(lambda t: with_key(t, "radius", "1979-05-27")),
+         "[punch] radius must be a number > 0 (m), got 1979-05-27 (a date)"),
+    Case("n a time of day", scene(lambda t: with_key(t, "n", "07:32:00")),
+         "[grid] n must be an integer >= 2, got 07:32:00 (a time of day)"),
+    Case("coefficients with a date-time", scene(lambda t: with_key(
+        t, "coefficients", "[1979-05-27T07:32:00Z, 1e-12]")),
+         "[wear] coefficients must be an array of numbers each > 0 (1/Pa), got "
+         "[1979-05-27T07:32:00+00:00 (a date-time), 1e-12]"),
+    Case("n = 10^30", scene(lambda t: with_key(t, "n", str(10**30))),
+         "[grid] n = 1e+30: the pixel h = 2 L / n = 8e-33 m is outside [1e-30, 1e+30] m"),
     Case("n not an integer", scene(lambda t: with_key(t, "n", "32.5")),
          "[grid] n must be an integer >= 2, got 32.5"),
     Case("E_star nan", scene(lambda t: with_key(t, "E_star", "nan")),
@@ -229,7 +240,10 @@ CASES = [
     # -- micrographs: refused before the image is segmented (10 phases would take years)
     Case("micrograph of 10 phases, 2 coefficients", scene_and(
         grey_image, lambda t: micrograph_map(t, "n_phases = 10")),
-         "but the phase map has 10 phases"),
+         "but [phases] map n_phases = 10"),
+    Case("micrograph of 10^30 phases", scene_and(
+        grey_image, lambda t: micrograph_map(t, f"n_phases = {10**30}")),
+         "but [phases] map n_phases = 1e+30"),
     Case("micrograph of 6 phases by Otsu", scene_and(
         grey_image, lambda t: with_key(micrograph_map(t, "n_phases = 6"), "coefficients",
                                        "[1e-13, 2e-13, 3e-13, 4e-13, 5e-13, 6e-13]")),
@@ -331,6 +345,10 @@ CASES = [
         lambda d: np.save(d / "h.npy", np.zeros((8, 8))),
         lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
          "h.npy' holds an array of shape (8, 8); (32, 32) is needed", ("transient",)),
+    Case("[initial_face] NaN on the face", scene_and(
+        lambda d: np.save(d / "h.npy", np.full((32, 32), np.nan)),
+        lambda t: with_section(t, "initial_face", 'kind = "file"\npath = "h.npy"')),
+         "h.npy': recession field must be finite on the face, got ", ("transient",)),
     # -- every array read from a file refuses complex numbers (numpy would keep the real part)
     Case("[initial_face] complex file", scene_and(
         lambda d: np.save(d / "h.npy", np.zeros((32, 32)) * (1 + 1e-6j)),

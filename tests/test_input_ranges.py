@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from conftest import scene_text
 
+import steady.cli.fit as fit_cli
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
 from steady.outline import Circle, Rectangle
@@ -118,6 +119,47 @@ def test_a_scale_out_of_range_is_bad_input(tmp_path, capsys, overrides, fragment
     assert (tmp_path / "out.h5").read_bytes() == PRECIOUS, "the output was replaced"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.npy", "out.h5", "s.toml"], \
         "a file was left behind"
+
+
+@pytest.mark.parametrize("command, flag, fragment", [
+    # A length flag is a scale like a scene's length: its range, named with the flag.
+    ("transient", "--distance-limit", f"error: argument --distance-limit: 1e+300 m {RANGE} m"),
+    ("fit", "--rim-margin", f"error: argument --rim-margin: 1e+300 m {RANGE} m"),
+    ("fit", "--max-shift", f"error: argument --max-shift: 1e+300 m {RANGE} m"),
+    # A step tolerance above 1 f* (more than the face's relief) is refused, not run to a failure.
+    ("transient", "--tol", "error: argument --tol: expected a number in (2.22045e-16, 1] (f*), "
+                           "got '1e300'"),
+])
+def test_a_flag_out_of_range_is_bad_input_named(tmp_path, capsys, command, flag, fragment):
+    scene = tmp_path / "s.toml"
+    scene.write_text(scene_text("runin"))
+    np.save(tmp_path / "measured.npy", np.zeros((32, 32)))
+    argv = ([str(scene), "-o", str(tmp_path / "out.h5")] if command == "transient" else
+            [str(scene), str(tmp_path / "measured.npy"), "-o", str(tmp_path / "fit.h5"),
+             "--pixel-size", "2.5e-4", "--shift"])
+    try:
+        status = (transient_cli if command == "transient" else fit_cli).main(
+            [*argv, flag, "1e300"])
+    except SystemExit as done:  # argument errors exit from the parser
+        status = done.code
+    out, err = capsys.readouterr()
+    lines = err.splitlines()
+    assert status == 2, f"exit {status}: {err!r}"
+    assert len(lines) == 1 and lines[0].startswith(fragment), f"{lines!r} lacks {fragment!r}"
+    assert out == "", f"stdout after a refusal: {out!r}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["measured.npy", "s.toml"], \
+        "a file was written"
+
+
+def test_a_fit_length_out_of_range_is_refused_in_python_too(tmp_path):
+    from steady.fit import fit_scene
+    from steady.fit_files import read_measured
+
+    (tmp_path / "s.toml").write_text(scene_text("runin"))
+    np.save(tmp_path / "m.npy", np.zeros((32, 32)))
+    measured = read_measured(tmp_path / "m.npy", pixel_size=2.5e-4)
+    with pytest.raises(ValueError, match=r"rim_margin = 1e\+300 m is outside \[1e-30, 1e\+30\]"):
+        fit_scene(load_scene(tmp_path / "s.toml"), measured, rim_margin=1e300)
 
 
 def test_an_inclusion_radius_out_of_range_is_named(tmp_path, capsys):

@@ -1182,8 +1182,8 @@ def valid_cases(rng):
                                     flags=flags))
     cases.append(scene_case("valid: --no-slope-error", "steady", base, "valid",
                             flags=["--no-slope-error"]))
-    cases.append(scene_case("valid: --spatial-error", "transient", base, "valid",
-                            flags=["--spatial-error"]))
+    cases.append(scene_case("valid: --no-grid-error", "transient", base, "valid",
+                            flags=["--no-grid-error"]))
     cases.append(scene_case("valid: --segmentation", "steady", MAPS["micrograph"], "valid",
                             flags=["--segmentation", "{d}/seg.png"]))
     return cases

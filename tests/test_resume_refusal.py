@@ -116,6 +116,29 @@ def test_resume_under_other_kinematics_is_refused(tmp_path, capsys, before, afte
     assert out.read_bytes() == saved, "the run file changed"
 
 
+PROGRAMME = "normal_force = 10.0\nprogramme = [[0.05, 20.0]]"
+
+
+@pytest.mark.parametrize("before, after, expected", [
+    (_runin(), _runin(normal_force=20.0),
+     "was run with normal_force = 10.0, the scene has 20.0; use --force to start over"),
+    (_runin().replace("normal_force = 10.0", PROGRAMME), _runin(),
+     "was run with another [load] programme ([[0.05, 20.0]]), the scene has none; use --force "
+     "to start over"),
+    (_runin(), _runin().replace("normal_force = 10.0", PROGRAMME),
+     "was run with another [load] programme (none), the scene has [[0.05, 20.0]]; use --force "
+     "to start over"),
+], ids=["force", "programme -> none", "none -> programme"])
+def test_resume_under_another_load_shows_both_as_written(tmp_path, capsys, before, after,
+                                                          expected):
+    """The file's values are numpy's when read: shown as numbers and lists, as a scene has them."""
+    scene, out = _stopped_text(tmp_path, capsys, before)
+    scene.write_text(after)
+    status, _, err = run([scene, "-o", out, "--resume"], capsys)
+    lines = err.strip().splitlines()
+    assert status == 2 and len(lines) == 1 and lines[0].endswith(expected), err
+
+
 def _layered(thickness=None):
     """The gallery's run-in, columnar, or its map as a layer of ``thickness`` (m)."""
     if thickness is None:

@@ -149,7 +149,7 @@ COUNT_MISMATCHES = {
     "micrograph of 10, power law of 2": (
         'map = { kind = "micrograph", path = "absent.png", n_phases = 10 }',
         "coefficients = [1e-09, 1e-08]", "",
-        "[wear] coefficients has 2 values [1e-09, 1e-08] but the phase map has 10 phases"),
+        "[wear] coefficients has 2 values [1e-09, 1e-08] but [phases] map n_phases = 10"),
     "voronoi of 3, table of 2": (
         'map = { kind = "voronoi", n_seeds = 100, fill_factors = [0.2, 0.3, 0.5], seed = 2024 }',
         'law = "table"\npressures = [[0, 1e5], [0, 1e5]]\nrates = [[0, 1e-9], [0, 1e-8]]', "",
@@ -172,7 +172,7 @@ COUNT_MISMATCHES = {
         'map = { kind = "homogeneous" }', "coefficients = [1e-9, 1e-8]",
         '[depth]\nkind = "layers"\n[[depth.layers]]\nthickness = 1e-4\n'
         'map = { kind = "micrograph", path = "absent.png", n_phases = 3 }\n',
-        "[depth] layers[0] map has 3 phases, the wear law 2"),
+        "[depth] layers[0] map n_phases = 3, the wear law 2"),
 }
 
 

@@ -323,4 +323,7 @@ def from_file(grid, path):
         raise ValueError(f"recession file must be a .npy file, got {path!r}")
     values = read_npy(path, what="initial face file", holds=REAL_NUMBERS, shape=grid.shape,
                       square=False)
-    return from_array(values, grid)
+    try:
+        return from_array(values, grid)
+    except ValueError as err:  # NaN on the face: the file is what to fix
+        raise ValueError(f"initial face file {path!r}: {err}") from None

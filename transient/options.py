@@ -61,7 +61,8 @@ class RunOptions:
         docs/benchmarks.md, "Run-in speed") (flag).
     tol : float
         Local error per step, rms over the face of the shape error in units
-        of ``f*`` (default 1e-5) (flag).
+        of ``f*`` (default 1e-5; at most 1, as the face's relief is a
+        fraction of ``f*``) (flag).
     fixed_step : float or None
         Fixed step, m (no adaptivity, no jump); default None (adaptive).
     first_step : float or None
@@ -108,10 +109,12 @@ class RunOptions:
     scheme: str = _option("esdirk3", Key(
         "scheme", "string", doc="registered integrator (transient.stepping.SCHEMES)"), flag=True)
     # A tolerance below the precision of a double cannot be met (and times f* may
-    # underflow to 0).
+    # underflow to 0); one above 1 lets a step err by more than the face's whole relief
+    # (a fraction of f*), so that the step controller accepts what no estimate resolves.
     tol: float = _option(1e-5, Key(
-        "tol", "number", unit="f*", low=sys.float_info.epsilon,
-        doc="local error per step, shape rms / f*"), flag=True)
+        "tol", "number", unit="f*", low=sys.float_info.epsilon, high=1.0, high_open=False,
+        doc="local error per step, shape rms / f* (at most 1: f* bounds the face's relief, "
+            "a looser step resolves nothing)"), flag=True)
     fixed_step: float | None = _option(None, Key(
         "fixed_step", "number", unit="m", low=0.0,
         doc="fixed steps, no adaptivity (default: adaptive)"))
@@ -243,19 +246,12 @@ def _renamed(old, new, value, distance_scale):
 
 
 def _flag_type(key):
-    """The argparse type of a flag: its key's check, one line on failure."""
+    """The argparse type of a flag: its key's check (:meth:`Key.parse_text`), one line."""
     def parse(text):
         try:
-            value = int(text) if key.type == "integer" else float(text)
-        except ValueError:
-            value = text if key.type == "string" else None
-        if value is None:
-            raise argparse.ArgumentTypeError(f"expected {key.describe()}, got {shorten(text)}")
-        try:
-            return key.parse(value, "")
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected {key.describe()}, got "
-                                             f"{shorten(text)}") from None
+            return key.parse_text(text)
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
     return parse
 
 

@@ -72,6 +72,7 @@ __all__ = [
     "check_figure_path",
     "configure_logging",
     "describe_os_error",
+    "key_type",
     "note",
     "prepare_output",
     "program_name",
@@ -479,6 +480,33 @@ def check_figure_path(path, what="--plot"):
         got = shorten(suffix) if suffix else "none"
         raise ValueError(f"{what} {shorten(str(path))}: expected the suffix .png, .pdf or .svg, "
                          f"got {got}")
+
+
+def key_type(key):
+    """The argparse type of a flag checked by a scene key (:meth:`steady.schema.Key.parse_text`).
+
+    Parameters
+    ----------
+    key : steady.schema.Key
+
+    Returns
+    -------
+    callable
+        ``text -> value``; a bad value is one line naming the flag (argparse
+        adds it), the value and what was expected.
+
+    Examples
+    --------
+    >>> from steady.schema import Key
+    >>> key_type(Key("margin", "number", unit="m", low=0.0, low_open=False))("2e-3")
+    0.002
+    """
+    def parse(text):
+        try:
+            return key.parse_text(text)
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
+    return parse
 
 
 def add_grid_flag(parser):

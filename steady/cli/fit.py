@@ -28,7 +28,7 @@ if __name__ == "__main__":  # python -m steady.cli.fit: Ctrl-C handled from here
 
 import pathlib
 
-from ..fit import fit_scene
+from ..fit import MAX_SHIFT, RIM_MARGIN, fit_scene
 from ..fit_files import plot_fit, read_measured, write_fit
 from ..memory import check_memory, fit_memory
 from ..scene import load_scene
@@ -44,6 +44,7 @@ from .common import (
     check_figure_path,
     configure_logging,
     describe_os_error,
+    key_type,
     note,
     prepare_output,
     program_name,
@@ -80,10 +81,10 @@ def build_parser():
                              "(.png, .pdf or .svg)")
     parser.add_argument("--shift", action="store_true",
                         help="search the lateral shift of the phase map that fits best")
-    parser.add_argument("--max-shift", type=float, metavar="M",
+    parser.add_argument("--max-shift", type=key_type(MAX_SHIFT), metavar="M",
                         help="search radius of --shift, m (default 5 %% of the face's scale: the "
                              "radius of a disk, else half the longer side of its bounding box)")
-    parser.add_argument("--rim-margin", type=float, default=0.0, metavar="M",
+    parser.add_argument("--rim-margin", type=key_type(RIM_MARGIN), default=0.0, metavar="M",
                         help="leave out the points within M of the face's rim, m (default 0)")
     parser.add_argument("--n", type=int, help="model grid, pixels along the longer side of "
                                               "the face's box (default: the scene's n)")

@@ -108,7 +108,7 @@ def check_same_inputs(path, quantities, arrays, stored_attrs, stored_arrays, sto
         if stored_attrs.get(key) != quantities[key][0]:
             raise ValueError(f"{str(path)!r} was run with {key} = "
                              f"{shorten(stored_attrs.get(key))}, the scene has "
-                             f"{quantities[key][0]!r}; use --force to start over")
+                             f"{shorten(quantities[key][0])}; use --force to start over")
     try:
         stored_wear = wear_law_from_file(stored_attrs)
     except ValueError:
@@ -131,9 +131,11 @@ def check_same_inputs(path, quantities, arrays, stored_attrs, stored_arrays, sto
     stored_programme, programme = stored.load_programme, problem.load_programme
     if (stored_programme is None) != (programme is None) or (
             programme is not None and stored_programme.pairs != programme.pairs):
-        shown = None if stored_programme is None else [list(p) for p in stored_programme.pairs]
+        def shown(programme):
+            return "none" if programme is None else shorten([list(p) for p in programme.pairs])
         raise ValueError(f"{str(path)!r} was run with another [load] programme "
-                         f"({shorten(shown)}); use --force")
+                         f"({shown(stored_programme)}), the scene has {shown(programme)}; "
+                         f"use --force to start over")
     if not np.array_equal(stored_arrays.get("phase"), arrays["phase"]):
         raise ValueError(f"{str(path)!r} was run with another phase map; use --force")
     check_same_columns(path, stored_attrs, stored, problem.columns)
