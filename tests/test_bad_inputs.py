@@ -396,12 +396,12 @@ CASES = [
          # The command logs numpy's overflow warning (shown with -v); here it must not raise.
          marks=(pytest.mark.filterwarnings("ignore::RuntimeWarning"),)),
     Case("--tol negative", argv("--tol", "-3"),
-         "argument --tol: expected a number > 2.22045e-16 (f*), got '-3'", ("transient",)),
+         "argument --tol: expected a number in (2.22045e-16, 1] (f*), got '-3'", ("transient",)),
     Case("--tol -1e-4", argv("--tol", "-1e-4"),
-         "argument --tol: expected a number > 2.22045e-16 (f*), got '-1e-4'", ("transient",)),
+         "argument --tol: expected a number in (2.22045e-16, 1] (f*), got '-1e-4'", ("transient",)),
     # A tolerance below the precision of a double (its product with f* underflowed to 0).
     Case("[transient] tol 5e-324", scene(lambda t: with_key(t, "tol", "5e-324")),
-         "[transient] tol must be a number > 2.22045e-16 (f*), got 5e-324", ("transient",)),
+         "[transient] tol must be a number in (2.22045e-16, 1] (f*), got 5e-324", ("transient",)),
     Case("--distance-limit -1E+3", argv("--distance-limit", "-1E+3"),
          "argument --distance-limit: expected a number > 0 (m), got '-1E+3'", ("transient",)),
     Case("--max-steps 0", argv("--max-steps", "0"),

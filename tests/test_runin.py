@@ -354,7 +354,7 @@ def test_stopped_run_resumes_to_steady():
 
 
 @pytest.mark.parametrize("field,value,match", [
-    ("tol", 0.0, r"tol must be a number > 2.22045e-16 \(f\*\), got 0.0"),
+    ("tol", 0.0, r"tol must be a number in \(2.22045e-16, 1\] \(f\*\), got 0.0"),
     ("spread_tol", -1.0, r"spread_tol must be a number > 0 \(1\), got -1.0"),
     ("max_steps", 0, r"max_steps must be an integer >= 1, got 0"),
     ("snapshot_distances", (-1.0,),

@@ -85,7 +85,7 @@ def test_existing_output_needs_force_or_resume(tmp_path, write_scene):
 @pytest.mark.parametrize("keys,match", [
     ({"bogus": 1}, "unknown key 'bogus'"),
     ({"scheme": "rk4"}, "unknown scheme 'rk4'"),
-    ({"tol": -1.0}, "[transient] tol must be a number > 2.22045e-16 (f*), got -1.0"),
+    ({"tol": -1.0}, "[transient] tol must be a number in (2.22045e-16, 1] (f*), got -1.0"),
 ])
 def test_bad_transient_section(tmp_path, scene_file, keys, match):
     scene = scene_file("runin", transient=keys)
