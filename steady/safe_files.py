@@ -143,21 +143,10 @@ def _remove_dead_temporaries(target):
         if not (name.startswith(prefix) and name.endswith(".tmp")):
             continue
         pid = name[len(prefix):].split(".", 1)[0]
-        if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
+        if not pid.isdigit() or int(pid) == os.getpid() or _running(int(pid)):
             continue
         with contextlib.suppress(OSError):
             (target.parent / name).unlink()
-
-
-def _alive(pid):
-    """Whether process ``pid`` exists (a zombie, not yet waited for, counts as alive)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # PermissionError: another user's process
-        return True
-    return True
 
 
 def _keep_backup(path, backup):
