@@ -18,6 +18,8 @@ import numpy as np
 
 from steady.topography import to_topography
 
+from .run_in_distance import coating_distance, run_in_distance
+
 __all__ = ["COATING_HISTORY_UNITS", "DEPTH_HISTORY_UNITS", "HISTORY_UNITS",
            "PROGRAMME_HISTORY_UNITS", "RunResult", "RunState", "rms_slope_uncertainty"]
 
@@ -299,8 +301,6 @@ class RunResult:
         >>> one.reached and tenth.reached and one.distance_m < tenth.distance_m
         True
         """
-        from .run_in_distance import run_in_distance
-
         return run_in_distance(self, within, sliding_speed=sliding_speed)
 
     @property
@@ -320,8 +320,6 @@ class RunResult:
         A :class:`transient.run_in_distance.CoatingDistance` (m and ``s*``),
         NaN with the reason without a coating or before it happened.
         """
-        from .run_in_distance import coating_distance
-
         return coating_distance(self, "worn_through")
 
     @property
@@ -331,8 +329,6 @@ class RunResult:
         A :class:`transient.run_in_distance.CoatingDistance`, as
         :attr:`coating_worn_through`.
         """
-        from .run_in_distance import coating_distance
-
         return coating_distance(self, "gone")
 
     @property
