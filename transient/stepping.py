@@ -43,8 +43,14 @@ Every scheme is registered by name with the class decorator
     Alexander's two-stage, stiffly accurate, L-stable SDIRK
     (``gamma = 1 - 1/sqrt 2``): two shifted solves per step, second order,
     with an embedded first-order estimate.
+``esdirk3``
+    Kennedy & Carpenter's ESDIRK3(2)4L[2]SA: three shifted solves per
+    step, third order, L-stable, with an embedded second-order estimate.
+``esdirk4``
+    Their ESDIRK4(3)6L[2]SA: five shifted solves per step, fourth order,
+    L-stable, with an embedded third-order estimate.
 
-Stiffly accurate schemes (all three implicit ones) end a step with the
+Stiffly accurate schemes (every implicit one) end a step with the
 pressure of the new face, ``p+ = P(w+)``, so the differential variable
 keeps its classical order on the index-1 DAE; where the contact set
 changes during a step the solution is only Lipschitz in ``s`` and every
