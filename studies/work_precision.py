@@ -363,7 +363,8 @@ def plot(path, png):
     fig = Figure(figsize=(16, 5))
     FigureCanvasAgg(fig)
     ax = fig.subplots(1, 3)
-    markers = {"implicit_euler": "o-", "bdf2": "s-", "sdirk2": "^-", "explicit_euler": "v-"}
+    markers = {"implicit_euler": "o-", "bdf2": "s-", "sdirk2": "^-", "explicit_euler": "v-",
+               "esdirk3": "D-", "esdirk4": "P-"}
     for scheme in sorted({r["scheme"] for r in runs.values()}):
         rs = sorted((r for r in runs.values() if r["scheme"] == scheme), key=lambda r: r["tol"])
         ax[0].loglog([r["wall"] / unit for r in rs], [r["history_error"] for r in rs],

@@ -59,3 +59,15 @@ def test_profile_runin_smoke(tmp_path):
     contact = rows[0]
     assert contact["part"] == "contact solves" and contact["calls"] > 0, f"{contact}"
     assert out.exists(), "the profile writes its HDF5 file"
+
+
+def test_bench_runin_interfaces_smoke(tmp_path):
+    out = tmp_path / "bench.h5"
+    bench = load("bench_runin")
+    scene = bench.EXAMPLES / "coating_transient.toml"
+    (row,) = bench.main(["--interfaces", "--interfaces-scene", str(scene), "--sizes", "16",
+                         "--tol", "1e-3", "--reference-tol", "1e-4",
+                         "--out", str(out)])["interfaces"]
+    assert row["status"] == "depth" and row["crossings"] > 0, f"interfaces row {row}"
+    assert 0 <= row["extra_newton"] < row["solves"], f"second Newton solves: {row}"
+    assert 0 < row["face_error"] < 1e-2, f"final face against tol 1e-4: {row}"

@@ -346,7 +346,9 @@ class StageSolver:
         ``D`` is linearised about the iterate, the line of its segment
         (slope ``k``), and ``g`` about the last pressure: each iteration
         is the shifted contact problem of a columnar stage with the
-        coefficients ``k`` of the iterate's segments.  Semismooth Newton on
+        coefficients ``k`` of the iterate's segments, the first iterate's
+        those that the warm start's predicted pressure reaches (so that a
+        crossing it foresees costs no second solve).  Semismooth Newton on
         the piecewise-linear ``D``: it ends once no pixel changes segment
         (then the linearisation is exact for the linear law) and, for
         another law, the pressure changes by less than ``newton_rtol``; at
@@ -370,6 +372,17 @@ class StageSolver:
                 # next combination amplified, to per cent of K x0 and wrong
                 # stage pressures (tests/test_depth_run.py).
                 start, _ = history.predict(h_lin, shift)
+                # The segments the predicted pressure reaches: the stage's crossings
+                # seen before its first solve rather than after it, which would
+                # cost a second one (docs/benchmarks.md, "Runs across interfaces").
+                ahead = known + c * self.variable_rate(np.maximum(start, 0.0))
+                predicted = work.segment(ahead)
+                if np.any(predicted != segments):
+                    segments, guess = predicted, ahead
+                    k = work.slope(segments)
+                    base = origin + work.depth(guess, segments) + k * (known - guess)
+                    shift, h_lin = self._linearisation(base, c, p0, k)
+                    start, _ = history.predict(h_lin, shift)
                 if not wear.linear:
                     p0 = start
                     shift, h_lin = self._linearisation(base, c, p0, k)

@@ -43,8 +43,14 @@ Every scheme is registered by name with the class decorator
     Alexander's two-stage, stiffly accurate, L-stable SDIRK
     (``gamma = 1 - 1/sqrt 2``): two shifted solves per step, second order,
     with an embedded first-order estimate.
+``esdirk3``
+    Kennedy & Carpenter's ESDIRK3(2)4L[2]SA: three shifted solves per
+    step, third order, L-stable, with an embedded second-order estimate.
+``esdirk4``
+    Their ESDIRK4(3)6L[2]SA: five shifted solves per step, fourth order,
+    L-stable, with an embedded third-order estimate.
 
-Stiffly accurate schemes (all three implicit ones) end a step with the
+Stiffly accurate schemes (every implicit one) end a step with the
 pressure of the new face, ``p+ = P(w+)``, so the differential variable
 keeps its classical order on the index-1 DAE; where the contact set
 changes during a step the solution is only Lipschitz in ``s`` and every
@@ -83,6 +89,7 @@ from steady.registry import Registry
 __all__ = [
     "BDF2",
     "ESDIRK3",
+    "ESDIRK4",
     "ExplicitEuler",
     "ImplicitEuler",
     "SCHEMES",
@@ -393,19 +400,49 @@ def _esdirk3_tableau():
     return g, a, a[3].copy(), b_hat
 
 
+class _ESDIRK(Scheme):
+    """An explicit-first-stage, stiffly accurate DIRK written as its table.
+
+    Subclasses set ``gamma``, ``a`` (s x s, lower triangular, ``a[0] = 0``,
+    ``a[i, i] = gamma`` for ``i >= 1``, last row ``b``), ``b`` and ``b_hat``.
+    The first stage is the rate of the accepted point, so a step costs
+    ``s - 1`` shifted contact solves, all with the shift ``gamma ds k``::
+
+        W_i = w + ds sum_{j<i} a_ij f(W_j) + gamma ds f(W_i),   i = 1 .. s-1,
+        w+ = W_(s-1).
+
+    Each stage starts from the pressure of the one before.  The embedded
+    weights ``b_hat`` give the error estimate ``ds sum_i (b_i - b_hat_i)
+    f(W_i)``, of order ``ds^(error_order + 1)``.
+    """
+
+    gamma = a = b = b_hat = None
+
+    def step(self, solver, state, ds):
+        """One step, ``s - 1`` shifted contact solves (see :meth:`Scheme.step`)."""
+        stages = len(self.b)
+        rates = [solver.variable_rate(state.pressure)]
+        y0 = _variable(solver, state, state.recession)
+        x0 = state.pressure
+        for i in range(1, stages):
+            base = y0 + ds * sum(self.a[i, j] * rates[j] for j in range(i))
+            y, res = _implicit(solver, state, base, self.gamma * ds, x0)
+            rates.append(solver.variable_rate(res.pressure))
+            x0 = res.pressure
+        weights = self.b - self.b_hat
+        error = ds * sum(weights[j] * rates[j] for j in range(stages))
+        return _trial(solver, state, y, res, error)
+
+
 @register_scheme
-class ESDIRK3(Scheme):
+class ESDIRK3(_ESDIRK):
     """Kennedy & Carpenter's ESDIRK3(2)4L[2]SA: third order, L-stable, stiffly accurate.
 
     Four stages with ``c = (0, 2 gamma, 3/5, 1)``, ``gamma = 0.4358665``; the
     first is explicit and is the rate of the accepted point, so a step costs
-    three shifted contact solves, all with the same shift ``gamma ds k``::
-
-        W_i = w + ds sum_{j<i} a_ij f(W_j) + gamma ds f(W_i),   i = 2, 3, 4,
-        w+ = W_4.
-
-    Stage order 2.  The embedded second-order weights ``b_hat`` give the
-    error estimate ``ds sum_i (b_i - b_hat_i) f(W_i)``, of order ``ds^3``.
+    three shifted contact solves, all with the same shift ``gamma ds k``
+    (:class:`_ESDIRK`).  Stage order 2.  The embedded second-order weights
+    ``b_hat`` give an error estimate of order ``ds^3``.
     """
 
     name = "esdirk3"
@@ -413,16 +450,42 @@ class ESDIRK3(Scheme):
     error_order = 2
     gamma, a, b, b_hat = _esdirk3_tableau()
 
-    def step(self, solver, state, ds):
-        """One ESDIRK3 step, three shifted contact solves (see :meth:`Scheme.step`)."""
-        rates = [solver.variable_rate(state.pressure)]
-        y0 = _variable(solver, state, state.recession)
-        x0 = state.pressure
-        for i in range(1, 4):
-            base = y0 + ds * sum(self.a[i, j] * rates[j] for j in range(i))
-            y, res = _implicit(solver, state, base, self.gamma * ds, x0)
-            rates.append(solver.variable_rate(res.pressure))
-            x0 = res.pressure
-        weights = self.b - self.b_hat
-        error = ds * sum(weights[j] * rates[j] for j in range(4))
-        return _trial(solver, state, y, res, error)
+
+def _esdirk4_tableau():
+    """Kennedy & Carpenter's ESDIRK4(3)6L[2]SA: ``gamma``, ``A`` (6 x 6), ``b``, ``b_hat``.
+
+    The implicit part of their ARK4(3)6L[2]SA: ``gamma = 1/4``,
+    ``c = (0, 1/2, 83/250, 31/50, 17/20, 1)``, stiffly accurate (the last
+    row of ``A`` is ``b``), L-stable, stage order 2; ``b_hat`` is the
+    embedded third-order method.  Appl. Numer. Math. 44 (2003) 139-181,
+    doi:10.1016/S0168-9274(02)00138-1, table of ARK4(3)6L[2]SA.
+    """
+    g = 0.25
+    a = np.zeros((6, 6))
+    a[1, 0] = g
+    a[2, :2] = (8611 / 62500, -1743 / 31250)
+    a[3, :3] = (5012029 / 34652500, -654441 / 2922500, 174375 / 388108)
+    a[4, :4] = (15267082809 / 155376265600, -71443401 / 120774400,
+                730878875 / 902184768, 2285395 / 8070912)
+    a[5, :5] = (82889 / 524892, 0.0, 15625 / 83664, 69875 / 102672, -2260 / 8211)
+    for i in range(1, 6):
+        a[i, i] = g
+    b_hat = np.array([4586570599 / 29645900160, 0.0, 178811875 / 945068544,
+                      814220225 / 1159782912, -3700637 / 11593932, 61727 / 225920])
+    return g, a, a[5].copy(), b_hat
+
+
+@register_scheme
+class ESDIRK4(_ESDIRK):
+    """Kennedy & Carpenter's ESDIRK4(3)6L[2]SA: fourth order, L-stable, stiffly accurate.
+
+    Six stages with ``c = (0, 1/2, 83/250, 31/50, 17/20, 1)``,
+    ``gamma = 1/4``: five shifted contact solves a step, all with the shift
+    ``ds k / 4`` (:class:`_ESDIRK`).  Stage order 2.  The embedded
+    third-order weights ``b_hat`` give an error estimate of order ``ds^4``.
+    """
+
+    name = "esdirk4"
+    order = 4
+    error_order = 3
+    gamma, a, b, b_hat = _esdirk4_tableau()

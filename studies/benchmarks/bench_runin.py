@@ -21,7 +21,20 @@ What it reproduces
     computed from the stored snapshots, so that it does not depend on the
     figures the run itself records) at ``s/s* = 1e-4, 1e-3, 1e-2, 0.1, 0.3, 1, 3``;
     face error: rms of the shape difference at ``3 s*`` (best constant
-    removed) over the reference's relief.
+    removed) over the reference's relief.  ``--scheme-names`` runs only the
+    integrators named.
+
+    ``--interfaces``: a scene whose phases change with depth (default
+    ``steady/examples/spheres_transient.toml``, from its initial face to its
+    ``end_depth``) at each of ``--sizes``: steps, rejected attempts, contact
+    solves, Newton solves of the stages beyond their first
+    (:attr:`transient.solver.StageSolver.stage_solves`), solver iterations,
+    face pixels crossing an interface, CPU and wall time; with
+    ``--reference-tol`` also the errors against a run of the same scene at
+    that tolerance: the rms of the final worn depth's difference (its mean
+    removed) in ``f*``, and the largest difference of the history's
+    ``rms_slope`` (reference interpolated in the sliding distance) in
+    ``grad_f0``.
 
     ``--memory``: the command line, ``python -m transient SCENE -o RUN.h5``
     (checkpoints every ``--checkpoint-interval`` seconds of wall time,
@@ -45,6 +58,9 @@ How to run
     python studies/benchmarks/bench_runin.py --table --schemes --sizes 40 --n 40 --quick
                                                         # smoke test, seconds
     python studies/benchmarks/bench_runin.py --memory --sizes 40   # smoke test, seconds
+    python studies/benchmarks/bench_runin.py --schemes --n 128 --scheme-names esdirk3 esdirk4
+    python studies/benchmarks/bench_runin.py --interfaces --sizes 64 128 --reference-tol 1e-6
+                                                        # ~10 min on 2 cores
 
 Writes ``--out`` (HDF5: one group per table row) and prints the tables in
 Markdown.
@@ -77,11 +93,13 @@ from transient.output import read_run
 from transient.preconditioners import FourierPreconditioner
 from transient.runin import run_in
 from transient.scene import load_transient_scene, wear_problem_of
+from transient.solver import StageSolver
 from transient.stepping import SCHEMES
 
 # -- parameters -------------------------------------------------------------------
-SCENE = (pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
-         / "voronoi_transient.toml")
+EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "steady" / "examples"
+SCENE = EXAMPLES / "voronoi_transient.toml"
+INTERFACES_SCENE = EXAMPLES / "spheres_transient.toml"
 SIZES = (64, 128, 256, 512, 1024)
 SCHEME_N = 256
 DISTANCES = (1e-4, 1e-3, 1e-2, 0.1, 0.3, 1.0, 3.0)   # s*, where the history is compared
@@ -92,6 +110,7 @@ LADDERS = {
     "bdf2": (1e-4, 1e-5, 3e-6),
     "sdirk2": (2e-3, 1e-3, 5e-4, 2e-4, 1e-4),
     "esdirk3": (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5),
+    "esdirk4": (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5),
 }
 QUICK_LADDER = (1e-2, 1e-3)
 
@@ -142,17 +161,18 @@ def run_counted(problem, initial_height, options):
     """One run-in with its work: ``(result, row)``.
 
     ``row``: steps, rejected, solves, iterations, products (padded FFT
-    products), pairs (unpadded FFT pairs, the preconditioner's), wall (s),
-    peak_rss (bytes, the process's high-water mark after the run).
+    products), pairs (unpadded FFT pairs, the preconditioner's), wall and
+    cpu (s, the process's CPU time over the run), peak_rss (bytes, the
+    process's high-water mark after the run).
     """
     with counted_transforms() as counts:
-        t = time.perf_counter()
+        t, cpu = time.perf_counter(), time.process_time()
         result = run_in(problem, initial_height, options)
-        wall = time.perf_counter() - t
+        wall, cpu = time.perf_counter() - t, time.process_time() - cpu
     row = dict(status=result.status, steps=result.steps, rejected=result.rejected,
                solves=result.solves, iterations=result.iterations,
                products=counts["products"], pairs=counts["pairs"],
-               wall=wall, peak_rss=_peak_rss())
+               wall=wall, cpu=cpu, peak_rss=_peak_rss())
     return result, row
 
 
@@ -268,6 +288,83 @@ def scheme_table(scene_path, n, ratio, ladders, reference=REFERENCE):
     return rows
 
 
+@contextlib.contextmanager
+def counted_stages():
+    """Count the implicit stages (:meth:`transient.solver.StageSolver.implicit` calls)."""
+    counts = {"stages": 0}
+    implicit = StageSolver.implicit
+
+    def counting_implicit(self, *args, **kwargs):
+        counts["stages"] += 1
+        return implicit(self, *args, **kwargs)
+
+    StageSolver.implicit = counting_implicit
+    try:
+        yield counts
+    finally:
+        StageSolver.implicit = implicit
+
+
+def _interface_run(scene, options, initial, n):
+    """One run of a depth scene on the ``n x n`` grid: ``(row, worn depth, history, scales)``.
+
+    ``row`` as :func:`run_counted`'s, with ``crossings`` (face pixels that
+    changed segment, summed over the steps) and ``extra_newton`` (contact
+    solves of the stages beyond one each); the worn depth on the face (m),
+    the history's ``distance`` and ``rms_slope``, and ``(f*, grad_f0)``.
+    """
+    problem = problem_of(scene, n)
+    with counted_stages() as counts:
+        result, row = run_counted(problem, initial.recession(problem.grid), options)
+    state, face = result.state, problem.face_mask
+    worn = problem.worn_depth(np.where(face, state.recession, 0.0), state.offset,
+                              np.where(face, state.initial_recession, 0.0))
+    history = {k: np.asarray(result.history[k]) for k in ("distance", "rms_slope", "crossings")}
+    row.update(n=n, tol=options.tol, scheme=options.scheme,
+               crossings=int(np.nansum(history["crossings"])),
+               extra_newton=int(result.solves - 1 - counts["stages"]))
+    return row, worn[face], history, (problem.depth_scale, result.reference_slope)
+
+
+def interface_table(scene_path, sizes, tol, reference_tol):
+    """Rows of the table of a scene across interfaces (see the module docstring)."""
+    scene, options, initial = load_transient_scene(scene_path)
+    options = dataclasses.replace(options, checkpoint_interval=1e9,
+                                  tol=options.tol if tol is None else tol)
+    rows = []
+    for n in sizes:
+        row, worn, history, (f_star, grad_f0) = _interface_run(scene, options, initial, n)
+        if reference_tol is not None:
+            _, worn_ref, ref, _ = _interface_run(
+                scene, dataclasses.replace(options, tol=reference_tol), initial, n)
+            d = worn - worn_ref
+            inside = history["distance"] <= ref["distance"][-1]
+            slope = np.interp(history["distance"][inside], ref["distance"], ref["rms_slope"])
+            row.update(reference_tol=reference_tol,
+                       face_error=float(np.sqrt(np.mean((d - d.mean()) ** 2))) / f_star,
+                       slope_error=float(np.max(np.abs(history["rms_slope"][inside] - slope)))
+                       / grad_f0)
+        rows.append(row)
+        logger.info("n = %d: %s", n, row)
+    return rows
+
+
+def markdown_interfaces(rows):
+    """The table across interfaces in Markdown."""
+    lines = ["| n | scheme, tol | steps (rejected) | contact solves | second Newton solves "
+             "| iterations | iterations / solve | crossings | CPU (s) | wall (s) "
+             "| final face (f*) | rms slope (grad_f0) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        errors = (f"{r['face_error']:.1e} | {r['slope_error']:.1e}" if "face_error" in r
+                  else "- | -")
+        lines.append(f"| {r['n']} | {r['scheme']}, {r['tol']:.2g} | {r['steps']} "
+                     f"({r['rejected']}) | {r['solves']} | {r['extra_newton']} | "
+                     f"{r['iterations']} | {r['iterations'] / r['solves']:.1f} | "
+                     f"{r['crossings']} | {r['cpu']:.1f} | {r['wall']:.1f} | {errors} |")
+    return "\n".join(lines)
+
+
 def markdown_table(rows):
     """The grid table in Markdown."""
     lines = ["| n | scheme, tol | steps | contact solves | iterations | iterations / solve "
@@ -337,30 +434,43 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--table", action="store_true", help="work per solve against n")
     parser.add_argument("--schemes", action="store_true", help="integrators at equal error")
+    parser.add_argument("--interfaces", action="store_true",
+                        help="a scene across interfaces against n")
+    parser.add_argument("--interfaces-scene", type=pathlib.Path, default=INTERFACES_SCENE)
+    parser.add_argument("--reference-tol", type=float,
+                        help="tol of the reference runs of --interfaces (default: none)")
+    parser.add_argument("--scheme-names", nargs="+",
+                        help="integrators of --schemes (default: every implicit one)")
     parser.add_argument("--memory", action="store_true",
                         help="peak memory of the command line against n")
     parser.add_argument("--checkpoint-interval", type=float,
                         help="checkpoint interval of --memory, s (default: the scene's)")
     parser.add_argument("--scene", type=pathlib.Path, default=SCENE)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
-    parser.add_argument("--tol", type=float, help="tol of --table (default: the scene's)")
+    parser.add_argument("--tol", type=float,
+                        help="tol of --table and --interfaces (default: the scene's)")
     parser.add_argument("--n", type=int, default=SCHEME_N, help="grid of --schemes")
     parser.add_argument("--ratio", type=float, help="k_2/k_1 of --schemes (default: the scene's)")
     parser.add_argument("--quick", action="store_true", help="smoke test: short ladders")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("bench_runin.h5"))
     args = parser.parse_args(argv)
-    if not (args.table or args.schemes or args.memory):
-        parser.error("choose --table, --schemes and/or --memory")
+    if not (args.table or args.schemes or args.memory or args.interfaces):
+        parser.error("choose --table, --schemes, --interfaces and/or --memory")
     logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
     groups = {}
     if args.table:
         groups["grids"] = grid_table(args.scene, args.sizes, args.tol)
         print(markdown_table(groups["grids"]))
+    if args.interfaces:
+        groups["interfaces"] = interface_table(args.interfaces_scene, args.sizes, args.tol,
+                                               args.reference_tol)
+        print(markdown_interfaces(groups["interfaces"]))
     if args.memory:
         groups["memory"] = memory_table(args.scene, args.sizes, args.checkpoint_interval)
         print(markdown_memory(groups["memory"]))
     if args.schemes:
-        implicit = [name for name, s in sorted(SCHEMES.items()) if not s.explicit]
+        implicit = [name for name, s in sorted(SCHEMES.items()) if not s.explicit
+                    and (args.scheme_names is None or name in args.scheme_names)]
         ladders = {name: QUICK_LADDER if args.quick else LADDERS.get(name, (1e-3, 1e-4))
                    for name in implicit}
         groups["schemes"] = scheme_table(args.scene, args.n, args.ratio, ladders,
