@@ -92,9 +92,9 @@ def check_same_inputs(path, quantities, arrays, stored_attrs, stored_arrays, sto
     Everything that defines the problem is compared: the face, the grid,
     the load and its programme, ``E*`` and the counter-body's layer, the
     phase map and the phases below the face (:func:`check_same_columns`),
-    the wear law (``wear``, the scene's, against the file's: :func:`steady.wear.same_wear_law`), the
-    sliding kinematics and the initial face.  The phase names are labels
-    and may change.
+    the wear law (``wear``, the scene's, against the file's:
+    :func:`steady.wear.same_wear_law`), the sliding kinematics and the
+    initial face.  The phase names are labels and may change.
 
     Parameters
     ----------
