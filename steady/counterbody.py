@@ -269,10 +269,11 @@ class LayeredHalfSpace(HalfSpace):
     def _quadrants(self, gradient):
         """The correction's pixel integrals at offsets ``0..nx`` by ``0..ny`` pixels.
 
-        Returns ``c`` integrated over the pixel (``gradient`` False), else the
-        x-derivatives (the y-derivatives are the transpose's on a square grid;
-        computed by swapping the axes otherwise).  Near pixels integrate ``c``
-        itself; far ones the total kernel minus Love's ``1/r``.
+        Returns ``c`` integrated over the pixel, shape ``(nx + 1, ny + 1)``
+        (``gradient`` False), else its x- and y-derivatives stacked, shape
+        ``(2, nx + 1, ny + 1)``; per unit pressure, m/Pa (1/Pa).  Near pixels
+        integrate ``c`` itself; farther ones the layer's whole kernel less
+        Love's ``1/r``; beyond the table, minus Love's alone.
         """
         nx, ny = self.shape
         h, t = self.h, self.thickness
