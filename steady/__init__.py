@@ -10,7 +10,9 @@ a module imports only from its floor and below):
   estimates; :mod:`steady.registry` -- registries of named entries;
   :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
 - fields, arrays that know no outline: :mod:`steady.halfspace` -- the
-  elastic half-space operator (eq. 8); :mod:`steady.array_files` -- ``.npy``
+  elastic half-space operator (eq. 8); :mod:`steady.counterbody` -- the
+  counter-body, a half-space or a layer on a rigid flat, and the layer's
+  operator; :mod:`steady.array_files` -- ``.npy``
   and PNG inputs, checked before their data are read; :mod:`steady.labels`
   -- rasterised phase maps; :mod:`steady.pressures` -- eq. 7;
   :mod:`steady.depth` -- columns of segments below the face;
@@ -60,6 +62,7 @@ _MODULE_OF = {
     "Annulus": "outline",
     "ArrayMap": "phases",
     "Circle": "outline",
+    "Counterbody": "counterbody",
     "Ellipse": "outline",
     "FaceGrid": "outline",
     "FaceModel": "fit",
@@ -68,6 +71,7 @@ _MODULE_OF = {
     "HalfSpace": "halfspace",
     "Homogeneous": "phases",
     "Inclusions": "inclusions",
+    "LayeredHalfSpace": "counterbody",
     "MaskOutline": "outline",
     "MeasuredFace": "measured_face",
     "Micrograph": "micrograph",

@@ -891,6 +891,10 @@ class FaceModel(FaceBasis):
             # Its model is a pressure constant on each phase: a face of K chi_i per phase.
             raise ValueError(f"the fit assumes a uniform sliding speed (pressure constant on "
                              f"each phase), not the sliding {problem.sliding.describe()}")
+        if problem.counterbody.layered:
+            # Its faces are the half-space's (padded past the face to fit the rim).
+            raise ValueError(f"the fit assumes a half-space counter-body, not a "
+                             f"{problem.counterbody.describe()}")
         super().__init__(problem.phases, problem.E_star)
         self.problem = problem
         self.normal_force = problem.normal_force

@@ -367,14 +367,18 @@ class HalfSpace:
         out[nx + 1:, 1:ny] = -s[nx - 1:0:-1]
         return out
 
+    def _gradient_quadrants(self):
+        """The x- and y-derivative kernels at offsets ``0..nx`` by ``0..ny`` pixels, 1/Pa."""
+        _, _, asinh_yx, asinh_xy = self._corners
+        scale = 1.0 / (np.pi * self.E_star)
+        # d/dx: corner sum of asinh(Y/|X|); d/dy: of asinh(X/|Y|).
+        return _corner_sum(asinh_yx) * scale, _corner_sum(asinh_xy) * scale
+
     def _ensure_gradient(self):
         if self._gradient_q is None:
-            _, _, asinh_yx, asinh_xy = self._corners
-            scale = 1.0 / (np.pi * self.E_star)
-            # d/dx: corner sum of asinh(Y/|X|); d/dy: of asinh(X/|Y|).  Both
-            # spectra are purely imaginary; their imaginary parts are kept.
-            self._gradient_q = (self._odd_x_spectrum(_corner_sum(asinh_yx) * scale),
-                                self._odd_y_spectrum(_corner_sum(asinh_xy) * scale))
+            gx, gy = self._gradient_quadrants()
+            # Both spectra are purely imaginary; their imaginary parts are kept.
+            self._gradient_q = (self._odd_x_spectrum(gx), self._odd_y_spectrum(gy))
             for a in self._gradient_q:
                 a.flags.writeable = False
             logger.debug("gradient spectra built for a %d x %d grid", *self.shape)

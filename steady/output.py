@@ -32,7 +32,8 @@ for every variable and attribute with its unit and meaning.  In short::
         (grad_f0), rms_slope_ref_error, mean_pressure (Pa), rms_height (m),
         normal_force (N), E_star (Pa), pixel_size (m), radius (m, disks
         only), scale (m), n (pixels along the longer side), the wear law's
-        numbers (the power law's exponent)
+        numbers (the power law's exponent); on a layered counter-body its
+        thickness (m) and poisson (1), absent on a half-space
         (phase_name): fill_factors, phase_pressures (Pa), the wear law's
         numbers per phase (the power law's wear_coefficients, Pa-m)
     root attributes: format "runin.steady", format_version 3, Conventions,
@@ -61,6 +62,7 @@ import pathlib
 import h5py
 import numpy as np
 
+from .counterbody import Counterbody
 from .outline import OUTLINES, Circle
 from .problem import check_phase_names, default_phase_names
 from .safe_files import atomic_h5
@@ -512,6 +514,10 @@ def _write_quantities(f, result, phase_scale):
                      long_names=wear_long_names(result.wear))
     f.attrs["rms_slope_ref_source"] = result.reference_slope_source
     write_record(f, result.outline.root_attributes())
+    layer = Counterbody(result.E_star, result.thickness, result.poisson).file_attributes()
+    if layer:  # a half-space's file has none of them
+        write_record(f, {name: (value, unit) for name, (value, unit, _) in layer.items()},
+                     long_names={name: words for name, (_, _, words) in layer.items()})
 
 
 def _write_fields(f, result, scales):
@@ -629,6 +635,11 @@ def read_outline(group, *, stored_yx=True):
         return field_from_file(value) if stored_yx and np.ndim(value) == 2 else value
 
     return OUTLINES[kind].from_group(values, read)
+
+
+def _layer_value(values, name):
+    """``thickness`` or ``poisson`` of a file's counter-body layer as a float; None: absent."""
+    return float(values[name]) if name in values else None
 
 
 def _text(value):
@@ -750,5 +761,7 @@ def _read(f, path):
         reference_slope_error=float(values.get("rms_slope_ref_error", 0.0)),
         reference_slope_source=_text(values.get("rms_slope_ref_source",
                                                 "disk: 4 pbar / (pi E*) (eq. 12)")),
+        thickness=_layer_value(values, "thickness"),
+        poisson=_layer_value(values, "poisson"),
     )
     return result, scene_text

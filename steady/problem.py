@@ -35,8 +35,8 @@ import math
 
 import numpy as np
 
+from .counterbody import Counterbody
 from .depth import DepthColumns
-from .halfspace import HalfSpace
 from .labels import validate_labels
 from .outline import FaceGrid
 from .schema import SCALE_RANGE as _SCALE_RANGE
@@ -417,7 +417,7 @@ class FacePhases:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Problem:
-    """A multi-phase punch on an elastic half-space: what every solver takes.
+    """A multi-phase punch on an elastic half-space or layer: what every solver takes.
 
     Parameters
     ----------
@@ -440,6 +440,11 @@ class Problem:
         (:meth:`wear_field`) and makes the steady pressure vary
         within each phase (:meth:`steady_pressure`); it needs a wear law with
         a factorisation ``k_i g(p)`` (:attr:`steady.wear.WearLaw.factor`).
+    thickness : float, m, optional, keyword
+        The counter-body is a layer of this thickness on a rigid flat
+        (:class:`steady.counterbody.Counterbody`); default None, a half-space.
+    poisson : float, optional, keyword
+        The layer's Poisson's ratio in ``[0, 0.5]``, with ``thickness`` only.
     checked : bool, optional, keyword
         The outline, the force, the modulus and the law and the scales that
         follow from them were checked where they entered (a scene file,
@@ -464,6 +469,8 @@ class Problem:
     normal_force: float
     E_star: float
     sliding: object = None
+    thickness: float | None = dataclasses.field(default=None, kw_only=True)
+    poisson: float | None = dataclasses.field(default=None, kw_only=True)
     checked: dataclasses.InitVar[bool] = dataclasses.field(default=False, kw_only=True)
     names: dataclasses.InitVar[object] = dataclasses.field(default=None, kw_only=True)
 
@@ -487,6 +494,10 @@ class Problem:
             check_scales(self.outline, self.normal_force, self.E_star, n=self.n, wear=wear,
                          names=names)
         check_phase_scales(wear, self.phases.counts, self.normal_force, self.pixel_area, names)
+        if self.thickness is not None or self.poisson is not None:
+            layer = self.counterbody  # checks the layer where it enters
+            object.__setattr__(self, "thickness", layer.thickness)
+            object.__setattr__(self, "poisson", layer.poisson)
         if self.sliding is not None:
             self._check_sliding(wear)
 
@@ -600,9 +611,18 @@ class Problem:
 
     # -- derived ---------------------------------------------------------
     @functools.cached_property
+    def counterbody(self):
+        """The counter-body (:class:`steady.counterbody.Counterbody`): modulus and layer."""
+        return Counterbody(self.E_star, self.thickness, self.poisson)
+
+    @functools.cached_property
     def halfspace(self):
-        """The elastic half-space operator of the grid (built on first use, then kept)."""
-        return HalfSpace(self.shape, self.grid.h, self.E_star)
+        """The counter-body's elastic operator of the grid (built on first use, then kept).
+
+        :meth:`steady.counterbody.Counterbody.operator`: the half-space's, or
+        the layer's with the same interface.
+        """
+        return self.counterbody.operator(self.grid)
 
     @property
     def mean_pressure(self):

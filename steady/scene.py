@@ -51,6 +51,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
+from .counterbody import POISSON, THICKNESS, Counterbody
 from .depth_maps import DepthLayers, LayerPhase
 from .load_programme import LoadProgramme
 from .outline import FaceGrid, outline_from_table
@@ -93,7 +94,8 @@ SECTIONS = {
                      "normal_force holds before s_1; the steady state is the one under the "
                      "last force")),
     "counterbody": (Key("E_star", "number", unit="Pa", low=0.0, required=True,
-                        doc="effective modulus E / (1 - nu^2) of the counter-body"),),
+                        doc="effective modulus E / (1 - nu^2) of the counter-body"),
+                    THICKNESS, POISSON),
     "grid": (Key("n", "integer", low=2, low_open=False, required=True,
                  doc="pixels along the longer side of the face's bounding box"),),
 }
@@ -179,6 +181,9 @@ class Scene:
     depth : steady.depth_maps.DepthLayers or None
         The ``[depth]`` section, parsed: layers over ``geometry`` (the
         substrate); None without one.
+    thickness, poisson : float or None
+        ``[counterbody] thickness`` (m) and ``poisson``: the counter-body is a
+        layer on a rigid flat (:attr:`counterbody`); None, a half-space.
     """
 
     outline: object
@@ -197,6 +202,8 @@ class Scene:
     sliding: object = None
     load_programme: LoadProgramme | None = None
     depth: DepthLayers | None = None
+    thickness: float | None = None
+    poisson: float | None = None
     #: The inputs as :func:`parse_scene` checked them (None: a scene built in Python).
     _checked: tuple | None = dataclasses.field(default=None, repr=False, compare=False)
 
@@ -214,6 +221,11 @@ class Scene:
         """What the scales depend on: outline, load, modulus, grid, law and programme."""
         return (self.outline, self.normal_force, self.E_star, self.n, self.wear,
                 self.load_programme)
+
+    @property
+    def counterbody(self):
+        """The counter-body (:class:`steady.counterbody.Counterbody`): modulus and layer."""
+        return Counterbody(self.E_star, self.thickness, self.poisson)
 
     @property
     def final_force(self):
@@ -370,7 +382,8 @@ def problem_of(scene, *, n=None):
         if checked and grid.n != scene.n:  # the scene checked its own grid's pixel
             check_pixel_scale(scene.outline, grid.n, dict(names, n=f"n = {grid.n!r}"))
         return Problem(phases, scene.wear, force, scene.E_star, scene.sliding,
-                       checked=checked, names=names)
+                       thickness=scene.thickness, poisson=scene.poisson, checked=checked,
+                       names=names)
     except ValueError as err:
         where = "" if scene.source_path is None else f"{scene.source_path}: "
         raise ValueError(f"{where}{err}") from None
@@ -496,6 +509,7 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None, n=None):
         values["grid"]["n"] = GRID_N.parse(n, "")
     n = values["grid"]["n"]
     force, E_star = values["load"]["normal_force"], values["counterbody"]["E_star"]
+    counterbody = Counterbody(**values["counterbody"])  # a layer's keys go together
     # The scales that follow from the face and the load (the keys checked their own),
     # before a phase map is drawn on it.
     check_load_scales(outline, force, E_star, input_names(outline, force, E_star, n), n)
@@ -536,7 +550,8 @@ def parse_scene(text, base_dir, *, extra_sections=(), source_path=None, n=None):
                   source_path=None if source_path is None else pathlib.Path(source_path),
                   text=text, extra=types.MappingProxyType(extra), ignored_sections=ignored,
                   phase_names=names, sliding_speed=values["load"].get("sliding_speed"),
-                  sliding=sliding, load_programme=programme, depth=depth)
+                  sliding=sliding, load_programme=programme, depth=depth,
+                  thickness=counterbody.thickness, poisson=counterbody.poisson)
     return dataclasses.replace(scene, _checked=scene._inputs())
 
 

@@ -529,7 +529,10 @@ def schema_targets():
 
     load = _with(base, ("load",), {"normal_force": FORCE, "sliding_speed": 0.1,
                                    "programme": [[500.0, 20.0]]})
-    targets = [Target(f"[{section}] {key.name}", (section, key.name), key, load)
+    # The layer's keys go together: each is mutated beside the other.
+    layer = _with(load, ("counterbody",), {"E_star": E_STAR, "thickness": 2e-3, "poisson": 0.3})
+    targets = [Target(f"[{section}] {key.name}", (section, key.name), key,
+                      layer if key.name in ("thickness", "poisson") else load)
                for section, keys in SECTIONS.items() for key in keys]
     targets += [Target(f"[phases] {key.name}", ("phases", key.name), key,
                        _with(base, ("phases", key.name), SAMPLES["phases", key.name]))

@@ -30,10 +30,11 @@ FLOORS = {
              "steady.registry", "steady.schema"),
     # Arrays on a grid and what acts on them, knowing no outline: the half-space operator,
     # array files, rasterised labels, eq. 7, depth columns, rms heights, the small-slope
-    # warning, measured faces, the closed forms, a face's power spectrum and topography.
-    "fields": ("steady.halfspace", "steady.array_files", "steady.labels", "steady.pressures",
-               "steady.depth", "steady.relief", "steady.validity", "steady.measured_face",
-               "steady.reference", "steady.topography"),
+    # warning, measured faces, the closed forms, a face's power spectrum and topography; the
+    # counter-body and its layer's operator.
+    "fields": ("steady.halfspace", "steady.counterbody", "steady.array_files", "steady.labels",
+               "steady.pressures", "steady.depth", "steady.relief", "steady.validity",
+               "steady.measured_face", "steady.reference", "steady.topography"),
     # The face: outlines and their grids, phase geometries (depth-dependent ones too), wear
     # laws, sliding kinematics, load programmes.
     "face": ("steady.outline", "steady.phases", "steady.inclusions", "steady.micrograph",

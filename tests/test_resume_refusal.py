@@ -225,3 +225,29 @@ def test_a_checkpoint_records_the_digest_of_its_columns(tmp_path):
     with pytest.raises(ValueError, match=r"was run on phases that change with depth; the scene "
                                          r"has phases that do not change with depth"):
         check_same_columns(path, earlier, stored, None)
+
+
+@pytest.mark.parametrize("before, after, expected", [
+    ("", "thickness = 0.002\npoisson = 0.5\n",
+     "was run on a half-space ([counterbody]), the scene has a layer of thickness 0.002 m"),
+    ("thickness = 0.002\npoisson = 0.5\n", "thickness = 0.002\npoisson = 0.3\n",
+     "poisson 0.5 ([counterbody]), the scene has a layer of thickness 0.002 m, poisson 0.3"),
+])
+def test_resume_on_another_counterbody_is_refused(tmp_path, capsys, before, after, expected):
+    scene, out = _stopped_run(tmp_path, capsys, {"radius": 0.004}, n=16)
+    text = scene.read_text()
+    if before:
+        scene.write_text(text.replace("[counterbody]\n", "[counterbody]\n" + before))
+        _stopped_run_again(scene, out, capsys)
+        text = scene.read_text()
+    scene.write_text(text.replace("[counterbody]\n" + before, "[counterbody]\n" + after)
+                     if before else text.replace("[counterbody]\n", "[counterbody]\n" + after))
+    status, _, err = run([scene, "-o", out, "--resume"], capsys)
+    assert status == 2, f"exit {status}: {err!r}"
+    assert expected in err and err.strip().endswith("use --force to start over"), err
+
+
+def _stopped_run_again(scene, out, capsys):
+    """Run ``scene`` over ``out`` from the start, stopped after its 2 steps."""
+    status, _, err = run([scene, "-o", out, "--force"], capsys)
+    assert status == 1 and "max_steps" in err, f"test setup: exit {status}, {err!r}"

@@ -18,7 +18,7 @@ STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways",
           "three_phases", "wear_exponent", "random_inclusions", "runin_distance",
           "face_outlines", "pin_on_disk", "coating_wear_through", "particles_3d",
-          "calibrate_error_bar"]
+          "calibrate_error_bar", "counterbody_thickness"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
             "design_table", "runin_history", "runin_convergence"]
 
@@ -117,6 +117,22 @@ def test_fig78_rods_signs(runs):
     """k_steel/k_brass = 1.7: steel wears faster, so steel rods sit low, brass rods high."""
     a = attrs_of(runs["fig78_rods"][1])
     assert a["steel_in_brass_side_rods"] < 0 < a["brass_in_steel_side_rods"], a
+
+
+def test_counterbody_thickness_quick(runs):
+    """A thin layer flattens the rods' face and shortens their run-in; a thick one does not.
+
+    Quick run (n = 32, run-ins at n = 24, nu = 0.5): measured 0.62 and 0.99 of the half-space's
+    rms slope at t = 0.5 a and 5 a, run-in distances 0.59 and 1.00 of the half-space's.
+    """
+    h5 = runs["counterbody_thickness"][1]
+    a = attrs_of(h5)
+    with h5py.File(h5, "r") as f:
+        slopes = f["rods/nu0.5/rms_slope"][()]
+        distances = f["rods/nu0.5/run_in_distance"][()]
+    half = a["rods_halfspace_rms_slope"]
+    assert slopes[0] < 0.8 * half and abs(slopes[1] / half - 1) < 0.03, (slopes, half)
+    assert distances[0] < 0.8 and abs(distances[1] - 1) < 0.05, distances
 
 
 def test_rods_both_ways(runs):

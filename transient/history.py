@@ -439,9 +439,11 @@ class FaceEstimator:
         # In partial contact the plain value and the correction off the contact
         # share the exact-kernel gradient of K p; in full contact the plain
         # value is the estimator's own face sum.
-        gradient = hs.gradient(pressure) if off.any() else None
+        layered = self.problem.problem.counterbody.layered
+        gradient = hs.gradient(pressure) if off.any() or layered else None
         plain = (face_rms_slope(hs, face_mask, recession, pressure, approach, gradient=gradient)
-                 if off.any() else math.sqrt(integrals.face_sum / integrals.face_area))
+                 if off.any() or layered
+                 else math.sqrt(integrals.face_sum / integrals.face_area))
         out = {"rms_slope_plain": plain, "rim_layer_pixels": self.rim_layer_pixels(distance),
                "rms_height": self._plane(face)}
         if distance == 0:
@@ -450,6 +452,12 @@ class FaceEstimator:
                        rms_slope_source=SOURCE_INITIAL)
             return out
         energy = float(integrals.corrected)
+        if layered:
+            # The estimator corrects the half-space's kernel; the layer's smooth
+            # correction changes the energy by its pixel sum (steady.solution, on a layer).
+            gx, gy = gradient
+            energy += (float(np.sum((gx * gx + gy * gy)[face_mask])) * self.h ** 2
+                       - float(integrals.face_sum))
         source = SOURCE_CONTACT
         if off.any():
             gx, gy = gradient

@@ -241,6 +241,8 @@ _LONG_NAMES = {
     "n": "pixels of the grid along the face's longer side",
     "normal_force": "normal force F_N",
     "E_star": "effective modulus E* of the counter-body",
+    "thickness": "thickness of the counter-body's layer on a rigid flat",
+    "poisson": "Poisson's ratio of the counter-body's layer",
 }
 # Quantities of the group history beside the history itself (layout 5 on; attributes before).
 _HISTORY_RECORD = ("distance_scale", "load_breakpoints", "load_forces", "load_initial_force")
@@ -398,8 +400,10 @@ def problem_inputs(problem):
         ``wear_law`` in words, and the law's own, for the power law
         ``wear_coefficients`` (Pa-m) and ``exponent``) and the sliding
         kinematics (:func:`steady.sliding.sliding_file_attributes`:
-        ``sliding_kind`` and its keys, none for a translation); a value with
-        a unit is stored as a variable, text as an attribute.
+        ``sliding_kind`` and its keys, none for a translation) and the
+        counter-body's layer (``thickness`` in m and ``poisson``, none for a
+        half-space); a value with a unit is stored as a variable, text as an
+        attribute.
     arrays : dict of str to ndarray
         ``phase``, the phase map (-1 off the face).
     names : tuple of str
@@ -407,7 +411,9 @@ def problem_inputs(problem):
     """
     attrs = {"n": (problem.n, "1"), "normal_force": (problem.normal_force, "N"),
              "E_star": (problem.E_star, "Pa"), **wear_file_attributes(problem.wear),
-             **sliding_file_attributes(problem.sliding)}
+             **sliding_file_attributes(problem.sliding),
+             **{name: (value, unit) for name, (value, unit, _)
+                in problem.counterbody.file_attributes().items()}}
     return attrs, {"phase": np.asarray(problem.labels)}, tuple(problem.phase_names)
 
 

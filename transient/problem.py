@@ -243,8 +243,12 @@ class WearProblem:
 
     @property
     def depth_scale(self):
-        """``f* = pbar L / E*``, m (``pbar`` the pixel mean pressure, ``L`` the scale)."""
-        return self.pixel_mean_pressure * self.scale / self.halfspace.E_star
+        """``f* = pbar L / E*``, m (``pbar`` the pixel mean pressure, ``L`` the scale).
+
+        On a layer its own displacement scale, ``f*`` times the factor of the
+        wave ``1 / L`` (:meth:`steady.counterbody.Counterbody.displacement_scale`).
+        """
+        return self.problem.counterbody.displacement_scale(self.pixel_mean_pressure, self.scale)
 
     @property
     def distance_scale(self):

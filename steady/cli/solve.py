@@ -131,9 +131,14 @@ def summary_lines(result, names=None):
     else:
         ref = f"{result.reference_slope:.6g}"
     source = result.reference_slope_source or "disk: 4 pbar / (pi E*) (eq. 12)"
+    thickness = getattr(result, "thickness", None)
+    layer = ([] if thickness is None else
+             [f"counter-body     layer of thickness {thickness:.6g} m on a rigid flat, nu = "
+              f"{result.poisson:.6g} (grad_f0 is the half-space's)"])
     return [
         f"face             {result.outline.describe()}, n = {result.n} "
         f"({result.shape[0]} x {result.shape[1]} pixels)",
+        *layer,
         slope,
         f"grad_f0          {ref}  ({source})",
         f"rms / grad_f0    {result.normalised_rms_slope:.6g}"

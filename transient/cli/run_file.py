@@ -71,16 +71,30 @@ def run_inputs(scene, problem):
     return attrs, quantities, {"phase": problem.labels}
 
 
+def _check_same_counterbody(path, stored_attrs, counterbody):
+    """Refuse a run file of another counter-body: a half-space, or a layer of other numbers."""
+    stored = tuple(None if stored_attrs.get(key) is None else float(stored_attrs[key])
+                   for key in ("thickness", "poisson"))
+    if stored != (counterbody.thickness, counterbody.poisson):
+        was = ("a half-space" if stored[0] is None
+               else f"a layer of thickness {stored[0]!r} m, poisson {stored[1]!r}")
+        now = ("a half-space" if not counterbody.layered
+               else f"a layer of thickness {counterbody.thickness!r} m, poisson "
+                    f"{counterbody.poisson!r}")
+        raise ValueError(f"{str(path)!r} was run on {was} ([counterbody]), the scene has "
+                         f"{now}; use --force to start over")
+
+
 def check_same_inputs(path, quantities, arrays, stored_attrs, stored_arrays, stored, h0,
                       problem, wear):
     """Refuse to resume a run of another problem; the message names what differs, both values.
 
     Everything that defines the problem is compared: the face, the grid,
-    the load and its programme, ``E*``, the phase map and the phases below
-    the face (:func:`check_same_columns`), the wear law (``wear``, the
-    scene's, against the file's: :func:`steady.wear.same_wear_law`), the
-    sliding kinematics and the initial face.  The phase names are labels
-    and may change.
+    the load and its programme, ``E*`` and the counter-body's layer, the
+    phase map and the phases below the face (:func:`check_same_columns`),
+    the wear law (``wear``, the scene's, against the file's:
+    :func:`steady.wear.same_wear_law`), the sliding kinematics and the
+    initial face.  The phase names are labels and may change.
 
     Parameters
     ----------
@@ -109,6 +123,7 @@ def check_same_inputs(path, quantities, arrays, stored_attrs, stored_arrays, sto
             raise ValueError(f"{str(path)!r} was run with {key} = "
                              f"{shorten(stored_attrs.get(key))}, the scene has "
                              f"{shorten(quantities[key][0])}; use --force to start over")
+    _check_same_counterbody(path, stored_attrs, problem.problem.counterbody)
     try:
         stored_wear = wear_law_from_file(stored_attrs)
     except ValueError:
