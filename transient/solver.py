@@ -34,6 +34,7 @@ __all__ = ["STAGE_NORM", "STAGE_SHARE_FACTOR", "StageSolver", "StepFailure"]
 #: steps; the largest violation bounds every pixel (docs/benchmarks.md, "Stopping rule of
 #: the stage solves").
 STAGE_NORM = "max"
+#: The factor on the share of :func:`transient.control.contact_tolerance` (see ``STAGE_NORM``).
 STAGE_SHARE_FACTOR = 30.0
 
 
@@ -76,6 +77,10 @@ class StageSolver:
         The wear law's field of every pixel (:meth:`at_depth`): the
         problem's, or across interfaces that of the section the face has
         worn down to.
+    stage_norm : str
+        ``STAGE_NORM`` when the solver was built.
+    stage_share_factor : float
+        ``STAGE_SHARE_FACTOR`` when the solver was built.
     solves, iterations : int
         Contact solves and contact-solver iterations done so far.
     stage_solves, most_stage_solves : int
