@@ -25,8 +25,10 @@ What it reproduces
 
     ``--levers``: the stopping rule of the stage solves side by side
     (``transient.solver.STAGE_NORM`` and ``STAGE_SHARE_FACTOR`` set per
-    variant, :data:`LEVERS`), on two cases at each grid of ``--sizes``: the
-    shipped scene as ``--table`` runs it, and the homogeneous 1:2 rectangle
+    variant, :data:`LEVERS`; one of them also takes the conjugate
+    directions' products in single precision, :func:`single_directions`), on
+    two cases at each grid of ``--sizes``: the shipped scene as ``--table``
+    runs it, and the homogeneous 1:2 rectangle
     (4 x 8 mm, the scene's load and counter-body) from flat at
     ``tol = 1e-4`` (the slow test of ``tests/test_transient_outlines.py``).
     Per run: steps, rejected attempts, solves, iterations, padded products,
@@ -123,7 +125,8 @@ LADDERS = {
     "esdirk3": (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5),
 }
 QUICK_LADDER = (1e-2, 1e-3)
-#: Stopping rules of the stage solves (--levers): name -> (norm, factor on the share).
+#: Stopping rules of the stage solves (--levers): name -> (norm, factor on the share), and
+#: "single" for the directions' products in single precision (:func:`single_directions`).
 #: The first is the reference of the "change" column.
 LEVERS = {
     "rms, share 1e-3": ("rms", 1.0),
@@ -133,6 +136,7 @@ LEVERS = {
     "max, share 3e-2": ("max", 30.0),
     "max, share 1e-1": ("max", 100.0),
     "max, share 3e-1": ("max", 300.0),
+    "max, share 3e-2, single K t": ("max", 30.0, "single"),
 }
 LEVER_TARGETS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0, 3.0)   # s*
 LEVER_REFERENCE_TOL = 1e-6
@@ -324,6 +328,43 @@ def stage_rule(norm, factor):
         transient.solver.STAGE_NORM, transient.solver.STAGE_SHARE_FACTOR = saved
 
 
+@contextlib.contextmanager
+def single_directions():
+    """The conjugate directions' products ``K t`` in single precision (``--single``).
+
+    A probe of mixed precision: each iteration's product of the direction by
+    ``K`` is a float32 padded FFT product (``scipy.fft``, the influence
+    spectrum rounded to complex64); the pressure, ``K p`` (updated with
+    those products, recomputed in double every 50 iterations and before a
+    solve ends) and the residual stay in double.
+    """
+    import scipy.fft
+
+    from transient import contact
+
+    call = contact._Operator.__call__
+    spectra = {}
+
+    def single(self, p, *, contiguous=True):
+        if contiguous:
+            return call(self, p, contiguous=True)
+        self.products += 1
+        hs = self.halfspace
+        nx, ny = hs.shape
+        kernel = spectra.get(id(hs))
+        if kernel is None:
+            kernel = spectra[id(hs)] = hs._influence_q.astype(np.complex64)
+        q = scipy.fft.rfft2(p.astype(np.float32), s=(2 * nx, 2 * ny))
+        q *= kernel
+        return scipy.fft.irfft2(q, s=(2 * nx, 2 * ny))[:nx, :ny].astype(float)
+
+    contact._Operator.__call__ = single
+    try:
+        yield
+    finally:
+        contact._Operator.__call__ = call
+
+
 def lever_cases(scene_path, sizes):
     """The cases of ``--levers``: ``(n, name, problem, initial recession, options)``."""
     scene, options, initial = load_transient_scene(scene_path)
@@ -366,12 +407,13 @@ def lever_table(cases, levers, reference_tol):
     """
     rows = []
     for n, case, problem, initial, options in cases:
-        with stage_rule(*next(iter(levers.values()))):
+        with stage_rule(*next(iter(levers.values()))[:2]):
             reference, _ = run_counted(problem, initial, dataclasses.replace(
                 options, tol=reference_tol(options.tol)))
         ref, first = history_values(reference), None
-        for name, (norm, factor) in levers.items():
-            with stage_rule(norm, factor):
+        for name, (norm, factor, *single) in levers.items():
+            with stage_rule(norm, factor), \
+                    single_directions() if single else contextlib.nullcontext():
                 result, row = run_counted(problem, initial, options)
             values = history_values(result)
             first = values if first is None else first
