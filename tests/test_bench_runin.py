@@ -32,6 +32,21 @@ def test_bench_runin_smoke(tmp_path):
         assert len(f["schemes"]) == len(groups["schemes"]), "one group per row"
 
 
+def test_bench_runin_levers_smoke(tmp_path):
+    out = tmp_path / "bench.h5"
+    bench = load("bench_runin")
+    rows = bench.main(["--levers", "--sizes", "40", "--quick", "--out", str(out)])["levers"]
+    assert [(r["case"], r["rule"]) for r in rows] == [
+        (case, rule) for case in ("voronoi", "rectangle") for rule in list(bench.LEVERS)[:2]], \
+        "each case under the first two rules"
+    for r in rows:
+        assert r["status"] == "steady" and 0 <= r["history_error"] < 0.1, f"row {r}"
+    # The looser share takes fewer iterations; the first rule is its own reference.
+    assert rows[1]["iterations"] < rows[0]["iterations"] and rows[0]["change"] == 0, rows[:2]
+    with h5py.File(out) as f:
+        assert len(f["levers"]) == len(rows), "one group per row"
+
+
 def test_bench_runin_memory_smoke(tmp_path):
     out = tmp_path / "bench.h5"
     bench = load("bench_runin")

@@ -450,6 +450,7 @@ def test_zero_force_gives_zero_pressure():
     (dict(maxiter=0), "maxiter"),
     (dict(maxiter=2.5), "maxiter"),
     (dict(preconditioner="multigrid"), "preconditioner"),
+    (dict(norm="l1"), "norm"),
 ])
 def test_bad_input_raises(change, match):
     n = 9

@@ -6,21 +6,29 @@ it (a residual ``r`` moves a stage's face by at most ``r`` and its pressure
 by at most ``r / lambda``), and that a run with it keeps the history of a
 run that solves everything to ``contact_rtol``.  Measured on the Voronoi
 map at n = 64, ``k_2/k_1 = 10``, ``tol = 1e-4``: the same 29 steps and 86
-solves, 202 solver iterations against 460, snapshot faces within 1.6e-7
-``f*`` of each other (the bound, solves x share x tol, is 8.6e-6), the
-history's rms slope within 1.1e-6, the final faces equal.
+solves, 153 solver iterations against 453, snapshot faces within 1.1e-6
+``f*`` of each other (the bound, solves x share x ``STAGE_SHARE_FACTOR`` x
+tol, is 2.6e-4), the history's rms slope within 5.8e-6 (relative), the
+final faces equal.  Then the stopping rule in the largest violation over
+the face: it bounds the corner pixels of a rectangle that the rms leaves,
+and so keeps the steps of a rectangle's run-in at the loose share.
 """
 
 import math
 
 import numpy as np
 import pytest
-from conftest import wear_problem
+from conftest import K1, wear_problem
+from conftest import problem as face_problem
 
 import transient.control as control
+import transient.solver as solver
+from steady.outline import Rectangle
+from steady.phases import Homogeneous
 from transient.contact import solve_contact
 from transient.control import SOLVE_ERROR_SHARE, SOLVE_SPREAD_SHARE, contact_tolerance
 from transient.diagnostics import shape_rms, wear_rate_spread
+from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
 
 
@@ -82,7 +90,8 @@ def test_run_keeps_the_history_of_tight_solves(monkeypatch):
     assert loose.status == tight.status == "steady", (loose.message, tight.message)
     assert loose.iterations < 0.6 * tight.iterations, (loose.iterations, tight.iterations)
     face, f_star = problem.face_mask, loose.depth_scale
-    bound = loose.solves * SOLVE_ERROR_SHARE * options.tol
+    # A stage solve leaves at most its absolute tolerance, in the largest violation, on the face.
+    bound = loose.solves * SOLVE_ERROR_SHARE * solver.STAGE_SHARE_FACTOR * options.tol
     assert np.array_equal(loose.snapshot_distance, tight.snapshot_distance)
     for a, b, s in zip(loose.snapshot_recession, tight.snapshot_recession, loose.snapshot_distance,
                        strict=True):
@@ -95,4 +104,62 @@ def test_run_keeps_the_history_of_tight_solves(monkeypatch):
         options.spread_tol
     if loose.steps == tight.steps:
         a, b = loose.history["rms_slope"][1:], tight.history["rms_slope"][1:]
-        assert np.max(np.abs(a / b - 1)) < 1e-5
+        assert np.max(np.abs(a / b - 1)) < 3e-5
+
+
+def violation(halfspace, face, res):
+    """Violation (m) of the contact conditions at every face pixel, from the pressure alone."""
+    gap = halfspace.displacement(res.pressure) + res.displacement - res.elastic_displacement \
+        - res.approach
+    return np.where(face, np.where(res.pressure > 0, np.abs(gap), np.maximum(-gap, 0.0)), 0.0)
+
+
+def test_max_rule_bounds_the_corner_pixel_that_the_rms_rule_leaves():
+    """A rectangle's implicit stage from the flat punch's pressure, to an absolute tolerance.
+
+    Measured (1:2 rectangle, 96 x 192 pixels, ``c = 1e-3 s*``, ``atol = 1e-4`` of the rms
+    displacement): the rms rule stops after 2 iterations with a violation of 6.8 ``atol``
+    at the corner pixels (the rms over the face 0.62 ``atol``: a corner pixel is 1/18432 of
+    the face); the max rule after 3 with at most 0.31 ``atol`` on any pixel.
+    """
+    problem = WearProblem(face_problem(Homogeneous(), [K1], n=192, outline=Rectangle(4e-3, 8e-3)))
+    hs, face, force = problem.halfspace, problem.face_mask, problem.normal_force
+    flat = solve_contact(hs, face, np.zeros(face.shape), force, rtol=1e-12)
+    shift = 1e-3 * problem.distance_scale * problem.wear_field
+    atol = 1e-4 * float(np.sqrt(np.mean(flat.displacement[face] ** 2)))
+    runs = {norm: solve_contact(hs, face, np.zeros(face.shape), force, shift=shift,
+                                x0=flat.pressure, rtol=1e-14, atol=atol, norm=norm)
+            for norm in ("rms", "max")}
+    assert all(res.success for res in runs.values())
+    corners = [(0, 0), (0, -1), (-1, 0), (-1, -1)]
+    peak = violation(hs, face, runs["max"])
+    assert runs["max"].residual <= atol and peak.max() <= atol, \
+        f"max rule: largest violation {peak.max() / atol:.3g} atol"
+    loose = violation(hs, face, runs["rms"])
+    worst_corner = max(loose[c] for c in corners)
+    assert runs["rms"].residual <= atol and worst_corner > 3 * atol, \
+        f"rms rule: corner violation only {worst_corner / atol:.3g} atol"
+    rms = float(np.sqrt(np.mean(loose[face] ** 2)))
+    assert rms <= atol, f"rms rule: rms violation {rms / atol:.3g} atol"
+
+
+@pytest.mark.parametrize("factor", [10.0, solver.STAGE_SHARE_FACTOR])
+def test_rectangle_from_flat_keeps_its_steps_under_a_loose_share(monkeypatch, factor):
+    """The homogeneous 1:2 rectangle from flat, 96 x 192 pixels, ``tol = 1e-4``.
+
+    The stage solves take ``factor`` times the share of
+    :func:`transient.control.contact_tolerance`, in the norm ``STAGE_NORM``.
+    Measured in the largest violation: 26 steps, none rejected, 77 solves;
+    154 iterations at the factor 10, 127 at 30 (the rms rule at the factor
+    1: 26 steps, 157 iterations).  In the rms over the face the factor 10
+    leaves the corners' singular pixels unsolved: 56 steps, 13 rejected,
+    1243 iterations.
+    """
+    monkeypatch.setattr(solver, "STAGE_SHARE_FACTOR", factor)
+    problem = WearProblem(face_problem(Homogeneous(), [K1], n=192, outline=Rectangle(4e-3, 8e-3)))
+    result = run_in(problem, np.zeros(problem.shape),
+                    RunOptions(tol=1e-4, snapshots_s_star=(0.01, 0.1, 1.0)))
+    assert result.status == "steady", result.message
+    assert result.rejected == 0 and result.steps <= 27 and result.iterations < 170, \
+        (f"{result.steps} steps, {result.rejected} rejected, {result.solves} solves, "
+         f"{result.iterations} iterations")

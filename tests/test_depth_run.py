@@ -34,6 +34,7 @@ from transient.output import read_run, write_run
 from transient.problem import WearProblem
 from transient.result import HISTORY_UNITS
 from transient.runin import run_in
+from transient.solver import STAGE_SHARE_FACTOR
 
 
 def repeated(wear, depths):
@@ -101,8 +102,9 @@ def test_columns_that_repeat_the_map_give_the_columnar_run(geometry, ratios, exp
     assert np.max(b.worn_depth[face]) > max(depths) * f_star, "no interface crossed"
     error = np.max(np.abs(a.worn_depth - b.worn_depth)[face]) / f_star
     # The power law solves every stage to contact_rtol (measured 4e-14 f*); Archard's
-    # leaves a step's solves SOLVE_ERROR_SHARE tol f* (measured 7e-8 f* over 10 steps).
-    bound = 1e-12 if exponent != 1.0 else 10 * SOLVE_ERROR_SHARE * options.tol
+    # leaves a step's solves SOLVE_ERROR_SHARE x STAGE_SHARE_FACTOR tol f* in the largest
+    # violation (measured 3.3e-8 f* over 10 steps).
+    bound = 1e-12 if exponent != 1.0 else 10 * SOLVE_ERROR_SHARE * STAGE_SHARE_FACTOR * options.tol
     assert error < bound, f"worn depth differs by {error:.3g} f* (bound {bound:.3g})"
     pressure = np.max(np.abs(a.pressure - b.pressure)) / a.pressure.max()
     assert pressure < 100 * bound, f"pressure differs by {pressure:.3g} of its peak"

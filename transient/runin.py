@@ -51,8 +51,10 @@ The contact solves of a regular step stop at the absolute residual
 :func:`transient.control.contact_tolerance` leaves them, or at
 ``contact_rtol`` times the displacement, whichever is larger: a thousandth
 of the step's error tolerance ``tol f*``, and no more than moves the
-pressure by a hundredth of the last wear-rate spread.  Far from the steady
-state that is several orders above ``contact_rtol`` and the warm start
+pressure by a hundredth of the last wear-rate spread; the stage solver
+takes it ``transient.solver.STAGE_SHARE_FACTOR`` times in the largest
+violation over the face (``transient.solver.STAGE_NORM``).  Far from the
+steady state that is several orders above ``contact_rtol`` and the warm start
 often meets it as it stands; near it the spread's share takes over, so the
 pressures the spread test sees are exact to its precision.  Jumps,
 fixed steps (no error control to leave a share) and power-law steps

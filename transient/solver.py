@@ -24,7 +24,18 @@ from .contact import solve_trusted_contact
 from .preconditioners import ScaledShift
 from .warm_start import WarmStart
 
-__all__ = ["StageSolver", "StepFailure"]
+__all__ = ["STAGE_NORM", "STAGE_SHARE_FACTOR", "StageSolver", "StepFailure"]
+
+#: The norm in which a stage solve with an absolute tolerance measures its residual
+#: (:func:`transient.contact.solve_contact`, ``norm``), and the factor on that tolerance
+#: (:func:`transient.control.contact_tolerance`, a share of the step's ``tol f*``) it
+#: takes.  The rms over the face lets the violation at a rectangle's corner pixels reach
+#: ``sqrt(N_face / 4)`` times its tolerance, which a looser share turns into rejected
+#: steps; the largest violation bounds every pixel (docs/benchmarks.md, "Stopping rule of
+#: the stage solves").
+STAGE_NORM = "max"
+#: The factor on the share of :func:`transient.control.contact_tolerance` (see ``STAGE_NORM``).
+STAGE_SHARE_FACTOR = 30.0
 
 
 class StepFailure(RuntimeError):
@@ -66,6 +77,10 @@ class StageSolver:
         The wear law's field of every pixel (:meth:`at_depth`): the
         problem's, or across interfaces that of the section the face has
         worn down to.
+    stage_norm : str
+        ``STAGE_NORM`` when the solver was built.
+    stage_share_factor : float
+        ``STAGE_SHARE_FACTOR`` when the solver was built.
     solves, iterations : int
         Contact solves and contact-solver iterations done so far.
     stage_solves, most_stage_solves : int
@@ -96,6 +111,7 @@ class StageSolver:
         self.newton_rtol = float(newton_rtol)
         self.newton_maxiter = int(newton_maxiter)
         self.pressure_floor = float(pressure_floor)
+        self.stage_norm, self.stage_share_factor = STAGE_NORM, float(STAGE_SHARE_FACTOR)
         self.force = problem.normal_force
         self.wear_field = problem.wear_field
         self.solves = self.iterations = 0
@@ -200,7 +216,8 @@ class StageSolver:
         atol : float, m, optional
             Absolute tolerance of the solve beside ``contact_rtol`` (default
             0: ``contact_rtol`` alone; see
-            :func:`transient.control.contact_tolerance`).
+            :func:`transient.control.contact_tolerance`).  A positive one is
+            taken times ``STAGE_SHARE_FACTOR`` in the norm ``STAGE_NORM``.
         preconditioner : str or callable, optional
             As :func:`transient.contact.solve_contact` takes it (default
             ``"auto"``).
@@ -215,9 +232,12 @@ class StageSolver:
         predicted, self._predicted = self._predicted, None
         if x0_displacement is None and predicted is not None and predicted[0] is x0:
             x0_displacement = predicted[1]
+        norm = "rms"
+        if atol > 0:
+            atol, norm = atol * self.stage_share_factor, self.stage_norm
         res = solve_trusted_contact(problem.halfspace, problem.face_mask, recession, self.force,
                                     shift=shift, x0=x0, x0_displacement=x0_displacement,
-                                    rtol=self.contact_rtol, atol=atol,
+                                    rtol=self.contact_rtol, atol=atol, norm=norm,
                                     maxiter=self.contact_maxiter, preconditioner=preconditioner)
         self.solves += 1
         self.iterations += int(res.nit)

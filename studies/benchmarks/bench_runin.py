@@ -36,6 +36,27 @@ What it reproduces
     ``rms_slope`` (reference interpolated in the sliding distance) in
     ``grad_f0``.
 
+    ``--levers``: the stopping rule of the stage solves side by side
+    (``transient.solver.STAGE_NORM`` and ``STAGE_SHARE_FACTOR`` set per
+    variant, :data:`LEVERS`; one of them also takes the conjugate
+    directions' products in single precision, :func:`single_directions`), on
+    two cases at each grid of ``--sizes``: the shipped scene as ``--table``
+    runs it, and the homogeneous 1:2 rectangle
+    (4 x 8 mm, the scene's load and counter-body) from flat at
+    ``tol = 1e-4`` (the slow test of ``tests/test_transient_outlines.py``).
+    Per run: steps, rejected attempts, solves, iterations, padded products,
+    the process's CPU time and the wall time; history error: the largest
+    deviation of the run's corrected rms slope (``history["rms_slope"]``,
+    in ``grad_f0``) at ``s/s* = 1e-4 .. 3`` from that of a reference run of
+    the same case with the first rule of :data:`LEVERS` at ``tol = 1e-6``;
+    change: the same deviation from the first rule's run at the case's
+    ``tol`` (what the rule alone moves).  The variants of one case run one after the other in one
+    process, so that their CPU times compare on a shared machine.
+
+    ``--shipped``: the rules of ``--rules`` on every shipped run-in scene
+    (those with an ``[initial_face]``), each at its own grid and settings;
+    the reference run takes ``0.1`` of the scene's ``tol``.
+
     ``--memory``: the command line, ``python -m transient SCENE -o RUN.h5``
     (checkpoints every ``--checkpoint-interval`` seconds of wall time,
     default the scene's 10 s), on the scene with only ``[grid] n`` changed,
@@ -61,6 +82,10 @@ How to run
     python studies/benchmarks/bench_runin.py --schemes --n 128 --scheme-names esdirk3 esdirk4
     python studies/benchmarks/bench_runin.py --interfaces --sizes 64 128 --reference-tol 1e-6
                                                         # ~10 min on 2 cores
+    python studies/benchmarks/bench_runin.py --levers --sizes 64 128 192 256   # ~15 min
+    python studies/benchmarks/bench_runin.py --levers --sizes 40 --quick   # smoke test, seconds
+    python studies/benchmarks/bench_runin.py --shipped --rules "rms, share 1e-3" \
+        "max, share 3e-2"                                                   # ~5 min
 
 Writes ``--out`` (HDF5: one group per table row) and prints the tables in
 Markdown.
@@ -84,16 +109,22 @@ import time
 
 import numpy as np
 
+import transient.solver
 from steady.halfspace import HalfSpace
+from steady.outline import Rectangle
+from steady.phases import Homogeneous
+from steady.problem import FacePhases, Problem
 from steady.safe_files import atomic_h5
 from transient.diagnostics import face_rms_slope, shape_rms
 from transient.memory import run_in_memory
 from transient.options import RunOptions
 from transient.output import read_run
 from transient.preconditioners import FourierPreconditioner
+from transient.problem import WearProblem
 from transient.runin import run_in
 from transient.scene import load_transient_scene, wear_problem_of
 from transient.solver import StageSolver
+from transient.spatial_error import _at
 from transient.stepping import SCHEMES
 
 # -- parameters -------------------------------------------------------------------
@@ -113,6 +144,24 @@ LADDERS = {
     "esdirk4": (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5),
 }
 QUICK_LADDER = (1e-2, 1e-3)
+#: Stopping rules of the stage solves (--levers): name -> (norm, factor on the share), and
+#: "single" for the directions' products in single precision (:func:`single_directions`).
+#: The first is the reference of the "change" column.
+LEVERS = {
+    "rms, share 1e-3": ("rms", 1.0),
+    "rms, share 1e-2": ("rms", 10.0),
+    "max, share 1e-3": ("max", 1.0),
+    "max, share 1e-2": ("max", 10.0),
+    "max, share 3e-2": ("max", 30.0),
+    "max, share 1e-1": ("max", 100.0),
+    "max, share 3e-1": ("max", 300.0),
+    "max, share 3e-2, single K t": ("max", 30.0, "single"),
+}
+LEVER_TARGETS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0, 3.0)   # s*
+LEVER_REFERENCE_TOL = 1e-6
+RECTANGLE = Rectangle(4e-3, 8e-3)
+RECTANGLE_TOL = 1e-4
+SHIPPED_REFERENCE = 0.1   # --shipped: the reference run's tol, times the scene's
 
 logger = logging.getLogger("bench_runin")
 
@@ -362,6 +411,130 @@ def markdown_interfaces(rows):
                      f"({r['rejected']}) | {r['solves']} | {r['extra_newton']} | "
                      f"{r['iterations']} | {r['iterations'] / r['solves']:.1f} | "
                      f"{r['crossings']} | {r['cpu']:.1f} | {r['wall']:.1f} | {errors} |")
+
+
+@contextlib.contextmanager
+def stage_rule(norm, factor):
+    """The stage solves' stopping rule set to ``norm`` and ``factor`` (see ``--levers``)."""
+    saved = transient.solver.STAGE_NORM, transient.solver.STAGE_SHARE_FACTOR
+    transient.solver.STAGE_NORM, transient.solver.STAGE_SHARE_FACTOR = norm, factor
+    try:
+        yield
+    finally:
+        transient.solver.STAGE_NORM, transient.solver.STAGE_SHARE_FACTOR = saved
+
+
+@contextlib.contextmanager
+def single_directions():
+    """The conjugate directions' products ``K t`` in single precision (``--single``).
+
+    A probe of mixed precision: each iteration's product of the direction by
+    ``K`` is a float32 padded FFT product (``scipy.fft``, the influence
+    spectrum rounded to complex64); the pressure, ``K p`` (updated with
+    those products, recomputed in double every 50 iterations and before a
+    solve ends) and the residual stay in double.
+    """
+    import scipy.fft
+
+    from transient import contact
+
+    call = contact._Operator.__call__
+    spectra = {}
+
+    def single(self, p, *, contiguous=True):
+        if contiguous:
+            return call(self, p, contiguous=True)
+        self.products += 1
+        hs = self.halfspace
+        nx, ny = hs.shape
+        kernel = spectra.get(id(hs))
+        if kernel is None:
+            kernel = spectra[id(hs)] = hs._influence_q.astype(np.complex64)
+        q = scipy.fft.rfft2(p.astype(np.float32), s=(2 * nx, 2 * ny))
+        q *= kernel
+        return scipy.fft.irfft2(q, s=(2 * nx, 2 * ny))[:nx, :ny].astype(float)
+
+    contact._Operator.__call__ = single
+    try:
+        yield
+    finally:
+        contact._Operator.__call__ = call
+
+
+def lever_cases(scene_path, sizes):
+    """The cases of ``--levers``: ``(n, name, problem, initial recession, options)``."""
+    scene, options, initial = load_transient_scene(scene_path)
+    options = dataclasses.replace(options, checkpoint_interval=1e9)
+    for n in sizes:
+        voronoi = problem_of(scene, n)
+        yield n, "voronoi", voronoi, initial.recession(voronoi.grid), options
+        grid = RECTANGLE.grid(n)
+        rectangle = WearProblem(Problem(FacePhases(grid, Homogeneous().labels(grid), 1),
+                                        [scene.wear.coefficients[0]], scene.normal_force,
+                                        scene.E_star))
+        yield (n, "rectangle", rectangle, np.zeros(grid.shape),
+               RunOptions(tol=RECTANGLE_TOL, checkpoint_interval=1e9))
+
+
+def history_values(result):
+    """The run's corrected rms slope at ``LEVER_TARGETS`` (s*), in ``grad_f0``."""
+    h = result.history
+    at = np.asarray(LEVER_TARGETS) * result.distance_scale
+    return _at(h["distance"], h["rms_slope"], at, steady=result.status == "steady") \
+        / result.reference_slope
+
+
+def shipped_cases():
+    """Every shipped run-in scene at its own grid: ``(n, name, problem, initial, options)``."""
+    for path in sorted(SCENE.parent.glob("*.toml")):
+        if not re.search(r"(?m)^\[initial_face\]", path.read_text()):
+            continue
+        scene, options, initial = load_transient_scene(path)
+        problem = wear_problem_of(scene)
+        yield (max(problem.grid.shape), path.stem, problem, initial.recession(problem.grid),
+               dataclasses.replace(options, checkpoint_interval=1e9))
+
+
+def lever_table(cases, levers, reference_tol):
+    """Rows of the stopping-rule comparison (see the module docstring).
+
+    ``cases``: ``(n, name, problem, initial recession, options)``; ``reference_tol``:
+    the reference run's ``tol`` from the case's.
+    """
+    rows = []
+    for n, case, problem, initial, options in cases:
+        with stage_rule(*next(iter(levers.values()))[:2]):
+            reference, _ = run_counted(problem, initial, dataclasses.replace(
+                options, tol=reference_tol(options.tol)))
+        ref, first = history_values(reference), None
+        for name, (norm, factor, *single) in levers.items():
+            with stage_rule(norm, factor), \
+                    single_directions() if single else contextlib.nullcontext():
+                result, row = run_counted(problem, initial, options)
+            values = history_values(result)
+            first = values if first is None else first
+            deviation = np.abs(values - ref)
+            row.update(n=n, case=case, rule=name, tol=options.tol,
+                       history_error=float(np.nanmax(deviation)),
+                       worst_distance=LEVER_TARGETS[int(np.nanargmax(deviation))],
+                       change=float(np.nanmax(np.abs(values - first))))
+            rows.append(row)
+            logger.info("%s n = %d %s: %s", case, n, name, row)
+    return rows
+
+
+def markdown_levers(rows):
+    """The stopping-rule table in Markdown."""
+    lines = ["| case | n | stage rule | steps | rejected | contact solves | iterations "
+             "| iterations / solve | padded products | CPU (s) | wall (s) "
+             "| history error, grad_f0 (at s/s*) | change, grad_f0 |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['case']} | {r['n']} | {r['rule']} | {r['steps']} | "
+                     f"{r['rejected']} | {r['solves']} | {r['iterations']} | "
+                     f"{r['iterations'] / r['solves']:.2f} | {r['products']} | "
+                     f"{r['cpu']:.1f} | {r['wall']:.1f} | {r['history_error']:.1e} "
+                     f"({r['worst_distance']:g}) | {r['change']:.1e} |")
     return "\n".join(lines)
 
 
@@ -441,6 +614,13 @@ def main(argv=None):
                         help="tol of the reference runs of --interfaces (default: none)")
     parser.add_argument("--scheme-names", nargs="+",
                         help="integrators of --schemes (default: every implicit one)")
+    parser.add_argument("--levers", action="store_true",
+                        help="stopping rules of the stage solves side by side")
+    parser.add_argument("--rules", nargs="+", choices=sorted(LEVERS), metavar="RULE",
+                        help="stage rules of --levers, the first the reference of 'change' "
+                             "(default: all of LEVERS)")
+    parser.add_argument("--shipped", action="store_true",
+                        help="--rules (at least two) on every shipped run-in scene")
     parser.add_argument("--memory", action="store_true",
                         help="peak memory of the command line against n")
     parser.add_argument("--checkpoint-interval", type=float,
@@ -454,8 +634,12 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="smoke test: short ladders")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("bench_runin.h5"))
     args = parser.parse_args(argv)
-    if not (args.table or args.schemes or args.memory or args.interfaces):
-        parser.error("choose --table, --schemes, --interfaces and/or --memory")
+    if not (args.table or args.schemes or args.memory or args.interfaces or args.levers
+            or args.shipped):
+        parser.error("choose --table, --schemes, --interfaces, --levers, --shipped "
+                     "and/or --memory")
+    if args.shipped and not (args.rules and len(args.rules) > 1):
+        parser.error("--shipped compares the --rules given, at least two")
     logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
     groups = {}
     if args.table:
@@ -465,6 +649,17 @@ def main(argv=None):
         groups["interfaces"] = interface_table(args.interfaces_scene, args.sizes, args.tol,
                                                args.reference_tol)
         print(markdown_interfaces(groups["interfaces"]))
+    if args.levers:
+        names = args.rules or (list(LEVERS)[:2] if args.quick else list(LEVERS))
+        levers = {k: LEVERS[k] for k in names}
+        reference = 1e-4 if args.quick else LEVER_REFERENCE_TOL
+        groups["levers"] = lever_table(lever_cases(args.scene, args.sizes), levers,
+                                       lambda tol: reference)
+        print(markdown_levers(groups["levers"]))
+    if args.shipped:
+        groups["shipped"] = lever_table(shipped_cases(), {k: LEVERS[k] for k in args.rules},
+                                        lambda tol: SHIPPED_REFERENCE * tol)
+        print(markdown_levers(groups["shipped"]))
     if args.memory:
         groups["memory"] = memory_table(args.scene, args.sizes, args.checkpoint_interval)
         print(markdown_memory(groups["memory"]))
