@@ -36,8 +36,8 @@ import math
 import numpy as np
 
 from .depth import DepthColumns
-from .halfspace import HalfSpace
 from .labels import validate_labels
+from .operators import operator_of
 from .outline import FaceGrid
 from .schema import SCALE_RANGE as _SCALE_RANGE
 from .schema import Key
@@ -499,6 +499,10 @@ class Problem:
         if sliding.uniform:
             object.__setattr__(self, "sliding", None)
             return
+        if self.outline.periodic:
+            raise ValueError(f"sliding {sliding.describe()} on the {self.outline.describe()}: "
+                             f"a periodic cell slides in translation only (a sliding speed that "
+                             f"varies across the plane does not repeat with the cell)")
         sliding.check_outline(self.outline, "sliding")
         if wear.factor is None:
             raise ValueError(f"sliding {sliding.describe()} needs a wear law k_i g(p) whose "
@@ -601,8 +605,12 @@ class Problem:
     # -- derived ---------------------------------------------------------
     @functools.cached_property
     def halfspace(self):
-        """The elastic half-space operator of the grid (built on first use, then kept)."""
-        return HalfSpace(self.shape, self.grid.h, self.E_star)
+        """The elastic operator of the grid (built on first use, then kept).
+
+        :func:`steady.operators.operator_of`: the zero-padded half-space, or the
+        periodic one for a periodic cell.
+        """
+        return operator_of(self.grid, self.E_star)
 
     @property
     def mean_pressure(self):

@@ -33,8 +33,8 @@ import math
 
 import numpy as np
 
-from .halfspace import HalfSpace
 from .normalisation import reference_slope
+from .operators import operator_of
 from .problem import Problem
 from .relief import rms_height
 from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
@@ -318,7 +318,7 @@ def _limiting_face(problem):
     # before the slope estimator's arrays are allocated (steady.memory.steady_memory).
     halfspace = problem.__dict__.get("halfspace")
     if halfspace is None:
-        halfspace = HalfSpace(problem.shape, problem.grid.h, problem.E_star)
+        halfspace = operator_of(problem.grid, problem.E_star)
     on_face = problem.face_mask
     counts = problem.phases.counts
     p_phase = problem.phase_pressures()

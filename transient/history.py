@@ -75,7 +75,7 @@ import numpy as np
 
 from steady.problem import FacePhases
 from steady.relief import PlaneFit, rms_height
-from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope, estimate_rms_slope
+from steady.rms_slope import estimate_map_rms_slope, estimate_rms_slope, slope_energy_of
 
 from .contact import solve_contact
 from .diagnostics import face_rms_slope, masked_gradient
@@ -302,7 +302,7 @@ class FaceEstimator:
         self.contact_rtol = float(contact_rtol)
         self.face_mask = problem.face_mask
         self.h = hs.h
-        self.energy = SlopeEnergy(problem.shape, hs.h, hs.E_star)
+        self.energy = slope_energy_of(problem.grid, hs.E_star)
         # The map's ladder and the steady comparison keep the double-precision
         # estimator; the figures of every step share its spectra.
         self._step_energy = self.energy.in_precision(precision)
@@ -315,7 +315,8 @@ class FaceEstimator:
         padded = np.pad(self.face_mask, 1)
         interior = (padded[2:, 1:-1] & padded[:-2, 1:-1] & padded[1:-1, 2:]
                     & padded[1:-1, :-2])
-        self.rim = self.face_mask & ~interior
+        # A periodic cell has no rim: no worn layer to correct, none in the error bar.
+        self.rim = self.face_mask & ~interior & (not problem.outline.periodic)
         rate = problem.wear.rate_constant(problem.wear_field[self.rim],
                                           problem.pixel_mean_pressure)
         # Layer width per unit sliding distance, in pixels.
@@ -401,7 +402,12 @@ class FaceEstimator:
         return self._own_halfspace
 
     def rim_layer_pixels(self, distance):
-        """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels."""
+        """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels.
+
+        0 on a face without a rim (a periodic cell).
+        """
+        if not self._rim_growth.size:
+            return 0.0
         return float(np.min(self._rim_growth)) * distance
 
     def figures(self, distance, recession, pressure, approach, *, rim_layers=None):
@@ -461,7 +467,8 @@ class FaceEstimator:
             layers = rim_layer_excess(self._rim_growth * distance)
         else:
             layers = sum(w * rim_layer_excess(self._rim_growth * d) for d, w in rim_layers)
-        excess = self.reference_slope ** 2 * float(np.mean(self._rim_weight * layers))
+        excess = (self.reference_slope ** 2 * float(np.mean(self._rim_weight * layers))
+                  if self._rim_weight.size else 0.0)
         if self.problem.wear.linear:
             slope = math.sqrt(max(mean_square - excess, 0.0))
             spread = RIM_LAYER_SCATTER * excess

@@ -174,7 +174,9 @@ class RunRecord:
         hist["approach"].append(run.approach + run.offset)
         hist["worn_volume"].append(float(np.sum(worn[face_mask])) * p.halfspace.h ** 2)
         hist["solves"].append(run.solver.solves)
-        hist["rim_worn_depth"].append(float(worn[self.estimator.rim].mean()))
+        rim = self.estimator.rim
+        # A periodic cell has no rim: NaN, no depth.
+        hist["rim_worn_depth"].append(float(worn[rim].mean()) if rim.any() else math.nan)
         diff = (run.approach - run.recession - self.steady_face)[face_mask]
         hist["face_deviation"].append(
             float(np.sqrt(np.mean((diff - diff.mean()) ** 2))) / self.steady_shape_rms)
