@@ -480,6 +480,10 @@ class FaceBasis:
 
     def __init__(self, phases, E_star):
         grid = phases.grid
+        if grid.outline.periodic:
+            # The fit places a measured face by its rim and samples faces beyond the box.
+            raise ValueError(f"the wear-ratio fit needs a face with a rim; the "
+                             f"{grid.outline.describe()} is a periodic cell")
         labels = phases.labels
         self.outline = grid.outline
         self.E_star = E_star

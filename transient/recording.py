@@ -179,10 +179,10 @@ class RunRecord:
         hist["rim_worn_depth"].append(float(worn[rim].mean()) if rim.any() else math.nan)
         diff = (run.approach - run.recession - self.steady_face)[face_mask]
         hist["face_deviation"].append(
-            float(np.sqrt(np.mean((diff - diff.mean()) ** 2))) / self.steady_shape_rms)
+            self._per_steady_shape(float(np.sqrt(np.mean((diff - diff.mean()) ** 2)))))
         step_error = slope_error = 0.0
         if error is not None:
-            step_error = shape_rms(error, face_mask) / self.steady_shape_rms
+            step_error = self._per_steady_shape(shape_rms(error, face_mask))
             gx, gy = masked_gradient(np.where(face_mask, error, 0.0), face_mask, p.halfspace.h)
             slope_error = float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
         hist["face_deviation_step_error"].append(step_error)
@@ -191,6 +191,13 @@ class RunRecord:
             hist["force"].append(run.solver.force)
         self.collect(wait=False)
         return hist["spread"][-1], shape_rate
+
+    def _per_steady_shape(self, deviation):
+        """A shape deviation (m) over the steady face's rms shape; NaN if that face is flat.
+
+        The steady face of a homogeneous periodic cell is flat: no relief to compare with.
+        """
+        return deviation / self.steady_shape_rms if self.steady_shape_rms > 0 else math.nan
 
     def _record_depth(self, run, worn, index):
         """Append the depth figures of a run with columns; returns the section's map, or None.

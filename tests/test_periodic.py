@@ -1,0 +1,239 @@
+"""The periodic cell: its operator against closed forms, its contact, steady face and run-in.
+
+Tolerances are the measured errors with a margin (each test says what was measured):
+the operator integrates each pixel exactly, so the closed forms of a pressure constant on
+pixels are met to round-off and the alias sum's accuracy; the contact of a wavy face is
+limited by the grid.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import GEOMETRIES, K1, RODS, problem
+
+from steady.load_programme import LoadProgramme
+from steady.operators import operator_of
+from steady.outline import OUTLINES, Circle, PeriodicCell, outline_from_table
+from steady.periodic import PeriodicHalfSpace
+from steady.phases import Homogeneous
+from steady.sliding import PinOnDisk
+from steady.solution import solve
+from steady.wear import PowerLaw
+from transient.comparison import compare_with_steady
+from transient.contact import solve_contact
+from transient.problem import WearProblem
+from transient.runin import RunOptions, run_in
+
+E_STAR = 1.3e6
+CELL = PeriodicCell(8e-3, 8e-3)
+
+
+def _brute_symbol(shape, h, cutoff, gradient=False):
+    """The alias sum of 2 / |Q| s(Qx) s(Qy) (times Qx) over |m|, |l| <= cutoff, E* = 1."""
+    nx, ny = shape
+    qx = 2 * np.pi * np.fft.fftfreq(nx, d=h)
+    qy = 2 * np.pi * np.fft.rfftfreq(ny, d=h)
+    m = np.arange(-cutoff, cutoff + 1)
+    # The boundary aliases at half weight: the alternating series' first end correction.
+    w = np.where(np.abs(m) == cutoff, 0.5, 1.0)
+    Qx = qx[:, None] + 2 * np.pi * m[None, :] / h
+    Qy = qy[:, None] + 2 * np.pi * m[None, :] / h
+    sx = np.sinc(Qx * h / (2 * np.pi)) * w
+    sy = np.sinc(Qy * h / (2 * np.pi)) * w
+    Q = np.hypot(Qx[:, None, :, None], Qy[None, :, None, :])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        term = np.where(Q > 0, 2.0 / Q, 0.0) * sx[:, None, :, None] * sy[None, :, None, :]
+    if gradient:
+        term = term * Qx[:, None, :, None]
+    out = term.sum(axis=(2, 3))
+    out[0, 0] = 0.0
+    return out
+
+
+@pytest.mark.parametrize("shape", [(12, 12), (11, 14)])
+def test_symbol_is_the_alias_sum(shape):
+    """The Ewald-type sum against the brute-force alias sum, extrapolated in its cut-off.
+
+    The brute sum's error falls as cutoff^-4 (displacement) and cutoff^-2 (gradient);
+    extrapolated from cut-offs 32 and 64 the two agree to 3e-12 and 1.1e-8 of the largest
+    value (to 4e-14 and 6e-10 from 64 and 128), the brute sum's own error: bounds 1e-11
+    and 3e-8.
+    """
+    h = 1e-4
+    hs = PeriodicHalfSpace(shape, h, 1.0)
+    for gradient, order, tol in ((False, 4, 1e-11), (True, 2, 3e-8)):
+        coarse, fine = (_brute_symbol(shape, h, c, gradient) for c in (32, 64))
+        reference = fine + (fine - coarse) / (2**order - 1)
+        ours = hs._gradient_q[0] if gradient else hs.influence_symbol
+        error = np.abs(ours - reference).max() / np.abs(reference).max()
+        what = "gradient" if gradient else "displacement"
+        assert error < tol, f"{what} symbol off by {error:.2e}"
+
+
+@pytest.mark.parametrize("n", [32, 33])
+def test_stripes_give_the_square_wave_series(n):
+    """Two phases in stripes: the displacement is the square wave's Fourier series, exactly.
+
+    Pressure ``p0 + dp`` on ``0 < x < W / 2`` (whole pixels of an even n; for odd n the
+    stripe is 16 of 33 pixels, a general two-level wave), ``p0`` on the rest: the continuum
+    displacement ``sum_k 2 P_k cos(k q0 x + phi_k) / (E* k q0)`` at the pixel centres.  The
+    series is summed to k = 2e5 with the tail of its terms ~1/k^2 (cancelling in sign):
+    measured agreement 1e-12 of the amplitude; bound 1e-10.
+    """
+    width = 4e-3
+    hs = PeriodicHalfSpace((n, 8), width / n, E_STAR)
+    h = width / n
+    stripe = n // 2
+    p0, dp = 2e4, 5e4
+    pressure = np.full((n, 8), p0)
+    pressure[:stripe] += dp
+    x = (np.arange(n) + 0.5) * h
+    # Fourier coefficients of the indicator of [0, stripe h) of period W.
+    k = np.arange(1, 200_001)
+    q = 2 * np.pi * k / width
+    c = dp * (np.exp(-1j * q * stripe * h) - 1) / (-1j * q * width)  # complex amplitude
+    u = np.zeros(n)
+    for block in range(0, k.size, 20_000):
+        sl = slice(block, block + 20_000)
+        u += np.real(2 * (c[sl, None] * 2 / (E_STAR * q[sl, None]))
+                     * np.exp(1j * q[sl, None] * x[None, :])).sum(axis=0)
+    ours = hs.displacement(pressure)[:, 3]
+    amplitude = np.ptp(u)
+    error = np.abs((ours - ours.mean()) - (u - u.mean())).max() / amplitude
+    assert error < 1e-10, f"stripe cell off the square-wave series by {error:.2e} of the relief"
+
+
+@pytest.mark.parametrize("n", [64, 63])
+def test_cosine_pressure(n):
+    """``P cos(q x)`` at the pixel centres: displacement ``2 P / (E* q)`` up to the pixels.
+
+    Constant on pixels, the cosine's fundamental is ``P sinc(q h / 2 pi)`` and the symbol
+    carries the sinc once more: relative deviation from ``2 P / (E* q)`` about
+    ``(q h)^2 / 12``, 8e-4 at n = 64 for the first mode (measured 8.0e-4); bound 1e-3.
+    The zero-mean displacement is exactly the cosine (no other mode).
+    """
+    width, P = 5e-3, 1e4
+    hs = PeriodicHalfSpace((n, n), width / n, E_STAR)
+    x = (np.arange(n) + 0.5) * width / n
+    q = 2 * np.pi / width
+    u = hs.displacement(np.repeat((P * np.cos(q * x))[:, None], n, axis=1))
+    amplitude = 2 * np.sum(u[:, 0] * np.cos(q * x)) / n
+    assert abs(amplitude / (2 * P / (E_STAR * q)) - 1) < 1e-3, "cosine amplitude off 2P/(E* q)"
+    shape_error = np.abs(u[:, 0] - amplitude * np.cos(q * x)).max() / amplitude
+    assert shape_error < 1e-12, f"the displacement of a cosine is not a cosine ({shape_error:.1e})"
+    assert abs(u.mean()) < 1e-15 * np.abs(u).max() * n * n, "the displacement's mean is not 0"
+
+
+@pytest.mark.parametrize("n", [128, 129])
+@pytest.mark.parametrize("load", [0.2, 0.5])
+def test_wavy_face_partial_contact_is_westergaards(n, load):
+    """A 1-d wavy face ``h (1 - cos(2 pi x / lambda))`` pressed flat: Westergaard's contact.
+
+    Half-width ``a``: ``sin^2(pi a / lambda) = pbar / p*``, ``p* = pi E* h / lambda``
+    (Westergaard 1939; Johnson, Int. J. Solids Struct. 32 (1995) 423, eq. 4).  The
+    pixels in contact span ``2 a`` to within two pixels (measured: within 1.1); the
+    load is met to round-off.
+    """
+    wavelength, amplitude = 4e-3, 2e-6
+    grid = PeriodicCell(wavelength, wavelength / 8).grid(n if n % 8 == 0 else 128)
+    if n % 8:  # an odd grid: a cell of n x 8 pixels along the wave
+        grid = PeriodicCell(wavelength, 8 * wavelength / n).grid(n)
+    x = grid.x - grid.x[0] + 0.5 * grid.h
+    recession = np.repeat((amplitude * (1 - np.cos(2 * np.pi * x / wavelength)))[:, None],
+                          grid.shape[1], axis=1)
+    p_star = np.pi * E_STAR * amplitude / wavelength
+    force = load * p_star * wavelength * grid.shape[1] * grid.h
+    hs = operator_of(grid, E_STAR)
+    res = solve_contact(hs, grid.mask, recession, force, rtol=1e-10)
+    assert res.success, res.message
+    assert res.pressure.sum() * grid.h**2 == pytest.approx(force, rel=1e-12), "load not met"
+    width = np.count_nonzero(res.pressure[:, 0] > 0) * grid.h
+    a = wavelength / np.pi * math.asin(math.sqrt(load))
+    assert abs(width - 2 * a) <= 2 * grid.h, \
+        f"contact width {width / grid.h:.1f} pixels, Westergaard {2 * a / grid.h:.2f}"
+    assert 0 < res.contact_fraction < 1, "not a partial contact"
+
+
+def test_outline_contract():
+    """Whole-cell face, exact area, square pixels tiling the cell; every outline says periodic."""
+    cell = outline_from_table({"shape": "periodic", "width": 6e-3, "length": 2e-3})
+    grid = cell.grid(96)
+    assert grid.shape == (96, 32) and grid.mask.all(), "the grid must tile the cell"
+    assert grid.face_area == pytest.approx(cell.area, rel=1e-14) == 12e-6, "cell area"
+    assert grid.h == pytest.approx(6e-3 / 96, rel=1e-15), "pixels must be square"
+    assert cell.periodic and cell.exact_rim_distance(0.0, 0.0) is None, "a cell has no rim"
+    for kind in OUTLINES:
+        assert OUTLINES[kind].periodic is (kind == "periodic"), f"{kind}: periodic attribute"
+    assert type(operator_of(grid, E_STAR)) is PeriodicHalfSpace, "the seam's choice"
+    assert type(operator_of(Circle(4e-3).grid(32), E_STAR)).__name__ == "HalfSpace"
+
+
+def test_refusals():
+    """Sides that are not whole pixels, and non-uniform sliding, refused with the reason."""
+    with pytest.raises(ValueError, match=r"not whole pixels at n = 64.*width 0.004 m and "
+                                         r"length 0.0031 m"):
+        PeriodicCell(4e-3, 3.1e-3).grid(64)
+    with pytest.raises(ValueError, match="periodic cell slides in translation only"):
+        p = problem(GEOMETRIES["voronoi"], PowerLaw([K1, 10 * K1]), n=32, outline=CELL)
+        type(p)(p.phases, p.wear, p.normal_force, p.E_star, sliding=PinOnDisk(0.05))
+
+
+@pytest.mark.parametrize("geometry", ["homogeneous", "voronoi", "rods"])
+def test_steady_face_has_zero_mean_and_exact_slope(geometry):
+    """Eq. 7 on the cell; the face's mean removed; the rms slope is Parseval's, exactly.
+
+    ``2 std(p) / E*`` for the half-space (its ladder measures only the rasterisation of the
+    map); for the homogeneous cell a flat face.
+    """
+    geometry = {"rods": RODS}.get(geometry, GEOMETRIES[geometry])
+    wear = PowerLaw([K1, 10 * K1][:geometry.n_phases])
+    result = solve(problem(geometry, wear, n=64, outline=CELL))
+    pressure = result.pressure
+    assert np.sum(pressure) * CELL.grid(64).pixel_area == pytest.approx(10.0, rel=1e-12)
+    assert abs(np.nanmean(result.face)) < 1e-12 * max(np.nanmax(np.abs(result.face)), 1e-30)
+    exact = 2 * np.std(pressure) / E_STAR
+    if geometry.n_phases == 1:
+        assert np.nanmax(np.abs(result.face)) < 1e-20 and result.rms_slope == 0.0
+    else:
+        assert result.rms_slope == pytest.approx(exact, rel=1e-12), "not Parseval's slope"
+        assert math.isfinite(result.rms_slope_error), "no error bar"
+
+
+def _run(geometry, ratios, *, exponent=1.0, programme=None):
+    wear = PowerLaw([K1 * r for r in ratios], exponent=exponent)
+    wp = WearProblem(problem(geometry, wear, n=32, outline=CELL), load_programme=programme)
+    return wp, run_in(wp, np.zeros(wp.shape), RunOptions(tol=1e-3))
+
+
+@pytest.mark.parametrize("case", ["voronoi", "rods", "power_law", "programme"])
+def test_run_in_reaches_the_steady_face(case):
+    """From flat to the closed-form face on the periodic operator.
+
+    Face error (max of the difference, mean removed, over the steady relief) measured
+    1.1e-8 .. 2.7e-8, the final jump's error of order s*/ds; bound 1e-7.  Pressures and
+    the rms slope to round-off (1e-12).  Under a programme, against the closed form at
+    its last force.
+    """
+    programme = LoadProgramme(10.0, ((2e4, 15.0),)) if case == "programme" else None
+    geometry = RODS if case == "rods" else GEOMETRIES["voronoi"]
+    exponent = 2.0 if case == "power_law" else 1.0
+    wp, result = _run(geometry, (1.0, 10.0), exponent=exponent, programme=programme)
+    assert result.status == "steady", result.message
+    force = 15.0 if programme else 10.0
+    steady_problem = WearProblem(problem(geometry, wp.wear, n=32, outline=CELL, force=force))
+    cmp = compare_with_steady(result, steady_problem.solve_steady(), steady_problem)
+    assert cmp.face_error < 1e-7, f"{case}: face error {cmp.face_error:.2e}"
+    assert cmp.phase_pressure_error < 1e-12, f"{case}: pressures {cmp.phase_pressure_error:.2e}"
+    assert cmp.rms_slope == pytest.approx(cmp.steady_rms_slope, rel=1e-12), cmp.summary()
+    assert np.all(np.isnan(result.history["rim_worn_depth"])), "a cell has no rim"
+
+
+def test_homogeneous_cell_stays_flat():
+    """A homogeneous cell wears uniformly: no relief, no slope, no deviation to measure."""
+    wp = WearProblem(problem(Homogeneous(), PowerLaw([K1]), n=32, outline=CELL))
+    result = run_in(wp, np.zeros(wp.shape), RunOptions(tol=1e-3))
+    assert result.status == "steady", result.message
+    slopes = np.asarray(result.history["rms_slope"])
+    assert np.all(slopes[1:] < 1e-12), f"a flat cell tilts: rms slope up to {slopes.max():.2e}"
+    assert np.all(np.isnan(result.history["face_deviation"])), "no steady relief to compare"
