@@ -330,7 +330,8 @@ def _limiting_face(problem):
     slope2 = gx * gx
     slope2 += gy * gy
     plain = math.sqrt(np.sum(slope2, where=on_face) / counts.sum())
-    height = rms_height(face, on_face, halfspace.h)
+    # A periodic face has no tilt to level: its mean alone is arbitrary.
+    height = rms_height(face, on_face, halfspace.h, plane=not problem.outline.periodic)
     off = ~on_face
     face[off] = np.nan
     slope = np.sqrt(slope2, out=slope2)

@@ -166,7 +166,7 @@ def _difference_rms_slope(face, face_mask, h):
     return float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
 
 
-def face_statistics(face, face_mask, h):
+def face_statistics(face, face_mask, h, *, plane=True):
     """Rms slope (finite differences) and rms height of a smooth face over the face pixels.
 
     For the initial faces of :mod:`transient.initial_face`: exact for a
@@ -180,6 +180,9 @@ def face_statistics(face, face_mask, h):
         Heights at the pixel centres (either sign convention).
     face_mask : ndarray of bool, shape (nx, ny)
     h : float, m
+    plane : bool, optional
+        The rms height about the least-squares plane (default), or about the
+        mean (False: a periodic cell's face).
 
     Returns
     -------
@@ -203,7 +206,7 @@ def face_statistics(face, face_mask, h):
     if error <= 1e-12 * max(slope, coarse):
         error = 0.0
     return FaceStatistics(rms_slope=slope, rms_slope_error=error,
-                          rms_height=rms_height(face, face_mask, h))
+                          rms_height=rms_height(face, face_mask, h, plane=plane))
 
 
 # The estimator of each live problem (FaceEstimator.of), with its initial face.
@@ -308,10 +311,11 @@ class FaceEstimator:
         self._step_energy = self.energy.in_precision(precision)
         self._own_halfspace = None
         self._threaded = False
-        self._plane = PlaneFit(self.face_mask, hs.h)
+        self._plane = PlaneFit(self.face_mask, hs.h, plane=not problem.outline.periodic)
         self.reference_slope = problem.reference_slope
         h0 = np.where(self.face_mask, np.asarray(initial_recession, dtype=float), 0.0)
-        self.initial = face_statistics(-h0, self.face_mask, hs.h)
+        self.initial = face_statistics(-h0, self.face_mask, hs.h,
+                                       plane=not problem.outline.periodic)
         padded = np.pad(self.face_mask, 1)
         interior = (padded[2:, 1:-1] & padded[:-2, 1:-1] & padded[1:-1, 2:]
                     & padded[1:-1, :-2])
