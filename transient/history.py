@@ -642,7 +642,8 @@ class DepthRecorder:
         labels = np.take_along_axis(columns.phases, segment[None], axis=0)[0]
         counts = np.bincount(labels[face], minlength=columns.n_phases)
         out = {"worn_depth_mean": float(worn[face].mean()),
-               "worn_depth_rim": float(worn[self.rim].mean()),
+               # NaN on a face without a rim (a periodic cell).
+               "worn_depth_rim": float(worn[self.rim].mean()) if self.rim.any() else math.nan,
                "worn_depth_max": float(worn[face].max()),
                "phase_fraction": counts / counts.sum(), "crossings": crossed}
         if self.coating is not None:
