@@ -10,7 +10,9 @@ a module imports only from its floor and below):
   estimates; :mod:`steady.registry` -- registries of named entries;
   :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
 - fields, arrays that know no outline: :mod:`steady.halfspace` -- the
-  elastic half-space operator (eq. 8); :mod:`steady.array_files` -- ``.npy``
+  elastic half-space operator (eq. 8); :mod:`steady.periodic` -- the same
+  on a periodic cell; :mod:`steady.operators` -- the choice between them
+  (``operator_of``); :mod:`steady.array_files` -- ``.npy``
   and PNG inputs, checked before their data are read; :mod:`steady.labels`
   -- rasterised phase maps; :mod:`steady.pressures` -- eq. 7;
   :mod:`steady.depth` -- columns of segments below the face;
@@ -71,6 +73,8 @@ _MODULE_OF = {
     "MaskOutline": "outline",
     "MeasuredFace": "measured_face",
     "Micrograph": "micrograph",
+    "PeriodicCell": "outline",
+    "PeriodicHalfSpace": "periodic",
     "PhaseBasis": "basis",
     "PowerSpectrum": "topography",
     "ArchardLaw": "wear",
@@ -105,6 +109,7 @@ _MODULE_OF = {
     "load_phase_map": "phases",
     "load_scene": "scene",
     "parse_scene": "scene",
+    "operator_of": "operators",
     "phase_pressures": "pressures",
     "pressure_field": "wear",
     "problem_of": "scene",

@@ -14,7 +14,6 @@ from conftest import GEOMETRIES, K1, RODS, one_error_line, problem, run_cli
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
-
 from steady.load_programme import LoadProgramme
 from steady.operators import operator_of
 from steady.outline import OUTLINES, Circle, PeriodicCell, outline_from_table
@@ -305,8 +304,10 @@ end_depth = 6e-4
 
 
 def test_periodic_voronoi_repeats():
-    """On a cell the tessellation wraps: the map of a cell shifted by half a side is the
-    map of the shifted seeds (no seam at the cell's sides)."""
+    """On a cell the tessellation wraps: each pixel takes the nearest image of a seed.
+
+    No seam at the cell's sides: grains run across them.
+    """
     cell = PeriodicCell(2.0, 2.0)
     grid = cell.grid(64)
     labels = Voronoi(40, (0.5, 0.5), 3307).labels(grid)
