@@ -37,10 +37,14 @@ adds less than ``1e-13`` of the symbol's largest value.
 The mean
 --------
 A periodic load's mean displacement is unbounded on a half-space: only its
-differences are defined.  The symbol is 0 at ``q = 0``, so the displacement
-has zero mean over the cell; the mean pressure is set by the load, not by
-the operator.  ``aliased_symbol``, which a Fourier preconditioner inverts,
-carries the symbol's smallest positive value there instead.
+differences are defined, and the mean pressure is set by the load.  The
+operator fixes the arbitrary mean as ``S_0`` times the mean pressure, ``S_0``
+the symbol's largest value (the cell's longest wave, about
+``max(W, L) / (pi E*)``): the displacement of a cell then has the elastic
+scale of a punch of the cell's size, which the contact solver's stopping rule
+measures its residual against, and the operator is positive definite.  Only
+differences of the displacement mean anything; figures and statistics of a
+cell remove its mean.
 """
 
 from __future__ import annotations
@@ -202,8 +206,8 @@ class PeriodicHalfSpace:
     -----
     Fields have the shape :attr:`shape`; spectra the ``rfft2`` layout
     ``(nx, ny // 2 + 1)``.  The displacement (positive into the half-space) has
-    zero mean over the cell.  The operator holds no work buffers: instances may
-    be shared between threads.
+    the arbitrary mean ``S_0 pbar`` (module docstring).  The operator holds no
+    work buffers: instances may be shared between threads.
 
     Examples
     --------
@@ -245,7 +249,10 @@ class PeriodicHalfSpace:
             gx += self._correction(lambda Q: Q[0])
             gy += self._correction(lambda Q: Q[1])
         nx, ny = self.shape
-        base[0, 0] = gx[0, 0] = gy[0, 0] = 0.0
+        gx[0, 0] = gy[0, 0] = 0.0
+        # The arbitrary mean: the longest wave's compliance (module docstring).
+        base[0, 0] = 0.0
+        base[0, 0] = base.max()
         # An odd kernel's Nyquist modes vanish (the aliases +-pi/h cancel).
         if nx % 2 == 0:
             gx[nx // 2] = 0.0
@@ -319,7 +326,7 @@ class PeriodicHalfSpace:
 
     # -- operators -----------------------------------------------------
     def displacement(self, pressure_r):
-        """Surface displacement at the pixel centres, zero mean over the cell.
+        """Surface displacement at the pixel centres (its mean arbitrary: ``S_0 pbar``).
 
         Parameters
         ----------
@@ -412,39 +419,31 @@ class PeriodicHalfSpace:
     # -- what the contact solver and its preconditioners read -------------
     @property
     def influence_symbol(self):
-        """The operator's symbol, m/Pa, shape (nx, ny // 2 + 1), read-only; 0 at ``q = 0``.
+        """The operator's symbol, m/Pa, shape (nx, ny // 2 + 1), read-only; positive.
 
-        ``inverse(forward(p) * influence_symbol)`` is :meth:`displacement`.
+        ``inverse(forward(p) * influence_symbol)`` is :meth:`displacement`; at
+        ``q = 0`` the arbitrary ``S_0`` (module docstring).
         """
+        return self._influence_q
+
+    @property
+    def aliased_symbol(self):
+        """The symbol a Fourier preconditioner inverts: :attr:`influence_symbol` (no padding)."""
         return self._influence_q
 
     @functools.cached_property
     def compliance_floor(self):
-        """Smallest eigenvalue of the operator on pressures of zero mean, m/Pa.
+        """Smallest eigenvalue of the operator, m/Pa: the symbol's minimum.
 
-        The smallest positive value of the symbol: the contact solver's
-        directions keep the load, so the ``q = 0`` mode never enters.
+        It bounds every principal submatrix (any contact set) from below.
         """
-        symbol = self._influence_q
-        return float(symbol[symbol > 0].min())
-
-    @functools.cached_property
-    def aliased_symbol(self):
-        """The positive symbol a Fourier preconditioner inverts, m/Pa, read-only.
-
-        :attr:`influence_symbol` with :attr:`compliance_floor` at ``q = 0``, where
-        the operator has none (the load, not the operator, sets the mean pressure).
-        """
-        symbol = self._influence_q.copy()
-        symbol[0, 0] = self.compliance_floor
-        symbol.flags.writeable = False
-        return symbol
+        return float(self._influence_q.min())
 
     @functools.cached_property
     def influence_quadrant(self):
         """Periodic influence coefficients at offsets ``0..nx`` by ``0..ny`` pixels, m/Pa.
 
-        The kernel of :meth:`displacement` (zero mean over the cell), even in
+        The kernel of :meth:`displacement`, even in
         both axes; the entries at offset ``nx`` (``ny``) repeat offset 0, so that
         an offset ``|i - i'|`` of two cell pixels indexes it directly.  Shape
         ``(nx + 1, ny + 1)``, read-only.
@@ -456,5 +455,5 @@ class PeriodicHalfSpace:
 
     @property
     def self_influence(self):
-        """Displacement of a pixel per unit pressure on itself (zero-mean kernel), m/Pa."""
+        """Displacement of a pixel per unit pressure on itself, m/Pa."""
         return float(self.influence_quadrant[0, 0])

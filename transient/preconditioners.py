@@ -323,11 +323,7 @@ def _multiplier(symbol, level, dtype, root):
     shifted = symbol + level
     if root:
         np.sqrt(shifted, out=shifted)
-    if shifted.min() > 0:
-        return np.divide(1.0, shifted, out=np.empty(symbol.shape, dtype))
-    # A mode the operator does not see (a periodic cell's mean, symbol 0): left out; the
-    # solver's directions keep the load, so it never enters.
-    return np.divide(1.0, shifted, out=np.zeros(symbol.shape, dtype), where=shifted > 0)
+    return np.divide(1.0, shifted, out=np.empty(symbol.shape, dtype))
 
 
 def shift_levels(shift, face_mask, scale, max_levels=_MAX_LEVELS):

@@ -97,6 +97,9 @@ class RunRecord:
         steady = problem.solve_steady(face_only=True)
         self.steady_face = np.where(face_mask, steady.face, 0.0)
         self.steady_shape_rms = shape_rms(steady.face, face_mask)
+        # A flat steady face (a homogeneous cell), to round-off: no relief to compare with.
+        self._flat = self.steady_shape_rms <= 1e-12 * float(np.max(np.abs(
+            steady.face[face_mask])))
         figures = estimator.figures(math.inf, -self.steady_face,
                                     np.where(face_mask, steady.pressure, 0.0), 0.0)
         self.steady_slope = (float(figures["rms_slope"]), float(figures["rms_slope_error"]))
@@ -197,7 +200,7 @@ class RunRecord:
 
         The steady face of a homogeneous periodic cell is flat: no relief to compare with.
         """
-        return deviation / self.steady_shape_rms if self.steady_shape_rms > 0 else math.nan
+        return math.nan if self._flat else deviation / self.steady_shape_rms
 
     def _record_depth(self, run, worn, index):
         """Append the depth figures of a run with columns; returns the section's map, or None.

@@ -23,6 +23,13 @@ What it reproduces
     face error: rms of the shape difference at ``3 s*`` (best constant
     removed) over the reference's relief.
 
+    ``--periodic``: the scene at each grid beside the same map on a periodic
+    cell (``[punch] shape = "periodic"``, the punch's bounding square, the
+    force scaled to the punch's mean pressure), alternated in one process:
+    the work of each (operator products: padded for the punch, plain FFT
+    pairs of the cell), its wall and CPU time, and the wall time of one
+    product (the best of five means of ten).
+
     ``--memory``: the command line, ``python -m transient SCENE -o RUN.h5``
     (checkpoints every ``--checkpoint-interval`` seconds of wall time,
     default the scene's 10 s), on the scene with only ``[grid] n`` changed,
@@ -45,6 +52,8 @@ How to run
     python studies/benchmarks/bench_runin.py --table --schemes --sizes 40 --n 40 --quick
                                                         # smoke test, seconds
     python studies/benchmarks/bench_runin.py --memory --sizes 40   # smoke test, seconds
+    python studies/benchmarks/bench_runin.py --periodic --sizes 512 1024   # ~10 min
+    python studies/benchmarks/bench_runin.py --periodic --sizes 40   # smoke test, seconds
 
 Writes ``--out`` (HDF5: one group per table row) and prints the tables in
 Markdown.
@@ -69,6 +78,8 @@ import time
 import numpy as np
 
 from steady.halfspace import HalfSpace
+from steady.outline import PeriodicCell
+from steady.periodic import PeriodicHalfSpace
 from steady.safe_files import atomic_h5
 from transient.diagnostics import face_rms_slope, shape_rms
 from transient.memory import run_in_memory
@@ -100,28 +111,36 @@ logger = logging.getLogger("bench_runin")
 
 @contextlib.contextmanager
 def counted_transforms():
-    """Count padded products (``HalfSpace.displacement``) and the preconditioner's FFT pairs.
+    """Count operator products (``displacement``) and the preconditioner's FFT pairs.
 
-    A pair is one forward transform of :class:`FourierPreconditioner` (one
-    per level and application), padded or not.
+    A product is a padded FFT pair of :class:`HalfSpace` or a plain one of
+    :class:`PeriodicHalfSpace`; a pair is one forward transform of
+    :class:`FourierPreconditioner` (one per level and application), padded or
+    not.
     """
     counts = {"products": 0, "pairs": 0}
-    displacement, forward = HalfSpace.displacement, FourierPreconditioner._forward
+    displacements = {cls: cls.displacement for cls in (HalfSpace, PeriodicHalfSpace)}
+    forward = FourierPreconditioner._forward
 
-    def counting_displacement(self, pressure_r):
-        counts["products"] += 1
-        return displacement(self, pressure_r)
+    def counting(displacement):
+        def counting_displacement(self, pressure_r):
+            counts["products"] += 1
+            return displacement(self, pressure_r)
+        return counting_displacement
 
     def counting_forward(self, field):
         counts["pairs"] += 1
         return forward(self, field)
 
-    HalfSpace.displacement, FourierPreconditioner._forward = counting_displacement, \
-        counting_forward
+    for cls, displacement in displacements.items():
+        cls.displacement = counting(displacement)
+    FourierPreconditioner._forward = counting_forward
     try:
         yield counts
     finally:
-        HalfSpace.displacement, FourierPreconditioner._forward = displacement, forward
+        for cls, displacement in displacements.items():
+            cls.displacement = displacement
+        FourierPreconditioner._forward = forward
 
 
 def problem_of(scene, n, ratio=None):
@@ -146,13 +165,13 @@ def run_counted(problem, initial_height, options):
     peak_rss (bytes, the process's high-water mark after the run).
     """
     with counted_transforms() as counts:
-        t = time.perf_counter()
+        t, cpu = time.perf_counter(), time.process_time()
         result = run_in(problem, initial_height, options)
-        wall = time.perf_counter() - t
+        wall, cpu = time.perf_counter() - t, time.process_time() - cpu
     row = dict(status=result.status, steps=result.steps, rejected=result.rejected,
                solves=result.solves, iterations=result.iterations,
                products=counts["products"], pairs=counts["pairs"],
-               wall=wall, peak_rss=_peak_rss())
+               wall=wall, cpu=cpu, peak_rss=_peak_rss())
     return result, row
 
 
@@ -168,6 +187,48 @@ def grid_table(scene_path, sizes, tol):
         row.update(n=n, scheme=options.scheme, tol=tol)
         rows.append(row)
         logger.info("n = %d: %s", n, row)
+    return rows
+
+
+def periodic_scene(scene):
+    """The scene's map on a periodic cell: the outline's bounding box, its mean pressure.
+
+    The seeds of a Voronoi map are drawn in the box, so the cell holds the
+    same seeds (its tessellation repeats with the cell).
+    """
+    lx, ly = scene.outline.half_extent
+    cell = PeriodicCell(2 * lx, 2 * ly)
+    return dataclasses.replace(scene, outline=cell,
+                               normal_force=scene.normal_force * cell.area / scene.outline.area)
+
+
+def _product_time(problem, repeats=5, count=10):
+    """Wall time of one operator product (``displacement``), s: the best of ``repeats``."""
+    hs, pressure = problem.halfspace, problem.steady_pressure()
+    hs.displacement(pressure)
+    best = np.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        for _ in range(count):
+            hs.displacement(pressure)
+        best = min(best, (time.perf_counter() - t) / count)
+    return best
+
+
+def periodic_table(scene_path, sizes, tol):
+    """Rows of the side-by-side table: at each grid the punch, then the periodic cell."""
+    scene, options, initial = load_transient_scene(scene_path)
+    tol = options.tol if tol is None else tol
+    options = dataclasses.replace(options, tol=tol, checkpoint_interval=1e9)
+    rows = []
+    for n in sizes:
+        for face, variant in (("punch", scene), ("periodic cell", periodic_scene(scene))):
+            problem = problem_of(variant, n)
+            _, row = run_counted(problem, initial.recession(problem.grid), options)
+            row.update(n=n, face=face, scheme=options.scheme, tol=tol,
+                       product=_product_time(problem))
+            rows.append(row)
+            logger.info("n = %d, %s: %s", n, face, row)
     return rows
 
 
@@ -283,6 +344,22 @@ def markdown_table(rows):
     return "\n".join(lines)
 
 
+def markdown_periodic(rows):
+    """The side-by-side table in Markdown, each cell's time over the punch's."""
+    lines = ["| n | face | steps | contact solves | iterations | operator products "
+             "| one product (ms) | wall (s) | CPU (s) | CPU / punch's |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    punch = {}
+    for r in rows:
+        if r["face"] == "punch":
+            punch[r["n"]] = r["cpu"]
+        ratio = r["cpu"] / punch[r["n"]] if r["n"] in punch else float("nan")
+        lines.append(f"| {r['n']} | {r['face']} | {r['steps']} | {r['solves']} | "
+                     f"{r['iterations']} | {r['products']} | {1e3 * r['product']:.2f} | "
+                     f"{r['wall']:.1f} | {r['cpu']:.1f} | {ratio:.2f} |")
+    return "\n".join(lines)
+
+
 def markdown_memory(rows):
     """The memory table in Markdown."""
     lines = ["| n | steps | snapshots | wall (s) | peak memory (MiB) | bytes / pixel "
@@ -339,6 +416,8 @@ def main(argv=None):
     parser.add_argument("--schemes", action="store_true", help="integrators at equal error")
     parser.add_argument("--memory", action="store_true",
                         help="peak memory of the command line against n")
+    parser.add_argument("--periodic", action="store_true",
+                        help="the scene beside its map on a periodic cell, against n")
     parser.add_argument("--checkpoint-interval", type=float,
                         help="checkpoint interval of --memory, s (default: the scene's)")
     parser.add_argument("--scene", type=pathlib.Path, default=SCENE)
@@ -349,13 +428,16 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="smoke test: short ladders")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("bench_runin.h5"))
     args = parser.parse_args(argv)
-    if not (args.table or args.schemes or args.memory):
-        parser.error("choose --table, --schemes and/or --memory")
+    if not (args.table or args.schemes or args.memory or args.periodic):
+        parser.error("choose --table, --schemes, --memory and/or --periodic")
     logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
     groups = {}
     if args.table:
         groups["grids"] = grid_table(args.scene, args.sizes, args.tol)
         print(markdown_table(groups["grids"]))
+    if args.periodic:
+        groups["periodic"] = periodic_table(args.scene, args.sizes, args.tol)
+        print(markdown_periodic(groups["periodic"]))
     if args.memory:
         groups["memory"] = memory_table(args.scene, args.sizes, args.checkpoint_interval)
         print(markdown_memory(groups["memory"]))
