@@ -27,12 +27,13 @@ by Poisson's formula, as the pixel box smoothed by a Gaussian in real space
 for smaller ``t`` (both sides to ``exp(-42)``); below ``t0 = 0.03 h`` the
 integrand is 1 to within ``erfc(8)``, and above, Gauss-Legendre panels in
 ``log t`` integrate it.  The result matches a brute-force alias sum
-extrapolated in its cut-off to about 1e-12 of the symbol's largest value
-(``tests/test_periodic.py``).  The surface gradient's symbol,
-``i Q_x S``-like, is summed the same way.  With a compliance factor the
+extrapolated in its cut-off to 4e-14 of the symbol's largest value, the
+brute sum's own error (``tests/test_periodic.py``).  The surface gradient's
+symbol (``i Q_x`` times the terms) is summed the same way (to 6e-10 of its
+largest value, again the brute sum's error).  With a compliance factor the
 correction ``c - 1``, which must tend to zero at large ``|Q|`` (a layer's
-does exponentially), is summed directly over rings of aliases until a ring
-adds less than ``1e-13`` of the symbol's largest value.
+does exponentially), is summed directly over rings of aliases until two
+rings each add less than ``1e-13`` of the symbol's largest value.
 
 The mean
 --------
