@@ -71,9 +71,11 @@ _T0 = 0.03
 # Gauss-Legendre nodes per unit of log t, and the panels' extent beyond the longest period.
 _NODES_PER_PANEL = 16
 _TAIL = 1.5
-# A compliance correction's ring of aliases smaller than this share of the symbol ends its sum.
+# A compliance correction's ring of aliases smaller than this share of the symbol ends its sum;
+# 64 rings reach |Q| = 128 pi / h, where a layer's correction exp(-2 |Q| H) is below 1e-13 for
+# any thickness H above h / 25.
 _RING_TOL = 1e-13
-_MAX_RINGS = 256
+_MAX_RINGS = 64
 
 
 def _axis_sums(q, t, h, derivative):
@@ -161,14 +163,16 @@ def _alias_rings(shape, h, term):
         does not tend to 1).
     """
     qx, qy = _wavenumbers(shape, h)
-    qx, qy = qx[:, None], qy[None, :]
-    total = term(qx, qy)
+    qx, qy = qx[:, None, None], qy[None, :, None]
+    total = term(qx, qy)[..., 0]
     quiet = 0
     for r in range(1, _MAX_RINGS + 1):
-        ring = np.zeros_like(total)
-        for m in range(-r, r + 1):
-            for n_ in ((-r, r) if abs(m) < r else range(-r, r + 1)):
-                ring += term(qx + 2 * np.pi * m / h, qy + 2 * np.pi * n_ / h)
+        # The ring's aliases (m, l), max(|m|, |l|) = r, along a last axis.
+        side = np.arange(-r, r + 1)
+        m = np.concatenate([side, side, np.full(2 * r - 1, -r), np.full(2 * r - 1, r)])
+        n_ = np.concatenate([np.full(2 * r + 1, -r), np.full(2 * r + 1, r), side[1:-1],
+                             side[1:-1]])
+        ring = term(qx + 2 * np.pi * m / h, qy + 2 * np.pi * n_ / h).sum(axis=-1)
         total += ring
         scale = max(float(np.max(np.abs(total))), np.finfo(float).tiny)
         quiet = quiet + 1 if float(np.max(np.abs(ring))) < _RING_TOL * scale else 0
