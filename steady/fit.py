@@ -471,6 +471,12 @@ class FaceBasis:
         the rim (:meth:`rim_distance`): the rim margin and the shift search
         radius together must stay below it.
 
+    Raises
+    ------
+    ValueError
+        A periodic cell (``outline.periodic``): the fit places a measured face
+        by its rim.
+
     Notes
     -----
     Cost: ``P`` half-space products on the grid of ``(nx + 8) x (ny + 8)``

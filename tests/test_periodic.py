@@ -14,6 +14,7 @@ from conftest import GEOMETRIES, K1, RODS, one_error_line, problem, run_cli
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
+from steady.fit import FaceBasis
 from steady.load_programme import LoadProgramme
 from steady.operators import operator_of
 from steady.outline import OUTLINES, Circle, PeriodicCell, outline_from_table
@@ -210,13 +211,16 @@ def test_outline_contract():
 
 
 def test_refusals():
-    """Sides that are not whole pixels, and non-uniform sliding, refused with the reason."""
+    """Sides that are not whole pixels, non-uniform sliding and the fit refused with the reason."""
     with pytest.raises(ValueError, match=r"not whole pixels at n = 64.*width 0.004 m and "
                                          r"length 0.0031 m"):
         PeriodicCell(4e-3, 3.1e-3).grid(64)
     with pytest.raises(ValueError, match="periodic cell slides in translation only"):
         p = problem(GEOMETRIES["voronoi"], PowerLaw([K1, 10 * K1]), n=32, outline=CELL)
         type(p)(p.phases, p.wear, p.normal_force, p.E_star, sliding=PinOnDisk(0.05))
+    p = problem(GEOMETRIES["voronoi"], PowerLaw([K1, 10 * K1]), n=32, outline=CELL)
+    with pytest.raises(ValueError, match="the wear-ratio fit needs a face with a rim"):
+        FaceBasis(p.phases, E_STAR)
 
 
 @pytest.mark.parametrize("geometry", ["homogeneous", "voronoi", "rods"])
