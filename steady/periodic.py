@@ -13,7 +13,7 @@ of a grid wavenumber ``q``, with ``s(Q) = sin(Q h / 2) / (Q h / 2)`` the
 pixel's form factor; the displacement ``2 P(Q) c(|Q|) / (E* |Q|)``
 (Johnson, *Contact Mechanics*, sec. 3.9 in Fourier form; ``c`` the
 optional compliance factor, 1 for the half-space), sampled at the pixel
-centres, aliases back to ``q``.  The discrete symbol is therefore
+centres, aliases back to ``q``.  The discrete symbol is therefore::
 
     S(q) = sum over (m, l) of 2 c(|Q|) / (E* |Q|) s(Q_x) s(Q_y),
 
