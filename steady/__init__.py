@@ -10,9 +10,11 @@ a module imports only from its floor and below):
   estimates; :mod:`steady.registry` -- registries of named entries;
   :mod:`steady.schema` -- declarative scene keys and the registries of kinds;
 - fields, arrays that know no outline: :mod:`steady.halfspace` -- the
-  elastic half-space operator (eq. 8); :mod:`steady.counterbody` -- the
-  counter-body, a half-space or a layer on a rigid flat, and the layer's
-  operator; :mod:`steady.array_files` -- ``.npy``
+  elastic half-space operator (eq. 8); :mod:`steady.periodic` -- the same
+  on a periodic cell; :mod:`steady.counterbody` -- the counter-body, a
+  half-space or a layer on a rigid flat, the layer's operator and the one
+  choice of a grid's operator (``Counterbody.operator``);
+  :mod:`steady.array_files` -- ``.npy``
   and PNG inputs, checked before their data are read; :mod:`steady.labels`
   -- rasterised phase maps; :mod:`steady.pressures` -- eq. 7;
   :mod:`steady.depth` -- columns of segments below the face;
@@ -75,6 +77,8 @@ _MODULE_OF = {
     "MaskOutline": "outline",
     "MeasuredFace": "measured_face",
     "Micrograph": "micrograph",
+    "PeriodicCell": "outline",
+    "PeriodicHalfSpace": "periodic",
     "PhaseBasis": "basis",
     "PowerSpectrum": "topography",
     "ArchardLaw": "wear",

@@ -16,11 +16,11 @@ import dataclasses
 
 import numpy as np
 
-from .halfspace import HalfSpace
+from .counterbody import Counterbody
 from .normalisation import reference_slope
 from .pressures import phase_pressures
 from .problem import FacePhases
-from .rms_slope import SlopeEnergy
+from .rms_slope import slope_energy_of
 
 __all__ = ["PhaseBasis", "SweepSlopes"]
 
@@ -96,10 +96,10 @@ class PhaseBasis:
         self.E_star = float(E_star)
         self.h = grid.h
         indicators = [(labels == i).astype(float) for i in range(self.n_phases)]
-        self._gram = SlopeEnergy(grid.shape, self.h, self.E_star).gram(indicators, labels >= 0)
+        self._gram = slope_energy_of(grid, self.E_star).gram(indicators, labels >= 0)
         self._faces = None
         if faces:
-            hs = HalfSpace(grid.shape, self.h, self.E_star)
+            hs = Counterbody(self.E_star).operator(grid)
             self._faces = np.array([hs.displacement(chi) for chi in indicators])
 
     @property

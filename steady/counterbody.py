@@ -45,6 +45,7 @@ import scipy.interpolate
 import scipy.special
 
 from .halfspace import HalfSpace, _corner_sum
+from .periodic import PeriodicHalfSpace
 from .schema import Key
 
 __all__ = ["POISSON", "THICKNESS", "Counterbody", "LayeredHalfSpace", "correction_kernel",
@@ -424,22 +425,41 @@ class Counterbody:
             return np.ones_like(np.asarray(q, dtype=float)) if np.ndim(q) else 1.0
         return fourier_factor(np.asarray(q, dtype=float) * self.thickness, self.poisson)
 
-    def operator(self, grid):
-        """The elastic operator of a face's grid: the one place it is made.
+    def operator(self, grid, *, workers=-1):
+        """The elastic operator of a face's grid: the one place it is chosen.
 
         Parameters
         ----------
         grid : steady.outline.FaceGrid
-            Or any object with ``shape`` and ``h`` (m).
+            Its outline (``periodic`` or not), shape and pixel size ``h`` (m).
+        workers : int, optional
+            Threads of the transforms (:mod:`scipy.fft`'s count; default -1, all cores).
 
         Returns
         -------
         steady.halfspace.HalfSpace
-            Or :class:`LayeredHalfSpace` for a layer.
+            The zero-padded half-space; :class:`LayeredHalfSpace` for a layer;
+            for a periodic cell (``grid.outline.periodic``) the periodic operator
+            :class:`steady.periodic.PeriodicHalfSpace`, whose modes a layer
+            scales by :meth:`fourier_factor`.
+
+        Examples
+        --------
+        >>> from steady.outline import Circle, PeriodicCell
+        >>> half_space = Counterbody(1e6)
+        >>> type(half_space.operator(Circle(4e-3).grid(32))).__name__
+        'HalfSpace'
+        >>> type(half_space.operator(PeriodicCell(4e-3, 4e-3).grid(32))).__name__
+        'PeriodicHalfSpace'
         """
+        if grid.outline.periodic:
+            factor = self.fourier_factor if self.layered else None
+            return PeriodicHalfSpace(grid.shape, grid.h, self.E_star, compliance_factor=factor,
+                                     workers=workers)
         if self.thickness is None:
-            return HalfSpace(grid.shape, grid.h, self.E_star)
-        return LayeredHalfSpace(grid.shape, grid.h, self.E_star, self.thickness, self.poisson)
+            return HalfSpace(grid.shape, grid.h, self.E_star, workers=workers)
+        return LayeredHalfSpace(grid.shape, grid.h, self.E_star, self.thickness, self.poisson,
+                                workers=workers)
 
     def displacement_scale(self, mean_pressure, length):
         """Displacement of the face under ``mean_pressure`` over ``length``, m.

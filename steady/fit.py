@@ -471,6 +471,12 @@ class FaceBasis:
         the rim (:meth:`rim_distance`): the rim margin and the shift search
         radius together must stay below it.
 
+    Raises
+    ------
+    ValueError
+        A periodic cell (``outline.periodic``): the fit places a measured face
+        by its rim.
+
     Notes
     -----
     Cost: ``P`` half-space products on the grid of ``(nx + 8) x (ny + 8)``
@@ -480,6 +486,10 @@ class FaceBasis:
 
     def __init__(self, phases, E_star):
         grid = phases.grid
+        if grid.outline.periodic:
+            # The fit places a measured face by its rim and samples faces beyond the box.
+            raise ValueError(f"the wear-ratio fit needs a face with a rim; the "
+                             f"{grid.outline.describe()} is a periodic cell")
         labels = phases.labels
         self.outline = grid.outline
         self.E_star = E_star

@@ -549,6 +549,15 @@ class HalfSpace:
         """
         return self._influence_q
 
+    @functools.cached_property
+    def compliance_floor(self):
+        """Lower bound of the eigenvalues of ``K`` on any contact set, m/Pa.
+
+        The minimum of the zero-padded circulant's symbol, which bounds every
+        principal submatrix of ``K`` from below.
+        """
+        return float(np.min(self._influence_q))
+
     @property
     def self_influence(self):
         """Displacement of a pixel per unit pressure on itself, m/Pa."""

@@ -5,6 +5,9 @@ cylinder), a rectangle (a tread block), an ellipse, an annulus (a seal) or
 any region given as a pixel mask.  Every outline has
 
 - ``kind`` : its name in scene files (``[punch] shape``);
+- ``periodic`` : whether the face is a cell that repeats in both directions
+  (:class:`PeriodicCell`, with no rim); False for every finite face.  Callers
+  ask it, and choose the operator by it (:meth:`steady.counterbody.Counterbody.operator`);
 - ``half_extent`` : ``(Lx, Ly)``, m, the half sides of its bounding box,
   x along axis 0;
 - ``scale`` : ``L = max(Lx, Ly)``, m, the length unit of phase geometries
@@ -72,6 +75,7 @@ __all__ = [
     "Ellipse",
     "FaceGrid",
     "MaskOutline",
+    "PeriodicCell",
     "Rectangle",
     "as_grid",
     "as_outline",
@@ -268,6 +272,9 @@ class FaceGrid:
 
 class _Outline:
     """What every outline shares (its subclasses are frozen dataclasses)."""
+
+    #: Whether the face is a periodic cell (no rim); a finite face is not.
+    periodic = False
 
     @property
     def scale(self):
@@ -712,6 +719,100 @@ class Rectangle(_Outline):
         return np.minimum(bx - np.abs(x), by - np.abs(y))
 
 
+# Relative tolerance of a periodic cell's shorter side in whole pixels.
+_WHOLE_PIXELS = 1e-9
+# Grid sizes :meth:`PeriodicCell.grid_at_least` tries before it gives up.
+_GRID_SEARCH = 100_000
+
+
+@OUTLINES.register("periodic", (_WIDTH, _LENGTH),
+                   doc="a periodic cell width x length, repeating in both directions: a "
+                       "representative patch of a large surface, with no rim")
+@dataclasses.dataclass(frozen=True)
+class PeriodicCell(Rectangle):
+    """A cell ``width x length`` (x along its width) that repeats in both directions.
+
+    The face covers the whole cell: every grid pixel is a face pixel, the
+    grid covers the cell exactly and ``area`` is ``width * length`` (the load is
+    the force on one cell).  The operator is the periodic half-space
+    (:class:`steady.periodic.PeriodicHalfSpace`, through
+    :meth:`steady.counterbody.Counterbody.operator`): the face has no rim, so there is no
+    rim distance and no rim term in its rms slope.  ``scale`` is the larger
+    half side, as for a rectangle, and the pixel ``h = 2 L / n`` the longer
+    side over ``n``.
+
+    Parameters
+    ----------
+    width : float, m
+        Side along x (axis 0).
+    length : float, m
+        Side along y (axis 1).
+
+    Notes
+    -----
+    Pixels are square and tile the cell: the shorter side must be a whole
+    number of pixels, ``n * short / long`` an integer to within ``1e-9``
+    (:meth:`check_grid` refuses other ``n``, naming the sides).
+
+    Examples
+    --------
+    >>> grid = PeriodicCell(4e-3, 12e-3).grid(96)
+    >>> grid.shape, bool(grid.mask.all()), PeriodicCell(4e-3, 12e-3).periodic
+    ((32, 96), True, True)
+    """
+
+    periodic = True
+
+    def grid_shape(self, n):
+        """``(nx, ny)``: ``n`` along the longer side, the shorter side in whole pixels."""
+        n = self.check_grid(n)
+        return super().grid_shape(n)
+
+    def _whole_pixels(self, n):
+        """Whether the shorter side is a whole number of the pixels of ``n``."""
+        ratio = min(self.width, self.length) / max(self.width, self.length)
+        pixels = n * ratio
+        return abs(pixels - round(pixels)) <= _WHOLE_PIXELS * max(pixels, 1.0)
+
+    def check_grid(self, n):
+        """``n`` as an int; ``ValueError`` if too coarse or the sides are not whole pixels."""
+        n = super().check_grid(n)
+        if not self._whole_pixels(n):
+            raise ValueError(
+                f"the sides of the {self.describe()} are not whole pixels at n = {n}: width "
+                f"{self.width!r} m and length {self.length!r} m, pixel "
+                f"{max(self.width, self.length) / n!r} m; the periodic cell must be tiled "
+                f"exactly (n = {self.grid_at_least(n)} is the next size that tiles it)")
+        return n
+
+    def grid_at_least(self, n):
+        """The smallest grid size at least ``n`` that tiles the cell in square pixels."""
+        for m in range(max(n, self.min_grid()), max(n, self.min_grid()) + _GRID_SEARCH):
+            if self._whole_pixels(m):
+                return m
+        raise ValueError(f"no grid size from n = {n} to {n + _GRID_SEARCH} tiles the "
+                         f"{self.describe()} in square pixels: width {self.width!r} m, "
+                         f"length {self.length!r} m")
+
+    def grid_mask(self, grid):
+        """Every pixel: the face is the whole cell."""
+        return np.ones(grid.shape, dtype=bool)
+
+    def homogeneous_slope_factor(self):
+        """``(4 / pi, 0, ...)``: the disk's scale ``4 pbar / (pi E*)`` (eq. 12).
+
+        The homogeneous face of a periodic cell is flat; its slopes are given in
+        the units of the disk's, so that a cell and a punch under the same mean
+        pressure compare directly.
+        """
+        return 4.0 / math.pi, 0.0, ("periodic cell (homogeneous face flat): the disk's "
+                                     "4 pbar / (pi E*) as the unit")
+
+    def exact_rim_distance(self, x, y):
+        """None: a periodic cell has no rim."""
+        return None
+
+
 _SEMI_AXIS_X = _length_key("semi_axis_x", "semi-axis along x")
 _SEMI_AXIS_Y = _length_key("semi_axis_y", "semi-axis along y")
 
@@ -1152,7 +1253,8 @@ def outline_from_table(table, base_dir="."):
     table : dict
         ``shape`` (default ``"circle"``) and the keys of that outline
         (:data:`OUTLINES`: ``Circle``: ``radius``; ``Rectangle``:
-        ``width``, ``length``; ``Ellipse``: ``semi_axis_x``,
+        ``width``, ``length``; ``PeriodicCell``: ``width``, ``length``;
+        ``Ellipse``: ``semi_axis_x``,
         ``semi_axis_y``; ``Annulus``: ``inner_radius``, ``outer_radius``;
         ``MaskOutline``: ``path``, ``pixel_size``), lengths in m.
     base_dir : path-like, optional

@@ -442,13 +442,20 @@ class Voronoi(PhaseMap):
     def labels(self, grid):
         """Nearest-seed phase at every face pixel, -1 off it; shape of the grid.
 
-        The seeds are uniform in the face's bounding box.
+        The seeds are uniform in the face's bounding box.  On a periodic cell
+        (an outline whose ``periodic`` is True) the tessellation repeats with
+        the cell: the nearest seed among all the cell's images.
         """
         self.check_grid(grid)
         grid = as_grid(grid)
-        _, phases, tree = self._seeds(grid.outline.aspect)
+        points, phases, tree = self._seeds(grid.outline.aspect)
         i, j = np.nonzero(grid.mask)
-        _, nearest = tree.query(np.column_stack([grid.unit_x[i], grid.unit_y[j]]))
+        centres = np.column_stack([grid.unit_x[i], grid.unit_y[j]])
+        if grid.outline.periodic:
+            box = 2.0 * np.asarray(grid.outline.aspect)
+            tree = spatial.cKDTree(np.mod(points + 0.5 * box, box), boxsize=box)
+            centres = np.mod(centres + 0.5 * box, box)
+        _, nearest = tree.query(centres)
         out = np.full(grid.shape, -1, dtype=np.int64)
         out[i, j] = phases[nearest]
         return out

@@ -44,7 +44,8 @@ from .problem import default_phase_names
 from .relief import PlaneFit
 from .text import shorten
 
-__all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "draw_map", "figure_and_axes",
+__all__ = ["COLUMN_WIDTH", "FONT_SIZES", "PAGE_WIDTH", "colour_bar", "default_removal",
+           "draw_map", "figure_and_axes",
            "grid_extent", "map_height", "new_figure", "phase_colours", "plot_face", "plot_file",
            "plot_phases", "pressure_scale", "pressure_unit", "relief", "result_figure",
            "root_figure", "save_figure", "save_new", "segmentation_figure", "set_fonts"]
@@ -198,6 +199,26 @@ def colour_bar(image, label):
     bar.set_label(label)
     set_fonts(bar.ax)
     return bar
+
+
+def default_removal(outline, remove=None):
+    """What a face's relief removes: ``remove`` if given, else by the outline.
+
+    A periodic cell's face has an arbitrary mean and no tilt to level:
+    ``"mean"``; any other face (or an unknown outline): ``"plane"``.
+
+    Parameters
+    ----------
+    outline : outline object or None
+    remove : {"plane", "mean"} or None, optional
+
+    Returns
+    -------
+    str
+    """
+    if remove is not None:
+        return remove
+    return "mean" if getattr(outline, "periodic", False) else "plane"
 
 
 def relief(face, face_mask, pixel_size, *, remove="plane"):
@@ -420,7 +441,7 @@ def plot_phases(source, *, ax=None, names=None, details=True):
     return fig
 
 
-def plot_face(source, *, ax=None, remove="plane", units="um", cmap="viridis"):
+def plot_face(source, *, ax=None, remove=None, units="um", cmap="viridis"):
     """The limiting face ``f_inf`` as relief about its mean plane.
 
     Parameters
@@ -430,8 +451,9 @@ def plot_face(source, *, ax=None, remove="plane", units="um", cmap="viridis"):
     ax : matplotlib.axes.Axes, optional
         Axes to draw into (default: a new figure a column wide).
     remove : {"plane", "mean"}, optional
-        Draw the height about the face's least-squares plane (default) or
-        about its mean (:func:`relief`); the colour bar says which.
+        Draw the height about the face's least-squares plane or about its
+        mean (:func:`relief`); the colour bar says which.  Default
+        (:func:`default_removal`): the mean on a periodic cell, else the plane.
     units : {"um", "normalised"}, optional
         Heights in micrometres (default) or in ``grad_f0 L`` (eq. 15 over
         ``L``; ``L`` the outline's scale, the radius of a disk).
@@ -447,6 +469,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", cmap="viridis"):
     if units not in ("um", "normalised"):
         raise ValueError(f"units must be 'um' or 'normalised', got {units!r}")
     fig, ax = figure_and_axes(ax, (COLUMN_WIDTH, map_height(res.shape, COLUMN_WIDTH)))
+    remove = default_removal(res.outline, remove)
     height = relief(res.face, res.labels >= 0, res.pixel_size, remove=remove)
     if units == "um":
         field, unit = height * 1e6, "µm"
@@ -458,7 +481,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", cmap="viridis"):
     return fig
 
 
-def result_figure(stored, *, axes=None, remove="plane", names=None):
+def result_figure(stored, *, axes=None, remove=None, names=None):
     """Two-panel figure of a steady result: phase map beside the face's relief.
 
     Parameters
@@ -468,7 +491,8 @@ def result_figure(stored, *, axes=None, remove="plane", names=None):
     axes : sequence of 2 matplotlib.axes.Axes, optional
         Axes to draw into (default: a new figure a page wide).
     remove : {"plane", "mean"}, optional
-        What the face panel removes from ``f_inf`` (:func:`plot_face`).
+        What the face panel removes from ``f_inf`` (:func:`plot_face`; default
+        :func:`default_removal`).
     names : sequence of str, optional
         Phase names (:func:`plot_phases`).
 

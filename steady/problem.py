@@ -510,6 +510,10 @@ class Problem:
         if sliding.uniform:
             object.__setattr__(self, "sliding", None)
             return
+        if self.outline.periodic:
+            raise ValueError(f"sliding {sliding.describe()} on the {self.outline.describe()}: "
+                             f"a periodic cell slides in translation only (a sliding speed that "
+                             f"varies across the plane does not repeat with the cell)")
         sliding.check_outline(self.outline, "sliding")
         if wear.factor is None:
             raise ValueError(f"sliding {sliding.describe()} needs a wear law k_i g(p) whose "

@@ -11,6 +11,9 @@ along the rim.  Measured against eq. 10 (rms height ``0.154990 grad_f0 a``
 by quadrature): relative errors -2.4e-3, -1.1e-3, 3.6e-5 and -5.7e-6 at
 n = 64, 128, 256 and 512, and -2.2e-3, 7.5e-4, -3.0e-4 and -3.7e-5 at
 n = 63, 127, 255 and 511: about second order, irregular in ``n``.
+
+A periodic cell's face repeats: it has no tilt to level, only an arbitrary
+mean, and its rms height is taken about the mean (``plane=False``).
 """
 
 from __future__ import annotations
@@ -29,6 +32,9 @@ class PlaneFit:
         Pixels of the face.
     h : float, m
         Pixel size.
+    plane : bool, optional
+        Remove the plane (default); False: the mean only (a periodic cell's
+        face).
 
     Examples
     --------
@@ -40,13 +46,16 @@ class PlaneFit:
     0.0e+00
     """
 
-    def __init__(self, face_mask, h):
+    def __init__(self, face_mask, h, *, plane=True):
         face_mask = np.asarray(face_mask, dtype=bool)
         nx, ny = face_mask.shape
         x = (np.arange(nx) - 0.5 * (nx - 1)) * float(h)
         y = (np.arange(ny) - 0.5 * (ny - 1)) * float(h)
         X, Y = np.meshgrid(x, y, indexing="ij")
-        design = np.column_stack([np.ones(int(face_mask.sum())), X[face_mask], Y[face_mask]])
+        columns = [np.ones(int(face_mask.sum()))]
+        if plane:
+            columns += [X[face_mask], Y[face_mask]]
+        design = np.column_stack(columns)
         self.basis, _ = np.linalg.qr(design)
         self.face_mask = face_mask
 
@@ -63,8 +72,8 @@ class PlaneFit:
         return 0.0 if rms <= 1e-13 * scale else rms
 
 
-def rms_height(face, face_mask, h):
-    """Rms height of a face over its pixels, least-squares plane removed, m.
+def rms_height(face, face_mask, h, *, plane=True):
+    """Rms height of a face over its pixels, least-squares plane (or mean) removed, m.
 
     Parameters
     ----------
@@ -73,9 +82,11 @@ def rms_height(face, face_mask, h):
     face_mask : ndarray of bool, shape (n, n)
     h : float, m
         Pixel size.
+    plane : bool, optional
+        Remove the plane (default); False: the mean only (a periodic cell).
 
     Returns
     -------
     float, m
     """
-    return PlaneFit(face_mask, h)(face)
+    return PlaneFit(face_mask, h, plane=plane)(face)

@@ -58,16 +58,17 @@ import math
 import numpy as np
 import scipy.fft
 
+from .counterbody import Counterbody
 from .halfspace import grid_shape
 from .labels import extend_off_face, validate_labels
 from .outline import MIN_SIDE_PIXELS, UNIT_DISK, FaceGrid, as_outline
 from .phases import Homogeneous
 from .wear import as_wear_law
 
-__all__ = ["SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals", "edge_jumps",
-           "estimate_map_rms_slope", "estimate_rms_slope", "grid_ladder", "ladder_error",
-           "MIN_CHORD_PIXELS", "mean_chord", "monopole_tail", "resample_labels",
-           "second_moment_tail"]
+__all__ = ["PeriodicSlopeEnergy", "SlopeEnergy", "SlopeEstimate", "SlopeGram", "SlopeIntegrals",
+           "edge_jumps", "estimate_map_rms_slope", "estimate_rms_slope", "grid_ladder",
+           "ladder_error", "MIN_CHORD_PIXELS", "mean_chord", "monopole_tail", "resample_labels",
+           "second_moment_tail", "slope_energy_of"]
 
 logger = logging.getLogger(__name__)
 
@@ -673,6 +674,146 @@ class SlopeEnergy:
                          interior_jumps=interior @ interior.T, rim_jumps=rim @ rim.T)
 
 
+class PeriodicSlopeEnergy:
+    """The slope integrals of a periodic cell: exact, with no exterior and no rim.
+
+    The continuum face of a pressure constant on the cell's pixels has the
+    mean-square slope of Parseval's identity
+    (:meth:`steady.periodic.PeriodicHalfSpace.mean_square_slope`, ``(2 / E*)^2``
+    times the pressure's variance on the half-space): the log singularities at
+    phase boundaries are integrated exactly, and a cell has no rim.  So
+    ``exterior`` is 0, ``rim_share`` 0 and ``corrected`` is ``total``, the exact
+    integral; ``face_sum`` is the plain pixel quadrature, for comparison.  What
+    is left of the discretisation error is the phase map's rasterisation, which
+    the ladder of :func:`estimate_rms_slope` measures.
+
+    Parameters
+    ----------
+    grid : steady.outline.FaceGrid
+        A periodic cell's grid.
+    E_star : float, Pa
+    operator : steady.periodic.PeriodicHalfSpace, optional
+        The cell's operator (a layer's scales its modes: the integrals are
+        then the layer's); default the half-space's.
+    precision : {"double", "single"}, optional
+        Accepted for the interface of :class:`SlopeEnergy`; the integrals are
+        always formed in double precision (they cost one transform).
+    workers : int, optional
+        Threads for :mod:`scipy.fft`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from steady.outline import PeriodicCell
+    >>> grid = PeriodicCell(1e-3, 1e-3).grid(16)
+    >>> p = np.where(grid.x[:, None] > 0, 2.0, 1.0) * np.ones(grid.shape)
+    >>> print(f"{PeriodicSlopeEnergy(grid, 1.0)(p, grid.mask).rms_slope:.6f}")
+    1.000000
+    """
+
+    def __init__(self, grid, E_star, *, operator=None, precision="double", workers=-1):
+        self.operator = (Counterbody(E_star).operator(grid, workers=workers) if operator is None
+                         else operator)
+        self.shape = tuple(grid.shape)
+        self.h, self.E_star = float(grid.h), float(E_star)
+        if precision not in _PRECISIONS:
+            raise ValueError(f"precision must be one of {', '.join(map(repr, _PRECISIONS))}, "
+                             f"got {precision!r}")
+        self.precision = precision
+
+    def in_precision(self, precision):
+        """The estimator with ``precision`` (the same integrals: see the class)."""
+        other = copy.copy(self)
+        other.precision = precision
+        return other
+
+    @property
+    def workers(self):
+        """Threads of its transforms (:mod:`scipy.fft`'s ``workers``); may be reset."""
+        return self.operator.workers
+
+    @workers.setter
+    def workers(self, value):
+        self.operator.workers = value
+
+    def __call__(self, pressure_r, face_mask):
+        """:class:`SlopeIntegrals` of a pressure on the cell (``face_mask``: every pixel).
+
+        Parameters
+        ----------
+        pressure_r : ndarray, shape (nx, ny), Pa
+        face_mask : ndarray of bool, shape (nx, ny)
+        """
+        return self.gram([pressure_r], face_mask).integrals([1.0])
+
+    def gram(self, fields, face_mask):
+        """Quadratic forms of the slope integrals over a set of pressure fields.
+
+        As :meth:`SlopeEnergy.gram`: ``total`` from the cell's spectra (exact),
+        ``face_sum`` from the pixel-centre gradients, ``exterior`` and the rim's
+        jumps zero; the interior jumps across every pixel edge of the cell
+        (periodically).
+
+        Parameters
+        ----------
+        fields : sequence of ndarray, shape (nx, ny), Pa
+        face_mask : ndarray of bool, shape (nx, ny)
+
+        Returns
+        -------
+        SlopeGram
+        """
+        face_mask = np.asarray(face_mask, dtype=bool)
+        if face_mask.shape != self.shape:
+            raise ValueError(f"face_mask must have the estimator's grid shape {self.shape}, got "
+                             f"{face_mask.shape}")
+        hs, area = self.operator, self.h * self.h
+        fields = np.asarray([np.where(face_mask, f, 0.0) for f in fields], dtype=float)
+        spectra = [hs.forward(f) for f in fields]
+        nx, ny = self.shape
+        # Columns other than 0 and Nyquist of the half spectrum stand for two.
+        twice = np.full(ny // 2 + 1, 2.0)
+        twice[0] = 1.0
+        if ny % 2 == 0:
+            twice[-1] = 1.0
+        weight = hs.slope_weight * twice
+        rows = np.array([(a * weight).ravel() for a in spectra])
+        cross = np.real(rows @ np.conj(np.array([a.ravel() for a in spectra])).T)
+        total = 4.0 / self.E_star**2 * cross * (nx * ny * area) / (nx * ny) ** 2
+        gradients = [np.concatenate([g.ravel() for g in hs.gradient(f, pressure_q=a)])
+                     for f, a in zip(fields, spectra, strict=True)]
+        g = np.array(gradients)
+        jumps = np.array([np.concatenate([(f - np.roll(f, 1, axis=0)).ravel(),
+                                          (f - np.roll(f, 1, axis=1)).ravel()]) for f in fields])
+        zero = np.zeros((len(fields), len(fields)))
+        return SlopeGram(face_area=float(face_mask.sum()) * area, total=total,
+                         face_sum=(g @ g.T) * area, exterior=zero,
+                         interior_jumps=jumps @ jumps.T, rim_jumps=zero.copy())
+
+
+def slope_energy_of(grid, E_star, *, operator=None, precision="double"):
+    """The slope estimator of a face's grid: the periodic cell's or the finite face's.
+
+    Parameters
+    ----------
+    grid : steady.outline.FaceGrid
+    E_star : float, Pa
+    operator : steady.periodic.PeriodicHalfSpace, optional
+        A periodic cell's operator, if the caller has it (a layer's scales
+        its modes, and the cell's integrals are then the layer's, exactly);
+        default: the half-space's.  A finite face's estimator corrects the
+        half-space's kernel and ignores it.
+    precision : {"double", "single"}, optional
+
+    Returns
+    -------
+    SlopeEnergy or PeriodicSlopeEnergy
+    """
+    if grid.outline.periodic:
+        return PeriodicSlopeEnergy(grid, E_star, operator=operator, precision=precision)
+    return SlopeEnergy(grid.shape, grid.h, E_star, precision=precision)
+
+
 def _jump_sums(field, face_mask):
     """:func:`edge_jumps` of one field zero off the face, summed without gathering the edges.
 
@@ -951,7 +1092,7 @@ def estimate_rms_slope(geometry, wear, normal_force, outline, E_star, n, *, slid
         pressure = _steady_pressure(lab, wear, normal_force, grid, sliding, checked=given)
         reuse = (energy is not None and m == n and energy.shape == grid.shape
                  and energy.h == grid.h and energy.E_star == float(E_star))
-        own = energy if reuse else SlopeEnergy(grid.shape, grid.h, E_star)
+        own = energy if reuse else slope_energy_of(grid, E_star)
         integrals = own(pressure, lab >= 0)
         del lab, pressure
         values.append(float(integrals.rms_slope))
@@ -1123,8 +1264,7 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
             pressure = _steady_pressure(lab, wear, normal_force, g, sliding)
         except ValueError:
             continue  # a phase vanished on the coarse grid
-        estimator = energy if (m == n and energy is not None) else SlopeEnergy(g.shape, g.h,
-                                                                                E_star)
+        estimator = energy if (m == n and energy is not None) else slope_energy_of(g, E_star)
         integrals = estimator(pressure, lab >= 0)
         grids.append(m)
         values.append(float(integrals.rms_slope))
@@ -1142,7 +1282,7 @@ def estimate_map_rms_slope(labels, wear, normal_force, outline, E_star, *, energ
     except ValueError:
         logger.debug("no grid beside n = %d keeps every phase: no error estimate", n)
     else:
-        refined = float(SlopeEnergy(fine.shape, fine.h, E_star)(pressure, lab >= 0).rms_slope)
+        refined = float(slope_energy_of(fine, E_star)(pressure, lab >= 0).rms_slope)
         error = 2.0 * abs(refined - values[0])
         grids.append(2 * n)
         values.append(refined)

@@ -33,11 +33,11 @@ import math
 
 import numpy as np
 
-from .halfspace import HalfSpace
+from .counterbody import Counterbody
 from .normalisation import reference_slope
 from .problem import Problem
 from .relief import rms_height
-from .rms_slope import estimate_map_rms_slope, estimate_rms_slope
+from .rms_slope import estimate_map_rms_slope, estimate_rms_slope, slope_energy_of
 from .scene import problem_of
 from .topography import isotropic_psd, to_topography
 from .validity import check_rms_slope
@@ -303,7 +303,12 @@ def _solve(problem, geometry, face_only, estimate=None):
     logger.debug("steady %s rms slope %.6g +- %.2g (grids %s), plain %.6g", problem.shape,
                  estimate.rms_slope, estimate.error, estimate.grids, result.rms_slope_plain)
     rms_slope, error = estimate.rms_slope, estimate.error
-    if problem.counterbody.layered:
+    if problem.counterbody.layered and problem.outline.periodic:
+        # A cell's integrals on its own operator are the layer's, exactly; the
+        # ladder's error (the map's rasterisation) stays the bar.
+        energy = slope_energy_of(problem.grid, problem.E_star, operator=problem.halfspace)
+        rms_slope = float(energy(result.pressure, problem.face_mask).rms_slope)
+    elif problem.counterbody.layered:
         rms_slope = _layer_rms_slope(problem, result, rms_slope)
         # The half-space's correction holds where the layer's kernel is 1/r, within
         # about its thickness of a phase boundary: on layers of a few pixels the rest of
@@ -322,7 +327,7 @@ def _layer_rms_slope(problem, result, halfspace_rms_slope):
     slope is taken at the pixels: ``rms^2 = rms_hs^2 + plain^2 - plain_hs^2``
     (docs/model.md, "Counter-body of finite thickness").
     """
-    halfspace = HalfSpace(problem.shape, problem.grid.h, problem.E_star)
+    halfspace = Counterbody(problem.E_star).operator(problem.grid)  # the half-space's
     gx, gy = halfspace.gradient(result.pressure)
     on_face = problem.face_mask
     plain_hs2 = np.sum(gx * gx + gy * gy, where=on_face) / np.count_nonzero(on_face)
@@ -359,7 +364,8 @@ def _limiting_face(problem):
     slope2 = gx * gx
     slope2 += gy * gy
     plain = math.sqrt(np.sum(slope2, where=on_face) / counts.sum())
-    height = rms_height(face, on_face, halfspace.h)
+    # A periodic face has no tilt to level: its mean alone is arbitrary.
+    height = rms_height(face, on_face, halfspace.h, plane=not problem.outline.periodic)
     off = ~on_face
     face[off] = np.nan
     slope = np.sqrt(slope2, out=slope2)

@@ -47,6 +47,15 @@ def test_bench_runin_levers_smoke(tmp_path):
         assert len(f["levers"]) == len(rows), "one group per row"
 
 
+def test_bench_runin_periodic_smoke(tmp_path):
+    out = tmp_path / "bench.h5"
+    rows = load("bench_runin").main(["--periodic", "--sizes", "40", "--out", str(out)])["periodic"]
+    assert [r["face"] for r in rows] == ["punch", "periodic cell"], f"rows {rows}"
+    for r in rows:
+        assert r["status"] == "steady" and r["products"] > r["iterations"] > 0, f"row {r}"
+        assert 0 < r["product"] < 1.0, f"one product takes {r['product']} s"
+
+
 def test_bench_runin_memory_smoke(tmp_path):
     out = tmp_path / "bench.h5"
     bench = load("bench_runin")

@@ -388,6 +388,8 @@ SHAPES = {
     "annulus": lambda d: base(punch={"shape": "annulus", "inner_radius": RADIUS / 2,
                                      "outer_radius": RADIUS}),
     "mask": _mask_scene,
+    "periodic": lambda d: base(punch={"shape": "periodic", "width": 2 * RADIUS,
+                                      "length": 2 * RADIUS}),
 }
 
 

@@ -28,13 +28,15 @@ FLOORS = {
     # filled by decorators and the declarative scene keys.
     "base": ("steady.text", "steady.memory", "steady.version", "steady.lazy",
              "steady.registry", "steady.schema"),
-    # Arrays on a grid and what acts on them, knowing no outline: the half-space operator,
+    # Arrays on a grid and what acts on them, knowing no outline: the half-space operators
+    # (finite and periodic) and the choice between them by a grid's ``periodic``,
     # array files, rasterised labels, eq. 7, depth columns, rms heights, the small-slope
     # warning, measured faces, the closed forms, a face's power spectrum and topography; the
-    # counter-body and its layer's operator.
-    "fields": ("steady.halfspace", "steady.counterbody", "steady.array_files", "steady.labels",
-               "steady.pressures", "steady.depth", "steady.relief", "steady.validity",
-               "steady.measured_face", "steady.reference", "steady.topography"),
+    # counter-body, whose operator is the one place a grid's operator is chosen.
+    "fields": ("steady.halfspace", "steady.periodic", "steady.counterbody", "steady.array_files",
+               "steady.labels", "steady.pressures", "steady.depth", "steady.relief",
+               "steady.validity", "steady.measured_face", "steady.reference",
+               "steady.topography"),
     # The face: outlines and their grids, phase geometries (depth-dependent ones too), wear
     # laws, sliding kinematics, load programmes.
     "face": ("steady.outline", "steady.phases", "steady.inclusions", "steady.micrograph",

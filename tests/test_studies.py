@@ -18,7 +18,7 @@ STUDIES = pathlib.Path(__file__).resolve().parent.parent / "studies"
 SERIAL = ["fig2_homogeneous", "fig3_biphasic", "fig6_epoxy", "fig78_rods", "rods_both_ways",
           "three_phases", "wear_exponent", "random_inclusions", "runin_distance",
           "face_outlines", "pin_on_disk", "coating_wear_through", "particles_3d",
-          "calibrate_error_bar", "counterbody_thickness"]
+          "calibrate_error_bar", "counterbody_thickness", "periodic_patch"]
 PARALLEL = ["fig4_coarseness", "fig5_collapse", "scale_independence", "claims",
             "design_table", "runin_history", "runin_convergence"]
 
@@ -263,6 +263,16 @@ def test_pin_on_disk_tilt_falls_like_the_inverse_track_radius(runs):
         for name in ("voronoi", "homogeneous"):
             scaled = np.abs(f[f"{name}/tilt"][()]) * ratio
             assert np.ptp(scaled[1:]) < 0.1 * scaled.mean(), f"{name}: tilt R/a {scaled}"
+
+
+def test_periodic_patch_is_parsevals_closed_form(runs):
+    _, h5, _ = runs["periodic_patch"]
+    with h5py.File(h5) as f:
+        values, closed = f["patch/rms_slope"][()], f["patch/closed_form"][()]
+        punch = f["punch/rms_slope"][()]
+    # Parseval's identity on the cell: 2 std(p) / E*, to round-off (measured 7e-16).
+    assert np.abs(values - closed).max() < 1e-12, "the patch is not Parseval's closed form"
+    assert np.all(punch > values.max()), "the punch's rim must add to the patch's slope"
 
 
 def test_fig4_map_is_symmetric_in_the_mean(runs):

@@ -75,7 +75,7 @@ import numpy as np
 
 from steady.problem import FacePhases
 from steady.relief import PlaneFit, rms_height
-from steady.rms_slope import SlopeEnergy, estimate_map_rms_slope, estimate_rms_slope
+from steady.rms_slope import estimate_map_rms_slope, estimate_rms_slope, slope_energy_of
 
 from .contact import solve_contact
 from .diagnostics import face_rms_slope, masked_gradient
@@ -166,7 +166,7 @@ def _difference_rms_slope(face, face_mask, h):
     return float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
 
 
-def face_statistics(face, face_mask, h):
+def face_statistics(face, face_mask, h, *, plane=True):
     """Rms slope (finite differences) and rms height of a smooth face over the face pixels.
 
     For the initial faces of :mod:`transient.initial_face`: exact for a
@@ -180,6 +180,9 @@ def face_statistics(face, face_mask, h):
         Heights at the pixel centres (either sign convention).
     face_mask : ndarray of bool, shape (nx, ny)
     h : float, m
+    plane : bool, optional
+        The rms height about the least-squares plane (default), or about the
+        mean (False: a periodic cell's face).
 
     Returns
     -------
@@ -203,7 +206,7 @@ def face_statistics(face, face_mask, h):
     if error <= 1e-12 * max(slope, coarse):
         error = 0.0
     return FaceStatistics(rms_slope=slope, rms_slope_error=error,
-                          rms_height=rms_height(face, face_mask, h))
+                          rms_height=rms_height(face, face_mask, h, plane=plane))
 
 
 # The estimator of each live problem (FaceEstimator.of), with its initial face.
@@ -302,20 +305,22 @@ class FaceEstimator:
         self.contact_rtol = float(contact_rtol)
         self.face_mask = problem.face_mask
         self.h = hs.h
-        self.energy = SlopeEnergy(problem.shape, hs.h, hs.E_star)
+        self.energy = slope_energy_of(problem.grid, hs.E_star, operator=hs)
         # The map's ladder and the steady comparison keep the double-precision
         # estimator; the figures of every step share its spectra.
         self._step_energy = self.energy.in_precision(precision)
         self._own_halfspace = None
         self._threaded = False
-        self._plane = PlaneFit(self.face_mask, hs.h)
+        self._plane = PlaneFit(self.face_mask, hs.h, plane=not problem.outline.periodic)
         self.reference_slope = problem.reference_slope
         h0 = np.where(self.face_mask, np.asarray(initial_recession, dtype=float), 0.0)
-        self.initial = face_statistics(-h0, self.face_mask, hs.h)
+        self.initial = face_statistics(-h0, self.face_mask, hs.h,
+                                       plane=not problem.outline.periodic)
         padded = np.pad(self.face_mask, 1)
         interior = (padded[2:, 1:-1] & padded[:-2, 1:-1] & padded[1:-1, 2:]
                     & padded[1:-1, :-2])
-        self.rim = self.face_mask & ~interior
+        # A periodic cell has no rim: no worn layer to correct, none in the error bar.
+        self.rim = self.face_mask & ~interior & (not problem.outline.periodic)
         rate = problem.wear.rate_constant(problem.wear_field[self.rim],
                                           problem.pixel_mean_pressure)
         # Layer width per unit sliding distance, in pixels.
@@ -401,7 +406,12 @@ class FaceEstimator:
         return self._own_halfspace
 
     def rim_layer_pixels(self, distance):
-        """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels."""
+        """Width ``k E* s / h`` of the slowest-wearing rim phase's worn layer, pixels.
+
+        0 on a face without a rim (a periodic cell).
+        """
+        if not self._rim_growth.size:
+            return 0.0
         return float(np.min(self._rim_growth)) * distance
 
     def figures(self, distance, recession, pressure, approach, *, rim_layers=None):
@@ -439,7 +449,10 @@ class FaceEstimator:
         # In partial contact the plain value and the correction off the contact
         # share the exact-kernel gradient of K p; in full contact the plain
         # value is the estimator's own face sum.
-        layered = self.problem.problem.counterbody.layered
+        # A cell's integrals are the layer's own (its operator's modes); a finite
+        # face's estimator corrects the half-space's kernel, and takes the layer's change.
+        layered = (self.problem.problem.counterbody.layered
+                   and not self.problem.problem.outline.periodic)
         gradient = hs.gradient(pressure) if off.any() or layered else None
         plain = (face_rms_slope(hs, face_mask, recession, pressure, approach, gradient=gradient)
                  if off.any() or layered
@@ -469,7 +482,8 @@ class FaceEstimator:
             layers = rim_layer_excess(self._rim_growth * distance)
         else:
             layers = sum(w * rim_layer_excess(self._rim_growth * d) for d, w in rim_layers)
-        excess = self.reference_slope ** 2 * float(np.mean(self._rim_weight * layers))
+        excess = (self.reference_slope ** 2 * float(np.mean(self._rim_weight * layers))
+                  if self._rim_weight.size else 0.0)
         if self.problem.wear.linear:
             slope = math.sqrt(max(mean_square - excess, 0.0))
             spread = RIM_LAYER_SCATTER * excess
@@ -639,7 +653,8 @@ class DepthRecorder:
         labels = np.take_along_axis(columns.phases, segment[None], axis=0)[0]
         counts = np.bincount(labels[face], minlength=columns.n_phases)
         out = {"worn_depth_mean": float(worn[face].mean()),
-               "worn_depth_rim": float(worn[self.rim].mean()),
+               # NaN on a face without a rim (a periodic cell).
+               "worn_depth_rim": float(worn[self.rim].mean()) if self.rim.any() else math.nan,
                "worn_depth_max": float(worn[face].max()),
                "phase_fraction": counts / counts.sum(), "crossings": crossed}
         if self.coating is not None:

@@ -39,6 +39,7 @@ from steady.plotting import (
     FONT_SIZES,
     PAGE_WIDTH,
     colour_bar,
+    default_removal,
     draw_map,
     figure_and_axes,
     map_height,
@@ -556,7 +557,7 @@ def extent(shape, outline):
     return [-0.5 * nx * h_mm, 0.5 * nx * h_mm, -0.5 * ny * h_mm, 0.5 * ny * h_mm], "mm"
 
 
-def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cmap="viridis"):
+def plot_face(source, *, ax=None, remove=None, units="um", snapshot=None, cmap="viridis"):
     """The worn face as relief about its plane (or mean), the final one or a snapshot.
 
     Parameters
@@ -566,9 +567,10 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
     ax : matplotlib.axes.Axes, optional
         Axes to draw into (default: a new figure a column wide).
     remove : {"plane", "mean"}, optional
-        Draw the height about the face's least-squares plane (default) or
-        about its mean (:func:`steady.plotting.relief`); the colour bar
-        says which.
+        Draw the height about the face's least-squares plane or about its
+        mean (:func:`steady.plotting.relief`); the colour bar says which.
+        Default (:func:`steady.plotting.default_removal`): the mean on a
+        periodic cell, else the plane.
     units : {"um", "normalised"}, optional
         Heights in micrometres (default) or in ``f*``, the run's depth
         scale.
@@ -601,6 +603,7 @@ def plot_face(source, *, ax=None, remove="plane", units="um", snapshot=None, cma
         s = float(result.snapshot_distance[snapshot])
         ax.set_title(f"face at s = {format_metres(s)} ({s / result.distance_scale:.3g} s*)")
     mask = result.face_mask & np.isfinite(face)
+    remove = default_removal(outline, remove)
     height = relief(face, mask, h, remove=remove)
     field, scale = ((height * 1e6, "µm") if units == "um"
                     else (height / result.depth_scale, "f*"))

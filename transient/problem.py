@@ -273,11 +273,13 @@ class WearProblem:
     def compliance_floor(self):
         """Lower bound of the eigenvalues of ``K`` on any contact set, m/Pa.
 
-        The minimum of the zero-padded circulant's symbol, which bounds every
-        principal submatrix of ``K`` from below: a displacement residual
-        ``r`` moves the pressure by at most ``|r| / compliance_floor``.
+        The operator's own bound (``compliance_floor``: the minimum of the
+        zero-padded circulant's symbol of :class:`steady.halfspace.HalfSpace`, of
+        the cell's symbol of :class:`steady.periodic.PeriodicHalfSpace`), which
+        bounds every principal submatrix of ``K`` from below: a displacement
+        residual ``r`` moves the pressure by at most ``|r| / compliance_floor``.
         """
-        return float(np.min(self.halfspace.influence_symbol))
+        return self.halfspace.compliance_floor
 
     # -- the steady state --------------------------------------------------
     def steady_pressure(self):

@@ -97,6 +97,9 @@ class RunRecord:
         steady = problem.solve_steady(face_only=True)
         self.steady_face = np.where(face_mask, steady.face, 0.0)
         self.steady_shape_rms = shape_rms(steady.face, face_mask)
+        # A flat steady face (a homogeneous cell), to round-off: no relief to compare with.
+        self._flat = self.steady_shape_rms <= 1e-12 * float(np.max(np.abs(
+            steady.face[face_mask])))
         figures = estimator.figures(math.inf, -self.steady_face,
                                     np.where(face_mask, steady.pressure, 0.0), 0.0)
         self.steady_slope = (float(figures["rms_slope"]), float(figures["rms_slope_error"]))
@@ -174,13 +177,15 @@ class RunRecord:
         hist["approach"].append(run.approach + run.offset)
         hist["worn_volume"].append(float(np.sum(worn[face_mask])) * p.halfspace.h ** 2)
         hist["solves"].append(run.solver.solves)
-        hist["rim_worn_depth"].append(float(worn[self.estimator.rim].mean()))
+        rim = self.estimator.rim
+        # A periodic cell has no rim: NaN, no depth.
+        hist["rim_worn_depth"].append(float(worn[rim].mean()) if rim.any() else math.nan)
         diff = (run.approach - run.recession - self.steady_face)[face_mask]
         hist["face_deviation"].append(
-            float(np.sqrt(np.mean((diff - diff.mean()) ** 2))) / self.steady_shape_rms)
+            self._per_steady_shape(float(np.sqrt(np.mean((diff - diff.mean()) ** 2)))))
         step_error = slope_error = 0.0
         if error is not None:
-            step_error = shape_rms(error, face_mask) / self.steady_shape_rms
+            step_error = self._per_steady_shape(shape_rms(error, face_mask))
             gx, gy = masked_gradient(np.where(face_mask, error, 0.0), face_mask, p.halfspace.h)
             slope_error = float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
         hist["face_deviation_step_error"].append(step_error)
@@ -189,6 +194,13 @@ class RunRecord:
             hist["force"].append(run.solver.force)
         self.collect(wait=False)
         return hist["spread"][-1], shape_rate
+
+    def _per_steady_shape(self, deviation):
+        """A shape deviation (m) over the steady face's rms shape; NaN if that face is flat.
+
+        The steady face of a homogeneous periodic cell is flat: no relief to compare with.
+        """
+        return math.nan if self._flat else deviation / self.steady_shape_rms
 
     def _record_depth(self, run, worn, index):
         """Append the depth figures of a run with columns; returns the section's map, or None.

@@ -131,7 +131,10 @@ class RunInDistance:
         line = (f"run-in distance within {pct}: s = {self.distance_m:.5g} +- "
                 f"{self.uncertainty_m:.2g} m = {self.distance_s_star:.4g} +- "
                 f"{self.uncertainty_s_star:.2g} s*; worn depth there {self.mean_worn_depth_m:.4g} m"
-                f" (mean), {self.rim_worn_depth_m:.4g} m (rim)")
+                f" (mean)")
+        # A face without a rim (a periodic cell) has no rim depth.
+        if math.isfinite(self.rim_worn_depth_m):
+            line += f", {self.rim_worn_depth_m:.4g} m (rim)"
         if math.isfinite(self.time_s):
             line += f"; time {self.time_s:.5g} +- {self.time_uncertainty_s:.2g} s"
         return line + ("" if self.spatial else " (+- without the grid's error: no companion "

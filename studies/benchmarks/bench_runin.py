@@ -57,6 +57,13 @@ What it reproduces
     (those with an ``[initial_face]``), each at its own grid and settings;
     the reference run takes ``0.1`` of the scene's ``tol``.
 
+    ``--periodic``: the scene at each grid beside the same map on a periodic
+    cell (``[punch] shape = "periodic"``, the punch's bounding square, the
+    force scaled to the punch's mean pressure), alternated in one process:
+    the work of each (operator products: padded for the punch, plain FFT
+    pairs of the cell), its wall and CPU time, and the wall time of one
+    product (the best of five means of ten).
+
     ``--memory``: the command line, ``python -m transient SCENE -o RUN.h5``
     (checkpoints every ``--checkpoint-interval`` seconds of wall time,
     default the scene's 10 s), on the scene with only ``[grid] n`` changed,
@@ -86,6 +93,8 @@ How to run
     python studies/benchmarks/bench_runin.py --levers --sizes 40 --quick   # smoke test, seconds
     python studies/benchmarks/bench_runin.py --shipped --rules "rms, share 1e-3" \
         "max, share 3e-2"                                                   # ~5 min
+    python studies/benchmarks/bench_runin.py --periodic --sizes 512 1024   # ~10 min
+    python studies/benchmarks/bench_runin.py --periodic --sizes 40   # smoke test, seconds
 
 Writes ``--out`` (HDF5: one group per table row) and prints the tables in
 Markdown.
@@ -111,7 +120,8 @@ import numpy as np
 
 import transient.solver
 from steady.halfspace import HalfSpace
-from steady.outline import Rectangle
+from steady.outline import PeriodicCell, Rectangle
+from steady.periodic import PeriodicHalfSpace
 from steady.phases import Homogeneous
 from steady.problem import FacePhases, Problem
 from steady.safe_files import atomic_h5
@@ -168,28 +178,36 @@ logger = logging.getLogger("bench_runin")
 
 @contextlib.contextmanager
 def counted_transforms():
-    """Count padded products (``HalfSpace.displacement``) and the preconditioner's FFT pairs.
+    """Count operator products (``displacement``) and the preconditioner's FFT pairs.
 
-    A pair is one forward transform of :class:`FourierPreconditioner` (one
-    per level and application), padded or not.
+    A product is a padded FFT pair of :class:`HalfSpace` or a plain one of
+    :class:`PeriodicHalfSpace`; a pair is one forward transform of
+    :class:`FourierPreconditioner` (one per level and application), padded or
+    not.
     """
     counts = {"products": 0, "pairs": 0}
-    displacement, forward = HalfSpace.displacement, FourierPreconditioner._forward
+    displacements = {cls: cls.displacement for cls in (HalfSpace, PeriodicHalfSpace)}
+    forward = FourierPreconditioner._forward
 
-    def counting_displacement(self, pressure_r):
-        counts["products"] += 1
-        return displacement(self, pressure_r)
+    def counting(displacement):
+        def counting_displacement(self, pressure_r):
+            counts["products"] += 1
+            return displacement(self, pressure_r)
+        return counting_displacement
 
     def counting_forward(self, field):
         counts["pairs"] += 1
         return forward(self, field)
 
-    HalfSpace.displacement, FourierPreconditioner._forward = counting_displacement, \
-        counting_forward
+    for cls, displacement in displacements.items():
+        cls.displacement = counting(displacement)
+    FourierPreconditioner._forward = counting_forward
     try:
         yield counts
     finally:
-        HalfSpace.displacement, FourierPreconditioner._forward = displacement, forward
+        for cls, displacement in displacements.items():
+            cls.displacement = displacement
+        FourierPreconditioner._forward = forward
 
 
 def problem_of(scene, n, ratio=None):
@@ -237,6 +255,48 @@ def grid_table(scene_path, sizes, tol):
         row.update(n=n, scheme=options.scheme, tol=tol)
         rows.append(row)
         logger.info("n = %d: %s", n, row)
+    return rows
+
+
+def periodic_scene(scene):
+    """The scene's map on a periodic cell: the outline's bounding box, its mean pressure.
+
+    The seeds of a Voronoi map are drawn in the box, so the cell holds the
+    same seeds (its tessellation repeats with the cell).
+    """
+    lx, ly = scene.outline.half_extent
+    cell = PeriodicCell(2 * lx, 2 * ly)
+    return dataclasses.replace(scene, outline=cell,
+                               normal_force=scene.normal_force * cell.area / scene.outline.area)
+
+
+def _product_time(problem, repeats=5, count=10):
+    """Wall time of one operator product (``displacement``), s: the best of ``repeats``."""
+    hs, pressure = problem.halfspace, problem.steady_pressure()
+    hs.displacement(pressure)
+    best = np.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        for _ in range(count):
+            hs.displacement(pressure)
+        best = min(best, (time.perf_counter() - t) / count)
+    return best
+
+
+def periodic_table(scene_path, sizes, tol):
+    """Rows of the side-by-side table: at each grid the punch, then the periodic cell."""
+    scene, options, initial = load_transient_scene(scene_path)
+    tol = options.tol if tol is None else tol
+    options = dataclasses.replace(options, tol=tol, checkpoint_interval=1e9)
+    rows = []
+    for n in sizes:
+        for face, variant in (("punch", scene), ("periodic cell", periodic_scene(scene))):
+            problem = problem_of(variant, n)
+            _, row = run_counted(problem, initial.recession(problem.grid), options)
+            row.update(n=n, face=face, scheme=options.scheme, tol=tol,
+                       product=_product_time(problem))
+            rows.append(row)
+            logger.info("n = %d, %s: %s", n, face, row)
     return rows
 
 
@@ -553,6 +613,22 @@ def markdown_table(rows):
     return "\n".join(lines)
 
 
+def markdown_periodic(rows):
+    """The side-by-side table in Markdown, each cell's time over the punch's."""
+    lines = ["| n | face | steps | contact solves | iterations | operator products "
+             "| one product (ms) | wall (s) | CPU (s) | CPU / punch's |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    punch = {}
+    for r in rows:
+        if r["face"] == "punch":
+            punch[r["n"]] = r["cpu"]
+        ratio = r["cpu"] / punch[r["n"]] if r["n"] in punch else float("nan")
+        lines.append(f"| {r['n']} | {r['face']} | {r['steps']} | {r['solves']} | "
+                     f"{r['iterations']} | {r['products']} | {1e3 * r['product']:.2f} | "
+                     f"{r['wall']:.1f} | {r['cpu']:.1f} | {ratio:.2f} |")
+    return "\n".join(lines)
+
+
 def markdown_memory(rows):
     """The memory table in Markdown."""
     lines = ["| n | steps | snapshots | wall (s) | peak memory (MiB) | bytes / pixel "
@@ -623,6 +699,8 @@ def main(argv=None):
                         help="--rules (at least two) on every shipped run-in scene")
     parser.add_argument("--memory", action="store_true",
                         help="peak memory of the command line against n")
+    parser.add_argument("--periodic", action="store_true",
+                        help="the scene beside its map on a periodic cell, against n")
     parser.add_argument("--checkpoint-interval", type=float,
                         help="checkpoint interval of --memory, s (default: the scene's)")
     parser.add_argument("--scene", type=pathlib.Path, default=SCENE)
@@ -635,9 +713,9 @@ def main(argv=None):
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("bench_runin.h5"))
     args = parser.parse_args(argv)
     if not (args.table or args.schemes or args.memory or args.interfaces or args.levers
-            or args.shipped):
-        parser.error("choose --table, --schemes, --interfaces, --levers, --shipped "
-                     "and/or --memory")
+            or args.shipped or args.periodic):
+        parser.error("choose --table, --schemes, --interfaces, --levers, --shipped, "
+                     "--periodic and/or --memory")
     if args.shipped and not (args.rules and len(args.rules) > 1):
         parser.error("--shipped compares the --rules given, at least two")
     logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
@@ -660,6 +738,9 @@ def main(argv=None):
         groups["shipped"] = lever_table(shipped_cases(), {k: LEVERS[k] for k in args.rules},
                                         lambda tol: SHIPPED_REFERENCE * tol)
         print(markdown_levers(groups["shipped"]))
+    if args.periodic:
+        groups["periodic"] = periodic_table(args.scene, args.sizes, args.tol)
+        print(markdown_periodic(groups["periodic"]))
     if args.memory:
         groups["memory"] = memory_table(args.scene, args.sizes, args.checkpoint_interval)
         print(markdown_memory(groups["memory"]))
