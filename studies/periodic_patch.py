@@ -15,10 +15,12 @@ fine-grain closed form (:func:`steady.reference.fine_grain_rms_slope`), whose
 remaining 1 is the homogeneous punch's rim.  The study measures how the
 patch's value and its scatter between realisations depend on its size.
 
-Further cases (a counter-body of finite thickness: a tread on its belt over a
-road's aggregate) enter through :func:`patch_estimate`, which takes the cell's
+Further cases enter through :func:`patch_estimate`, which takes the cell's
 problem as every solve does (:func:`steady.scene.problem_of` of a scene, or a
-:class:`steady.problem.Problem`): its operator is the problem's.
+:class:`steady.problem.Problem`): its operator is the problem's.  One is
+built in: a road's aggregate under a tyre -- the same microstructure with
+grains of 10 mm on a patch of 8 x 8 grains, ``pbar / E* = 0.08``, on the
+half-space and on a tread of 8 mm (incompressible) on a rigid belt.
 
 Run::
 
@@ -41,24 +43,25 @@ from steady.outline import Circle, PeriodicCell
 from steady.phases import Voronoi
 from steady.problem import FacePhases, Problem
 from steady.reference import fine_grain_rms_slope
-from steady.rms_slope import estimate_rms_slope
 from steady.solution import solve
 
 NAME = "periodic_patch"
 PARAMS = {"spacing": 2e-4, "pixels_per_spacing": 8, "fill_factor": 0.5, "ratio": 10.0,
           "grains": [2, 4, 8, 16, 32, 64], "seeds": [4101, 4102, 4103, 4104, 4105, 4106],
-          "punch_radius": 4e-3, "pbar": 198943.68, "E_star": 1.3e6, "shown": 16}
+          "punch_radius": 4e-3, "pbar": 198943.68, "E_star": 1.3e6, "shown": 16,
+          "road_spacing": 1e-2, "road_grains": 8, "road_pbar_over_E_star": 0.08, "tread": 8e-3}
 QUICK = {"spacing": 8e-4, "pixels_per_spacing": 8, "fill_factor": 0.5, "ratio": 10.0,
          "grains": [2, 4, 8], "seeds": [4101, 4102], "punch_radius": 4e-3,
-         "pbar": 198943.68, "E_star": 1.3e6, "shown": 4}
+         "pbar": 198943.68, "E_star": 1.3e6, "shown": 4,
+         "road_spacing": 1e-2, "road_grains": 4, "road_pbar_over_E_star": 0.08, "tread": 8e-3}
 
 
 def patch_estimate(problem, geometry):
-    """The corrected rms slope of a problem's steady face, with its error bar.
+    """The corrected rms slope of a problem's steady face and its error bar, Pa / Pa.
 
     The hook of every case of the study: the problem carries the face, the
-    load, the wear law and the counter-body (its operator), the geometry the
-    map's ladder.
+    load, the wear law and the counter-body (its operator: on a layer the
+    cell's slope integrals are the layer's), the geometry the map's ladder.
 
     Parameters
     ----------
@@ -68,17 +71,19 @@ def patch_estimate(problem, geometry):
 
     Returns
     -------
-    steady.rms_slope.SlopeEstimate
+    tuple of float
+        ``(rms_slope, rms_slope_error)``, dimensionless.
     """
-    return estimate_rms_slope(geometry, problem.wear, problem.normal_force, problem.outline,
-                              problem.E_star, problem.n, labels=problem.labels)
+    result = solve(problem, geometry=geometry)
+    return result.rms_slope, result.rms_slope_error
 
 
-def _problem(outline, geometry, n, params):
+def _problem(outline, geometry, n, params, *, pbar=None, thickness=None, poisson=None):
     grid = outline.grid(n)
     k = [1.0e-13, 1.0e-13 * params["ratio"]]
     phases = FacePhases(grid, geometry.labels(grid), geometry.n_phases)
-    return Problem(phases, k, params["pbar"] * outline.area, params["E_star"])
+    force = (params["pbar"] if pbar is None else pbar) * outline.area
+    return Problem(phases, k, force, params["E_star"], thickness=thickness, poisson=poisson)
 
 
 def _cases(outline, n_seeds, n, params):
@@ -89,9 +94,33 @@ def _cases(outline, n_seeds, n, params):
     for seed in params["seeds"]:
         geometry = Voronoi(n_seeds, (1.0 - rho, rho), seed)
         problem = _problem(outline, geometry, n, params)
-        estimate = patch_estimate(problem, geometry)
+        rms_slope, error = patch_estimate(problem, geometry)
         fill = float(problem.phases.counts[1] / problem.phases.counts.sum())
-        out.append((estimate.rms_slope / unit, estimate.error / unit, fill))
+        out.append((rms_slope / unit, error / unit, fill))
+    return np.array(out)
+
+
+def _road(params):
+    """A road's aggregate under a tyre: the patch on the half-space and on the tread.
+
+    ``(seeds, 2, 2)``: rms slope and error bar over ``grad_f0`` of each map, on the
+    half-space and on the tread (a layer of ``tread`` m, incompressible, on a rigid belt).
+    """
+    d, m = params["road_spacing"], params["road_grains"]
+    pbar = params["road_pbar_over_E_star"] * params["E_star"]
+    unit = 4.0 * pbar / (math.pi * params["E_star"])
+    rho = params["fill_factor"]
+    out = []
+    for seed in params["seeds"]:
+        geometry = Voronoi(m * m, (1.0 - rho, rho), seed)
+        row = []
+        for thickness, poisson in ((None, None), (params["tread"], 0.5)):
+            problem = _problem(PeriodicCell(m * d, m * d), geometry,
+                               m * params["pixels_per_spacing"], params, pbar=pbar,
+                               thickness=thickness, poisson=poisson)
+            rms_slope, error = patch_estimate(problem, geometry)
+            row.append((rms_slope / unit, error / unit))
+        out.append(row)
     return np.array(out)
 
 
@@ -123,6 +152,9 @@ def compute(path, params):
     attrs["fine_grain_punch"] = (nominal, "grad_f0")
     attrs["fine_grain_patch"] = (math.sqrt(nominal**2 - 1.0), "grad_f0")
     attrs["punch_grains"] = (across, "1")
+    road = _road(params)
+    datasets["road/rms_slope"] = (road[..., 0], "grad_f0")
+    datasets["road/rms_slope_error"] = (road[..., 1], "grad_f0")
     # One patch's map and face for the figure.
     m = params["shown"]
     geometry = Voronoi(m * m, (1.0 - rho, rho), params["seeds"][0])
@@ -155,6 +187,13 @@ def plot(path, png):
     ax.axhspan(pm - ps, pm + ps, color="C1", alpha=0.25)
     ax.axhline(pm, color="C1", label=f"punch, {a['punch_grains']} grains across")
     ax.axhline(a["fine_grain_punch"], color="C1", ls=":", lw=1, label="fine-grain form (punch)")
+    road = d["road/rms_slope"].mean(axis=0)
+    ax.plot([p["road_grains"]] * 2, road, "s", color="C2", mfc="none")
+    ax.annotate(f"road, {p['road_spacing'] * 1e3:g} mm grains: half-space",
+                (p["road_grains"], road[0]), xytext=(6, 4), textcoords="offset points",
+                fontsize=7, color="C2")
+    ax.annotate(f"on a {p['tread'] * 1e3:g} mm tread", (p["road_grains"], road[1]),
+                xytext=(6, -4), textcoords="offset points", fontsize=7, color="C2")
     ax.set_xscale("log", base=2)
     ax.set_xlabel("patch side (grains)")
     ax.set_ylabel(r"rms slope / $\nabla f^0_\infty$")

@@ -453,3 +453,32 @@ def test_run_in_on_a_layered_cell_reaches_its_closed_form():
     cmp = compare_with_steady(result, wp.solve_steady(), wp)
     assert cmp.face_error < 2e-7, f"face error {cmp.face_error:.2e}"
     assert cmp.rms_slope == pytest.approx(cmp.steady_rms_slope, rel=1e-12), cmp.summary()
+
+
+@pytest.mark.parametrize("thickness, poisson, bound", [(2e-3, 0.5, 1e-6), (1e-3, 0.3, 5e-10),
+                                                       (4e-4, 0.5, 3e-8)])
+def test_finite_punch_on_a_layer_is_a_large_cell_with_zero_pressure_around(thickness, poisson,
+                                                                           bound):
+    """The layer's real-space coefficients against the layered cell's modes.
+
+    A disk of radius 4 mm (n = 32) carrying a paraboloid of pressure, alone on the layer
+    (zero padded) and in the middle of a periodic cell five times wider with zero pressure
+    around it: the layer's response decays over a few thicknesses, so the images do not
+    interact.  Face displacements, mean removed (a cell's is arbitrary), measured apart by
+    2.1e-7 (t = a / 2, the images 16 thicknesses apart; 1.0e-4 in a cell three times wider),
+    7.3e-11 and 5.8e-9 (t = 0.4 mm, the real-space quadrature's floor) of their relief.
+    """
+    counterbody = Counterbody(E_STAR, thickness, poisson)
+    grid = Circle(4e-3).grid(32)
+    r2 = (grid.x[:, None] ** 2 + grid.y[None, :] ** 2) / 4e-3**2
+    pressure = np.where(grid.mask, 1e4 * (1.2 - r2), 0.0)
+    alone = counterbody.operator(grid).displacement(pressure)
+    side = 5 * 32
+    cell = PeriodicCell(side * grid.h, side * grid.h).grid(side)
+    padded = np.zeros(cell.shape)
+    start = (side - 32) // 2
+    padded[start:start + 32, start:start + 32] = pressure
+    among = counterbody.operator(cell).displacement(padded)[start:start + 32, start:start + 32]
+    difference = (alone - among)[grid.mask]
+    error = np.abs(difference - difference.mean()).max() / np.ptp(alone[grid.mask])
+    assert error < bound, f"finite punch against the cell: {error:.2e} of the relief"

@@ -270,9 +270,12 @@ def test_periodic_patch_is_parsevals_closed_form(runs):
     with h5py.File(h5) as f:
         values, closed = f["patch/rms_slope"][()], f["patch/closed_form"][()]
         punch = f["punch/rms_slope"][()]
+        road = f["road/rms_slope"][()]
     # Parseval's identity on the cell: 2 std(p) / E*, to round-off (measured 7e-16).
     assert np.abs(values - closed).max() < 1e-12, "the patch is not Parseval's closed form"
     assert np.all(punch > values.max()), "the punch's rim must add to the patch's slope"
+    # A tread on a rigid belt is stiffer than the half-space at the grain's wavelengths.
+    assert np.all(road[:, 1] < road[:, 0]), f"the tread does not lower the road's slope: {road}"
 
 
 def test_fig4_map_is_symmetric_in_the_mean(runs):
