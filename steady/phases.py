@@ -533,7 +533,7 @@ class Rods(PhaseMap):
         rod_phases = _ROD_PHASES.parse(rod_phases, "")
         phases = (matrix_phase, *rod_phases)
         if len(rod_phases) != len(centres):
-            raise ValueError(f"{len(centres)} rods but {len(rod_phases)} rod phases")
+            raise ValueError(f"{len(centres)} rod centres but {len(rod_phases)} rod_phases")
         for k in range(len(centres)):
             for m in range(k + 1, len(centres)):
                 d = math.dist(centres[k], centres[m])
