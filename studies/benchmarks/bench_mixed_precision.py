@@ -28,7 +28,10 @@ What it reproduces
     verified on a ``K p`` recomputed in double before a solve ends, and
     ``K p`` is recomputed every 50 iterations as before); and ``mixed,
     unverified`` (the same products, the drift bound left at float64's: a
-    solve may end on the incrementally updated ``K p``).  Per run: steps,
+    solve may end on the incrementally updated ``K p``); ``mixed, step drift``
+    (the same products, the drift bound of each single-precision step being
+    ``8 eps_32 |tau| max |K t|``, the round-off of that step's update of
+    ``K p``, instead of ``8 eps_32 max |K p|``).  Per run: steps,
     rejected attempts, solves, iterations, products in double and in single, the
     CPU time of the run and of its products, and the history change: the
     largest deviation of the corrected rms slope (``history["rms_slope"]``, in
@@ -67,10 +70,13 @@ from steady.halfspace import _SPLIT_ROWS, HalfSpace
 from transient import contact
 
 logger = logging.getLogger("bench_mixed_precision")
-VARIANTS = ("double", "mixed", "mixed, unverified")
+VARIANTS = ("double", "mixed", "mixed, step drift", "mixed, unverified")
 # The drift bound of the incrementally updated K p (contact._ROUNDING_PER_ITERATION, in units of
 # float64's epsilon) rescaled to float32's: a direction product carries float32 round-off.
 _SINGLE_ROUNDING = np.finfo(np.float32).eps / np.finfo(np.float64).eps
+# Bound of a single-precision product's error, in units of float32's epsilon times the largest
+# entry of the product (measured: 3 to 4, ``--products``).
+_SINGLE_PRODUCT_ROUNDING = 8.0
 
 
 class SingleHalfSpace(HalfSpace):
@@ -173,7 +179,7 @@ def contact_products(variant):
     update_direction = contact._update_direction
     rounding = contact._ROUNDING_PER_ITERATION
     singles = {}
-    counts = {"single": 0, "cpu": 0.0, "accurate": False}
+    counts = {"single": 0, "cpu": 0.0, "accurate": False, "last_single": False}
 
     def direction(problem, state, r, active, work, accurate=False):
         # The solver's own accuracy switch (contact._SINGLE_REDUCTION): the direction's
@@ -184,7 +190,9 @@ def contact_products(variant):
     def timed(self, p, *, contiguous=True):
         start = time.process_time()
         try:
-            if contiguous or variant == "double" or counts["accurate"]:
+            counts["last_single"] = not (contiguous or variant == "double"
+                                         or counts["accurate"])
+            if not counts["last_single"]:
                 return call(self, p, contiguous=contiguous)
             self.products += 1
             counts["single"] += 1
@@ -196,8 +204,40 @@ def contact_products(variant):
         finally:
             counts["cpu"] += time.process_time() - start
 
+    take_step, stopping_rule = contact._take_step, contact._stopping_rule
+    init, recompute = contact._State.__init__, contact._State.recompute_displacement
+    drift = {}
+
+    def fresh(state, p, v):
+        init(state, p, v)
+        drift[id(state)] = 0.0
+
+    def step(state, q, tau, work):
+        take_step(state, q, tau, work)
+        if counts["last_single"]:
+            drift[id(state)] = drift.get(id(state), 0.0) + (
+                _SINGLE_PRODUCT_ROUNDING * np.finfo(np.float32).eps * abs(tau)
+                * contact._largest_magnitude(q))
+
+    def refreshed(state, operator):
+        recompute(state, operator)
+        drift[id(state)] = 0.0
+
+    def rule(residual, tolerance, state):
+        # contact._stopping_rule with the single-precision steps' drift added.
+        bound = (state.since_full * contact._ROUNDING_PER_ITERATION * np.finfo(float).eps
+                 * state.v_max + drift.get(id(state), 0.0))
+        if residual <= tolerance and (state.verified or bound < 1e-3 * tolerance):
+            return contact._CONVERGED
+        if (residual <= tolerance and not state.verified) or state.since_full >= contact._REFRESH:
+            return contact._RECOMPUTE
+        return contact._ITERATE
+
     contact._Operator.__call__ = timed
     contact._update_direction = direction
+    if variant == "mixed, step drift":
+        contact._take_step, contact._stopping_rule = step, rule
+        contact._State.__init__, contact._State.recompute_displacement = fresh, refreshed
     if variant == "mixed":
         contact._ROUNDING_PER_ITERATION = rounding * _SINGLE_ROUNDING
     try:
@@ -205,6 +245,8 @@ def contact_products(variant):
     finally:
         contact._Operator.__call__ = call
         contact._update_direction = update_direction
+        contact._take_step, contact._stopping_rule = take_step, stopping_rule
+        contact._State.__init__, contact._State.recompute_displacement = init, recompute
         contact._ROUNDING_PER_ITERATION = rounding
 
 
