@@ -299,7 +299,7 @@ def markdown_runs(rows):
 
 
 def main(argv=None):
-    """Command line: see the module docstring."""
+    """Command line: see the module docstring; returns the tables' rows by name."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--products", action="store_true", help="the raw product table")
     parser.add_argument("--runs", action="store_true", help="the run-in table")
@@ -312,10 +312,14 @@ def main(argv=None):
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"numpy {np.__version__}, load average {os.getloadavg()[0]:.1f}")
+    tables = {}
     if args.products:
-        print(markdown_products(product_table(args.sizes, max(args.repeats, 5), args.count)))
+        tables["products"] = product_table(args.sizes, max(args.repeats, 5), args.count)
+        print(markdown_products(tables["products"]))
     if args.runs:
-        print(markdown_runs(run_table(args.sizes, args.repeats, args.variants)))
+        tables["runs"] = run_table(args.sizes, args.repeats, args.variants)
+        print(markdown_runs(tables["runs"]))
+    return tables
 
 
 if __name__ == "__main__":
