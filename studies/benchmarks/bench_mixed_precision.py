@@ -16,7 +16,7 @@ What it reproduces
 
     ``--runs``: the run-in cases of ``bench_runin.py --levers`` (the shipped
     Voronoi scene with only ``n`` changed, and the homogeneous 1:2 rectangle
-    from flat at ``tol = 1e-4``) at each of ``--sizes``, under three products
+    from flat at ``tol = 1e-4``) at each of ``--sizes``, under four products
     of the contact solver: ``double`` (as shipped); ``mixed`` (each conjugate
     direction's product ``K t`` by :class:`SingleHalfSpace`, except in the
     iterations where the solver takes its preconditioner in double precision
@@ -26,26 +26,28 @@ What it reproduces
     solver's bound on the drift of the incrementally updated ``K p`` taken
     with float32's machine epsilon, so that a residual within the tolerance is
     verified on a ``K p`` recomputed in double before a solve ends, and
-    ``K p`` is recomputed every 50 iterations as before); and ``mixed,
-    unverified`` (the same products, the drift bound left at float64's: a
-    solve may end on the incrementally updated ``K p``); ``mixed, step drift``
+    ``K p`` is recomputed every 50 iterations as before); ``mixed, step drift``
     (the same products, the drift bound of each single-precision step being
     ``8 eps_32 |tau| max |K t|``, the round-off of that step's update of
-    ``K p``, instead of ``8 eps_32 max |K p|``).  Per run: steps,
+    ``K p``, instead of ``8 eps_32 max |K p|``); and ``mixed, unverified``
+    (the same products, the drift bound left at float64's: a solve may end on
+    the incrementally updated ``K p`` with no bound on the single round-off).
+    ``--variants`` runs only those named.  Per run: steps,
     rejected attempts, solves, iterations, products in double and in single, the
     CPU time of the run and of its products, and the history change: the
     largest deviation of the corrected rms slope (``history["rms_slope"]``, in
     ``grad_f0``) at ``s/s* = 1e-4 .. 3`` from the double run of the same case.
     The variants of one case run one after the other in one process, the whole
     set ``--repeats`` times; the table gives the counts of the first repeat
-    and, per variant, the CPU time ratio to the double run of the same repeat
-    (median and range over the repeats).
+    and, per variant, the ratios of the run's CPU time and of its products'
+    to the first variant's run of the same repeat (median and range over the
+    repeats).
 
 How to run
     python studies/benchmarks/bench_mixed_precision.py --products --sizes 256 512 1024
     python studies/benchmarks/bench_mixed_precision.py --runs --sizes 256 512 --repeats 3
-    python studies/benchmarks/bench_mixed_precision.py --runs --sizes 1024 --repeats 1 \
-        --variants double mixed
+    python studies/benchmarks/bench_mixed_precision.py --runs --sizes 1024 --repeats 2 \
+        --variants double "mixed, step drift"   # ~6 min
     python studies/benchmarks/bench_mixed_precision.py --products --runs --sizes 40 \
         --repeats 1   # smoke test, seconds
 
