@@ -132,7 +132,11 @@ def contact_tolerance(tol, depth_scale, spread, compliance_floor, mean_pressure)
     state it sits far above ``contact_rtol`` times the displacement, and it
     tightens as the spread falls, so the spread test sees pressures that are
     exact to its own precision.  Jumps, fixed steps and power-law steps
-    keep 0 (``contact_rtol`` alone).
+    keep 0 (``contact_rtol`` alone).  The stage solver applies it
+    ``transient.solver.STAGE_SHARE_FACTOR`` times in the largest violation
+    over the face (``transient.solver.STAGE_NORM``), not the rms: the rms
+    does not see a few singular pixels (docs/benchmarks.md, "Stopping rule
+    of the stage solves").
 
     Parameters
     ----------
