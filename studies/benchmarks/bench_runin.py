@@ -364,7 +364,8 @@ def history(result, problem):
         kp = hs.displacement(pressure)
         contact = face & (pressure > 0)
         approach = float(np.mean((height + kp)[contact]))
-        slopes.append(face_rms_slope(hs, face, height, pressure, approach))
+        slopes.append(face_rms_slope(hs, face, height, pressure, approach,
+                                     periodic=problem.outline.periodic))
     return np.array(slopes), np.where(face, result.snapshot_recession[-1], 0.0)
 
 
