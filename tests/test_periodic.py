@@ -26,6 +26,7 @@ from steady.solution import solve
 from steady.wear import PowerLaw
 from transient.comparison import compare_with_steady
 from transient.contact import solve_contact
+from transient.output import read_run
 from transient.preconditioners import PRECONDITIONERS
 from transient.problem import WearProblem
 from transient.runin import RunOptions, run_in
@@ -359,12 +360,16 @@ def test_steady_command_on_a_cell(tmp_path, capsys):
     assert status != 0 and "a periodic cell slides in translation only" in one_error_line(err)
 
 
-def test_run_in_command_with_depth_layers_and_a_crowned_face(tmp_path, capsys):
-    """A coating over a Voronoi cell, from a crowned face under a load programme, to steady.
+def test_run_in_command_with_depth_layers_and_a_wavy_face(tmp_path, capsys):
+    """A coating over a Voronoi cell, from a wavy face read from a file, under a programme.
 
-    The crowned start is in partial contact on the cell (a periodic face's partial
-    contact); the coating is worn through before the end depth.
+    The wave ``0.4 mm (1 - cos 2 pi x / W)`` repeats with the cell; its start is in partial
+    contact on the cell (two thirds of it touch: a periodic face's partial contact); the
+    coating is worn through before the end depth.
     """
+    grid = PeriodicCell(8e-3, 4e-3).grid(48)
+    wave = 4e-4 * (1 - np.cos(2 * np.pi * grid.x / 8e-3))[:, None] * np.ones(grid.shape)
+    np.save(tmp_path / "wave.npy", wave)
     extra = """
 [depth]
 kind = "layers"
@@ -372,8 +377,8 @@ kind = "layers"
 thickness = 1e-4
 phase = 0
 [initial_face]
-kind = "crowned"
-sphere_radius = 0.05
+kind = "file"
+path = "wave.npy"
 [transient]
 tol = 1e-3
 end_depth = 6e-4
@@ -382,6 +387,20 @@ end_depth = 6e-4
     status, out, err = run_cli(transient_cli, [scene, "-o", tmp_path / "r.h5"], capsys)
     assert status == 0, err
     assert "periodic face" in out and "nan" not in out, out
+    contact = read_run(tmp_path / "r.h5")[0].history["contact_fraction"][0]
+    assert 0 < contact < 1, f"not a partial contact at the start: {contact}"
+
+
+@pytest.mark.parametrize("kind, keys", [("crowned", "sphere_radius = 0.05"),
+                                        ("tilted", "angle = 1e-3")])
+def test_run_in_command_refuses_a_face_that_does_not_repeat(tmp_path, capsys, kind, keys):
+    """A crowned or tilted face on a cell: one error line naming the kind and the shape."""
+    scene = _scene(tmp_path, extra=f"[initial_face]\nkind = \"{kind}\"\n{keys}")
+    status, _, err = run_cli(transient_cli, [scene, "-o", tmp_path / "r.h5"], capsys)
+    line = one_error_line(err)
+    assert status != 0 and f"initial face kind '{kind}' on [punch] shape = \"periodic\"" in line
+    assert str(scene) in line and "seam" in line, line
+    assert not (tmp_path / "r.h5").exists(), "nothing written"
 
 
 def test_periodic_voronoi_repeats():
