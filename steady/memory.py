@@ -133,8 +133,8 @@ def keep_freed_memory():
             and bool(libc.mallopt(m_arena_max, 1)))
 
 
-def halfspace_memory(n, *, gradient=False):
-    """Bytes held by a :class:`steady.halfspace.HalfSpace` of grid ``n``.
+def halfspace_memory(n, *, gradient=False, periodic=False):
+    """Bytes held by the operator of grid ``n``: the padded half-space's or a periodic cell's.
 
     Parameters
     ----------
@@ -143,16 +143,26 @@ def halfspace_memory(n, *, gradient=False):
     gradient : bool, optional
         Include the two gradient spectra, built on the first slope
         (default False).
+    periodic : bool, optional
+        The grid is a periodic cell's (the outline's ``periodic``), whose
+        operator is :class:`steady.periodic.PeriodicHalfSpace`, with no
+        padding (default False: :class:`steady.halfspace.HalfSpace`).
 
     Returns
     -------
     int
-        The influence spectrum (real, ``2n x (n+1)``), the zero-padded
-        buffer (``2n x 2n``), the complex work buffer (``2n x (n+1)``), the
-        corner lattice and influence quadrant (``(n+2)^2`` each), and with
-        ``gradient`` the two gradient spectra (real, ``2n x (n+1)`` each):
-        96 bytes per pixel, 128 with the gradient.
+        The padded operator: the influence spectrum (real, ``2n x (n+1)``),
+        the zero-padded buffer (``2n x 2n``), the complex work buffer
+        (``2n x (n+1)``), the corner lattice and influence quadrant
+        (``(n+2)^2`` each), and with ``gradient`` the two gradient spectra
+        (real, ``2n x (n+1)`` each): 96 bytes per pixel, 128 with the
+        gradient.  A cell's: the symbol and the two gradient spectra, built
+        with it whatever ``gradient`` (real, ``n x (n/2+1)`` each), and the
+        influence quadrant a preconditioner may ask for (``(n+1)^2``): 20
+        bytes per pixel.
     """
+    if periodic:
+        return 3 * n * (n // 2 + 1) * _FLOAT + (n + 1) ** 2 * _FLOAT
     spectrum = 2 * n * (n + 1) * _FLOAT
     total = spectrum + (2 * n) ** 2 * _FLOAT + 2 * spectrum + 2 * (n + 2) ** 2 * _FLOAT
     if gradient:
@@ -160,22 +170,34 @@ def halfspace_memory(n, *, gradient=False):
     return total
 
 
-def product_memory(n):
+def product_memory(n, *, periodic=False):
     """Bytes of the short-lived transforms of one half-space product of grid ``n``.
 
-    The padded spectrum of the pressure and ``i`` times it for the gradient
-    (complex ``2n x (n+1)`` each), the column pass of the inverse (complex
-    ``2n x (n+1)``; only ``n`` rows are kept but the whole array stays
-    alive) and the row pass (real ``n x 2n``): 112 bytes per pixel.
+    The padded operator's: the padded spectrum of the pressure and ``i``
+    times it for the gradient (complex ``2n x (n+1)`` each), the column
+    pass of the inverse (complex ``2n x (n+1)``; only ``n`` rows are kept
+    but the whole array stays alive) and the row pass (real ``n x 2n``):
+    112 bytes per pixel.  A periodic cell's (``periodic``, one plain FFT
+    pair): the spectrum of the pressure, ``i`` times it and one product
+    (complex ``n x (n/2+1)`` each) and the displacement and the gradient's
+    two components (real ``n x n`` each): 48 bytes per pixel.
     """
+    if periodic:
+        return 3 * n * (n // 2 + 1) * 2 * _FLOAT + 3 * n * n * _FLOAT
     spectrum = 2 * n * (n + 1) * 2 * _FLOAT
     return 3 * spectrum + n * 2 * n * _FLOAT
 
 
-def slope_estimator_memory(n):
+def slope_estimator_memory(n, *, periodic=False):
     """Bytes of the energy-corrected slope estimator of grid ``n``: kept, and while applied.
 
-    :class:`steady.rms_slope.SlopeEnergy` convolves on a fine box of FFT
+    On a periodic cell (``periodic``) the estimator is
+    :class:`steady.rms_slope.PeriodicSlopeEnergy`, Parseval's sum on the
+    cell's own spectra: it keeps the slope weight (real ``n x (n/2+1)``, 4
+    bytes per pixel) and, applied, holds the field, its spectrum, the
+    weighted spectrum and its conjugate, the gradient's two components and
+    the jumps between neighbours, each concatenated: about 100 bytes per
+    pixel.  Otherwise :class:`steady.rms_slope.SlopeEnergy` convolves on a fine box of FFT
     size ``S`` (about ``2.2 n``) and a coarse one of size ``S_c`` (about
     ``1.2 n``), the same arithmetic as its constructor with the default
     margin ``max(8, n // 16)``, coarsening 8 and far radius 8.
@@ -192,6 +214,8 @@ def slope_estimator_memory(n):
         spectrum, product, column and row passes): ``32 S^2`` bytes, about
         150 per pixel.
     """
+    if periodic:
+        return 4 * n * (n // 2 + 1), 100 * n * n
     c = 8
     margin = c * -(-max(8, n // 16) // c)
     fine = c * -(-(n + 2 * margin) // c)
@@ -203,7 +227,7 @@ def slope_estimator_memory(n):
     return 8 * size ** 2 + 20 * coarse ** 2, 32 * size ** 2
 
 
-def steady_memory(n, *, slope_error=True):
+def steady_memory(n, *, slope_error=True, periodic=False):
     """Estimated peak memory of a steady solve at grid ``n``, bytes.
 
     Counted from the arrays :func:`steady.solution.solve_scene` allocates,
@@ -213,13 +237,15 @@ def steady_memory(n, *, slope_error=True):
       gradient components (the face and the components are views of
       ``n x 2n`` arrays): 64 bytes per pixel;
     - the face: the half-space operator with its gradient spectra
-      (:func:`halfspace_memory`, 128 bytes per pixel) and the transforms of
-      the products (:func:`product_memory`, 112 bytes per pixel); the
-      operator is freed with them (unless the problem holds one);
+      (:func:`halfspace_memory`, 128 bytes per pixel; a periodic cell's, 20)
+      and the transforms of the products (:func:`product_memory`, 112
+      bytes per pixel; a cell's, 48); the operator is freed with them
+      (unless the problem holds one);
     - with ``slope_error`` (the default of the command), then: the
       pressure and face mask of the finest grid of the ladder (17 bytes per
       pixel) and the slope estimator of :mod:`steady.rms_slope`, kept and
-      applied (:func:`slope_estimator_memory`, about 210 bytes per pixel).
+      applied (:func:`slope_estimator_memory`, about 210 bytes per pixel;
+      a cell's, about 104).
 
     The sum is multiplied by 1.25 (allocator overhead, short-lived copies
     not listed) and 16 MiB are added for what does not grow with ``n``.
@@ -237,6 +263,9 @@ def steady_memory(n, *, slope_error=True):
     slope_error : bool, optional
         Whether the corrected rms slope and its error bar are computed
         (default True).
+    periodic : bool, optional
+        The grid is a periodic cell's (the outline's ``periodic``): its
+        operator and slope estimator, with no padding (default False).
 
     Returns
     -------
@@ -246,11 +275,14 @@ def steady_memory(n, *, slope_error=True):
     --------
     >>> print(format_bytes(steady_memory(1024)), format_bytes(steady_memory(12000)))
     396 MiB 51 GiB
+    >>> print(format_bytes(steady_memory(1024, periodic=True)))
+    245 MiB
     """
     n = int(n) if not isinstance(n, (tuple, list)) else math.ceil(math.sqrt(n[0] * n[1]))
-    peak = halfspace_memory(n, gradient=True) + product_memory(n)
+    peak = (halfspace_memory(n, gradient=True, periodic=periodic)
+            + product_memory(n, periodic=periodic))
     if slope_error:
-        peak = max(peak, 17 * n * n + sum(slope_estimator_memory(n)))
+        peak = max(peak, 17 * n * n + sum(slope_estimator_memory(n, periodic=periodic)))
     return int(_MARGIN * (8 * n * n * _FLOAT + peak)) + _BASE
 
 

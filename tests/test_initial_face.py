@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from steady.outline import Circle
+from steady.outline import Circle, PeriodicCell
 from transient import initial_face
 
 RADIUS = 4e-3
@@ -104,3 +104,29 @@ def test_a_face_of_complex_numbers_or_booleans_is_refused(tmp_path, values, foun
     with pytest.raises(ValueError, match=f"initial face file .*h.npy' {found}; it must hold "
                                          f"real numbers"):
         initial_face.from_file(grid(8), tmp_path / "h.npy")
+
+
+@pytest.mark.parametrize("kind, parameters", [("tilted", {"angle": 1e-3}),
+                                              ("crowned", {"sphere_radius": 0.05})])
+def test_a_face_that_does_not_repeat_is_refused_on_a_periodic_cell(kind, parameters):
+    """A tilt or a crown would jump at the cell's edges: refused, by kind and by function."""
+    grid = PeriodicCell(8e-3, 4e-3).grid(32)
+    expected = f"initial face kind '{kind}' on \\[punch\\] shape = \"periodic\""
+    with pytest.raises(ValueError, match=expected):
+        initial_face.initial_recession(kind, grid, **parameters)
+    with pytest.raises(ValueError, match=expected):
+        getattr(initial_face, kind)(grid, **parameters)
+    with pytest.raises(ValueError, match="a periodic cell takes kind 'file' or 'flat'"):
+        initial_face.check_outline(kind, grid.outline)
+    assert initial_face.initial_recession(kind, Circle(4e-3).grid(32), **parameters).any()
+
+
+def test_flat_and_a_file_are_taken_on_a_periodic_cell(tmp_path):
+    """A flat face repeats; a file's field (a measured patch) is taken as it stands."""
+    grid = PeriodicCell(8e-3, 4e-3).grid(32)
+    assert not initial_face.initial_recession("flat", grid).any()
+    field = np.random.default_rng(3301).random(grid.shape) * 1e-6
+    np.save(tmp_path / "patch.npy", field)
+    read = initial_face.initial_recession("file", grid, path=tmp_path / "patch.npy")
+    assert np.array_equal(read, field), "the file's field as it stands"
+    assert np.array_equal(initial_face.from_array(field, grid), field)

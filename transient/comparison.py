@@ -143,7 +143,7 @@ def compare_with_steady(result, steady, problem):
     face_rms = float(np.sqrt(np.mean((diff - diff.mean()) ** 2)) / relief)
     recession = np.where(face_mask, result.recession, 0.0)
     plain = face_rms_slope(problem.halfspace, face_mask, recession, result.pressure,
-                           result.approach)
+                           result.approach, periodic=problem.outline.periodic)
     estimator = FaceEstimator.of(problem, np.where(face_mask, result.initial_recession, 0.0))
     # A state a jump reached is the steady face at no particular distance: its rim layer is
     # fully worn (the distance of the history's end would measure it as barely worn, or, for a

@@ -22,7 +22,7 @@ def shape_rms(field, face_mask):
     return float(np.sqrt(np.mean(v * v)))
 
 
-def masked_gradient(field, face_mask, h):
+def masked_gradient(field, face_mask, h, *, periodic=False, stride=1):
     """Finite-difference gradient using only pixels of the face (central where possible).
 
     Parameters
@@ -31,35 +31,74 @@ def masked_gradient(field, face_mask, h):
     face_mask : ndarray of bool, shape (nx, ny)
     h : float, m
         Pixel size.
+    periodic : bool, optional
+        Whether the grid is a periodic cell (the outline's ``periodic``):
+        the neighbours of an edge pixel are then those across the opposite
+        edge, so that differences are central there too and the gradient
+        of a face that repeats with the cell does not depend on where the
+        cell's origin lies.  Default False: off the grid is off the face.
+    stride : int, optional
+        Pixels between a pixel and its neighbours (default 1): differences
+        over ``stride h``, those of a grid ``stride`` times coarser taken at
+        every pixel.
 
     Returns
     -------
     gx, gy : ndarray, shape (nx, ny)
         Central differences where both neighbours are on the face, one-sided
         where one is, zero where none is and off the face.
+
+    Examples
+    --------
+    A cosine over a cell of eight pixels, at the pixels of both edges: central
+    differences across the edge on the cell, one-sided ones on a finite face
+    (the exact derivative is 0 and 4.44 there):
+
+    >>> x = np.arange(8) / 8
+    >>> field = np.broadcast_to(np.cos(2 * np.pi * x)[:, None], (8, 3))
+    >>> face = np.ones((8, 3), bool)
+    >>> cell, _ = masked_gradient(field, face, 1 / 8, periodic=True)
+    >>> finite, _ = masked_gradient(field, face, 1 / 8)
+    >>> print(np.round(cell[[0, 7], 0], 3), np.round(finite[[0, 7], 0], 3))
+    [0. 4.] [-2.343  5.657]
     """
     f = np.where(face_mask, field, 0.0)
-    # Neighbours along each axis through a border of zeros (off the face): views, no copies.
-    f_pad = np.pad(f, 1)
-    on_pad = np.pad(face_mask, 1)
-    inner = (slice(1, -1), slice(1, -1))
+    step = stride * h
     out = []
-    for axis in (0, 1):
-        ahead, behind = list(inner), list(inner)
-        ahead[axis], behind[axis] = slice(2, None), slice(None, -2)
-        fp, fm = f_pad[tuple(ahead)], f_pad[tuple(behind)]
-        mp, mm = on_pad[tuple(ahead)] & face_mask, on_pad[tuple(behind)] & face_mask
+    for fp, fm, on_p, on_m in _neighbours(f, face_mask, periodic, stride):
+        mp, mm = on_p & face_mask, on_m & face_mask
         g = np.zeros(f.shape)
         both = mp & mm
-        for where, a, b, step in ((both, fp, fm, 2 * h), (mp & ~mm, fp, f, h),
-                                  (mm & ~mp, f, fm, h)):
+        for where, a, b, width in ((both, fp, fm, 2 * step), (mp & ~mm, fp, f, step),
+                                   (mm & ~mp, f, fm, step)):
             np.subtract(a, b, out=g, where=where)
-            np.divide(g, step, out=g, where=where)
+            np.divide(g, width, out=g, where=where)
         out.append(g)
     return out
 
 
-def face_rms_slope(halfspace, face_mask, recession, pressure, approach, *, gradient=None):
+def _neighbours(f, face_mask, periodic, stride):
+    """Along each axis in turn, the field and the face mask ``stride`` pixels ahead and behind.
+
+    On a periodic cell by wrap-around (copies, one axis at a time);
+    otherwise through a border of zeros, off the face (views of one padded
+    array, no copies).
+    """
+    if periodic:
+        for axis in (0, 1):
+            yield (np.roll(f, -stride, axis), np.roll(f, stride, axis),
+                   np.roll(face_mask, -stride, axis), np.roll(face_mask, stride, axis))
+        return
+    f_pad, on_pad = np.pad(f, stride), np.pad(face_mask, stride)
+    for axis in (0, 1):
+        ahead, behind = [slice(stride, -stride)] * 2, [slice(stride, -stride)] * 2
+        ahead[axis], behind[axis] = slice(2 * stride, None), slice(None, -2 * stride)
+        yield (f_pad[tuple(ahead)], f_pad[tuple(behind)],
+               on_pad[tuple(ahead)], on_pad[tuple(behind)])
+
+
+def face_rms_slope(halfspace, face_mask, recession, pressure, approach, *, gradient=None,
+                   periodic=False):
     """Plain pixel rms slope of the worn face over the face pixels, dimensionless.
 
     On the contact the face is ``d - w = K p``, whose gradient is the exact
@@ -88,6 +127,10 @@ def face_rms_slope(halfspace, face_mask, recession, pressure, approach, *, gradi
     approach : float, m
     gradient : tuple of ndarray, optional
         ``halfspace.gradient(pressure)``, when the caller has it already.
+    periodic : bool, optional
+        Whether the grid is a periodic cell (the outline's ``periodic``):
+        the gap's differences wrap around its edges (:func:`masked_gradient`).
+        Default False.
 
     Returns
     -------
@@ -102,7 +145,7 @@ def face_rms_slope(halfspace, face_mask, recession, pressure, approach, *, gradi
         kp = halfspace.displacement_q(pressure_q)
         gap = np.where(face_mask, recession - (approach - kp), 0.0)
         gap = np.where(contact, 0.0, np.maximum(gap, 0.0))
-        dx, dy = masked_gradient(gap, face_mask, halfspace.h)
+        dx, dy = masked_gradient(gap, face_mask, halfspace.h, periodic=periodic)
         gx = gx - dx
         gy = gy - dy
     s2 = gx * gx + gy * gy

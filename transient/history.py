@@ -161,12 +161,13 @@ class FaceStatistics:
     rms_height: float
 
 
-def _difference_rms_slope(face, face_mask, h):
-    gx, gy = masked_gradient(np.where(face_mask, face, 0.0), face_mask, h)
+def _difference_rms_slope(face, face_mask, h, *, periodic=False, stride=1):
+    gx, gy = masked_gradient(np.where(face_mask, face, 0.0), face_mask, h, periodic=periodic,
+                             stride=stride)
     return float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
 
 
-def face_statistics(face, face_mask, h, *, plane=True):
+def face_statistics(face, face_mask, h, *, periodic=False):
     """Rms slope (finite differences) and rms height of a smooth face over the face pixels.
 
     For the initial faces of :mod:`transient.initial_face`: exact for a
@@ -180,9 +181,14 @@ def face_statistics(face, face_mask, h, *, plane=True):
         Heights at the pixel centres (either sign convention).
     face_mask : ndarray of bool, shape (nx, ny)
     h : float, m
-    plane : bool, optional
-        The rms height about the least-squares plane (default), or about the
-        mean (False: a periodic cell's face).
+    periodic : bool, optional
+        Whether the face is a periodic cell's (the outline's ``periodic``,
+        default False): its differences then wrap around the cell's edges,
+        ``S_2h`` is taken over ``2h`` at every pixel (every other pixel would
+        not tile a side of an odd number of pixels, and would depend on
+        where the cell's origin lies), and the rms height is about the mean
+        (a periodic face has no tilt to level) instead of the least-squares
+        plane.
 
     Returns
     -------
@@ -198,15 +204,17 @@ def face_statistics(face, face_mask, h, *, plane=True):
     0.010000 0.0e+00 0.0e+00
     """
     face = np.asarray(face, dtype=float)
-    slope = _difference_rms_slope(face, face_mask, h)
-    coarse_mask = face_mask[::2, ::2]
-    coarse = _difference_rms_slope(face[::2, ::2], coarse_mask, 2 * h)
+    slope = _difference_rms_slope(face, face_mask, h, periodic=periodic)
+    if periodic:
+        coarse = _difference_rms_slope(face, face_mask, h, periodic=True, stride=2)
+    else:
+        coarse = _difference_rms_slope(face[::2, ::2], face_mask[::2, ::2], 2 * h)
     # A plane's differences are exact on both: round-off is not an error.
     error = abs(slope - coarse)
     if error <= 1e-12 * max(slope, coarse):
         error = 0.0
     return FaceStatistics(rms_slope=slope, rms_slope_error=error,
-                          rms_height=rms_height(face, face_mask, h, plane=plane))
+                          rms_height=rms_height(face, face_mask, h, plane=not periodic))
 
 
 # The estimator of each live problem (FaceEstimator.of), with its initial face.
@@ -315,7 +323,7 @@ class FaceEstimator:
         self.reference_slope = problem.reference_slope
         h0 = np.where(self.face_mask, np.asarray(initial_recession, dtype=float), 0.0)
         self.initial = face_statistics(-h0, self.face_mask, hs.h,
-                                       plane=not problem.outline.periodic)
+                                       periodic=problem.outline.periodic)
         padded = np.pad(self.face_mask, 1)
         interior = (padded[2:, 1:-1] & padded[:-2, 1:-1] & padded[1:-1, 2:]
                     & padded[1:-1, :-2])
@@ -451,10 +459,11 @@ class FaceEstimator:
         # value is the estimator's own face sum.
         # A cell's integrals are the layer's own (its operator's modes); a finite
         # face's estimator corrects the half-space's kernel, and takes the layer's change.
-        layered = (self.problem.problem.counterbody.layered
-                   and not self.problem.problem.outline.periodic)
+        periodic = self.problem.problem.outline.periodic
+        layered = self.problem.problem.counterbody.layered and not periodic
         gradient = hs.gradient(pressure) if off.any() or layered else None
-        plain = (face_rms_slope(hs, face_mask, recession, pressure, approach, gradient=gradient)
+        plain = (face_rms_slope(hs, face_mask, recession, pressure, approach, gradient=gradient,
+                                periodic=periodic)
                  if off.any() or layered
                  else math.sqrt(integrals.face_sum / integrals.face_area))
         out = {"rms_slope_plain": plain, "rim_layer_pixels": self.rim_layer_pixels(distance),
@@ -474,7 +483,7 @@ class FaceEstimator:
         source = SOURCE_CONTACT
         if off.any():
             gx, gy = gradient
-            fx, fy = masked_gradient(face, face_mask, self.h)
+            fx, fy = masked_gradient(face, face_mask, self.h, periodic=periodic)
             energy += float(np.sum((fx * fx + fy * fy - gx * gx - gy * gy)[off])) * self.h ** 2
             source = SOURCE_PARTIAL_CONTACT
         mean_square = energy / integrals.face_area

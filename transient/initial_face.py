@@ -17,6 +17,12 @@ Every shape is registered in :data:`INITIAL_FACES` (a
 by kind.  A kind may also give the exact rms slope and rms height of its
 continuous face over the outline (:func:`exact_statistics`), the values the
 run-in history starts from (docs/model.md, "The run-in history").
+
+On a periodic cell (an outline whose ``periodic`` is True) the face repeats
+with the cell: a kind whose face does not (``"tilted"``, ``"crowned"``)
+would leave a seam at the cell's edges and is refused
+(:func:`check_outline`); ``"flat"`` repeats, and a face read from a file
+(``"file"``, a measured patch) is taken as periodic as it stands.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from steady.schema import Key, KindRegistry
 __all__ = [
     "INITIAL_FACES",
     "ExactStatistics",
+    "check_outline",
     "crowned",
     "exact_statistics",
     "flat",
@@ -44,18 +51,24 @@ __all__ = [
 ]
 
 #: Registered initial faces by ``[initial_face] kind`` (default ``"flat"``): functions
-#: ``build(grid, **parameters)`` with the attributes ``kind``, ``keys`` and
+#: ``build(grid, **parameters)`` with the attributes ``kind``, ``keys``,
 #: ``statistics`` (``statistics(outline, **parameters)``, the
-#: :class:`ExactStatistics` of the continuous face over an outline, or None).
+#: :class:`ExactStatistics` of the continuous face over an outline, or None) and
+#: ``periodic`` (whether the face repeats with a periodic cell, built on one).
 INITIAL_FACES = KindRegistry("initial face", "kind", default="flat",
                              entry_point_group="runin.initial_faces")
 
 
-def _register(kind, keys=(), statistics=None, doc=""):
-    """Register ``build(grid, **parameters)`` as the initial face ``kind`` with its keys."""
+def _register(kind, keys=(), statistics=None, periodic=False, doc=""):
+    """Register ``build(grid, **parameters)`` as the initial face ``kind`` with its keys.
+
+    ``periodic``: whether the face built on a periodic cell repeats with it
+    (default False: refused on a cell, :func:`check_outline`).
+    """
     def decorate(build):
         build = INITIAL_FACES.register(kind, keys, doc=doc)(build)
         build.statistics = statistics
+        build.periodic = periodic
         return build
     return decorate
 
@@ -118,12 +131,56 @@ def _kind(kind):
     return INITIAL_FACES[kind]
 
 
-def _grid(grid):
-    """``grid`` checked to be a :class:`~steady.outline.FaceGrid`."""
+def _grid(grid, kind=None):
+    """``grid`` checked to be a :class:`~steady.outline.FaceGrid` that ``kind`` may be built on.
+
+    Without ``kind`` (a field given pixel by pixel) any grid is accepted.
+    """
     if not isinstance(grid, FaceGrid):
         raise ValueError(f"an initial face is built on a face's grid (outline.grid(n)), got "
                          f"{type(grid).__name__}")
+    if kind is not None:
+        check_outline(kind, grid.outline)
     return grid
+
+
+def check_outline(kind, outline):
+    """Refuse an initial face ``kind`` that does not repeat with a periodic cell.
+
+    A face built on a periodic cell (``outline.periodic``) must repeat with
+    it, or it leaves a seam at the cell's edges (a tilt or a crown jumps
+    there); every kind is accepted on a finite face.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`INITIAL_FACES`.
+    outline : outline object
+        The face (:mod:`steady.outline`).
+
+    Raises
+    ------
+    ValueError
+        ``kind`` unknown, or not periodic on a periodic cell: the message
+        names the kind, the shape ``"periodic"`` and the kinds accepted.
+
+    Examples
+    --------
+    >>> from steady.outline import Circle, PeriodicCell
+    >>> check_outline("crowned", Circle(4e-3))
+    >>> check_outline("crowned", PeriodicCell(8e-3, 8e-3))
+    Traceback (most recent call last):
+    ...
+    ValueError: initial face kind 'crowned' on [punch] shape = "periodic": its face does not \
+repeat with the cell and would leave a seam at the cell's edges; a periodic cell takes \
+kind 'file' or 'flat'
+    """
+    if outline.periodic and not _kind(kind).periodic:
+        accepted = " or ".join(repr(k) for k in sorted(INITIAL_FACES)
+                               if INITIAL_FACES[k].periodic)
+        raise ValueError(f"initial face kind {kind!r} on [punch] shape = \"periodic\": its face "
+                         f"does not repeat with the cell and would leave a seam at the cell's "
+                         f"edges; a periodic cell takes kind {accepted}")
 
 
 def initial_recession(kind, grid, **parameters):
@@ -152,7 +209,7 @@ def initial_recession(kind, grid, **parameters):
     (16, 48)
     """
     build = _kind(kind)
-    grid = _grid(grid)
+    grid = _grid(grid, kind)
     h = np.asarray(build(grid, **parameters), dtype=float)
     if h.shape != grid.shape:
         raise ValueError(f"initial face has shape {h.shape}, expected {grid.shape}")
@@ -167,7 +224,7 @@ def _flat_statistics(outline):
     return ExactStatistics(rms_slope=0.0, rms_height=0.0)
 
 
-@_register("flat", statistics=_flat_statistics, doc="a flat face (default)")
+@_register("flat", statistics=_flat_statistics, periodic=True, doc="a flat face (default)")
 def flat(grid):
     """Flat face.
 
@@ -180,7 +237,7 @@ def flat(grid):
     ndarray, shape of the grid, m
         Zeros.
     """
-    return np.zeros(_grid(grid).shape)
+    return np.zeros(_grid(grid, "flat").shape)
 
 
 def _tilted_statistics(outline, angle, azimuth=0.0):
@@ -192,7 +249,8 @@ def _tilted_statistics(outline, angle, azimuth=0.0):
         required=True, doc="tilt"),
     Key("azimuth", "number", unit="rad", default=0.0,
         doc="direction (from the x axis) in which the face recedes")),
-    statistics=_tilted_statistics, doc="a flat face tilted towards an azimuth")
+    statistics=_tilted_statistics,
+    doc="a flat face tilted towards an azimuth (not on a periodic cell)")
 def tilted(grid, angle, azimuth=0.0):
     """Flat face tilted by ``angle`` so that it recedes towards ``azimuth``.
 
@@ -214,8 +272,14 @@ def tilted(grid, angle, azimuth=0.0):
         disk tilted this way (with no rotation allowed) stays in full
         contact while ``tan(angle) < F / (4 a^2 E*)``; above that the
         recessed side lifts off.
+
+    Raises
+    ------
+    ValueError
+        ``angle`` or ``azimuth`` out of range; a periodic cell's grid
+        (:func:`check_outline`: a tilt does not repeat with the cell).
     """
-    grid = _grid(grid)
+    grid = _grid(grid, "tilted")
     if angle is None or not (np.isfinite(angle) and 0 <= angle < np.pi / 2):
         raise ValueError(f"angle must lie in [0, pi/2), got {angle!r} rad")
     if not np.isfinite(azimuth):
@@ -234,7 +298,7 @@ def _crowned_statistics(outline, sphere_radius):
 @_register("crowned", (
     Key("sphere_radius", "number", unit="m", low=0.0, required=True,
         doc="radius of the sphere, at least the face's largest distance from its centre"),),
-    statistics=_crowned_statistics, doc="a face crowned to a sphere")
+    statistics=_crowned_statistics, doc="a face crowned to a sphere (not on a periodic cell)")
 def crowned(grid, sphere_radius):
     """Spherical cap: the face crowned to a sphere of radius ``sphere_radius``.
 
@@ -253,8 +317,14 @@ def crowned(grid, sphere_radius):
         paraboloid ``r^2 / (2 R)``, which differs by ``r^4 / (8 R^3)``).
         Off the sphere's footprint (``r >= R``, off the face) the
         paraboloid continues it.
+
+    Raises
+    ------
+    ValueError
+        ``sphere_radius`` below the face's reach; a periodic cell's grid
+        (:func:`check_outline`: a crown does not repeat with the cell).
     """
-    grid = _grid(grid)
+    grid = _grid(grid, "crowned")
     outline = grid.outline
     reach = outline.circumradius()
     if sphere_radius is None or not (np.isfinite(sphere_radius) and sphere_radius >= reach):
@@ -269,7 +339,7 @@ def crowned(grid, sphere_radius):
 
 
 def from_array(values, grid):
-    """Height field given pixel by pixel.
+    """Height field given pixel by pixel (on a periodic cell taken as periodic, as it stands).
 
     Parameters
     ----------
@@ -298,9 +368,14 @@ def from_array(values, grid):
 
 @_register("file", (Key("path", "path", required=True,
                          doc=".npy recession field, m, on the grid (n x n for a disk)"),),
-           doc="a recession field read from a .npy file")
+           periodic=True,
+           doc="a recession field read from a .npy file (on a periodic cell, taken as periodic)")
 def from_file(grid, path):
     """Recession field (m, larger = recessed) read from a ``.npy`` file; see :func:`from_array`.
+
+    On a periodic cell the field is taken as periodic, as it stands (a
+    measured patch of the surface): its last row and column neighbour its
+    first, and nothing checks that they join without a step.
 
     The file is checked before its data are read
     (:func:`steady.array_files.read_npy`: a wrong shape, an empty or
@@ -317,7 +392,7 @@ def from_file(grid, path):
     -------
     ndarray, shape of the grid, m
     """
-    grid = _grid(grid)
+    grid = _grid(grid, "file")
     path = os.fspath(path)
     if not path.endswith(".npy"):
         raise ValueError(f"recession file must be a .npy file, got {path!r}")

@@ -186,7 +186,8 @@ class RunRecord:
         step_error = slope_error = 0.0
         if error is not None:
             step_error = self._per_steady_shape(shape_rms(error, face_mask))
-            gx, gy = masked_gradient(np.where(face_mask, error, 0.0), face_mask, p.halfspace.h)
+            gx, gy = masked_gradient(np.where(face_mask, error, 0.0), face_mask, p.halfspace.h,
+                                     periodic=p.outline.periodic)
             slope_error = float(np.sqrt(np.mean((gx * gx + gy * gy)[face_mask])))
         hist["face_deviation_step_error"].append(step_error)
         hist["rms_slope_step_error"].append(slope_error)

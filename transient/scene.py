@@ -37,7 +37,7 @@ from steady.scene import RUN_IN_SECTIONS, load_scene, problem_of
 from steady.schema import Context
 from steady.text import one_line
 
-from .initial_face import INITIAL_FACES, initial_recession
+from .initial_face import INITIAL_FACES, check_outline, initial_recession
 from .options import RunOptions, options_from_table
 from .problem import WearProblem
 
@@ -267,8 +267,10 @@ def load_transient_scene(path, *, n=None):
         The file does not exist.
     ValueError
         Any other error of :func:`steady.scene.load_scene` or of the two
-        sections, or a wear law without a run-in across the scene's
-        interfaces (:func:`check_run_in_law`).
+        sections, a wear law without a run-in across the scene's
+        interfaces (:func:`check_run_in_law`), or an initial face that does
+        not repeat with a periodic cell
+        (:func:`transient.initial_face.check_outline`).
 
     Examples
     --------
@@ -286,6 +288,10 @@ def load_transient_scene(path, *, n=None):
                    if "transient" in scene.extra else RunOptions())
         initial = (parse_initial_face(scene.extra["initial_face"], base_dir)
                    if "initial_face" in scene.extra else InitialFace())
+        try:
+            check_outline(initial.kind, scene.outline)
+        except ValueError as err:
+            raise ValueError(f"[initial_face]: {err}") from None
     except ValueError as err:
         raise ValueError(f"{path}: {err}") from None
     return scene, options, initial

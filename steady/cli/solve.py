@@ -210,7 +210,8 @@ def _check(args):
     if scene.ignored_sections:
         note("ignoring run-in sections "
              + ", ".join(f"[{name}]" for name in scene.ignored_sections))
-    check_memory(steady_memory(scene.grid().shape, slope_error=args.slope_error),
+    check_memory(steady_memory(scene.grid().shape, slope_error=args.slope_error,
+                               periodic=scene.outline.periodic),
                  f"a steady solve at n = {scene.n}", args.memory_limit)
     _DEPTH.parse(args.depth, "", scale=False)  # a depth has no scale range: 0 is the surface
     # Names a phase without a face pixel before the solve; the solve takes its map.

@@ -347,7 +347,8 @@ def memory_table(scene_path, sizes, checkpoint_interval=None):
             result = read_run(out)[0]
             snapshots = int(result.snapshot_recession.shape[0])
             out.unlink()
-            estimate = run_in_memory(n, snapshots)
+            periodic = load_transient_scene(scene)[0].outline.periodic
+            estimate = run_in_memory(n, snapshots, periodic=periodic)
             rows.append(dict(n=n, steps=result.steps, snapshots=snapshots, wall=wall,
                              peak_rss=peak, estimate=estimate, ratio=estimate / peak))
             logger.info("n = %d: %s", n, rows[-1])
@@ -364,7 +365,8 @@ def history(result, problem):
         kp = hs.displacement(pressure)
         contact = face & (pressure > 0)
         approach = float(np.mean((height + kp)[contact]))
-        slopes.append(face_rms_slope(hs, face, height, pressure, approach))
+        slopes.append(face_rms_slope(hs, face, height, pressure, approach,
+                                     periodic=problem.outline.periodic))
     return np.array(slopes), np.where(face, result.snapshot_recession[-1], 0.0)
 
 

@@ -350,7 +350,8 @@ def _prepare(args, lock, scene, initial, options, checked):
                 note(text)
             options = dataclasses.replace(options, snapshot_distances=snapshots,
                                           snapshots_s_star=())
-            check_memory(run_in_memory(problem.shape, len(snapshots)),
+            check_memory(run_in_memory(problem.shape, len(snapshots),
+                                       periodic=problem.outline.periodic),
                          _run_in_text(problem.grid, len(snapshots)), args.memory_limit)
     else:
         if args.resume:
@@ -399,8 +400,8 @@ def run(args):
         _check_outputs(args)
         grid = scene.grid()  # load_scene has checked n against the outline
         snapshots = len(options.snapshot_distances) + len(options.snapshots_s_star)
-        check_memory(run_in_memory(grid.shape, snapshots), _run_in_text(grid, snapshots),
-                     args.memory_limit)
+        check_memory(run_in_memory(grid.shape, snapshots, periodic=grid.outline.periodic),
+                     _run_in_text(grid, snapshots), args.memory_limit)
         # Names a phase without a face pixel, or a scale out of range, before the run; the
         # run's problem takes its map (rasterised once).
         checked = problem_of(scene)
