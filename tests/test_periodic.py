@@ -386,7 +386,7 @@ end_depth = 6e-4
     scene = _scene(tmp_path, programme="programme = [[2e3, 7.0]]", extra=extra)
     status, out, err = run_cli(transient_cli, [scene, "-o", tmp_path / "r.h5"], capsys)
     assert status == 0, err
-    assert "periodic face" in out and "nan" not in out, out
+    assert "periodic face" in out and "nan" not in out and "+- inf" not in out, out
     contact = read_run(tmp_path / "r.h5")[0].history["contact_fraction"][0]
     assert 0 < contact < 1, f"not a partial contact at the start: {contact}"
 
@@ -534,3 +534,37 @@ def test_finite_punch_on_a_layer_is_a_large_cell_with_zero_pressure_around(thick
     difference = (alone - among)[grid.mask]
     error = np.abs(difference - difference.mean()).max() / np.ptp(alone[grid.mask])
     assert error < bound, f"finite punch against the cell: {error:.2e} of the relief"
+
+
+@pytest.mark.parametrize("outline", [CELL, Circle(4e-3)], ids=["cell", "punch"])
+def test_a_coating_takes_the_map_error_of_the_section_it_wears_down_to(outline):
+    """A surface of one phase has no boundary to rasterise: the section below it counts too.
+
+    A coating of phase 0 over a Voronoi section: the history's relative map error is the
+    larger of the coating's and of the Voronoi section's own ladders.  On a cell the
+    coating's face is flat, slope 0 known exactly (error 0, not an unbounded one).
+    """
+    from steady.depth import DepthColumns
+    from steady.rms_slope import estimate_map_rms_slope
+    from transient.history import FaceEstimator
+
+    voronoi = problem(GEOMETRIES["voronoi"], PowerLaw([K1, 10 * K1]), n=48, outline=outline)
+    face = voronoi.face_mask
+    coat = np.where(face, 0, -1)
+    columns = DepthColumns(np.where(face, 1e-5, np.inf)[None],
+                           np.stack([coat, np.where(face, voronoi.labels, -1)]), 2)
+    coated = Problem(FacePhases(voronoi.grid, coat, 2, columns=columns), voronoi.wear,
+                     voronoi.normal_force, voronoi.E_star)
+    wear = WearProblem(coated)
+    estimator = FaceEstimator(wear, np.zeros(face.shape))
+
+    def relative(section):
+        labels, law = section.present_phases()
+        e = estimate_map_rms_slope(labels, law, section.normal_force, section.outline,
+                                   section.E_star)
+        return e.error / e.rms_slope if e.rms_slope > 0 else (0.0 if e.error == 0 else math.inf)
+
+    surface, below = relative(coated), relative(coated.section(1e-5))
+    assert math.isfinite(below) and (surface == 0.0) is outline.periodic
+    assert estimator.map_error == pytest.approx(max(surface, below), rel=1e-12, abs=1e-15)
+    assert math.isfinite(estimator.map_error)

@@ -342,14 +342,9 @@ class FaceEstimator:
             estimate = self.geometry_estimate = estimate_rms_slope(
                 geometry, problem.wear, problem.normal_force, problem.outline, hs.E_star,
                 problem.n, labels=problem.labels, energy=self.energy)
+            self.map_error = _relative_error(estimate)
         else:
-            # A depth-varying map: its surface section, of the phases on the face.
-            labels, wear = problem.problem.present_phases()
-            estimate = estimate_map_rms_slope(labels, wear, problem.normal_force,
-                                              problem.outline, hs.E_star, energy=self.energy)
-        self.map_error = (estimate.error / estimate.rms_slope
-                          if math.isfinite(estimate.error) and estimate.rms_slope > 0
-                          else math.inf)
+            self.map_error = _sections_map_error(problem.problem, hs.E_star, self.energy)
 
     def _rim_weights(self, h0):
         """Squared rim stress intensity of each rim pixel relative to the flat punch's.
@@ -506,6 +501,45 @@ class FaceEstimator:
         out.update(rms_slope=slope, rms_slope_error=math.hypot(rim_error, map_part),
                    rms_slope_source=source)
         return out
+
+
+def _relative_error(estimate):
+    """The relative error bar of a :class:`steady.rms_slope.SlopeEstimate`.
+
+    Infinite without a bound; 0 for a flat face known exactly (a homogeneous
+    periodic cell: zero slope, zero error), whose slope has nothing to rasterise.
+    """
+    if not math.isfinite(estimate.error):
+        return math.inf
+    if estimate.rms_slope > 0:
+        return estimate.error / estimate.rms_slope
+    return 0.0 if estimate.error == 0 else math.inf
+
+
+def _sections_map_error(problem, E_star, energy):
+    """Relative map error of a depth-varying map: its surface's, and its first mixed section's.
+
+    The surface section's map (the phases on the face) is the ladder's first
+    value.  A surface of one phase (a coating, a homogeneous top layer) has
+    no phase boundary to rasterise, and its error says nothing of those the
+    run wears down to: the first plane section from the top with two phases
+    or more is estimated too, and the larger relative error kept.
+    """
+    def estimate(section):
+        labels, wear = section.present_phases()
+        return _relative_error(estimate_map_rms_slope(
+            labels, wear, section.normal_force, section.outline, E_star, energy=energy))
+
+    error = estimate(problem)
+    columns, face = problem.phases.columns, problem.face_mask
+    if columns is None or np.count_nonzero(problem.phases.counts) > 1:
+        return error
+    for depth in np.unique(columns.interfaces[:, face][np.isfinite(columns.interfaces[:, face])]):
+        # (a depth at an interface is in the segment below it)
+        section = problem.section(float(depth))
+        if np.count_nonzero(section.phases.counts) > 1:
+            return max(error, estimate(section))
+    return error
 
 
 # -- depth-varying microstructure ---------------------------------------------
