@@ -534,7 +534,8 @@ def _sections_map_error(problem, E_star, energy):
     columns, face = problem.phases.columns, problem.face_mask
     if columns is None or np.count_nonzero(problem.phases.counts) > 1:
         return error
-    for depth in np.unique(columns.interfaces[:, face][np.isfinite(columns.interfaces[:, face])]):
+    depths = columns.interfaces[:, face]
+    for depth in np.unique(depths[np.isfinite(depths)]):
         # (a depth at an interface is in the segment below it)
         section = problem.section(float(depth))
         if np.count_nonzero(section.phases.counts) > 1:

@@ -237,7 +237,7 @@ def flat(grid):
     ndarray, shape of the grid, m
         Zeros.
     """
-    return np.zeros(_grid(grid, "flat").shape)
+    return np.zeros(_grid(grid).shape)
 
 
 def _tilted_statistics(outline, angle, azimuth=0.0):
@@ -392,7 +392,7 @@ def from_file(grid, path):
     -------
     ndarray, shape of the grid, m
     """
-    grid = _grid(grid, "file")
+    grid = _grid(grid)
     path = os.fspath(path)
     if not path.endswith(".npy"):
         raise ValueError(f"recession file must be a .npy file, got {path!r}")

@@ -69,6 +69,7 @@ import dataclasses
 import functools
 import platform
 import time
+import timeit
 
 import numpy as np
 import scipy.ndimage
@@ -101,6 +102,16 @@ def pseudo_inverse(Z, AZ):
     lam, V = np.linalg.eigh(0.5 * (E + E.T))
     keep = lam > _CUTOFF * lam.max()
     return (V[:, keep] / lam[keep]) @ V[:, keep].T
+
+
+def stage_operator(Z, KZ, shift, out=None):
+    """``A Z = K Z + diag(shift) Z`` (into ``out`` if given) and ``E^+``: a stage's coarse work.
+
+    ``Z``, ``K Z``: shape (m, nx * ny); ``shift``: m/Pa, shape (nx, ny).
+    """
+    AZ = np.multiply(Z, shift.reshape(1, -1), out=out)
+    AZ += KZ
+    return AZ, pseudo_inverse(Z, AZ)
 
 
 class TwoLevel:
@@ -269,9 +280,10 @@ class Recorder:
             m = len(P)
             Z = (P[0] - P[1:]).reshape(m - 1, -1)
             KZ = (KP[0] - KP[1:]).reshape(m - 1, -1)
+            support, AZ = np.any(Z != 0, axis=0).reshape(shift.shape), None
         else:
-            # The variant's stacks, their support and Z's moments by the wear pattern are
-            # built once per run: a stage forms A Z (two passes over the stack) and E.
+            # A fixed space's stacks, its support and the buffer of A Z are built once per
+            # run: a stage forms A Z (two passes over the stack) and E.
             cached = self._stacks.get(variant)
             if cached is None:
                 parts = [self.fixed[part] for part in variant_parts(variant)]
@@ -280,16 +292,10 @@ class Recorder:
                 support = np.any(Z != 0, axis=0).reshape(shift.shape)
                 cached = self._stacks[variant] = (Z, KZ, support, np.empty_like(KZ))
             Z, KZ, support, AZ = cached
-            if not len(Z):
-                return None
-            np.multiply(Z, shift.reshape(1, -1), out=AZ)
-            AZ += KZ
-            return Z, AZ, KZ, pseudo_inverse(Z, AZ), support
         if not len(Z):
             return None
-        AZ = KZ + shift.reshape(1, -1) * Z
-        support = np.any(Z != 0, axis=0).reshape(shift.shape)
-        return Z, AZ, KZ, pseudo_inverse(Z, AZ), support
+        AZ, einv = stage_operator(Z, KZ, shift, out=AZ)
+        return Z, AZ, KZ, einv, support
 
     def solve(self, solver, stage, shipped):
         """Solve ``stage`` by every variant; add to the rows."""
@@ -337,10 +343,8 @@ class Recorder:
 def recorded(recorder):
     """Every stage solve of :class:`transient.solver.StageSolver` passed to ``recorder``."""
     contact = transient.solver.StageSolver.contact
-    import transient.contact as contact_module
-
     captured = {}
-    trusted = contact_module.solve_trusted_contact
+    trusted = solve_trusted_contact
 
     def capturing(halfspace, face_mask, recession, normal_force, **kwargs):
         captured.update(halfspace=halfspace, face=face_mask, recession=recession.copy(),
@@ -382,8 +386,7 @@ def cases(names, sizes, spheres_n=None):
     if "spheres" in names:
         scene, options, initial = load_transient_scene(INTERFACES_SCENE)
         options = dataclasses.replace(options, checkpoint_interval=1e9)
-        problem = wear_problem_of(scene) if spheres_n is None else \
-            wear_problem_of(scene, n=spheres_n)
+        problem = wear_problem_of(scene, n=spheres_n)
         yield max(problem.grid.shape), "spheres", problem, initial.recession(problem.grid), \
             options
 
@@ -410,12 +413,7 @@ def table(names, sizes, variants, quick, spheres_n=None):
 
 def _best_cpu(call, repeats):
     """The least CPU time (ms) of ``repeats`` calls of ``call()``."""
-    best = np.inf
-    for _ in range(repeats):
-        t = time.process_time()
-        call()
-        best = min(best, time.process_time() - t)
-    return 1e3 * best
+    return 1e3 * min(timeit.repeat(call, timer=time.process_time, number=1, repeat=repeats))
 
 
 def _costs_at(problem, variants, repeats):
@@ -437,18 +435,12 @@ def _costs_at(problem, variants, repeats):
         Z = np.concatenate([parts[part][0] for part in variant_parts(variant)])
         KZ = np.concatenate([parts[part][1] for part in variant_parts(variant)])
         support = np.any(Z != 0, axis=0).reshape(face.shape)
-        AZ = np.empty_like(KZ)
-
-        def operator_and_gram(Z=Z, KZ=KZ, AZ=AZ):
-            np.multiply(Z, shift.reshape(1, -1), out=AZ)
-            AZ += KZ
-            return pseudo_inverse(Z, AZ)
-
-        Einv = operator_and_gram()
+        AZ, Einv = stage_operator(Z, KZ, shift)
         two_level = TwoLevel(base, Z, AZ, Einv, support, additive=False)
         rows.append(dict(
             n=max(face.shape), variant=variant, m=len(Z),
-            gram=_best_cpu(operator_and_gram, repeats),
+            gram=_best_cpu(functools.partial(stage_operator, Z, KZ, shift, out=np.empty_like(KZ)),
+                           repeats),
             start=_best_cpu(functools.partial(corrected_start, stage, Z, KZ, Einv, support),
                             repeats),
             two_level=_best_cpu(functools.partial(two_level, residual, face), repeats),
