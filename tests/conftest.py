@@ -13,10 +13,12 @@ Tests draw their scenes from here rather than carrying inline copies:
   Voronoi, rods or a file); the fixture ``scene_file`` writes one into the
   test's directory;
 - :func:`run_cli`, :func:`one_error_line`, :func:`temporaries` -- a command
-  run in-process, its one ``error:`` line, the temporary files it left.
+  run in-process, its one ``error:`` line, the temporary files it left;
+- :func:`benchmark` -- a script of ``studies/benchmarks`` loaded as a module.
 """
 
 import dataclasses
+import importlib.util
 import math
 import pathlib
 import sys
@@ -253,3 +255,21 @@ def _close_pyplot_figures():
     pyplot = sys.modules.get("matplotlib.pyplot")
     if pyplot is not None:
         pyplot.close("all")
+
+
+BENCHMARKS = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
+
+
+def benchmark(name, monkeypatch=None):
+    """The script ``studies/benchmarks/<name>.py`` loaded as a module (not run).
+
+    With ``monkeypatch`` (the pytest fixture) its directory is put on
+    ``sys.path`` for the test, for a script that imports a sibling
+    (``bench_runin``).
+    """
+    if monkeypatch is not None:
+        monkeypatch.syspath_prepend(str(BENCHMARKS))
+    spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

@@ -1,22 +1,13 @@
 """The coarse-space benchmark (studies/benchmarks): its deflation's algebra, and a smoke run."""
 
-import importlib.util
-import pathlib
-
 import numpy as np
 import pytest
-
-BENCHMARKS = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
+from conftest import benchmark
 
 
 @pytest.fixture
 def bench(monkeypatch):
-    monkeypatch.syspath_prepend(str(BENCHMARKS))   # it imports bench_runin, beside it
-    spec = importlib.util.spec_from_file_location(
-        "bench_coarse_space", BENCHMARKS / "bench_coarse_space.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return benchmark("bench_coarse_space", monkeypatch)   # it imports bench_runin
 
 
 def _stage(bench, n=40):

@@ -1,17 +1,10 @@
 """Smoke test of the mixed-precision benchmark (studies/benchmarks) at a small size."""
 
-import importlib.util
-import pathlib
-
-BENCHMARKS = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
+from conftest import benchmark
 
 
 def test_bench_mixed_precision_smoke(monkeypatch):
-    monkeypatch.syspath_prepend(str(BENCHMARKS))   # it imports bench_runin, beside it
-    spec = importlib.util.spec_from_file_location(
-        "bench_mixed_precision", BENCHMARKS / "bench_mixed_precision.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = benchmark("bench_mixed_precision", monkeypatch)   # it imports bench_runin
     tables = bench.main(["--products", "--runs", "--sizes", "40", "--repeats", "1",
                          "--count", "2"])
     (product,) = tables["products"]

@@ -1,25 +1,14 @@
 """Smoke tests of the run-in benchmark scripts (studies/benchmarks) at a small size."""
 
-import importlib.util
-import pathlib
-
 import h5py
 import pytest
-
-BENCHMARKS = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
-
-
-def load(name):
-    spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from conftest import benchmark
 
 
 def test_bench_runin_smoke(tmp_path):
     out = tmp_path / "bench.h5"
-    groups = load("bench_runin").main(["--table", "--schemes", "--sizes", "40", "--n", "40",
-                                       "--quick", "--out", str(out)])
+    groups = benchmark("bench_runin").main(["--table", "--schemes", "--sizes", "40", "--n",
+                                            "40", "--quick", "--out", str(out)])
     (row,) = groups["grids"]
     assert row["status"] == "steady" and row["solves"] > 2 * row["steps"] - 2, \
         f"grid table row {row}"
@@ -34,7 +23,7 @@ def test_bench_runin_smoke(tmp_path):
 
 def test_bench_runin_levers_smoke(tmp_path):
     out = tmp_path / "bench.h5"
-    bench = load("bench_runin")
+    bench = benchmark("bench_runin")
     rows = bench.main(["--levers", "--sizes", "40", "--quick", "--out", str(out)])["levers"]
     assert [(r["case"], r["rule"]) for r in rows] == [
         (case, rule) for case in ("voronoi", "rectangle") for rule in list(bench.LEVERS)[:2]], \
@@ -49,7 +38,8 @@ def test_bench_runin_levers_smoke(tmp_path):
 
 def test_bench_runin_periodic_smoke(tmp_path):
     out = tmp_path / "bench.h5"
-    rows = load("bench_runin").main(["--periodic", "--sizes", "40", "--out", str(out)])["periodic"]
+    tables = benchmark("bench_runin").main(["--periodic", "--sizes", "40", "--out", str(out)])
+    rows = tables["periodic"]
     assert [r["face"] for r in rows] == ["punch", "periodic cell"], f"rows {rows}"
     for r in rows:
         assert r["status"] == "steady" and r["products"] > r["iterations"] > 0, f"row {r}"
@@ -58,7 +48,7 @@ def test_bench_runin_periodic_smoke(tmp_path):
 
 def test_bench_runin_memory_smoke(tmp_path):
     out = tmp_path / "bench.h5"
-    bench = load("bench_runin")
+    bench = benchmark("bench_runin")
     (row,) = bench.main(["--memory", "--sizes", "40", "--out", str(out)])["memory"]
     assert row["steps"] > 10 and row["snapshots"] == 3, f"memory table row {row}"
     # The interpreter with NumPy, SciPy and h5py alone takes about 95 MiB.
@@ -74,7 +64,7 @@ def test_bench_runin_memory_smoke(tmp_path):
 
 def test_profile_runin_smoke(tmp_path):
     out = tmp_path / "profile.h5"
-    rows = load("profile_runin").main(["--n", "40", "--quick", "--out", str(out)])
+    rows = benchmark("profile_runin").main(["--n", "40", "--quick", "--out", str(out)])
     whole = rows[-1]
     assert whole["part"] == "whole run" and "missing" not in whole, f"parts absent: {whole}"
     total = sum(r["seconds"] for r in rows[:-1])
@@ -87,7 +77,7 @@ def test_profile_runin_smoke(tmp_path):
 
 def test_bench_runin_interfaces_smoke(tmp_path):
     out = tmp_path / "bench.h5"
-    bench = load("bench_runin")
+    bench = benchmark("bench_runin")
     scene = bench.EXAMPLES / "coating_transient.toml"
     (row,) = bench.main(["--interfaces", "--interfaces-scene", str(scene), "--sizes", "16",
                          "--tol", "1e-3", "--reference-tol", "1e-4",

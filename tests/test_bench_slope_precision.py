@@ -1,15 +1,10 @@
 """Smoke test of studies/benchmarks/bench_slope_precision.py at a small size."""
 
-import importlib.util
-import pathlib
-
-SCRIPT = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks" / "bench_slope_precision.py"
+from conftest import benchmark
 
 
 def test_bench_slope_precision_smoke(capsys):
-    spec = importlib.util.spec_from_file_location("bench_slope_precision", SCRIPT)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = benchmark("bench_slope_precision")
     (row,) = bench.main(["--n", "40", "--repeats", "1"])
     out = capsys.readouterr().out
     assert "| 40 | " in out, out

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 import scipy.optimize
+from conftest import benchmark
 
 from steady import reference
 from steady.halfspace import HalfSpace
@@ -493,13 +494,7 @@ def test_crowned_face_on_a_fine_grid():
 
 
 def test_benchmark_script_smoke(tmp_path):
-    import importlib.util
-    import pathlib
-
-    path = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks" / "bench_contact.py"
-    spec = importlib.util.spec_from_file_location("bench_contact", path)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = benchmark("bench_contact")
     out = tmp_path / "bench.h5"
     peer_rows, pc_rows = bench.main(["--sizes", "24", "--pc-sizes", "25", "--repeat", "1",
                                      "--out", str(out), "--skip-peers"])
@@ -513,16 +508,11 @@ def test_benchmark_script_smoke(tmp_path):
 
 @pytest.mark.slow
 def test_run_in_solve_benchmark_smoke(tmp_path):
-    import importlib.util
     import pathlib
 
     import h5py
 
-    path = (pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
-            / "bench_contact_solve.py")
-    spec = importlib.util.spec_from_file_location("bench_contact_solve", path)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = benchmark("bench_contact_solve")
     problems = tmp_path / "problems"
     kept = bench.main(["capture", "--n", "48", "--dir", str(problems), "--stride", "2",
                        "--count", "2"])

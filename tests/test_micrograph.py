@@ -15,7 +15,7 @@ import sys
 import h5py
 import numpy as np
 import pytest
-from conftest import scene_text
+from conftest import benchmark, scene_text
 from PIL import Image
 from scipy import ndimage
 
@@ -367,10 +367,7 @@ def test_otsu_beyond_its_limit_asks_for_thresholds_before_the_image_is_read(tmp_
 
 
 def test_bench_otsu_smoke(skimage, capsys):
-    spec = importlib.util.spec_from_file_location(
-        "bench_otsu", ROOT / "studies" / "benchmarks" / "bench_otsu.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = benchmark("bench_otsu")
     rows = bench.main(["--size", "16", "--phases", "2", "3", "--repeat", "1"])
     assert [(row["phases"], row["sets"]) for row in rows] == [(2, 256), (3, 32640)], rows
     assert all(row["wall"] > 0 for row in rows), rows

@@ -1,18 +1,11 @@
 """Smoke test of studies/benchmarks/profile_fixed_costs.py at a small size."""
 
-import importlib.util
-import pathlib
-
 import h5py
-
-SCRIPT = (pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
-          / "profile_fixed_costs.py")
+from conftest import benchmark
 
 
 def test_profile_fixed_costs_smoke(tmp_path):
-    spec = importlib.util.spec_from_file_location("profile_fixed_costs", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = benchmark("profile_fixed_costs")
     out = tmp_path / "fixed.h5"
     rows = module.main(["--n", "40", "--quick", "--out", str(out)])
     by_part = {r["part"]: r for r in rows}

@@ -8,6 +8,7 @@ test's own configuration; errors are relative to the closed form
 
 import numpy as np
 import pytest
+from conftest import benchmark
 from scipy import integrate
 
 from steady import reference
@@ -228,15 +229,9 @@ def test_homogeneous_outline_on_fine_grids(outline, n, tol):
 
 def test_benchmark_script_runs(tmp_path):
     """``studies/benchmarks/bench_outline_slopes.py --quick`` writes its file (seconds)."""
-    import importlib.util
-    import pathlib
-
     import h5py
 
-    path = pathlib.Path(__file__).parents[1] / "studies" / "benchmarks" / "bench_outline_slopes.py"
-    spec = importlib.util.spec_from_file_location("bench_outline_slopes", path)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = benchmark("bench_outline_slopes")
     out = tmp_path / "bench.h5"
     tables = bench.main(["--quick", "--repeats", "1", "--out", str(out)])
     assert set(tables) == {"homogeneous", "ellipse", "two_phase"}, f"tables {set(tables)}"

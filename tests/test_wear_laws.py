@@ -18,14 +18,23 @@ threshold run starts from the flat punch, whose central pressure (about
 ``pbar / 2``) lies below both thresholds: its pressures cross ``p_th``.
 """
 
-import importlib.util
 import pathlib
 import re
 
 import h5py
 import numpy as np
 import pytest
-from conftest import FORCE, GEOMETRIES, K1, RADIUS, one_error_line, problem, run_cli, scene_text
+from conftest import (
+    FORCE,
+    GEOMETRIES,
+    K1,
+    RADIUS,
+    benchmark,
+    one_error_line,
+    problem,
+    run_cli,
+    scene_text,
+)
 from scipy.optimize import brentq
 
 import steady.cli.solve as steady_cli
@@ -301,11 +310,7 @@ def test_the_fit_refuses_other_laws():
 
 
 def test_bench_wear_laws_smoke(tmp_path):
-    spec = importlib.util.spec_from_file_location(
-        "bench_wear_laws", pathlib.Path(__file__).parents[1] / "studies" / "benchmarks"
-        / "bench_wear_laws.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = benchmark("bench_wear_laws")
     out = tmp_path / "bench.h5"
     rows = module.main(["--sizes", "40", "--out", str(out)])
     assert [r["law"] for r in rows] == ["archard", "threshold"], rows
