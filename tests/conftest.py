@@ -182,10 +182,12 @@ def scene_text(name="runin", *, extra="", **overrides):
         ``radii`` in metres, or ``"file"`` with ``path``), ``transient`` and
         ``initial_face`` (dicts, or None to drop), ``punch`` (a dict of
         ``[punch]`` keys, e.g. ``shape`` and its lengths, replacing
-        ``radius``).
+        ``radius``), ``load`` and ``counterbody`` (dicts of further keys of
+        those sections, e.g. a ``programme``, a layer's ``thickness``).
     """
     spec = dict(radius=0.004, normal_force=10.0, E_star=1.3e6, exponent=None,
-                map="voronoi", transient=None, initial_face=None, punch=None)
+                map="voronoi", transient=None, initial_face=None, punch=None, load={},
+                counterbody={})
     spec.update(SCENES[name])
     spec.update(overrides)
     phase_map = _MAPS[spec["map"]].format(
@@ -196,7 +198,9 @@ def scene_text(name="runin", *, extra="", **overrides):
              else [f"{key} = {_toml(value)}" for key, value in spec["punch"].items()])
     lines = ["[punch]", *punch,
              "[load]", f"normal_force = {spec['normal_force']!r}",
+             *(f"{key} = {_toml(value)}" for key, value in spec["load"].items()),
              "[counterbody]", f"E_star = {spec['E_star']!r}",
+             *(f"{key} = {_toml(value)}" for key, value in spec["counterbody"].items()),
              "[grid]", f"n = {spec['n']}",
              "[wear]", f"coefficients = {_toml(spec['coefficients'])}"]
     if spec["exponent"] is not None:

@@ -14,7 +14,7 @@ import mpmath
 import numpy as np
 import pytest
 import scipy.linalg
-from conftest import E_STAR, FORCE, K1, RADIUS
+from conftest import E_STAR, FORCE, K1, RADIUS, scene_text
 
 from steady.counterbody import Counterbody, LayeredHalfSpace, correction_kernel, fourier_factor
 from steady.halfspace import HalfSpace
@@ -228,40 +228,28 @@ def test_result_file_records_the_layer(tmp_path):
     assert (stored.thickness, stored.poisson) == (None, None), "a half-space has no layer"
 
 
-SCENE = """
-[punch]
-radius = 0.004
-[load]
-normal_force = 10.0
-[counterbody]
-E_star = 1.3e6
-{layer}
-[grid]
-n = 32
-[wear]
-coefficients = [1.0e-13, 1.0e-12]
-[phases]
-map = {{ kind = "voronoi", n_seeds = 64, fill_factors = [0.7, 0.3], seed = 2029 }}
-"""
+def layered_scene(**layer):
+    """The gallery's run-in scene (without its run-in section), with ``[counterbody]`` keys."""
+    return scene_text("runin", transient=None, counterbody=layer)
 
 
 def test_scene_reads_the_layer():
-    scene = parse_scene(SCENE.format(layer="thickness = 0.002\npoisson = 0.5"), ".")
+    scene = parse_scene(layered_scene(thickness=0.002, poisson=0.5), ".")
     assert scene.counterbody == Counterbody(1.3e6, 0.002, 0.5), scene.counterbody
-    assert parse_scene(SCENE.format(layer=""), ".").counterbody.layered is False
+    assert parse_scene(layered_scene(), ".").counterbody.layered is False
 
 
 @pytest.mark.parametrize("layer, words", [
-    ("thickness = -0.002\npoisson = 0.3", "thickness must be a number > 0"),
-    ("thickness = 0\npoisson = 0.3", "thickness must be a number > 0"),
-    ("thickness = 0.002\npoisson = -0.1", "poisson must be a number in [0, 0.5]"),
-    ("thickness = 0.002\npoisson = 0.6", "poisson must be a number in [0, 0.5]"),
-    ("poisson = 0.3", "poisson = 0.3 is for a layer: give its thickness"),
-    ("thickness = 0.002", "thickness = 0.002 needs poisson"),
+    (dict(thickness=-0.002, poisson=0.3), "thickness must be a number > 0"),
+    (dict(thickness=0, poisson=0.3), "thickness must be a number > 0"),
+    (dict(thickness=0.002, poisson=-0.1), "poisson must be a number in [0, 0.5]"),
+    (dict(thickness=0.002, poisson=0.6), "poisson must be a number in [0, 0.5]"),
+    (dict(poisson=0.3), "poisson = 0.3 is for a layer: give its thickness"),
+    (dict(thickness=0.002), "thickness = 0.002 needs poisson"),
 ])
 def test_bad_layer_inputs_are_refused_in_one_line(layer, words):
     with pytest.raises(ValueError) as err:
-        parse_scene(SCENE.format(layer=layer), ".")
+        parse_scene(layered_scene(**layer), ".")
     message = str(err.value)
     assert words in message and "\n" not in message, message
 

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import GEOMETRIES, K1, RODS, one_error_line, problem, run_cli
+from conftest import GEOMETRIES, K1, RODS, one_error_line, problem, run_cli, scene_text
 
 import steady.cli.solve as steady_cli
 import transient.__main__ as transient_cli
@@ -324,29 +324,12 @@ def test_partial_contact_history_does_not_depend_on_the_cells_origin():
     assert error < 1e-6, f"the step's slope error moved by {error:.1e}"
 
 
-_SCENE = """
-[punch]
-shape = "periodic"
-width = 0.008
-length = 0.004
-[load]
-normal_force = 5.0
-{programme}
-[counterbody]
-E_star = 1.3e6
-[grid]
-n = 48
-[wear]
-coefficients = [1e-13, 1e-12]
-[phases]
-map = {{ kind = "voronoi", n_seeds = 60, fill_factors = [0.7, 0.3], seed = 3301 }}
-{extra}
-"""
-
-
-def _scene(tmp_path, programme="", extra=""):
+def _scene(tmp_path, load=None, extra=""):
+    """A Voronoi cell of 8 x 4 mm under 5 N (``load``: further ``[load]`` keys), written."""
     path = tmp_path / "cell.toml"
-    path.write_text(_SCENE.format(programme=programme, extra=extra))
+    path.write_text(scene_text(
+        "runin", punch=dict(shape="periodic", width=0.008, length=0.004), normal_force=5.0,
+        load=load or {}, n=48, n_seeds=60, seed=3301, transient=None, extra=extra))
     return path
 
 
@@ -383,7 +366,7 @@ path = "wave.npy"
 tol = 1e-3
 end_depth = 6e-4
 """
-    scene = _scene(tmp_path, programme="programme = [[2e3, 7.0]]", extra=extra)
+    scene = _scene(tmp_path, load=dict(programme=((2e3, 7.0),)), extra=extra)
     status, out, err = run_cli(transient_cli, [scene, "-o", tmp_path / "r.h5"], capsys)
     assert status == 0, err
     assert "periodic face" in out and "nan" not in out and "+- inf" not in out, out
